@@ -1,0 +1,252 @@
+//! Pinhole camera model (sec. 2.2): intrinsics (eq. 4), projection (eqs. 1-3) and the
+//! interaction matrix of an image point in pixels.
+
+use nalgebra::{Matrix2, Matrix2x6, Matrix3, Point3, Vector3};
+
+use crate::error::{Error, Result, check_finite};
+
+/// Intrinsic parameters of eq. (4): `f ku`, `f kv` (pixels), principal point `(u0, v0)`
+/// (pixels) and the angle `theta` between the image axes (radians, `pi/2` for square pixels).
+///
+/// ```text
+///     | f ku   -f ku cot(theta)   u0 |
+/// K = |  0      f kv / sin(theta)  v0 |
+///     |  0      0                  1  |
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Intrinsics {
+    fku: f64,
+    fkv: f64,
+    u0: f64,
+    v0: f64,
+    theta: f64,
+}
+
+impl Intrinsics {
+    /// Validated intrinsics: all finite, `fku > 0`, `fkv > 0`, `0 < theta < pi`.
+    pub fn new(fku: f64, fkv: f64, u0: f64, v0: f64, theta: f64) -> Result<Self> {
+        check_finite("intrinsics", &[fku, fkv, u0, v0, theta])
+            .map_err(|_| Error::InvalidIntrinsics { reason: "non-finite value".into() })?;
+        if fku <= 0.0 || fkv <= 0.0 {
+            return Err(Error::InvalidIntrinsics {
+                reason: format!("focal terms must be > 0, got fku = {fku}, fkv = {fkv}"),
+            });
+        }
+        if !(theta > 0.0 && theta < std::f64::consts::PI) {
+            return Err(Error::InvalidIntrinsics {
+                reason: format!("skew angle must be in (0, pi), got {theta}"),
+            });
+        }
+        Ok(Self { fku, fkv, u0, v0, theta })
+    }
+
+    /// Square pixels (`theta = pi/2`).
+    pub fn pinhole(fku: f64, fkv: f64, u0: f64, v0: f64) -> Result<Self> {
+        Self::new(fku, fkv, u0, v0, std::f64::consts::FRAC_PI_2)
+    }
+
+    /// Reads eq. (4) back from a 3x3 matrix; the inverse of [`Intrinsics::matrix`].
+    pub fn from_matrix(k: &Matrix3<f64>) -> Result<Self> {
+        check_finite("K", k.as_slice())
+            .map_err(|_| Error::InvalidIntrinsics { reason: "non-finite entry in K".into() })?;
+        if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
+            return Err(Error::InvalidIntrinsics {
+                reason: format!(
+                    "K must be upper triangular with last row (0, 0, 1), got rows [{}, {}, {}], last row ({}, {}, {})",
+                    k[(1, 0)],
+                    k[(2, 0)],
+                    k[(2, 1)],
+                    k[(2, 0)],
+                    k[(2, 1)],
+                    k[(2, 2)]
+                ),
+            });
+        }
+        let fku = k[(0, 0)];
+        if fku <= 0.0 || k[(1, 1)] <= 0.0 {
+            return Err(Error::InvalidIntrinsics {
+                reason: format!("K[0,0] and K[1,1] must be > 0, got {} and {}", fku, k[(1, 1)]),
+            });
+        }
+        // K01 = -fku cot(theta), K11 = fkv / sin(theta).
+        let theta = f64::atan2(1.0, -k[(0, 1)] / fku);
+        let fkv = k[(1, 1)] * theta.sin();
+        Self::new(fku, fkv, k[(0, 2)], k[(1, 2)], theta)
+    }
+
+    /// `f ku` in pixels.
+    pub fn fku(&self) -> f64 {
+        self.fku
+    }
+    /// `f kv` in pixels.
+    pub fn fkv(&self) -> f64 {
+        self.fkv
+    }
+    /// Principal point abscissa in pixels.
+    pub fn u0(&self) -> f64 {
+        self.u0
+    }
+    /// Principal point ordinate in pixels.
+    pub fn v0(&self) -> f64 {
+        self.v0
+    }
+    /// Angle between the image axes in radians.
+    pub fn theta(&self) -> f64 {
+        self.theta
+    }
+
+    /// The 3x3 matrix K of eq. (4).
+    pub fn matrix(&self) -> Matrix3<f64> {
+        let (s, c) = self.theta.sin_cos();
+        Matrix3::new(self.fku, -self.fku * c / s, self.u0, 0.0, self.fkv / s, self.v0, 0.0, 0.0, 1.0)
+    }
+
+    /// F(K) of sec. 4.1, the 2x2 factor of the rotational columns of J.
+    pub fn f_matrix(&self) -> Matrix2<f64> {
+        f_of_matrix(&self.matrix())
+    }
+
+    /// Pixel of a point given in the camera frame, with its depth (eqs. 2-3).
+    pub fn project(&self, point: &Point3<f64>) -> ([f64; 2], f64) {
+        let k = self.matrix();
+        let z = point.z;
+        let p = k * (point.coords / z);
+        ([p.x, p.y], z)
+    }
+
+    /// Normalised coordinates `m = K^-1 p` of a pixel (x, y; the third coordinate is 1).
+    pub fn normalise(&self, pixel: [f64; 2]) -> [f64; 2] {
+        let (s, c) = self.theta.sin_cos();
+        let y = (pixel[1] - self.v0) * s / self.fkv;
+        let x = (pixel[0] - self.u0 + self.fku * c / s * y) / self.fku;
+        [x, y]
+    }
+}
+
+/// F(K) of sec. 4.1 written with the entries of K:
+/// `F = [[sin(th)/fkv, -cos(th)/fkv], [0, 1/fku]] = [[1/K11, K01/(K00 K11)], [0, 1/K00]]`.
+/// Valid for any nonsingular upper-triangular K, including the non-physical estimates that
+/// the stability checks explore.
+pub fn f_of_matrix(k: &Matrix3<f64>) -> Matrix2<f64> {
+    Matrix2::new(1.0 / k[(1, 1)], k[(0, 1)] / (k[(0, 0)] * k[(1, 1)]), 0.0, 1.0 / k[(0, 0)])
+}
+
+/// Projects points given in the camera frame; fails for a point at or behind the camera.
+pub fn project_points(
+    points: &[[f64; 3]],
+    intrinsics: &Intrinsics,
+) -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
+    check_finite("points", points.as_flattened())?;
+    let mut pixels = Vec::with_capacity(points.len());
+    let mut depths = Vec::with_capacity(points.len());
+    for (index, p) in points.iter().enumerate() {
+        if p[2] <= 0.0 {
+            return Err(Error::PointBehindCamera { index, depth: p[2] });
+        }
+        let (pix, z) = intrinsics.project(&Point3::new(p[0], p[1], p[2]));
+        pixels.push(pix);
+        depths.push(z);
+    }
+    Ok((pixels, depths))
+}
+
+/// Interaction matrix of an image point in normalised coordinates (Espiau et al. 1992):
+/// `d(x, y)/dt = L (v, w)` for the camera twist in the camera frame.
+#[inline]
+pub fn normalised_interaction(x: f64, y: f64, depth: f64) -> Matrix2x6<f64> {
+    let iz = 1.0 / depth;
+    Matrix2x6::new(
+        -iz,
+        0.0,
+        x * iz,
+        x * y,
+        -(1.0 + x * x),
+        y,
+        0.0,
+        -iz,
+        y * iz,
+        1.0 + y * y,
+        -x * y,
+        -x,
+    )
+}
+
+/// Interaction matrix of a pixel `p = K m`: the first two rows of `L_k` in sec. 4.1
+/// (its third row is zero): `dp/dt = K[0..2, 0..2] L(m, depth) (v, w)`.
+#[inline]
+pub fn pixel_interaction(k: &Matrix3<f64>, k_inv: &Matrix3<f64>, pixel: [f64; 2], depth: f64) -> Matrix2x6<f64> {
+    let m = k_inv * Vector3::new(pixel[0], pixel[1], 1.0);
+    let l = normalised_interaction(m.x, m.y, depth);
+    k.fixed_view::<2, 2>(0, 0) * l
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn matrix_round_trip_with_skew() {
+        let k = Intrinsics::new(1200.0, 1100.0, 390.0, 280.0, 1.4).unwrap();
+        let back = Intrinsics::from_matrix(&k.matrix()).unwrap();
+        assert_relative_eq!(back.fku(), 1200.0, max_relative = 1e-12);
+        assert_relative_eq!(back.fkv(), 1100.0, max_relative = 1e-12);
+        assert_relative_eq!(back.theta(), 1.4, max_relative = 1e-12);
+        assert_relative_eq!(back.u0(), 390.0);
+        assert_relative_eq!(back.v0(), 280.0);
+    }
+
+    #[test]
+    fn rejects_bad_intrinsics() {
+        assert!(Intrinsics::new(-1.0, 1.0, 0.0, 0.0, 1.5).is_err());
+        assert!(Intrinsics::new(1.0, 0.0, 0.0, 0.0, 1.5).is_err());
+        assert!(Intrinsics::new(1.0, 1.0, f64::NAN, 0.0, 1.5).is_err());
+        assert!(Intrinsics::new(1.0, 1.0, 0.0, 0.0, 0.0).is_err());
+        assert!(Intrinsics::new(1.0, 1.0, 0.0, 0.0, std::f64::consts::PI).is_err());
+        let mut k = Intrinsics::pinhole(1.0, 1.0, 0.0, 0.0).unwrap().matrix();
+        k[(2, 2)] = 2.0;
+        assert!(Intrinsics::from_matrix(&k).is_err());
+    }
+
+    #[test]
+    fn f_matrix_matches_eq4_form() {
+        let k = Intrinsics::new(900.0, 1300.0, 10.0, 20.0, 1.2).unwrap();
+        let (s, c) = k.theta().sin_cos();
+        let expected = Matrix2::new(s / k.fkv(), -c / k.fkv(), 0.0, 1.0 / k.fku());
+        assert_relative_eq!(k.f_matrix(), expected, max_relative = 1e-12);
+    }
+
+    #[test]
+    fn normalise_inverts_k() {
+        let k = Intrinsics::new(900.0, 1300.0, 10.0, 20.0, 1.2).unwrap();
+        let m = k.normalise([300.0, -40.0]);
+        let p = k.matrix() * Vector3::new(m[0], m[1], 1.0);
+        assert_relative_eq!(p.x, 300.0, max_relative = 1e-12);
+        assert_relative_eq!(p.y, -40.0, max_relative = 1e-12);
+    }
+
+    #[test]
+    fn pixel_interaction_matches_finite_differences() {
+        use crate::se3::exp_twist;
+        let k = Intrinsics::new(800.0, 750.0, 320.0, 240.0, 1.45).unwrap();
+        let km = k.matrix();
+        let kinv = km.try_inverse().unwrap();
+        let x = Point3::new(0.1, -0.05, 0.7);
+        let (p0, z) = k.project(&x);
+        let l = pixel_interaction(&km, &kinv, p0, z);
+        let h = 1e-6;
+        for j in 0..6 {
+            let mut tw = [0.0; 6];
+            tw[j] = h;
+            let plus = exp_twist(&tw).inverse() * x;
+            tw[j] = -h;
+            let minus = exp_twist(&tw).inverse() * x;
+            let (pp, _) = k.project(&plus);
+            let (pm, _) = k.project(&minus);
+            for r in 0..2 {
+                let fd = (pp[r] - pm[r]) / (2.0 * h);
+                assert!((fd - l[(r, j)]).abs() < 1e-4 * (1.0 + l[(r, j)].abs()), "col {j} row {r}: {fd} vs {}", l[(r, j)]);
+            }
+        }
+    }
+}

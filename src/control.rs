@@ -1,0 +1,308 @@
+//! The invariant control laws of sec. 4: the five-dof task-function law (eqs. 14, 17) and
+//! the law for the rotation about the optical axis (eq. 24).
+
+use nalgebra::{Matrix3, Matrix5, Vector3, Vector5, Vector6};
+
+use crate::camera::{Intrinsics, pixel_interaction};
+use crate::error::{Error, Result, check_depths, check_finite, check_finite_points, check_positive};
+use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
+use crate::jacobian::{
+    DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, combined_interaction, q_inv_gram, rz_from_interactions,
+};
+
+/// Tuning of an [`InvariantController`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InvariantControllerConfig {
+    /// lambda of eq. (17), 1/s.
+    pub gain: f64,
+    /// eta of eq. (24), 1/s.
+    pub gain_rz: f64,
+    /// Whether to add the feed-forward term `J_hat^+ ds*/dt` of eq. (17) when the reference
+    /// moves (sec. 5.3 drops it to show it is not needed for stability).
+    pub feedforward: bool,
+    /// Threshold on `sigma_5/sigma_1` of the depth-balanced `J_hat` (degenerate structure).
+    pub min_structure_ratio: f64,
+}
+
+impl Default for InvariantControllerConfig {
+    fn default() -> Self {
+        Self { gain: 1.0, gain_rz: 1.0, feedforward: true, min_structure_ratio: DEFAULT_MIN_STRUCTURE_RATIO }
+    }
+}
+
+/// What the last successful control step measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ControlState {
+    /// The twist sent to the camera (vx, vy, vz, wx, wy, wz), camera frame.
+    pub twist: Vector6<f64>,
+    /// Task function eps of eq. (14).
+    pub eps: Vector5<f64>,
+    /// Task function eps_z = det(Q*) tau_21 (sec. 4.2), pixels^2 units.
+    pub eps_z: f64,
+    /// `||s - s*(t)||` in the invariant space.
+    pub invariant_error: f64,
+    /// `T = Q Q*^-1` (eq. 21).
+    pub t: Matrix3<f64>,
+    /// The coefficient `a_hat` of eq. (24).
+    pub a_hat: f64,
+}
+
+impl ControlState {
+    /// tau_11 of eq. (21).
+    pub fn tau11(&self) -> f64 {
+        self.t[(0, 0)]
+    }
+    /// tau_21 of eq. (21).
+    pub fn tau21(&self) -> f64 {
+        self.t[(1, 0)]
+    }
+    /// tau_22 of eq. (21).
+    pub fn tau22(&self) -> f64 {
+        self.t[(1, 1)]
+    }
+}
+
+/// Visual servoing in the invariant space (sec. 4): from the current pixels and per-point
+/// depth estimates (any common positive scale), the camera twist that drives the invariant
+/// points `s` to `s*(t)` (eq. 17) and `tau_21` to zero (eq. 24).
+///
+/// The reference image may come from another camera: only the estimated intrinsics of the
+/// *current* camera, `K_hat`, enter the Jacobian, and any `K_hat` with positive focal terms
+/// stabilises the law locally (Prop. 1).
+#[derive(Debug, Clone)]
+pub struct InvariantController {
+    k_hat: Intrinsics,
+    k: Matrix3<f64>,
+    k_inv: Matrix3<f64>,
+    basis: [usize; 3],
+    others: Vec<usize>,
+    n: usize,
+    reference: RzReference,
+    s_star: Vec<Vector3<f64>>,
+    s_star_rate: Vec<Vector3<f64>>,
+    reference_moves: bool,
+    config: InvariantControllerConfig,
+    structure_checked: bool,
+    state: Option<ControlState>,
+}
+
+impl InvariantController {
+    /// A controller for the reference image `reference_pixels` (n >= 6 points), estimated
+    /// current intrinsics `k_hat` and the basis points (see [`crate::choose_basis`]).
+    pub fn new(
+        reference_pixels: &[[f64; 2]],
+        k_hat: Intrinsics,
+        basis: [usize; 3],
+        config: InvariantControllerConfig,
+    ) -> Result<Self> {
+        check_finite_points("reference_pixels", reference_pixels)?;
+        let n = reference_pixels.len();
+        if n < MIN_POINTS {
+            return Err(Error::TooFewPoints {
+                needed: MIN_POINTS,
+                got: n,
+                why: "three basis points plus three more to control five dof",
+            });
+        }
+        check_positive("gain", config.gain)?;
+        check_positive("gain_rz", config.gain_rz)?;
+        if !(config.min_structure_ratio.is_finite() && config.min_structure_ratio >= 0.0) {
+            return Err(Error::InvalidParameter { name: "min_structure_ratio", reason: "must be finite and >= 0".into() });
+        }
+        let basis = validate_basis(basis, n)?;
+        let frame = BasisFrame::new(reference_pixels, basis, "reference")?;
+        let others = non_basis_indices(n, basis);
+        let s_star: Vec<_> = others.iter().map(|&i| frame.transform(reference_pixels[i])).collect();
+        let k = k_hat.matrix();
+        let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
+        Ok(Self {
+            k_hat,
+            k,
+            k_inv,
+            basis,
+            s_star_rate: vec![Vector3::zeros(); others.len()],
+            others,
+            n,
+            reference: RzReference::new(&frame),
+            s_star,
+            reference_moves: false,
+            config,
+            structure_checked: false,
+            state: None,
+        })
+    }
+
+    /// Number of points.
+    pub fn num_points(&self) -> usize {
+        self.n
+    }
+    /// The basis indices.
+    pub fn basis(&self) -> [usize; 3] {
+        self.basis
+    }
+    /// Indices of the non-basis points, in the order of `s`.
+    pub fn non_basis(&self) -> &[usize] {
+        &self.others
+    }
+    /// The estimated intrinsics used in the Jacobian.
+    pub fn k_hat(&self) -> &Intrinsics {
+        &self.k_hat
+    }
+    /// The tuning.
+    pub fn config(&self) -> &InvariantControllerConfig {
+        &self.config
+    }
+    /// The current reference `s*(t)`, one invariant point per non-basis point.
+    pub fn reference_invariants(&self) -> &[Vector3<f64>] {
+        &self.s_star
+    }
+    /// The state measured by the last successful step.
+    pub fn state(&self) -> Option<&ControlState> {
+        self.state.as_ref()
+    }
+
+    /// Replaces the estimated intrinsics (e.g. a zoom read-out).
+    pub fn set_k_hat(&mut self, k_hat: Intrinsics) -> Result<()> {
+        let k = k_hat.matrix();
+        self.k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
+        self.k = k;
+        self.k_hat = k_hat;
+        Ok(())
+    }
+
+    /// Sets a time-varying reference `s*(t)` and its derivative `ds*/dt` (sec. 3, eq. 17),
+    /// each one invariant point (3 values summing to 1, resp. 0) per non-basis point.
+    /// `rate = None` means a still reference.
+    pub fn set_reference(&mut self, s_star: &[[f64; 3]], rate: Option<&[[f64; 3]]>) -> Result<()> {
+        let m = self.others.len();
+        let shape = |what: &'static str, got: usize| Error::Shape {
+            what,
+            expected: format!("{m} invariant points (one per non-basis point)"),
+            got: format!("{got}"),
+        };
+        if s_star.len() != m {
+            return Err(shape("s_star", s_star.len()));
+        }
+        check_finite("s_star", s_star.as_flattened())?;
+        if let Some(bad) = s_star.iter().position(|q| (q[0] + q[1] + q[2] - 1.0).abs() > 1e-6) {
+            return Err(Error::InvalidParameter {
+                name: "s_star",
+                reason: format!("invariant point {bad} does not sum to 1 (q1 + q2 + q3 = 1 in the invariant space)"),
+            });
+        }
+        if let Some(r) = rate {
+            if r.len() != m {
+                return Err(shape("s_star_rate", r.len()));
+            }
+            check_finite("s_star_rate", r.as_flattened())?;
+        }
+        for (j, q) in s_star.iter().enumerate() {
+            self.s_star[j] = Vector3::from(*q);
+            self.s_star_rate[j] = rate.map_or_else(Vector3::zeros, |r| Vector3::from(r[j]));
+        }
+        self.reference_moves = rate.is_some();
+        Ok(())
+    }
+
+    /// One control step: the twist `(mu, w_z)` of eqs. (17) and (24) for the current pixels
+    /// and depth estimates `zeta_hat = kappa zeta` (any common kappa > 0).
+    pub fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        if pixels.len() != self.n {
+            return Err(Error::Shape {
+                what: "pixels",
+                expected: format!("{} points (as in the reference image)", self.n),
+                got: format!("{} points", pixels.len()),
+            });
+        }
+        check_finite_points("pixels", pixels)?;
+        check_depths(depths, self.n)?;
+        let frame = BasisFrame::new(pixels, self.basis, "current")?;
+        let (k, k_inv) = (&self.k, &self.k_inv);
+        let l_basis = self.basis.map(|i| pixel_interaction(k, k_inv, pixels[i], depths[i]));
+        let (q2, gram) = q_inv_gram(&frame.q_inv);
+        let feedforward = self.config.feedforward && self.reference_moves;
+
+        // Accumulate J^T J, J^T (s - s*) and J^T ds*/dt point by point, J_k = Q^-1 N_k.
+        let mut jtj = Matrix5::zeros();
+        let mut jte = Vector5::zeros();
+        let mut jtr = Vector5::zeros();
+        let mut err2 = 0.0;
+        for (j, &idx) in self.others.iter().enumerate() {
+            let q = frame.transform(pixels[idx]);
+            let e = q - self.s_star[j];
+            err2 += e.norm_squared();
+            let l_k = pixel_interaction(k, k_inv, pixels[idx], depths[idx]);
+            let n_k = combined_interaction(&l_k, &l_basis, &q);
+            let n5 = n_k.fixed_columns::<5>(0);
+            let n5t = n5.transpose();
+            jtj += n5t * (gram * n5);
+            jte += n5t * (q2.tr_mul(&e));
+            if feedforward {
+                jtr += n5t * (q2.tr_mul(&self.s_star_rate[j]));
+            }
+        }
+
+        let mean_depth = depths.iter().sum::<f64>() / depths.len() as f64;
+        let threshold = self.config.min_structure_ratio;
+        let degenerate = |jtj: &Matrix5<f64>| {
+            let ratio = balanced_ratio(jtj, mean_depth);
+            (ratio < threshold.max(1e-7)).then_some(Error::DegenerateStructure { ratio, threshold })
+        };
+        if !self.structure_checked {
+            if let Some(err) = degenerate(&jtj) {
+                return Err(err);
+            }
+            self.structure_checked = true;
+        }
+        let chol = match jtj.cholesky() {
+            Some(c) => c,
+            None => {
+                let ratio = balanced_ratio(&jtj, mean_depth);
+                return Err(Error::DegenerateStructure { ratio, threshold });
+            }
+        };
+        // A pivot that lost almost all of its diagonal means rank loss since the first step.
+        let l = chol.l_dirty();
+        if (0..5).any(|i| l[(i, i)] * l[(i, i)] < 1e-14 * jtj[(i, i)]) {
+            if let Some(err) = degenerate(&jtj) {
+                return Err(err);
+            }
+        }
+        // eps = J_hat^+ (s - s*)  (eq. 14); mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
+        let eps = chol.solve(&jte);
+        let mut mu = -self.config.gain * eps;
+        if feedforward {
+            mu += chol.solve(&jtr);
+        }
+
+        // eps_z = det(Q*) tau_21 and w_z = -(eta eps_z + c_hat^T mu) / a_hat  (eq. 24).
+        let [b0, b1, b2] = self.basis;
+        let v = Vector3::new(pixels[b0][1], pixels[b1][1], pixels[b2][1]);
+        let eps_z = self.reference.eps_z(&v);
+        let (a_hat, c_hat) = rz_from_interactions(&self.reference, &l_basis);
+        let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * l_basis[j][(1, 5)]).abs()).sum();
+        if !(a_hat.abs() > 1e-9 * scale) {
+            return Err(Error::RzSingular { a_hat });
+        }
+        let wz = -(self.config.gain_rz * eps_z + c_hat.dot(&mu)) / a_hat;
+        let twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
+        self.state = Some(ControlState {
+            twist,
+            eps,
+            eps_z,
+            invariant_error: err2.sqrt(),
+            t: self.reference.t_matrix(&frame),
+            a_hat,
+        });
+        Ok(twist)
+    }
+
+    /// The stop rule for different cameras (sec. 5.2): `||s - s*|| < invariant_tol`,
+    /// `|tau_21| < tau21_tol`, and `tau_11 > 0`, `tau_22 > 0`, which rule out the attracting
+    /// equilibrium at rz = pi (NOTES.md item 8). False before the first step.
+    pub fn converged(&self, invariant_tol: f64, tau21_tol: f64) -> bool {
+        self.state.as_ref().is_some_and(|s| {
+            s.invariant_error < invariant_tol && s.tau21().abs() < tau21_tol && s.tau11() > 0.0 && s.tau22() > 0.0
+        })
+    }
+}

@@ -1,0 +1,148 @@
+//! The crate's one error type.
+
+use thiserror::Error;
+
+/// Everything that can go wrong in `vsinv`.
+///
+/// The variants fall into two families, which the Python bindings map to
+/// `vsinv.InvalidInput` and `vsinv.DegenerateGeometry` (see [`Error::is_degenerate`]).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A value is NaN or infinite.
+    #[error("{what}: non-finite value at index {index}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+        /// Flat index of the first offending value.
+        index: usize,
+    },
+    /// An array does not have the expected size.
+    #[error("{what}: expected {expected}, got {got}")]
+    Shape {
+        /// Which input.
+        what: &'static str,
+        /// What was expected, in words (e.g. "12 points").
+        expected: String,
+        /// What was given.
+        got: String,
+    },
+    /// Intrinsic parameters that do not describe a camera (eq. 4).
+    #[error("invalid intrinsics: {reason}")]
+    InvalidIntrinsics {
+        /// What is wrong.
+        reason: String,
+    },
+    /// A tuning parameter out of its domain (gain <= 0, bad basis index, ...).
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParameter {
+        /// Parameter name.
+        name: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Not enough points for the task.
+    #[error("too few points: {needed} needed ({why}), got {got}")]
+    TooFewPoints {
+        /// Minimum number of points.
+        needed: usize,
+        /// Number given.
+        got: usize,
+        /// Why that many are needed.
+        why: &'static str,
+    },
+    /// The three basis points are (nearly) collinear in an image, so Q is singular.
+    #[error(
+        "basis points {basis:?} are collinear in the {image} image (normalised area {ratio:.3e}); choose three points well spread in the image"
+    )]
+    CollinearBasis {
+        /// The basis indices.
+        basis: [usize; 3],
+        /// "current" or "reference".
+        image: &'static str,
+        /// Twice the triangle area divided by the square of its longest side.
+        ratio: f64,
+    },
+    /// A point is at or behind the camera centre (depth <= 0).
+    #[error("point {index} is at or behind the camera (depth {depth})")]
+    PointBehindCamera {
+        /// Index of the point.
+        index: usize,
+        /// Its depth in metres (or the given estimate).
+        depth: f64,
+    },
+    /// The invariant Jacobian has lost rank: planar object, equal depth estimates,
+    /// or points too close to a plane (NOTES.md: planar failure mode).
+    #[error(
+        "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof"
+    )]
+    DegenerateStructure {
+        /// sigma_5 / sigma_1 of `J_hat diag(Z, Z, Z, 1, 1)`.
+        ratio: f64,
+        /// The threshold that was applied.
+        threshold: f64,
+    },
+    /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
+    /// +-90 degrees), so the rz law (24) is undefined.
+    #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]
+    RzSingular {
+        /// The estimated coefficient.
+        a_hat: f64,
+    },
+}
+
+impl Error {
+    /// True for errors caused by the scene geometry (collinear basis, planar object,
+    /// points behind the camera, too few points) rather than by malformed input.
+    pub fn is_degenerate(&self) -> bool {
+        matches!(
+            self,
+            Error::TooFewPoints { .. }
+                | Error::CollinearBasis { .. }
+                | Error::PointBehindCamera { .. }
+                | Error::DegenerateStructure { .. }
+                | Error::RzSingular { .. }
+        )
+    }
+}
+
+/// Shorthand for `Result<T, vsinv::Error>`.
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Checks that every value is finite.
+pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(Error::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that pixels are finite (flattened index in the error).
+pub(crate) fn check_finite_points(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
+    check_finite(what, points.as_flattened())
+}
+
+/// Checks that every depth is finite and strictly positive.
+pub(crate) fn check_depths(depths: &[f64], n: usize) -> Result<()> {
+    if depths.len() != n {
+        return Err(Error::Shape {
+            what: "depths",
+            expected: format!("{n} values (one per point)"),
+            got: format!("{} values", depths.len()),
+        });
+    }
+    check_finite("depths", depths)?;
+    match depths.iter().position(|&z| z <= 0.0) {
+        Some(index) => Err(Error::PointBehindCamera { index, depth: depths[index] }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a gain is finite and positive.
+pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::InvalidParameter { name, reason: format!("must be finite and > 0, got {value}") })
+    }
+}

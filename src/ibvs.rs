@@ -1,0 +1,127 @@
+//! Classic image-based visual servoing in pixels (Espiau, Chaumette, Rives 1992):
+//! `v = -lambda L_hat^+ (p - p*)`. The baseline that ends at a wrong pose when the lens
+//! changes between the reference image and the servo, since `p = p*` then no longer means
+//! `F = F*`.
+
+use nalgebra::{Matrix6, Vector6};
+
+use crate::camera::{Intrinsics, pixel_interaction};
+use crate::error::{Error, Result, check_depths, check_finite_points, check_positive};
+
+/// Where the interaction matrix is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interaction {
+    /// At the current pixels and depths.
+    Current,
+    /// At the reference pixels and reference depths (constant).
+    Desired,
+    /// The mean of the two.
+    Mean,
+}
+
+impl std::str::FromStr for Interaction {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "current" => Ok(Self::Current),
+            "desired" => Ok(Self::Desired),
+            "mean" => Ok(Self::Mean),
+            _ => Err(Error::InvalidParameter {
+                name: "interaction",
+                reason: format!("expected \"current\", \"desired\" or \"mean\", got {s:?}"),
+            }),
+        }
+    }
+}
+
+/// Minimum number of points for a six-dof pixel-space law.
+pub const IBVS_MIN_POINTS: usize = 4;
+
+/// Pixel-space IBVS controller.
+#[derive(Debug, Clone)]
+pub struct IbvsController {
+    reference: Vec<[f64; 2]>,
+    reference_depths: Option<Vec<f64>>,
+    k: nalgebra::Matrix3<f64>,
+    k_inv: nalgebra::Matrix3<f64>,
+    gain: f64,
+    interaction: Interaction,
+    last_error: Option<f64>,
+}
+
+impl IbvsController {
+    /// `reference_depths` are required for [`Interaction::Desired`] and [`Interaction::Mean`].
+    pub fn new(
+        reference_pixels: &[[f64; 2]],
+        k_hat: Intrinsics,
+        gain: f64,
+        interaction: Interaction,
+        reference_depths: Option<&[f64]>,
+    ) -> Result<Self> {
+        check_finite_points("reference_pixels", reference_pixels)?;
+        let n = reference_pixels.len();
+        if n < IBVS_MIN_POINTS {
+            return Err(Error::TooFewPoints { needed: IBVS_MIN_POINTS, got: n, why: "six dof from pixel errors" });
+        }
+        check_positive("gain", gain)?;
+        if let Some(z) = reference_depths {
+            check_depths(z, n)?;
+        } else if interaction != Interaction::Current {
+            return Err(Error::InvalidParameter {
+                name: "reference_depths",
+                reason: "required when the interaction matrix uses the desired points".into(),
+            });
+        }
+        let k = k_hat.matrix();
+        let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
+        Ok(Self {
+            reference: reference_pixels.to_vec(),
+            reference_depths: reference_depths.map(<[f64]>::to_vec),
+            k,
+            k_inv,
+            gain,
+            interaction,
+            last_error: None,
+        })
+    }
+
+    /// Root-mean-square pixel error `sqrt(mean ||p_k - p_k*||^2)` at the last step.
+    pub fn last_pixel_error(&self) -> Option<f64> {
+        self.last_error
+    }
+
+    /// One control step: `v = -lambda L_hat^+ (p - p*)`.
+    pub fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        let n = self.reference.len();
+        if pixels.len() != n {
+            return Err(Error::Shape {
+                what: "pixels",
+                expected: format!("{n} points (as in the reference image)"),
+                got: format!("{} points", pixels.len()),
+            });
+        }
+        check_finite_points("pixels", pixels)?;
+        check_depths(depths, n)?;
+        let mut ltl = Matrix6::zeros();
+        let mut lte = Vector6::zeros();
+        let mut err2 = 0.0;
+        for i in 0..n {
+            let e = nalgebra::Vector2::new(pixels[i][0] - self.reference[i][0], pixels[i][1] - self.reference[i][1]);
+            err2 += e.norm_squared();
+            let desired = || {
+                let z = self.reference_depths.as_ref().map_or(1.0, |z| z[i]);
+                pixel_interaction(&self.k, &self.k_inv, self.reference[i], z)
+            };
+            let l = match self.interaction {
+                Interaction::Current => pixel_interaction(&self.k, &self.k_inv, pixels[i], depths[i]),
+                Interaction::Desired => desired(),
+                Interaction::Mean => (pixel_interaction(&self.k, &self.k_inv, pixels[i], depths[i]) + desired()) * 0.5,
+            };
+            ltl += l.tr_mul(&l);
+            lte += l.tr_mul(&e);
+        }
+        let chol = ltl.cholesky().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: 0.0 })?;
+        self.last_error = Some((err2 / n as f64).sqrt());
+        Ok(chol.solve(&lte) * -self.gain)
+    }
+}

@@ -1,0 +1,69 @@
+//! # vsinv: visual servoing invariant to the camera's intrinsic parameters
+//!
+//! An implementation of E. Malis, *Visual servoing invariant to changes in camera intrinsic
+//! parameters*, INRIA research report RR-4309 (2001): position a camera with respect to a
+//! non-planar object from a reference image that may have been taken with another camera,
+//! lens or zoom.
+//!
+//! ## Where each concept lives
+//! | paper | module |
+//! |---|---|
+//! | camera model, eq. (4), point interaction matrix | [`camera`] |
+//! | projective invariant transform, sec. 2.3, eq. (21) | [`invariant`] |
+//! | invariant Jacobian, sec. 4.1, eqs. (11)-(13), (23) | [`jacobian`] |
+//! | control laws, eqs. (14), (17), (24) | [`control`] |
+//! | classic IBVS baseline | [`ibvs`] |
+//! | Props. 1-3, appendix B | [`stability`] |
+//! | rigid motions, exact twist integration | [`se3`] |
+//!
+//! ## Conventions
+//! - SI units: metres, radians, seconds; pixels for image points.
+//! - Image points are `(u, v)` pairs, `[[f64; 2]]` in Rust and `(n, 2)` arrays in Python.
+//! - The camera twist is `(vx, vy, vz, wx, wy, wz)` in the *current camera frame* (ViSP's
+//!   order): linear velocity in m/s, then angular velocity in rad/s.
+//! - Poses are 4x4 homogeneous matrices (`Isometry3` in Rust) of the camera frame expressed
+//!   in F*, the camera frame where the reference image was taken.
+//! - The basis is three point indices; the task vector `s` stacks the invariant points of the
+//!   other points in increasing index order.
+//! - Depths passed to the controllers are per-point estimates; any common positive scale
+//!   (`kappa` of sec. 4.1) is allowed for the invariant law.
+//!
+//! The paper's misprints and their corrections (`shared/paper/NOTES.md`) are cited as
+//! "NOTES.md item N" next to the code they affect.
+//!
+//! ## Example
+//! ```
+//! use vsinv::{Intrinsics, InvariantController, InvariantControllerConfig, project_points};
+//! let k_star = Intrinsics::pinhole(1200.0, 1200.0, 384.0, 288.0)?; // reference lens
+//! let k = Intrinsics::pinhole(600.0, 600.0, 384.0, 288.0)?;       // servo lens
+//! let object: Vec<[f64; 3]> = vec![
+//!     [-0.1, -0.1, 0.6], [0.12, -0.08, 0.62], [0.0, 0.11, 0.58],
+//!     [0.05, 0.02, 0.7], [-0.06, 0.05, 0.55], [0.09, 0.09, 0.65], [-0.1, 0.0, 0.66],
+//! ];
+//! let (reference, _) = project_points(&object, &k_star)?;
+//! let mut ctl = InvariantController::new(&reference, k, [0, 1, 2], InvariantControllerConfig::default())?;
+//! let (pixels, depths) = project_points(&object, &k)?;
+//! let twist = ctl.step(&pixels, &depths)?; // at the reference pose: ~zero twist
+//! assert!(twist.norm() < 1e-9);
+//! # Ok::<(), vsinv::Error>(())
+//! ```
+
+pub mod camera;
+pub mod control;
+pub mod error;
+pub mod ibvs;
+pub mod invariant;
+pub mod jacobian;
+pub mod se3;
+pub mod stability;
+
+#[cfg(feature = "python")]
+mod python;
+
+pub use camera::{Intrinsics, project_points};
+pub use control::{ControlState, InvariantController, InvariantControllerConfig};
+pub use error::{Error, Result};
+pub use ibvs::{IbvsController, Interaction};
+pub use invariant::{choose_basis, invariant_points, task_vector};
+pub use jacobian::{invariant_interaction, invariant_jacobian, jacobian_factors, rz_coefficients, structure_ratio};
+pub use stability::{StabilityReport, a_matrix, check_stability, tracking_bound};

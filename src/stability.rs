@@ -1,0 +1,102 @@
+//! Stability of the five-dof law (sec. 4.1, Props. 1-3, appendix B).
+//!
+//! Linearised about the reference path, the closed loop is `d eps/dt = -lambda A eps + b`
+//! (eq. 19) with `A = J_hat^+ J = blockdiag(kappa K_hat^-1 K, F(K_hat)^-1 F(K))`
+//! (NOTES.md items 4-5), which holds wherever the depth estimates are `kappa zeta`.
+
+use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
+
+use crate::camera::f_of_matrix;
+use crate::error::{Error, Result, check_finite};
+
+/// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
+/// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
+pub fn check_upper_triangular(what: &'static str, k: &Matrix3<f64>) -> Result<()> {
+    check_finite(what, k.as_slice())?;
+    if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
+        return Err(Error::InvalidIntrinsics {
+            reason: format!("{what} must be upper triangular with last row (0, 0, 1)"),
+        });
+    }
+    if k[(0, 0)] == 0.0 || k[(1, 1)] == 0.0 {
+        return Err(Error::InvalidIntrinsics { reason: format!("{what} is singular (zero focal term)") });
+    }
+    Ok(())
+}
+
+/// `A = blockdiag(kappa K_hat^-1 K, F(K_hat)^-1 F(K))` (eq. 19).
+pub fn a_matrix(k: &Matrix3<f64>, k_hat: &Matrix3<f64>, kappa: f64) -> Result<Matrix5<f64>> {
+    check_upper_triangular("K", k)?;
+    check_upper_triangular("K_hat", k_hat)?;
+    check_finite("kappa", &[kappa])?;
+    // K_hat is triangular with nonzero diagonal: solve instead of inverting.
+    let top = k_hat
+        .solve_upper_triangular(k)
+        .ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?
+        * kappa;
+    let f_hat = f_of_matrix(k_hat);
+    let bottom: Matrix2<f64> = f_hat
+        .solve_upper_triangular(&f_of_matrix(k))
+        .ok_or_else(|| Error::InvalidIntrinsics { reason: "F(K_hat) is singular".into() })?;
+    let mut a = Matrix5::zeros();
+    a.fixed_view_mut::<3, 3>(0, 0).copy_from(&top);
+    a.fixed_view_mut::<2, 2>(3, 3).copy_from(&bottom);
+    Ok(a)
+}
+
+/// Stability verdicts for an estimate `K_hat` against the true intrinsics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StabilityReport {
+    /// Prop. 1 (constant K, if and only if): `lambda > 0`, `kappa > 0`, `K_hat[0,0] > 0`,
+    /// `K_hat[1,1] > 0` (NOTES.md item 5), for every K of the schedule taken as constant.
+    pub prop1: bool,
+    /// Prop. 2 (time-varying K, sufficient): `lambda > 0`, `kappa > 0` and the symmetric
+    /// parts of both blocks of A positive definite for every K of the schedule.
+    pub prop2: bool,
+    /// Eigenvalues of A for each K of the schedule (computed numerically).
+    pub eigenvalues: Vec<[Complex<f64>; 5]>,
+    /// Smallest eigenvalue of `A + A^T` over the schedule: the sigma of Prop. 3 (its minimum
+    /// singular value) when positive; zero or negative when `A + A^T` is not positive definite.
+    pub sigma: f64,
+    /// lambda.
+    pub gain: f64,
+}
+
+impl StabilityReport {
+    /// Prop. 3: the bound `psi/phi` on `||eps(t)||` for `||b(t)|| <= max_b`, with
+    /// `psi = 2 max_b` and `phi = lambda sigma` (eq. 20). Infinite when Prop. 2 fails.
+    pub fn tracking_bound(&self, max_b: f64) -> Result<f64> {
+        tracking_bound(self.gain, self.sigma, max_b)
+    }
+}
+
+/// Prop. 3 bound `psi / phi = 2 max_b / (lambda sigma)` (eq. 20); infinite if `sigma <= 0`.
+pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
+    check_finite("tracking_bound inputs", &[gain, sigma, max_b])?;
+    if gain <= 0.0 || max_b < 0.0 {
+        return Err(Error::InvalidParameter { name: "tracking_bound", reason: "needs gain > 0 and max_b >= 0".into() });
+    }
+    Ok(if sigma > 0.0 { 2.0 * max_b / (gain * sigma) } else { f64::INFINITY })
+}
+
+/// Props. 1 and 2 for a schedule of true intrinsics `k_schedule` (one matrix for a fixed
+/// camera), an estimate `k_hat` (any signs), the depth scale `kappa` and the gain lambda.
+pub fn check_stability(k_schedule: &[Matrix3<f64>], k_hat: &Matrix3<f64>, kappa: f64, gain: f64) -> Result<StabilityReport> {
+    if k_schedule.is_empty() {
+        return Err(Error::Shape { what: "K", expected: "at least one 3x3 matrix".into(), got: "none".into() });
+    }
+    check_finite("gain", &[gain])?;
+    let base = gain > 0.0 && kappa > 0.0;
+    let prop1_hat = k_hat[(0, 0)] > 0.0 && k_hat[(1, 1)] > 0.0;
+    let mut eigenvalues = Vec::with_capacity(k_schedule.len());
+    let mut sigma = f64::INFINITY;
+    for k in k_schedule {
+        crate::camera::Intrinsics::from_matrix(k)?;
+        let a = a_matrix(k, k_hat, kappa)?;
+        let ev = a.complex_eigenvalues();
+        eigenvalues.push([ev[0], ev[1], ev[2], ev[3], ev[4]]);
+        let sym = a + a.transpose();
+        sigma = sigma.min(sym.symmetric_eigenvalues().min());
+    }
+    Ok(StabilityReport { prop1: base && prop1_hat, prop2: base && sigma > 0.0, eigenvalues, sigma, gain })
+}
