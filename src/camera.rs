@@ -97,8 +97,18 @@ impl Intrinsics {
 
     /// The 3x3 matrix K of eq. (4).
     pub fn matrix(&self) -> Matrix3<f64> {
-        let (s, c) = self.theta.sin_cos();
-        Matrix3::new(self.fku, -self.fku * c / s, self.u0, 0.0, self.fkv / s, self.v0, 0.0, 0.0, 1.0)
+        let (s, cot) = self.sin_cot();
+        Matrix3::new(self.fku, -self.fku * cot, self.u0, 0.0, self.fkv / s, self.v0, 0.0, 0.0, 1.0)
+    }
+
+    /// `sin(theta)` and `cot(theta)`, exact for square pixels.
+    fn sin_cot(&self) -> (f64, f64) {
+        if self.theta == std::f64::consts::FRAC_PI_2 {
+            (1.0, 0.0)
+        } else {
+            let (s, c) = self.theta.sin_cos();
+            (s, c / s)
+        }
     }
 
     /// F(K) of sec. 4.1, the 2x2 factor of the rotational columns of J.
@@ -116,9 +126,9 @@ impl Intrinsics {
 
     /// Normalised coordinates `m = K^-1 p` of a pixel (x, y; the third coordinate is 1).
     pub fn normalise(&self, pixel: [f64; 2]) -> [f64; 2] {
-        let (s, c) = self.theta.sin_cos();
+        let (s, cot) = self.sin_cot();
         let y = (pixel[1] - self.v0) * s / self.fkv;
-        let x = (pixel[0] - self.u0 + self.fku * c / s * y) / self.fku;
+        let x = (pixel[0] - self.u0 + self.fku * cot * y) / self.fku;
         [x, y]
     }
 }

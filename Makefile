@@ -1,0 +1,32 @@
+# Developer entry points. `make test` runs every test (Rust and Python); `make run` installs
+# the package and runs the main job.
+PYTHON ?= python3
+PIP := $(PYTHON) -m pip
+
+.PHONY: install test test-rust test-python stubtest lint bench run
+
+install:
+	$(PIP) install -q -e ".[test]"
+
+test: install test-rust test-python stubtest
+
+test-rust:
+	cargo test
+
+test-python:
+	$(PYTHON) -m pytest -q
+
+stubtest:
+	$(PYTHON) -m mypy.stubtest vsinv._core
+	$(PYTHON) -m mypy python/vsinv
+
+lint:
+	cargo clippy --all-targets -- -D warnings
+	cargo clippy --features python -- -D warnings
+
+bench: install
+	cargo bench --bench vsinv
+	$(PYTHON) benches/bench_step.py
+
+run: install
+	$(PYTHON) examples/lens_change.py

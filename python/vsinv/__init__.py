@@ -1,0 +1,45 @@
+"""vsinv: visual servoing invariant to the camera's intrinsic parameters.
+
+An implementation of E. Malis, "Visual servoing invariant to changes in camera intrinsic
+parameters", INRIA RR-4309 (2001), with a Rust core.
+
+Conventions: SI units (metres, radians, seconds), pixels for image points given as (n, 2)
+arrays of (u, v); the camera twist is (vx, vy, vz, wx, wy, wz) in the current camera frame;
+poses are 4x4 homogeneous matrices of the camera frame in F*, the frame of the reference image.
+"""
+
+from ._core import (
+    DegenerateGeometry,
+    IbvsController,
+    Intrinsics,
+    InvalidInput,
+    InvariantController,
+    StabilityReport,
+    VsinvError,
+    __version__,
+    check_stability,
+    choose_basis,
+    invariant_jacobian,
+    invariant_points,
+    project,
+    structure_ratio,
+    tracking_bound,
+)
+
+__all__ = [
+    "DegenerateGeometry",
+    "IbvsController",
+    "Intrinsics",
+    "InvalidInput",
+    "InvariantController",
+    "StabilityReport",
+    "VsinvError",
+    "__version__",
+    "check_stability",
+    "choose_basis",
+    "invariant_jacobian",
+    "invariant_points",
+    "project",
+    "structure_ratio",
+    "tracking_bound",
+]

@@ -1,0 +1,455 @@
+//! Python bindings (feature `python`): the only module that knows about Python. Thin
+//! wrappers that read NumPy arrays in place, call the core and map errors to the package's
+//! exception hierarchy; no panic crosses into Python.
+
+mod arrays;
+mod errors;
+
+use nalgebra::{Matrix3, Vector6};
+use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+
+use arrays::{F64Array, f64_array, from_matrix, mat, points2, points3, vec1};
+use errors::{invalid_input, to_py};
+
+use crate::camera::Intrinsics;
+use crate::control::{InvariantController, InvariantControllerConfig};
+use crate::ibvs::{IbvsController, Interaction};
+use crate::stability::{StabilityReport, check_upper_triangular};
+
+/// A basis argument: three point indices, or "auto" for the widest triangle of the
+/// reference (or given) image.
+#[derive(Clone, Copy)]
+enum BasisArg {
+    Fixed([usize; 3]),
+    Auto,
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if let Ok(s) = obj.cast::<PyString>() {
+            return match s.to_str()? {
+                "auto" => Ok(BasisArg::Auto),
+                other => Err(invalid_input(format!("basis: expected three indices or \"auto\", got {other:?}"))),
+            };
+        }
+        let v: Vec<i64> = obj
+            .extract()
+            .map_err(|_| invalid_input("basis: expected three integer indices or \"auto\"".into()))?;
+        match v.as_slice() {
+            &[a, b, c] if a >= 0 && b >= 0 && c >= 0 => Ok(BasisArg::Fixed([a as usize, b as usize, c as usize])),
+            _ => Err(invalid_input(format!("basis: expected three non-negative indices, got {v:?}"))),
+        }
+    }
+}
+
+impl BasisArg {
+    fn resolve(self, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
+        match self {
+            BasisArg::Fixed(b) => Ok(b),
+            BasisArg::Auto => crate::invariant::choose_basis(pixels).map_err(to_py),
+        }
+    }
+}
+
+/// Intrinsic parameters of eq. (4): `Intrinsics(fku, fkv, u0, v0, skew=pi/2)`, pixels and
+/// radians. `skew` is the angle theta between the image axes.
+#[pyclass(name = "Intrinsics", module = "vsinv._core", frozen, from_py_object)]
+#[derive(Clone)]
+struct PyIntrinsics {
+    inner: Intrinsics,
+}
+
+#[pymethods]
+impl PyIntrinsics {
+    #[new]
+    #[pyo3(signature = (fku, fkv, u0, v0, skew = std::f64::consts::FRAC_PI_2))]
+    fn new(fku: f64, fkv: f64, u0: f64, v0: f64, skew: f64) -> PyResult<Self> {
+        Ok(Self { inner: Intrinsics::new(fku, fkv, u0, v0, skew).map_err(to_py)? })
+    }
+    /// From a 3x3 upper-triangular matrix K with K[2] = (0, 0, 1).
+    #[staticmethod]
+    fn from_matrix(k: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(Self { inner: Intrinsics::from_matrix(&matrix3(k, "K")?).map_err(to_py)? })
+    }
+    #[getter]
+    fn fku(&self) -> f64 {
+        self.inner.fku()
+    }
+    #[getter]
+    fn fkv(&self) -> f64 {
+        self.inner.fkv()
+    }
+    #[getter]
+    fn u0(&self) -> f64 {
+        self.inner.u0()
+    }
+    #[getter]
+    fn v0(&self) -> f64 {
+        self.inner.v0()
+    }
+    #[getter]
+    fn skew(&self) -> f64 {
+        self.inner.theta()
+    }
+    /// K, a new (3, 3) array.
+    #[getter]
+    fn matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        from_matrix(py, &self.inner.matrix())
+    }
+    fn __repr__(&self) -> String {
+        let i = &self.inner;
+        format!("Intrinsics(fku={}, fkv={}, u0={}, v0={}, skew={})", i.fku(), i.fkv(), i.u0(), i.v0(), i.theta())
+    }
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyIntrinsics>().is_ok_and(|o| o.get().inner == self.inner)
+    }
+}
+
+fn matrix3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrix3<f64>> {
+    let a = f64_array(obj, what, &[Some(3), Some(3)])?;
+    let m = Matrix3::from_row_slice(a.as_slice()?);
+    crate::error::check_finite("K", m.as_slice()).map_err(to_py)?;
+    Ok(m)
+}
+
+/// An `Intrinsics` or a 3x3 array, validated.
+fn intrinsics(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Intrinsics> {
+    if let Ok(k) = obj.cast::<PyIntrinsics>() {
+        return Ok(k.get().inner);
+    }
+    Intrinsics::from_matrix(&matrix3(obj, what)?).map_err(to_py)
+}
+
+fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<'py>> {
+    f64_array(obj, what, &[None, Some(2)])
+}
+
+fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
+    f64_array(obj, "depths", &[None])
+}
+
+/// Projects points given in the camera frame (n, 3), metres, with intrinsics K:
+/// returns (pixels (n, 2), depths (n,)).
+#[pyfunction]
+#[allow(non_snake_case)]
+fn project<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+    let pts = f64_array(points, "points", &[None, Some(3)])?;
+    let k = intrinsics(K, "K")?;
+    let (px, z) = crate::camera::project_points(points3(&pts)?, &k).map_err(to_py)?;
+    Ok((mat(py, px.len(), 2, px.into_flattened())?, PyArray1::from_vec(py, z)))
+}
+
+/// The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array.
+#[pyfunction]
+#[pyo3(signature = (pixels, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, basis=(0, 1, 2))")]
+fn invariant_points<'py>(py: Python<'py>, pixels: &Bound<'py, PyAny>, basis: BasisArg) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = pixels_arg(pixels, "pixels")?;
+    let px = points2(&a)?;
+    let q = crate::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
+    mat(py, q.len(), 3, q.into_flattened())
+}
+
+/// The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths.
+#[pyfunction]
+#[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
+#[allow(non_snake_case)]
+fn invariant_jacobian<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    basis: BasisArg,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let px = points2(&a)?;
+    let k = intrinsics(K, "K")?;
+    let j = crate::jacobian::invariant_jacobian(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    from_matrix(py, &j)
+}
+
+/// sigma_5/sigma_1 of the depth-balanced invariant Jacobian (degenerate-structure measure).
+#[pyfunction]
+#[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
+#[allow(non_snake_case)]
+fn structure_ratio(pixels: &Bound<'_, PyAny>, depths: &Bound<'_, PyAny>, K: &Bound<'_, PyAny>, basis: BasisArg) -> PyResult<f64> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let px = points2(&a)?;
+    let k = intrinsics(K, "K")?;
+    crate::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)
+}
+
+/// Three points well spread in the image (the widest triangle), sorted.
+#[pyfunction]
+fn choose_basis(pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
+    let a = pixels_arg(pixels, "pixels")?;
+    let [i, j, k] = crate::invariant::choose_basis(points2(&a)?).map_err(to_py)?;
+    Ok((i, j, k))
+}
+
+fn twist_out<'py>(py: Python<'py>, tw: &Vector6<f64>) -> Bound<'py, PyArray1<f64>> {
+    vec1(py, tw.as_slice())
+}
+
+/// The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24).
+#[pyclass(name = "InvariantController", module = "vsinv._core")]
+struct PyInvariantController {
+    inner: InvariantController,
+}
+
+fn state_of(c: &InvariantController) -> PyResult<&crate::control::ControlState> {
+    c.state().ok_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("no control step has run yet"))
+}
+
+#[pymethods]
+impl PyInvariantController {
+    #[new]
+    #[allow(non_snake_case)]
+    #[pyo3(
+        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::jacobian::DEFAULT_MIN_STRUCTURE_RATIO),
+        text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis=(0, 1, 2), feedforward=True, min_structure_ratio=0.001)"
+    )]
+    fn new(
+        reference_pixels: &Bound<'_, PyAny>,
+        K_hat: &Bound<'_, PyAny>,
+        gain: f64,
+        gain_rz: f64,
+        basis: BasisArg,
+        feedforward: bool,
+        min_structure_ratio: f64,
+    ) -> PyResult<Self> {
+        let a = pixels_arg(reference_pixels, "reference_pixels")?;
+        let px = points2(&a)?;
+        let k_hat = intrinsics(K_hat, "K_hat")?;
+        let config = InvariantControllerConfig { gain, gain_rz, feedforward, min_structure_ratio };
+        let inner = InvariantController::new(px, k_hat, basis.resolve(px)?, config).map_err(to_py)?;
+        Ok(Self { inner })
+    }
+
+    /// One control step from the current pixels (n, 2) and depth estimates (n,): the twist
+    /// (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s.
+    fn step<'py>(&mut self, py: Python<'py>, pixels: &Bound<'py, PyAny>, depths: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+        let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
+        Ok(twist_out(py, &tw))
+    }
+
+    /// Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its
+    /// derivative ds*/dt (same shape) for the feed-forward term of eq. (17).
+    #[pyo3(signature = (s_star, rate = None))]
+    fn set_reference(&mut self, s_star: &Bound<'_, PyAny>, rate: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+        let s = f64_array(s_star, "s_star", &[None, Some(3)])?;
+        let r = rate.map(|r| f64_array(r, "rate", &[None, Some(3)])).transpose()?;
+        let r_pts = match &r {
+            Some(r) => Some(points3(r)?),
+            None => None,
+        };
+        self.inner.set_reference(points3(&s)?, r_pts).map_err(to_py)
+    }
+
+    /// Stop rule for different cameras: ||s - s*|| < invariant_tol, |tau_21| < tau21_tol,
+    /// tau_11 > 0 and tau_22 > 0 (the last two exclude the rz = pi equilibrium).
+    #[pyo3(signature = (invariant_tol = 1e-4, tau21_tol = 1e-4))]
+    fn converged(&self, invariant_tol: f64, tau21_tol: f64) -> bool {
+        self.inner.converged(invariant_tol, tau21_tol)
+    }
+
+    /// The basis indices.
+    #[getter]
+    fn basis(&self) -> (usize, usize, usize) {
+        let [a, b, c] = self.inner.basis();
+        (a, b, c)
+    }
+    /// The reference s*(t): (n-3, 3) invariant points of the non-basis points.
+    #[getter]
+    fn reference_invariants<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let s = self.inner.reference_invariants();
+        mat(py, s.len(), 3, s.iter().flat_map(|q| [q.x, q.y, q.z]).collect())
+    }
+    /// Task function eps of eq. (14) at the last step, (5,).
+    #[getter]
+    fn eps<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        Ok(vec1(py, state_of(&self.inner)?.eps.as_slice()))
+    }
+    /// eps_z = det(Q*) tau_21 at the last step.
+    #[getter]
+    fn eps_z(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.eps_z)
+    }
+    /// ||s - s*|| at the last step.
+    #[getter]
+    fn invariant_error(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.invariant_error)
+    }
+    /// tau_11 of T = Q Q*^-1 at the last step.
+    #[getter]
+    fn tau_11(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.tau11())
+    }
+    /// tau_21 of T at the last step.
+    #[getter]
+    fn tau_21(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.tau21())
+    }
+    /// tau_22 of T at the last step.
+    #[getter]
+    fn tau_22(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.tau22())
+    }
+    /// T = Q Q*^-1 (eq. 21) at the last step, (3, 3).
+    #[getter]
+    fn t_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        from_matrix(py, &state_of(&self.inner)?.t)
+    }
+}
+
+/// Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*).
+#[pyclass(name = "IbvsController", module = "vsinv._core")]
+struct PyIbvsController {
+    inner: IbvsController,
+}
+
+#[pymethods]
+impl PyIbvsController {
+    #[new]
+    #[allow(non_snake_case)]
+    #[pyo3(
+        signature = (reference_pixels, K_hat, gain = 1.0, interaction = "current", reference_depths = None),
+        text_signature = "(reference_pixels, K_hat, gain=1.0, interaction='current', reference_depths=None)"
+    )]
+    fn new(
+        reference_pixels: &Bound<'_, PyAny>,
+        K_hat: &Bound<'_, PyAny>,
+        gain: f64,
+        interaction: &str,
+        reference_depths: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let a = pixels_arg(reference_pixels, "reference_pixels")?;
+        let k_hat = intrinsics(K_hat, "K_hat")?;
+        let kind: Interaction = interaction.parse().map_err(to_py)?;
+        let z = reference_depths.map(|z| f64_array(z, "reference_depths", &[None])).transpose()?;
+        let z_slice = match &z {
+            Some(z) => Some(z.as_slice()?),
+            None => None,
+        };
+        let inner = IbvsController::new(points2(&a)?, k_hat, gain, kind, z_slice).map_err(to_py)?;
+        Ok(Self { inner })
+    }
+
+    /// One control step: the twist (6,) in the camera frame.
+    fn step<'py>(&mut self, py: Python<'py>, pixels: &Bound<'py, PyAny>, depths: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+        let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
+        Ok(twist_out(py, &tw))
+    }
+
+    /// RMS pixel error at the last step (None before the first step).
+    #[getter]
+    fn pixel_error(&self) -> Option<f64> {
+        self.inner.last_pixel_error()
+    }
+}
+
+/// Stability verdicts of Props. 1-2 and the sigma of Prop. 3.
+#[pyclass(name = "StabilityReport", module = "vsinv._core", frozen)]
+struct PyStabilityReport {
+    inner: StabilityReport,
+    single: bool,
+}
+
+#[pymethods]
+impl PyStabilityReport {
+    /// Prop. 1 (constant K): necessary and sufficient.
+    #[getter]
+    fn prop1(&self) -> bool {
+        self.inner.prop1
+    }
+    /// Prop. 2 (K varying over the schedule): sufficient.
+    #[getter]
+    fn prop2(&self) -> bool {
+        self.inner.prop2
+    }
+    /// Smallest eigenvalue of A + A^T over the schedule (Prop. 3's sigma when positive).
+    #[getter]
+    fn sigma(&self) -> f64 {
+        self.inner.sigma
+    }
+    /// Eigenvalues of A: complex (5,) for one K, (m, 5) for a schedule of m matrices.
+    #[getter]
+    fn eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let flat: Vec<Complex64> = self.inner.eigenvalues.iter().flatten().map(|c| Complex64::new(c.re, c.im)).collect();
+        let arr = PyArray1::from_vec(py, flat);
+        if self.single { Ok(arr.into_any()) } else { Ok(arr.reshape([self.inner.eigenvalues.len(), 5])?.into_any()) }
+    }
+    /// Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b.
+    fn tracking_bound(&self, max_b: f64) -> PyResult<f64> {
+        self.inner.tracking_bound(max_b).map_err(to_py)
+    }
+    fn __repr__(&self) -> String {
+        format!("StabilityReport(prop1={}, prop2={}, sigma={:.6})", self.inner.prop1, self.inner.prop2, self.inner.sigma)
+    }
+}
+
+/// Reads K as one camera (Intrinsics or (3, 3)) or a schedule ((m, 3, 3) or a list).
+fn k_schedule(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<Matrix3<f64>>, bool)> {
+    if let Ok(k) = obj.cast::<PyIntrinsics>() {
+        return Ok((vec![k.get().inner.matrix()], true));
+    }
+    if let Ok(list) = obj.cast::<pyo3::types::PyList>() {
+        if list.iter().any(|x| x.cast::<PyIntrinsics>().is_ok()) {
+            let ks = list.iter().map(|x| intrinsics(&x, "K").map(|k| k.matrix())).collect::<PyResult<_>>()?;
+            return Ok((ks, false));
+        }
+    }
+    let a = f64_array(obj, "K", &[None, Some(3), Some(3)]).or_else(|_| f64_array(obj, "K", &[Some(3), Some(3)]));
+    let a = a.map_err(|_| invalid_input("K: expected an Intrinsics, a (3, 3) array or an (m, 3, 3) schedule".into()))?;
+    let single = a.shape().len() == 2;
+    let ks = a.as_slice()?.chunks_exact(9).map(Matrix3::from_row_slice).collect();
+    Ok((ks, single))
+}
+
+/// Props. 1-2 for true intrinsics K (one camera or a schedule), an estimate K_hat (any
+/// signs: a 3x3 upper-triangular matrix or Intrinsics), depth scale kappa and gain lambda.
+#[pyfunction]
+#[pyo3(signature = (K, K_hat, kappa = 1.0, gain = 1.0), text_signature = "(K, K_hat, kappa=1.0, gain=1.0)")]
+#[allow(non_snake_case)]
+fn check_stability(K: &Bound<'_, PyAny>, K_hat: &Bound<'_, PyAny>, kappa: f64, gain: f64) -> PyResult<PyStabilityReport> {
+    let (ks, single) = k_schedule(K)?;
+    let k_hat = match K_hat.cast::<PyIntrinsics>() {
+        Ok(i) => i.get().inner.matrix(),
+        Err(_) => matrix3(K_hat, "K_hat")?,
+    };
+    check_upper_triangular("K_hat", &k_hat).map_err(to_py)?;
+    let inner = crate::stability::check_stability(&ks, &k_hat, kappa, gain).map_err(to_py)?;
+    Ok(PyStabilityReport { inner, single })
+}
+
+/// Prop. 3 bound psi/phi = 2 max_b / (gain sigma) (eq. 20).
+#[pyfunction]
+fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> PyResult<f64> {
+    crate::stability::tracking_bound(gain, sigma, max_b).map_err(to_py)
+}
+
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    errors::register(m)?;
+    m.add_class::<PyIntrinsics>()?;
+    m.add_class::<PyInvariantController>()?;
+    m.add_class::<PyIbvsController>()?;
+    m.add_class::<PyStabilityReport>()?;
+    m.add_function(wrap_pyfunction!(project, m)?)?;
+    m.add_function(wrap_pyfunction!(invariant_points, m)?)?;
+    m.add_function(wrap_pyfunction!(invariant_jacobian, m)?)?;
+    m.add_function(wrap_pyfunction!(structure_ratio, m)?)?;
+    m.add_function(wrap_pyfunction!(choose_basis, m)?)?;
+    m.add_function(wrap_pyfunction!(check_stability, m)?)?;
+    m.add_function(wrap_pyfunction!(tracking_bound, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
