@@ -29,4 +29,4 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 
 run: install
-	$(PYTHON) examples/lens_change.py
+	cargo run --release --example lens_change
