@@ -21,6 +21,7 @@ stubtest:
 	$(PYTHON) -m mypy python/vsinv
 
 lint:
+	cargo fmt --check
 	cargo clippy --all-targets -- -D warnings
 	cargo clippy --features python -- -D warnings
 

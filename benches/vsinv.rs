@@ -83,10 +83,8 @@ fn scene(n: usize) -> Scene {
     let (reference, _) = vsinv::project_points(&object, &k_star).expect("reference view");
     // Displaced camera: 0.3 rad about a tilted axis, translated by (0.05, -0.03, -0.08) m.
     let axis = Unit::new_normalize(Vector3::new(0.3, -0.5, 1.0));
-    let pose = Isometry3::from_parts(
-        Translation3::new(0.05, -0.03, -0.08),
-        UnitQuaternion::from_axis_angle(&axis, 0.3),
-    );
+    let pose =
+        Isometry3::from_parts(Translation3::new(0.05, -0.03, -0.08), UnitQuaternion::from_axis_angle(&axis, 0.3));
     let (pixels, depths) = vsinv::project_points(&to_camera(&object, &pose), &k).expect("current view");
     let basis = choose_basis(&reference).expect("basis");
     Scene { reference, pixels, depths, basis, k_hat: k }
@@ -97,8 +95,9 @@ fn control_step(c: &mut Criterion) {
     for n in SIZES {
         let s = scene(n);
 
-        let mut invariant = InvariantController::new(&s.reference, s.k_hat, s.basis, InvariantControllerConfig::default())
-            .expect("invariant controller");
+        let mut invariant =
+            InvariantController::new(&s.reference, s.k_hat, s.basis, InvariantControllerConfig::default())
+                .expect("invariant controller");
         // Fail here rather than benchmark an error path.
         invariant.step(&s.pixels, &s.depths).expect("invariant step");
         group.bench_with_input(BenchmarkId::new("invariant", n), &s, |b, s| {
@@ -125,10 +124,7 @@ fn pose_integration(c: &mut Criterion) {
 }
 
 fn config() -> Criterion {
-    Criterion::default()
-        .warm_up_time(Duration::from_secs(1))
-        .measurement_time(Duration::from_secs(2))
-        .sample_size(50)
+    Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(2)).sample_size(50)
 }
 
 criterion_group! {

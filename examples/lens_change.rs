@@ -1,4 +1,5 @@
 //! The paper's lens-change experiment (sec. 5.2, experiment 2) in a few lines of Rust:
+#![allow(clippy::unwrap_used)]
 //! reference image with a 12 mm lens, servo with a 6 mm lens, start about 300 mm and 80
 //! degrees away; the invariant law against classic IBVS.
 //!
@@ -17,9 +18,8 @@ fn view(object: &[[f64; 3]], pose: &Isometry3<f64>, k: &Intrinsics) -> vsinv::Re
 fn main() -> vsinv::Result<()> {
     // 12 points, 300 x 240 mm, 600 mm away, with relief.
     let relief = [0.0, 0.06, -0.04, 0.03, -0.06, 0.05, 0.02, -0.03, 0.04, -0.05, 0.01, 0.06];
-    let object: Vec<[f64; 3]> = (0..12)
-        .map(|i| [-0.15 + 0.1 * (i % 4) as f64, -0.12 + 0.12 * (i / 4) as f64, 0.6 + relief[i]])
-        .collect();
+    let object: Vec<[f64; 3]> =
+        (0..12).map(|i| [-0.15 + 0.1 * (i % 4) as f64, -0.12 + 0.12 * (i / 4) as f64, 0.6 + relief[i]]).collect();
     let k_star = Intrinsics::pinhole(1200.0, 1200.0, 384.0, 288.0)?; // 12 mm at 100 px/mm
     let k = Intrinsics::pinhole(600.0, 600.0, 384.0, 288.0)?; // 6 mm
     let k_hat = Intrinsics::pinhole(650.0, 570.0, 395.0, 280.0)?; // rough estimate of k
@@ -30,7 +30,8 @@ fn main() -> vsinv::Result<()> {
         .unwrap_or_else(Rotation3::identity);
     let start = Isometry3::from_parts(
         Translation3::from(center),
-        UnitQuaternion::from_rotation_matrix(&look) * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 78f64.to_radians()),
+        UnitQuaternion::from_rotation_matrix(&look)
+            * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 78f64.to_radians()),
     );
     let (t0, r0) = pose_error(&Isometry3::identity(), &start);
     println!("start: {:.0} mm and {:.1} deg from the reference pose", t0 * 1e3, r0.to_degrees());

@@ -33,9 +33,7 @@ impl Intrinsics {
             });
         }
         if !(theta > 0.0 && theta < std::f64::consts::PI) {
-            return Err(Error::InvalidIntrinsics {
-                reason: format!("skew angle must be in (0, pi), got {theta}"),
-            });
+            return Err(Error::InvalidIntrinsics { reason: format!("skew angle must be in (0, pi), got {theta}") });
         }
         Ok(Self { fku, fkv, u0, v0, theta })
     }
@@ -142,10 +140,7 @@ pub fn f_of_matrix(k: &Matrix3<f64>) -> Matrix2<f64> {
 }
 
 /// Projects points given in the camera frame; fails for a point at or behind the camera.
-pub fn project_points(
-    points: &[[f64; 3]],
-    intrinsics: &Intrinsics,
-) -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
+pub fn project_points(points: &[[f64; 3]], intrinsics: &Intrinsics) -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
     check_finite("points", points.as_flattened())?;
     let mut pixels = Vec::with_capacity(points.len());
     let mut depths = Vec::with_capacity(points.len());
@@ -160,25 +155,21 @@ pub fn project_points(
     Ok((pixels, depths))
 }
 
+/// Pixel interaction matrices of all points (validated pixels, positive depths).
+pub fn pixel_interactions(pixels: &[[f64; 2]], depths: &[f64], intrinsics: &Intrinsics) -> Result<Vec<Matrix2x6<f64>>> {
+    crate::error::check_finite_points("pixels", pixels)?;
+    crate::error::check_depths(depths, pixels.len())?;
+    let k = intrinsics.matrix();
+    let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
+    Ok(pixels.iter().zip(depths).map(|(&p, &z)| pixel_interaction(&k, &k_inv, p, z)).collect())
+}
+
 /// Interaction matrix of an image point in normalised coordinates (Espiau et al. 1992):
 /// `d(x, y)/dt = L (v, w)` for the camera twist in the camera frame.
 #[inline]
 pub fn normalised_interaction(x: f64, y: f64, depth: f64) -> Matrix2x6<f64> {
     let iz = 1.0 / depth;
-    Matrix2x6::new(
-        -iz,
-        0.0,
-        x * iz,
-        x * y,
-        -(1.0 + x * x),
-        y,
-        0.0,
-        -iz,
-        y * iz,
-        1.0 + y * y,
-        -x * y,
-        -x,
-    )
+    Matrix2x6::new(-iz, 0.0, x * iz, x * y, -(1.0 + x * x), y, 0.0, -iz, y * iz, 1.0 + y * y, -x * y, -x)
 }
 
 /// Interaction matrix of a pixel `p = K m`: the first two rows of `L_k` in sec. 4.1
@@ -191,6 +182,7 @@ pub fn pixel_interaction(k: &Matrix3<f64>, k_inv: &Matrix3<f64>, pixel: [f64; 2]
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
@@ -255,7 +247,11 @@ mod tests {
             let (pm, _) = k.project(&minus);
             for r in 0..2 {
                 let fd = (pp[r] - pm[r]) / (2.0 * h);
-                assert!((fd - l[(r, j)]).abs() < 1e-4 * (1.0 + l[(r, j)].abs()), "col {j} row {r}: {fd} vs {}", l[(r, j)]);
+                assert!(
+                    (fd - l[(r, j)]).abs() < 1e-4 * (1.0 + l[(r, j)].abs()),
+                    "col {j} row {r}: {fd} vs {}",
+                    l[(r, j)]
+                );
             }
         }
     }

@@ -107,7 +107,10 @@ impl InvariantController {
         check_positive("gain", config.gain)?;
         check_positive("gain_rz", config.gain_rz)?;
         if !(config.min_structure_ratio.is_finite() && config.min_structure_ratio >= 0.0) {
-            return Err(Error::InvalidParameter { name: "min_structure_ratio", reason: "must be finite and >= 0".into() });
+            return Err(Error::InvalidParameter {
+                name: "min_structure_ratio",
+                reason: "must be finite and >= 0".into(),
+            });
         }
         let basis = validate_basis(basis, n)?;
         let frame = BasisFrame::new(reference_pixels, basis, "reference")?;
@@ -263,10 +266,10 @@ impl InvariantController {
         };
         // A pivot that lost almost all of its diagonal means rank loss since the first step.
         let l = chol.l_dirty();
-        if (0..5).any(|i| l[(i, i)] * l[(i, i)] < 1e-14 * jtj[(i, i)]) {
-            if let Some(err) = degenerate(&jtj) {
-                return Err(err);
-            }
+        if (0..5).any(|i| l[(i, i)] * l[(i, i)] < 1e-14 * jtj[(i, i)])
+            && let Some(err) = degenerate(&jtj)
+        {
+            return Err(err);
         }
         // eps = J_hat^+ (s - s*)  (eq. 14); mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
         let eps = chol.solve(&jte);
@@ -281,7 +284,7 @@ impl InvariantController {
         let eps_z = self.reference.eps_z(&v);
         let (a_hat, c_hat) = rz_from_interactions(&self.reference, &l_basis);
         let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * l_basis[j][(1, 5)]).abs()).sum();
-        if !(a_hat.abs() > 1e-9 * scale) {
+        if a_hat.is_nan() || a_hat.abs() <= 1e-9 * scale {
             return Err(Error::RzSingular { a_hat });
         }
         let wz = -(self.config.gain_rz * eps_z + c_hat.dot(&mu)) / a_hat;

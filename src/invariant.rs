@@ -128,11 +128,7 @@ impl RzReference {
     /// From the reference basis frame.
     pub fn new(reference: &BasisFrame) -> Self {
         let det_q_star = reference.q.determinant();
-        Self {
-            det_q_star,
-            adj_col0: reference.q_inv.column(0) * det_q_star,
-            q_star_inv: reference.q_inv,
-        }
+        Self { det_q_star, adj_col0: reference.q_inv.column(0) * det_q_star, q_star_inv: reference.q_inv }
     }
 
     /// `T = Q Q*^-1` (eq. 21).
@@ -149,6 +145,7 @@ impl RzReference {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;

@@ -21,7 +21,12 @@ pub const MIN_POINTS: usize = 6;
 pub const DEFAULT_MIN_STRUCTURE_RATIO: f64 = 1e-3;
 
 /// Validates pixels and depths and the basis; returns the basis.
-pub(crate) fn check_inputs(pixels: &[[f64; 2]], depths: &[f64], basis: [usize; 3], min_points: usize) -> Result<[usize; 3]> {
+pub(crate) fn check_inputs(
+    pixels: &[[f64; 2]],
+    depths: &[f64],
+    basis: [usize; 3],
+    min_points: usize,
+) -> Result<[usize; 3]> {
     check_finite_points("pixels", pixels)?;
     let n = pixels.len();
     if n < min_points {
@@ -37,7 +42,11 @@ pub(crate) fn check_inputs(pixels: &[[f64; 2]], depths: &[f64], basis: [usize; 3
 
 /// `L_k - q_1k L_1 - q_2k L_2 - q_3k L_3` for the two image rows (the third row is zero).
 #[inline]
-pub(crate) fn combined_interaction(l_k: &Matrix2x6<f64>, l_basis: &[Matrix2x6<f64>; 3], q_k: &Vector3<f64>) -> Matrix2x6<f64> {
+pub(crate) fn combined_interaction(
+    l_k: &Matrix2x6<f64>,
+    l_basis: &[Matrix2x6<f64>; 3],
+    q_k: &Vector3<f64>,
+) -> Matrix2x6<f64> {
     l_k - l_basis[0] * q_k.x - l_basis[1] * q_k.y - l_basis[2] * q_k.z
 }
 
@@ -79,7 +88,11 @@ pub fn invariant_jacobian(
 
 /// The factors `Phi(zeta)` (`3 (n-3) x 3`) and `Psi` (`3 (n-3) x 2`) of sec. 4.1, which depend
 /// only on the pixels and depths: `J = [Phi K, Psi F(K)]` for any intrinsics K.
-pub fn jacobian_factors(pixels: &[[f64; 2]], depths: &[f64], basis: [usize; 3]) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
+pub fn jacobian_factors(
+    pixels: &[[f64; 2]],
+    depths: &[f64],
+    basis: [usize; 3],
+) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     let basis = check_inputs(pixels, depths, basis, 4)?;
     let frame = BasisFrame::new(pixels, basis, "current")?;
     let others = non_basis_indices(pixels.len(), basis);

@@ -81,7 +81,12 @@ pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
 
 /// Props. 1 and 2 for a schedule of true intrinsics `k_schedule` (one matrix for a fixed
 /// camera), an estimate `k_hat` (any signs), the depth scale `kappa` and the gain lambda.
-pub fn check_stability(k_schedule: &[Matrix3<f64>], k_hat: &Matrix3<f64>, kappa: f64, gain: f64) -> Result<StabilityReport> {
+pub fn check_stability(
+    k_schedule: &[Matrix3<f64>],
+    k_hat: &Matrix3<f64>,
+    kappa: f64,
+    gain: f64,
+) -> Result<StabilityReport> {
     if k_schedule.is_empty() {
         return Err(Error::Shape { what: "K", expected: "at least one 3x3 matrix".into(), got: "none".into() });
     }

@@ -1,4 +1,5 @@
 //! Closed-loop behaviour of the control laws, integrated exactly with the SE(3) exponential.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod common;
 
@@ -14,7 +15,12 @@ fn paper_start() -> Isometry3<f64> {
     look_at([0.2, -0.15, -0.15], [0.0, 0.0, 0.6], 78f64.to_radians())
 }
 
-fn run_invariant(k_star: &Intrinsics, k: &Intrinsics, k_hat: Intrinsics, reference_depths: bool) -> (Isometry3<f64>, usize, InvariantController) {
+fn run_invariant(
+    k_star: &Intrinsics,
+    k: &Intrinsics,
+    k_hat: Intrinsics,
+    reference_depths: bool,
+) -> (Isometry3<f64>, usize, InvariantController) {
     let object = object_points();
     let (reference, z_star) = view(&object, &Isometry3::identity(), k_star);
     let basis = vsinv::choose_basis(&reference).unwrap();
@@ -45,7 +51,12 @@ fn invariant_law_converges_after_lens_change_with_reference_depths() {
     let (pose, iters, ctl) = run_invariant(&k_star, &k, k_hat, true);
     let (t, r) = pose_error(&Isometry3::identity(), &pose);
     assert!(iters < 3000, "did not converge");
-    assert!(t < 1e-3 && r.to_degrees() < 0.1, "ended {:.3} mm / {:.4} deg away after {iters} iterations", t * 1e3, r.to_degrees());
+    assert!(
+        t < 1e-3 && r.to_degrees() < 0.1,
+        "ended {:.3} mm / {:.4} deg away after {iters} iterations",
+        t * 1e3,
+        r.to_degrees()
+    );
     let s = ctl.state().unwrap();
     assert!(s.tau11() > 0.0 && s.tau22() > 0.0);
     // T = K K*^-1 at convergence (eq. 22).
@@ -58,7 +69,12 @@ fn invariant_law_converges_with_true_depths() {
     let (k_star, k) = (lens(1200.0), lens(600.0));
     let (pose, iters, _) = run_invariant(&k_star, &k, k, false);
     let (t, r) = pose_error(&Isometry3::identity(), &pose);
-    assert!(t < 1e-3 && r.to_degrees() < 0.1, "ended {:.3} mm / {:.4} deg away after {iters} iterations", t * 1e3, r.to_degrees());
+    assert!(
+        t < 1e-3 && r.to_degrees() < 0.1,
+        "ended {:.3} mm / {:.4} deg away after {iters} iterations",
+        t * 1e3,
+        r.to_degrees()
+    );
 }
 
 /// Classic IBVS with the same lens change drives p to p* and so stops far from the goal.
@@ -97,7 +113,10 @@ fn converged_rejects_the_rz_pi_equilibrium() {
     let k = lens(1200.0);
     let (reference, z_star) = view(&object, &Isometry3::identity(), &k);
     let mut ctl = InvariantController::new(&reference, k, [0, 3, 8], InvariantControllerConfig::default()).unwrap();
-    let flipped = Isometry3::from_parts(Default::default(), UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI));
+    let flipped = Isometry3::from_parts(
+        Default::default(),
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI),
+    );
     let (px, z) = view(&object, &flipped, &k);
     let _ = ctl.step(&px, &z);
     let s = ctl.state().unwrap();
@@ -119,7 +138,8 @@ fn feedforward_reduces_tracking_error() {
     let (reference, _) = view(&object, &Isometry3::identity(), &k);
     let basis = [0, 3, 8];
     let start = Isometry3::translation(0.06, -0.04, -0.08);
-    let path = |t: f64| Isometry3::translation(0.06 * (1.0 - t / 4.0), -0.04 * (1.0 - t / 4.0), -0.08 * (1.0 - t / 4.0));
+    let path =
+        |t: f64| Isometry3::translation(0.06 * (1.0 - t / 4.0), -0.04 * (1.0 - t / 4.0), -0.08 * (1.0 - t / 4.0));
     let s_of = |pose: &Isometry3<f64>| -> Vec<[f64; 3]> {
         let (px, _) = view(&object, pose, &k);
         let q = vsinv::invariant_points(&px, basis).unwrap();
@@ -134,7 +154,8 @@ fn feedforward_reduces_tracking_error() {
             let s = s_of(&path(t));
             let h = 1e-5;
             let (sp, sm) = (s_of(&path(t + h)), s_of(&path(t - h)));
-            let rate: Vec<[f64; 3]> = sp.iter().zip(&sm).map(|(a, b)| [0, 1, 2].map(|c| (a[c] - b[c]) / (2.0 * h))).collect();
+            let rate: Vec<[f64; 3]> =
+                sp.iter().zip(&sm).map(|(a, b)| [0, 1, 2].map(|c| (a[c] - b[c]) / (2.0 * h))).collect();
             ctl.set_reference(&s, Some(&rate)).unwrap();
             let (px, z) = view(&object, pose, &k);
             let tw = ctl.step(&px, &z).unwrap();

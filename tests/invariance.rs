@@ -1,4 +1,5 @@
 //! The projective invariant transform (sec. 2.3) and the Jacobians (sec. 4.1) against
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 //! independent computations: re-projection with other cameras and finite differences.
 
 mod common;
@@ -88,7 +89,11 @@ fn jacobian_matches_finite_differences() {
             let scale = full.column(col).amax().max(1e-3);
             for r in 0..27 {
                 let fd = (sp[r] - sm[r]) / (2.0 * h);
-                assert!((fd - full[(r, col)]).abs() < 1e-5 * scale.max(1.0), "col {col} row {r}: fd {fd} vs J {}", full[(r, col)]);
+                assert!(
+                    (fd - full[(r, col)]).abs() < 1e-5 * scale.max(1.0),
+                    "col {col} row {r}: fd {fd} vs J {}",
+                    full[(r, col)]
+                );
             }
         }
         let col6 = full.column(5).amax();

@@ -1,4 +1,5 @@
 //! Props. 1-3 (appendix B): the block form of A = J_hat^+ J and the verdicts.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod common;
 
@@ -58,8 +59,7 @@ fn prop1_verdict_equals_eigenvalue_signs_over_a_grid() {
 /// (a large skew error keeps the eigenvalues positive but A + A^T indefinite).
 #[test]
 fn prop2_is_sufficient_and_stricter() {
-    let schedule: Vec<Matrix3<f64>> =
-        (0..6).map(|i| lens(2250.0 - 140.0 * i as f64).matrix()).collect();
+    let schedule: Vec<Matrix3<f64>> = (0..6).map(|i| lens(2250.0 - 140.0 * i as f64).matrix()).collect();
     let good = check_stability(&schedule, &lens(1500.0).matrix(), 1.0, 1.0).unwrap();
     assert!(good.prop1 && good.prop2 && good.sigma > 0.0);
     let skewed = Matrix3::new(300.0, -3000.0, 384.0, 0.0, 5000.0, 288.0, 0.0, 0.0, 1.0);

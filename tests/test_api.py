@@ -148,3 +148,41 @@ def test_check_stability_report():
     assert r.eigenvalues.shape == (3, 5) and r.prop2
     assert r.tracking_bound(0.1) == pytest.approx(vsinv.tracking_bound(2.0, r.sigma, 0.1))
     assert vsinv.tracking_bound(2.0, 0.5, 0.1) == pytest.approx(0.2)
+
+
+def test_interaction_matrix_and_factors(scene):
+    k = vsinv.Intrinsics(700.0, 650.0, 400.0, 250.0, skew=1.5)
+    px, z = scene["cur"], scene["z"]
+    ls = vsinv.interaction_matrix(px, z, k)
+    assert ls.shape == (12, 2, 6)
+    km = k.matrix
+    x, y, _ = np.linalg.solve(km, [px[4, 0], px[4, 1], 1.0])
+    zz = z[4]
+    lx = np.array([[-1 / zz, 0, x / zz, x * y, -(1 + x * x), y], [0, -1 / zz, y / zz, 1 + y * y, -x * y, -x]])
+    np.testing.assert_allclose(ls[4], km[:2, :2] @ lx, rtol=1e-10)
+    phi, psi = vsinv.jacobian_factors(px, z)
+    assert phi.shape == (27, 3) and psi.shape == (27, 2)
+    s, c = np.sin(k.skew), np.cos(k.skew)
+    f = np.array([[s / k.fkv, -c / k.fkv], [0.0, 1.0 / k.fku]])
+    j = np.hstack([phi @ km, psi @ f])
+    np.testing.assert_allclose(j, vsinv.invariant_jacobian(px, z, k), rtol=1e-8, atol=1e-12)
+
+
+def test_rz_coefficients_drive_eps_z(scene):
+    """a and c predict the change of eps_z for a small motion (eq. 23)."""
+    obj, k = scene["object"], scene["k"]
+    start = pose((0.05, -0.03, -0.08), (0.1, -0.2, 0.3))
+    px, z = view(obj, start, k)
+    a, c = vsinv.rz_coefficients(px, z, scene["ref"], k)
+    ref = scene["ref"]
+
+    def eps_z(m):
+        p, _ = view(obj, m, k)
+        qs = np.vstack([ref[:3].T, np.ones(3)])
+        t = np.vstack([p[:3].T, np.ones(3)]) @ np.linalg.inv(qs)
+        return np.linalg.det(qs) * t[1, 0]
+
+    tw = np.array([0.01, -0.02, 0.015, 0.02, -0.01, 0.03]) * 1e-4
+    moved = start @ pose(tw[:3], tw[3:])
+    predicted = a * tw[5] + c @ tw[:5]
+    assert eps_z(moved) - eps_z(start) == pytest.approx(predicted, rel=1e-3)

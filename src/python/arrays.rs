@@ -55,8 +55,7 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str, dims: &[Option<usize>
         }
     };
     let shape = array.shape();
-    let shape_ok =
-        shape.len() == dims.len() && shape.iter().zip(dims).all(|(s, d)| d.is_none_or(|d| d == *s));
+    let shape_ok = shape.len() == dims.len() && shape.iter().zip(dims).all(|(s, d)| d.is_none_or(|d| d == *s));
     if !shape_ok {
         let want: Vec<String> = dims.iter().map(|d| d.map_or("n".to_string(), |d| d.to_string())).collect();
         return Err(invalid_input(format!("{what}: expected shape ({}), got {:?}", want.join(", "), shape)));

@@ -6,7 +6,7 @@ mod arrays;
 mod errors;
 
 use nalgebra::{Matrix3, Vector6};
-use numpy::{Complex64, PyArray1, PyArray2, PyArrayMethods};
+use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
@@ -35,9 +35,8 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
                 other => Err(invalid_input(format!("basis: expected three indices or \"auto\", got {other:?}"))),
             };
         }
-        let v: Vec<i64> = obj
-            .extract()
-            .map_err(|_| invalid_input("basis: expected three integer indices or \"auto\"".into()))?;
+        let v: Vec<i64> =
+            obj.extract().map_err(|_| invalid_input("basis: expected three integer indices or \"auto\"".into()))?;
         match v.as_slice() {
             &[a, b, c] if a >= 0 && b >= 0 && c >= 0 => Ok(BasisArg::Fixed([a as usize, b as usize, c as usize])),
             _ => Err(invalid_input(format!("basis: expected three non-negative indices, got {v:?}"))),
@@ -131,15 +130,14 @@ fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
     f64_array(obj, "depths", &[None])
 }
 
+type PixelsAndDepths<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>);
+type PixelsPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
+
 /// Projects points given in the camera frame (n, 3), metres, with intrinsics K:
 /// returns (pixels (n, 2), depths (n,)).
 #[pyfunction]
 #[allow(non_snake_case)]
-fn project<'py>(
-    py: Python<'py>,
-    points: &Bound<'py, PyAny>,
-    K: &Bound<'py, PyAny>,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+fn project<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, K: &Bound<'py, PyAny>) -> PyResult<PixelsAndDepths<'py>> {
     let pts = f64_array(points, "points", &[None, Some(3)])?;
     let k = intrinsics(K, "K")?;
     let (px, z) = crate::camera::project_points(points3(&pts)?, &k).map_err(to_py)?;
@@ -149,7 +147,11 @@ fn project<'py>(
 /// The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array.
 #[pyfunction]
 #[pyo3(signature = (pixels, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, basis=(0, 1, 2))")]
-fn invariant_points<'py>(py: Python<'py>, pixels: &Bound<'py, PyAny>, basis: BasisArg) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn invariant_points<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    basis: BasisArg,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let a = pixels_arg(pixels, "pixels")?;
     let px = points2(&a)?;
     let q = crate::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
@@ -174,11 +176,69 @@ fn invariant_jacobian<'py>(
     from_matrix(py, &j)
 }
 
+/// Pixel interaction matrices (n, 2, 6) of the points: dp_k/dt = L_k (v, w) (Espiau et al.).
+#[pyfunction]
+#[allow(non_snake_case)]
+fn interaction_matrix<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let (px, z) = (points2(&a)?, z.as_slice()?);
+    let k = intrinsics(K, "K")?;
+    let ls = crate::camera::pixel_interactions(px, z, &k).map_err(to_py)?;
+    let flat: Vec<f64> = ls.iter().flat_map(|l| (0..2).flat_map(move |r| (0..6).map(move |c| l[(r, c)]))).collect();
+    PyArray1::from_vec(py, flat).reshape([ls.len(), 2, 6])
+}
+
+/// The factors (Phi (3(n-3), 3), Psi (3(n-3), 2)) of sec. 4.1: J = [Phi K, Psi F(K)].
+#[pyfunction]
+#[pyo3(signature = (pixels, depths, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, basis=(0, 1, 2))")]
+fn jacobian_factors<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+    basis: BasisArg,
+) -> PyResult<PixelsPair<'py>> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let px = points2(&a)?;
+    let (phi, psi) = crate::jacobian::jacobian_factors(px, z.as_slice()?, basis.resolve(px)?).map_err(to_py)?;
+    Ok((from_matrix(py, &phi)?, from_matrix(py, &psi)?))
+}
+
+/// The coefficients (a, c (5,)) of eq. (23): d eps_z/dt = a w_z + c . (vx, vy, vz, wx, wy).
+#[pyfunction]
+#[allow(non_snake_case)]
+#[pyo3(signature = (pixels, depths, reference_pixels, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, reference_pixels, K, basis=(0, 1, 2))")]
+fn rz_coefficients<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+    reference_pixels: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    basis: BasisArg,
+) -> PyResult<(f64, Bound<'py, PyArray1<f64>>)> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let r = pixels_arg(reference_pixels, "reference_pixels")?;
+    let (px, rpx) = (points2(&a)?, points2(&r)?);
+    let k = intrinsics(K, "K")?;
+    let (coef_a, c) =
+        crate::jacobian::rz_coefficients(px, z.as_slice()?, rpx, &k, basis.resolve(rpx)?).map_err(to_py)?;
+    Ok((coef_a, vec1(py, c.as_slice())))
+}
+
 /// sigma_5/sigma_1 of the depth-balanced invariant Jacobian (degenerate-structure measure).
 #[pyfunction]
 #[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
 #[allow(non_snake_case)]
-fn structure_ratio(pixels: &Bound<'_, PyAny>, depths: &Bound<'_, PyAny>, K: &Bound<'_, PyAny>, basis: BasisArg) -> PyResult<f64> {
+fn structure_ratio(
+    pixels: &Bound<'_, PyAny>,
+    depths: &Bound<'_, PyAny>,
+    K: &Bound<'_, PyAny>,
+    basis: BasisArg,
+) -> PyResult<f64> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
@@ -234,7 +294,12 @@ impl PyInvariantController {
 
     /// One control step from the current pixels (n, 2) and depth estimates (n,): the twist
     /// (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s.
-    fn step<'py>(&mut self, py: Python<'py>, pixels: &Bound<'py, PyAny>, depths: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        depths: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
         let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
         Ok(twist_out(py, &tw))
@@ -343,7 +408,12 @@ impl PyIbvsController {
     }
 
     /// One control step: the twist (6,) in the camera frame.
-    fn step<'py>(&mut self, py: Python<'py>, pixels: &Bound<'py, PyAny>, depths: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        depths: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
         let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
         Ok(twist_out(py, &tw))
@@ -383,7 +453,8 @@ impl PyStabilityReport {
     /// Eigenvalues of A: complex (5,) for one K, (m, 5) for a schedule of m matrices.
     #[getter]
     fn eigenvalues<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let flat: Vec<Complex64> = self.inner.eigenvalues.iter().flatten().map(|c| Complex64::new(c.re, c.im)).collect();
+        let flat: Vec<Complex64> =
+            self.inner.eigenvalues.iter().flatten().map(|c| Complex64::new(c.re, c.im)).collect();
         let arr = PyArray1::from_vec(py, flat);
         if self.single { Ok(arr.into_any()) } else { Ok(arr.reshape([self.inner.eigenvalues.len(), 5])?.into_any()) }
     }
@@ -392,7 +463,10 @@ impl PyStabilityReport {
         self.inner.tracking_bound(max_b).map_err(to_py)
     }
     fn __repr__(&self) -> String {
-        format!("StabilityReport(prop1={}, prop2={}, sigma={:.6})", self.inner.prop1, self.inner.prop2, self.inner.sigma)
+        format!(
+            "StabilityReport(prop1={}, prop2={}, sigma={:.6})",
+            self.inner.prop1, self.inner.prop2, self.inner.sigma
+        )
     }
 }
 
@@ -401,14 +475,15 @@ fn k_schedule(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<Matrix3<f64>>, bool)> {
     if let Ok(k) = obj.cast::<PyIntrinsics>() {
         return Ok((vec![k.get().inner.matrix()], true));
     }
-    if let Ok(list) = obj.cast::<pyo3::types::PyList>() {
-        if list.iter().any(|x| x.cast::<PyIntrinsics>().is_ok()) {
-            let ks = list.iter().map(|x| intrinsics(&x, "K").map(|k| k.matrix())).collect::<PyResult<_>>()?;
-            return Ok((ks, false));
-        }
+    if let Ok(list) = obj.cast::<pyo3::types::PyList>()
+        && list.iter().any(|x| x.cast::<PyIntrinsics>().is_ok())
+    {
+        let ks = list.iter().map(|x| intrinsics(&x, "K").map(|k| k.matrix())).collect::<PyResult<_>>()?;
+        return Ok((ks, false));
     }
     let a = f64_array(obj, "K", &[None, Some(3), Some(3)]).or_else(|_| f64_array(obj, "K", &[Some(3), Some(3)]));
-    let a = a.map_err(|_| invalid_input("K: expected an Intrinsics, a (3, 3) array or an (m, 3, 3) schedule".into()))?;
+    let a =
+        a.map_err(|_| invalid_input("K: expected an Intrinsics, a (3, 3) array or an (m, 3, 3) schedule".into()))?;
     let single = a.shape().len() == 2;
     let ks = a.as_slice()?.chunks_exact(9).map(Matrix3::from_row_slice).collect();
     Ok((ks, single))
@@ -419,7 +494,12 @@ fn k_schedule(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<Matrix3<f64>>, bool)> {
 #[pyfunction]
 #[pyo3(signature = (K, K_hat, kappa = 1.0, gain = 1.0), text_signature = "(K, K_hat, kappa=1.0, gain=1.0)")]
 #[allow(non_snake_case)]
-fn check_stability(K: &Bound<'_, PyAny>, K_hat: &Bound<'_, PyAny>, kappa: f64, gain: f64) -> PyResult<PyStabilityReport> {
+fn check_stability(
+    K: &Bound<'_, PyAny>,
+    K_hat: &Bound<'_, PyAny>,
+    kappa: f64,
+    gain: f64,
+) -> PyResult<PyStabilityReport> {
     let (ks, single) = k_schedule(K)?;
     let k_hat = match K_hat.cast::<PyIntrinsics>() {
         Ok(i) => i.get().inner.matrix(),
@@ -447,6 +527,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(invariant_points, m)?)?;
     m.add_function(wrap_pyfunction!(invariant_jacobian, m)?)?;
     m.add_function(wrap_pyfunction!(structure_ratio, m)?)?;
+    m.add_function(wrap_pyfunction!(interaction_matrix, m)?)?;
+    m.add_function(wrap_pyfunction!(jacobian_factors, m)?)?;
+    m.add_function(wrap_pyfunction!(rz_coefficients, m)?)?;
     m.add_function(wrap_pyfunction!(choose_basis, m)?)?;
     m.add_function(wrap_pyfunction!(check_stability, m)?)?;
     m.add_function(wrap_pyfunction!(tracking_bound, m)?)?;

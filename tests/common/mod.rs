@@ -1,5 +1,6 @@
 //! Scene helpers shared by the integration tests: an object, poses, a pinhole view, and a
 //! tiny deterministic random generator (the tests must be reproducible).
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 #![allow(dead_code)]
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
