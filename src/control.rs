@@ -7,8 +7,23 @@ use crate::camera::{Intrinsics, pixel_interaction};
 use crate::error::{Error, Result, check_depths, check_finite, check_finite_points, check_positive};
 use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::jacobian::{
-    DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, combined_interaction, q_inv_gram, rz_from_interactions,
+    DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction, q_inv_gram,
+    rz_from_interactions,
 };
+
+/// A visual-servoing control law: current pixels and depth estimates in, camera twist
+/// `(vx, vy, vz, wx, wy, wz)` (camera frame) out. Implemented by [`InvariantController`] and
+/// [`crate::IbvsController`], so a simulator or a robot loop can run either.
+pub trait Controller {
+    /// One control step.
+    fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>>;
+}
+
+impl Controller for InvariantController {
+    fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        InvariantController::step(self, pixels, depths)
+    }
+}
 
 /// Tuning of an [`InvariantController`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,13 +112,7 @@ impl InvariantController {
     ) -> Result<Self> {
         check_finite_points("reference_pixels", reference_pixels)?;
         let n = reference_pixels.len();
-        if n < MIN_POINTS {
-            return Err(Error::TooFewPoints {
-                needed: MIN_POINTS,
-                got: n,
-                why: "three basis points plus three more to control five dof",
-            });
-        }
+        check_point_count(n, MIN_POINTS)?;
         check_positive("gain", config.gain)?;
         check_positive("gain_rz", config.gain_rz)?;
         if !(config.min_structure_ratio.is_finite() && config.min_structure_ratio >= 0.0) {

@@ -37,6 +37,12 @@ impl std::str::FromStr for Interaction {
 /// Minimum number of points for a six-dof pixel-space law.
 pub const IBVS_MIN_POINTS: usize = 4;
 
+impl crate::control::Controller for IbvsController {
+    fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        IbvsController::step(self, pixels, depths)
+    }
+}
+
 /// Pixel-space IBVS controller.
 #[derive(Debug, Clone)]
 pub struct IbvsController {

@@ -20,6 +20,18 @@ pub const MIN_POINTS: usize = 6;
 /// planar object gives about 1e-15, +-20 mm of relief at 600 mm about 0.08).
 pub const DEFAULT_MIN_STRUCTURE_RATIO: f64 = 1e-3;
 
+/// Fails with `TooFewPoints` when fewer than `min_points` points are given.
+pub(crate) fn check_point_count(n: usize, min_points: usize) -> Result<()> {
+    if n < min_points {
+        return Err(Error::TooFewPoints {
+            needed: min_points,
+            got: n,
+            why: "three basis points plus three more to control five dof",
+        });
+    }
+    Ok(())
+}
+
 /// Validates pixels and depths and the basis; returns the basis.
 pub(crate) fn check_inputs(
     pixels: &[[f64; 2]],
@@ -29,13 +41,7 @@ pub(crate) fn check_inputs(
 ) -> Result<[usize; 3]> {
     check_finite_points("pixels", pixels)?;
     let n = pixels.len();
-    if n < min_points {
-        return Err(Error::TooFewPoints {
-            needed: min_points,
-            got: n,
-            why: "three basis points plus three more to control five dof",
-        });
-    }
+    check_point_count(n, min_points)?;
     check_depths(depths, n)?;
     validate_basis(basis, n)
 }

@@ -61,7 +61,7 @@ pub mod stability;
 mod python;
 
 pub use camera::{Intrinsics, project_points};
-pub use control::{ControlState, InvariantController, InvariantControllerConfig};
+pub use control::{ControlState, Controller, InvariantController, InvariantControllerConfig};
 pub use error::{Error, Result};
 pub use ibvs::{IbvsController, Interaction};
 pub use invariant::{choose_basis, invariant_points, task_vector};

@@ -5,7 +5,7 @@
 mod arrays;
 mod errors;
 
-use nalgebra::{Matrix3, Vector6};
+use nalgebra::Matrix3;
 use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyString;
@@ -14,7 +14,7 @@ use arrays::{F64Array, f64_array, from_matrix, mat, points2, points3, vec1};
 use errors::{invalid_input, to_py};
 
 use crate::camera::Intrinsics;
-use crate::control::{InvariantController, InvariantControllerConfig};
+use crate::control::{Controller, InvariantController, InvariantControllerConfig};
 use crate::ibvs::{IbvsController, Interaction};
 use crate::stability::{StabilityReport, check_upper_triangular};
 
@@ -253,8 +253,16 @@ fn choose_basis(pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
     Ok((i, j, k))
 }
 
-fn twist_out<'py>(py: Python<'py>, tw: &Vector6<f64>) -> Bound<'py, PyArray1<f64>> {
-    vec1(py, tw.as_slice())
+/// Reads the step's arrays in place and returns the twist as a new (6,) array.
+fn step_controller<'py, C: Controller>(
+    ctl: &mut C,
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let tw = ctl.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
+    Ok(vec1(py, tw.as_slice()))
 }
 
 /// The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24).
@@ -300,9 +308,7 @@ impl PyInvariantController {
         pixels: &Bound<'py, PyAny>,
         depths: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
-        let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
-        Ok(twist_out(py, &tw))
+        step_controller(&mut self.inner, py, pixels, depths)
     }
 
     /// Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its
@@ -414,9 +420,7 @@ impl PyIbvsController {
         pixels: &Bound<'py, PyAny>,
         depths: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
-        let tw = self.inner.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
-        Ok(twist_out(py, &tw))
+        step_controller(&mut self.inner, py, pixels, depths)
     }
 
     /// RMS pixel error at the last step (None before the first step).
