@@ -52,6 +52,8 @@ pub mod camera;
 pub mod control;
 pub mod error;
 pub mod ibvs;
+pub mod robot;
+pub mod scene;
 pub mod invariant;
 pub mod jacobian;
 pub mod se3;
