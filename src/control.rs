@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Matrix5, Vector3, Vector5, Vector6};
 
 use crate::camera::{Intrinsics, pixel_interaction};
-use crate::error::{Error, Result, check_depths, check_finite, check_finite_points, check_positive};
+use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
 use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::jacobian::{
     DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction, q_inv_gram,
@@ -15,13 +15,19 @@ use crate::jacobian::{
 /// `(vx, vy, vz, wx, wy, wz)` (camera frame) out. Implemented by [`InvariantController`] and
 /// [`crate::IbvsController`], so a simulator or a robot loop can run either.
 pub trait Controller {
-    /// One control step.
+    /// One control step with every point in view.
     fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>>;
+    /// One control step using only the points flagged visible (the others' pixels and
+    /// depths are ignored). Fails with `TooFewPoints` when too few remain.
+    fn step_visible(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<Vector6<f64>>;
 }
 
 impl Controller for InvariantController {
     fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
-        InvariantController::step(self, pixels, depths)
+        self.step_masked(pixels, depths, None)
+    }
+    fn step_visible(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, Some(visible))
     }
 }
 
@@ -219,6 +225,16 @@ impl InvariantController {
     /// One control step: the twist `(mu, w_z)` of eqs. (17) and (24) for the current pixels
     /// and depth estimates `zeta_hat = kappa zeta` (any common kappa > 0).
     pub fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, None)
+    }
+
+    /// A step with some points hidden: the three basis points and at least three others must
+    /// be visible; hidden points drop out of `s` and `J_hat`.
+    pub fn step_visible(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, Some(visible))
+    }
+
+    fn step_masked(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<Vector6<f64>> {
         if pixels.len() != self.n {
             return Err(Error::Shape {
                 what: "pixels",
@@ -226,8 +242,18 @@ impl InvariantController {
                 got: format!("{} points", pixels.len()),
             });
         }
-        check_finite_points("pixels", pixels)?;
-        check_depths(depths, self.n)?;
+        check_step_inputs(pixels, depths, visible)?;
+        let seen = |i: usize| visible.is_none_or(|v| v[i]);
+        if let Some(v) = visible {
+            let others_seen = self.others.iter().filter(|&&i| v[i]).count();
+            if !self.basis.iter().all(|&b| v[b]) || others_seen < MIN_POINTS - 3 {
+                return Err(Error::TooFewPoints {
+                    needed: MIN_POINTS,
+                    got: 3 * usize::from(self.basis.iter().all(|&b| v[b])) + others_seen,
+                    why: "the three basis points and three more must be visible",
+                });
+            }
+        }
         let frame = BasisFrame::new(pixels, self.basis, "current")?;
         let (k, k_inv) = (&self.k, &self.k_inv);
         let l_basis = self.basis.map(|i| pixel_interaction(k, k_inv, pixels[i], depths[i]));
@@ -240,6 +266,9 @@ impl InvariantController {
         let mut jtr = Vector5::zeros();
         let mut err2 = 0.0;
         for (j, &idx) in self.others.iter().enumerate() {
+            if !seen(idx) {
+                continue;
+            }
             let q = frame.transform(pixels[idx]);
             let e = q - self.s_star[j];
             err2 += e.norm_squared();
@@ -254,7 +283,9 @@ impl InvariantController {
             }
         }
 
-        let mean_depth = depths.iter().sum::<f64>() / depths.len() as f64;
+        let (depth_sum, depth_count) =
+            (0..self.n).filter(|&i| seen(i)).fold((0.0, 0usize), |(s, c), i| (s + depths[i], c + 1));
+        let mean_depth = depth_sum / depth_count as f64;
         let threshold = self.config.min_structure_ratio;
         let degenerate = |jtj: &Matrix5<f64>| {
             let ratio = balanced_ratio(jtj, mean_depth);

@@ -82,6 +82,15 @@ pub enum Error {
         /// The threshold that was applied.
         threshold: f64,
     },
+    /// A scenario file or dictionary that does not describe a valid run; `key` names the
+    /// offending entry (e.g. `control.gain`).
+    #[error("scenario: {key}: {reason}")]
+    Scenario {
+        /// Dotted path of the key at fault (empty for the whole document).
+        key: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]
@@ -136,6 +145,41 @@ pub(crate) fn check_depths(depths: &[f64], n: usize) -> Result<()> {
         Some(index) => Err(Error::PointBehindCamera { index, depth: depths[index] }),
         None => Ok(()),
     }
+}
+
+/// Checks the inputs of a control step: `depths` (and `visible`, if given) have one value per
+/// pixel, and every point in use (all, or the visible ones) has a finite pixel and a finite
+/// positive depth. Pixels and depths of hidden points are ignored.
+pub(crate) fn check_step_inputs(pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<()> {
+    let n = pixels.len();
+    if let Some(v) = visible
+        && v.len() != n
+    {
+        return Err(Error::Shape {
+            what: "visible",
+            expected: format!("{n} flags (one per point)"),
+            got: format!("{} flags", v.len()),
+        });
+    }
+    let Some(visible) = visible else {
+        check_finite_points("pixels", pixels)?;
+        return check_depths(depths, n);
+    };
+    if depths.len() != n {
+        return check_depths(depths, n);
+    }
+    for (index, ((p, &z), _)) in pixels.iter().zip(depths).zip(visible).enumerate().filter(|(_, (_, v))| **v) {
+        if !(p[0].is_finite() && p[1].is_finite()) {
+            return Err(Error::NonFinite { what: "pixels", index: 2 * index });
+        }
+        if !z.is_finite() {
+            return Err(Error::NonFinite { what: "depths", index });
+        }
+        if z <= 0.0 {
+            return Err(Error::PointBehindCamera { index, depth: z });
+        }
+    }
+    Ok(())
 }
 
 /// Checks that a gain is finite and positive.

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix6, Vector6};
 
 use crate::camera::{Intrinsics, pixel_interaction};
-use crate::error::{Error, Result, check_depths, check_finite_points, check_positive};
+use crate::error::{Error, Result, check_depths, check_finite_points, check_positive, check_step_inputs};
 
 /// Where the interaction matrix is evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -39,7 +39,10 @@ pub const IBVS_MIN_POINTS: usize = 4;
 
 impl crate::control::Controller for IbvsController {
     fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
-        IbvsController::step(self, pixels, depths)
+        self.step_masked(pixels, depths, None)
+    }
+    fn step_visible(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, Some(visible))
     }
 }
 
@@ -98,6 +101,15 @@ impl IbvsController {
 
     /// One control step: `v = -lambda L_hat^+ (p - p*)`.
     pub fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, None)
+    }
+
+    /// A step with only the visible points (at least [`IBVS_MIN_POINTS`]).
+    pub fn step_visible(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<Vector6<f64>> {
+        self.step_masked(pixels, depths, Some(visible))
+    }
+
+    fn step_masked(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<Vector6<f64>> {
         let n = self.reference.len();
         if pixels.len() != n {
             return Err(Error::Shape {
@@ -106,12 +118,15 @@ impl IbvsController {
                 got: format!("{} points", pixels.len()),
             });
         }
-        check_finite_points("pixels", pixels)?;
-        check_depths(depths, n)?;
+        check_step_inputs(pixels, depths, visible)?;
+        let used = visible.map_or(n, |v| v.iter().filter(|&&x| x).count());
+        if used < IBVS_MIN_POINTS {
+            return Err(Error::TooFewPoints { needed: IBVS_MIN_POINTS, got: used, why: "six dof from pixel errors" });
+        }
         let mut ltl = Matrix6::zeros();
         let mut lte = Vector6::zeros();
         let mut err2 = 0.0;
-        for i in 0..n {
+        for i in (0..n).filter(|&i| visible.is_none_or(|v| v[i])) {
             let e = nalgebra::Vector2::new(pixels[i][0] - self.reference[i][0], pixels[i][1] - self.reference[i][1]);
             err2 += e.norm_squared();
             let desired = || {
@@ -127,7 +142,7 @@ impl IbvsController {
             lte += l.tr_mul(&e);
         }
         let chol = ltl.cholesky().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: 0.0 })?;
-        self.last_error = Some((err2 / n as f64).sqrt());
+        self.last_error = Some((err2 / used as f64).sqrt());
         Ok(chol.solve(&lte) * -self.gain)
     }
 }

@@ -52,11 +52,13 @@ pub mod camera;
 pub mod control;
 pub mod error;
 pub mod ibvs;
-pub mod robot;
-pub mod scene;
 pub mod invariant;
 pub mod jacobian;
+pub mod robot;
+pub mod scenario;
+pub mod scene;
 pub mod se3;
+pub mod simulator;
 pub mod stability;
 
 #[cfg(feature = "python")]

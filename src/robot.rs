@@ -28,7 +28,11 @@ impl Default for JointLimits {
     /// b (the wrist singularity is at b = +-90 degrees), 0.5 m/s and 1.5 rad/s.
     fn default() -> Self {
         let (a, b) = (170f64.to_radians(), 80f64.to_radians());
-        Self { min: [-1.0, -1.0, -1.0, -a, -b, -a], max: [1.0, 1.0, 1.0, a, b, a], velocity: [0.5, 0.5, 0.5, 1.5, 1.5, 1.5] }
+        Self {
+            min: [-1.0, -1.0, -1.0, -a, -b, -a],
+            max: [1.0, 1.0, 1.0, a, b, a],
+            velocity: [0.5, 0.5, 0.5, 1.5, 1.5, 1.5],
+        }
     }
 }
 

@@ -85,9 +85,10 @@ impl Scene {
         check_finite("object points", points.as_flattened())?;
         for (i, b) in bodies.iter().enumerate() {
             let (dims, ok): (Vec<f64>, bool) = match b {
-                Body::Cuboid { half_extents, pose } => {
-                    (half_extents.to_vec(), half_extents.iter().all(|&h| h > 0.0) && pose.translation.vector.iter().all(|v| v.is_finite()))
-                }
+                Body::Cuboid { half_extents, pose } => (
+                    half_extents.to_vec(),
+                    half_extents.iter().all(|&h| h > 0.0) && pose.translation.vector.iter().all(|v| v.is_finite()),
+                ),
                 Body::Ball { radius, center } => (vec![*radius], *radius > 0.0 && center.iter().all(|v| v.is_finite())),
                 Body::Cylinder { half_height, radius, pose } => (
                     vec![*half_height, *radius],
@@ -192,7 +193,12 @@ mod tests {
         // behind the plate, on its front face, beside it, on its back face
         assert_eq!(obs.visible, vec![false, true, true, false]);
         // outside the image
-        scene.observe(&Isometry3::translation(1.0, 0.0, 0.0), &k, Some(ImageSize { width: 640.0, height: 480.0 }), &mut obs);
+        scene.observe(
+            &Isometry3::translation(1.0, 0.0, 0.0),
+            &k,
+            Some(ImageSize { width: 640.0, height: 480.0 }),
+            &mut obs,
+        );
         assert!(obs.visible.iter().all(|v| !v));
         // behind the camera
         scene.observe(&Isometry3::translation(0.0, 0.0, 1.0), &k, None, &mut obs);
