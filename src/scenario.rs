@@ -390,7 +390,10 @@ impl Scenario {
         let mut de = serde_json::Deserializer::from_str(text);
         let scenario: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();
-            scenario_error(&key, e.into_inner().to_string())
+            let message = e.into_inner().to_string();
+            // serde_json appends the position in the JSON text, meaningless for a dictionary.
+            let message = message.split(" at line ").next().unwrap_or_default().to_string();
+            scenario_error(&key, message)
         })?;
         scenario.validate()?;
         Ok(scenario)

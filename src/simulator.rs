@@ -530,7 +530,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         }
         let finish = |status: Status, message: String, m: Metrics| (status, message, m);
 
-        if !(dt_err <= stop.divergence_distance) {
+        if dt_err.is_nan() || dt_err > stop.divergence_distance {
             break finish(Status::Diverged, format!("camera {dt_err:.2} m from the goal"), m);
         }
         let seen = obs.visible.iter().filter(|&&v| v).count();

@@ -4,6 +4,7 @@
 
 mod arrays;
 mod errors;
+mod sim;
 
 use nalgebra::Matrix3;
 use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
@@ -537,6 +538,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(choose_basis, m)?)?;
     m.add_function(wrap_pyfunction!(check_stability, m)?)?;
     m.add_function(wrap_pyfunction!(tracking_bound, m)?)?;
+    m.add_class::<sim::PyScenario>()?;
+    m.add_class::<sim::PyRunResult>()?;
+    m.add_function(wrap_pyfunction!(sim::load_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::list_scenarios, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::run_scenario, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

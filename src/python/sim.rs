@@ -1,0 +1,258 @@
+//! Bindings of the scenario runner: scenarios from files, built-in names or dictionaries,
+//! runs with the GIL released, and recordings handed to NumPy without copying.
+
+use numpy::{PyArray1, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use super::errors::{invalid_input, to_py};
+use crate::scenario::{BUILTIN, Scenario, builtin};
+use crate::simulator::{Outcome, simulate};
+
+/// A validated scenario (see the README for the schema).
+#[pyclass(name = "Scenario", module = "vsinv._core", frozen, skip_from_py_object)]
+#[derive(Clone)]
+pub struct PyScenario {
+    pub inner: Scenario,
+}
+
+#[pymethods]
+impl PyScenario {
+    /// From TOML text.
+    #[staticmethod]
+    fn from_toml(text: &str) -> PyResult<Self> {
+        Ok(Self { inner: Scenario::from_toml(text).map_err(to_py)? })
+    }
+    /// From a dictionary with the structure of a scenario file.
+    #[staticmethod]
+    fn from_dict(d: &Bound<'_, PyAny>) -> PyResult<Self> {
+        scenario_from_dict(d).map(|inner| Self { inner })
+    }
+    /// The name.
+    #[getter]
+    fn name(&self) -> &str {
+        &self.inner.name
+    }
+    /// The description.
+    #[getter]
+    fn description(&self) -> &str {
+        &self.inner.description
+    }
+    /// The scenario as a dictionary (every default filled in); edit it and pass it back to
+    /// `run_scenario` or `Scenario.from_dict`.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = self.inner.to_json().map_err(to_py)?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+    /// The scenario as TOML text.
+    fn to_toml(&self) -> PyResult<String> {
+        self.inner.to_toml().map_err(to_py)
+    }
+    fn __repr__(&self) -> String {
+        format!("Scenario(name={:?})", self.inner.name)
+    }
+}
+
+fn scenario_from_dict(d: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    let py = d.py();
+    let text: String = py
+        .import("json")?
+        .call_method1("dumps", (d,))
+        .map_err(|e| invalid_input(format!("scenario: cannot be written as JSON ({e})")))?
+        .extract()?;
+    Scenario::from_json(&text).map_err(to_py)
+}
+
+/// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path.
+pub fn scenario_arg(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    if let Ok(s) = obj.cast::<PyScenario>() {
+        return Ok(s.get().inner.clone());
+    }
+    if obj.cast::<PyDict>().is_ok() {
+        return scenario_from_dict(obj);
+    }
+    let py = obj.py();
+    let text: String = if obj.cast::<PyString>().is_ok() {
+        obj.extract()?
+    } else {
+        py.import("os")?
+            .call_method1("fspath", (obj,))
+            .map_err(|_| invalid_input("scenario: expected a Scenario, a dict, a built-in name or a file path".into()))?
+            .extract()?
+    };
+    if BUILTIN.iter().any(|(n, _)| *n == text) {
+        return builtin(&text).map_err(to_py);
+    }
+    let path = std::path::Path::new(&text);
+    if path.is_file() {
+        let body = std::fs::read_to_string(path).map_err(|e| invalid_input(format!("{text}: {e}")))?;
+        return Scenario::from_toml(&body).map_err(|e| invalid_input(format!("{text}: {e}")));
+    }
+    let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+    Err(invalid_input(format!("{text:?} is neither a scenario file nor a built-in scenario ({})", names.join(", "))))
+}
+
+/// Loads a scenario from a built-in name, a TOML file path or a dictionary.
+#[pyfunction]
+pub fn load_scenario(source: &Bound<'_, PyAny>) -> PyResult<PyScenario> {
+    Ok(PyScenario { inner: scenario_arg(source)? })
+}
+
+/// The built-in scenarios as (name, description) pairs.
+#[pyfunction]
+pub fn list_scenarios() -> PyResult<Vec<(String, String)>> {
+    BUILTIN.iter().map(|(n, _)| builtin(n).map(|s| (s.name, s.description)).map_err(to_py)).collect()
+}
+
+/// The result of a run: `.summary` (a dict) and the recorded arrays, NumPy views of the
+/// simulator's buffers (one row per iteration).
+#[pyclass(name = "RunResult", module = "vsinv._core", frozen)]
+pub struct PyRunResult {
+    #[pyo3(get)]
+    summary: Py<PyDict>,
+    #[pyo3(get)]
+    scenario: Py<PyScenario>,
+    #[pyo3(get)]
+    time: Py<PyAny>,
+    #[pyo3(get)]
+    pose: Py<PyAny>,
+    #[pyo3(get)]
+    twist: Py<PyAny>,
+    #[pyo3(get)]
+    joints: Py<PyAny>,
+    #[pyo3(get)]
+    pixels: Py<PyAny>,
+    #[pyo3(get)]
+    visible: Py<PyAny>,
+    #[pyo3(get)]
+    invariant_error: Py<PyAny>,
+    #[pyo3(get)]
+    eps: Py<PyAny>,
+    #[pyo3(get)]
+    eps_z: Py<PyAny>,
+    #[pyo3(get)]
+    image_error: Py<PyAny>,
+    #[pyo3(get)]
+    translation_error: Py<PyAny>,
+    #[pyo3(get)]
+    rotation_error: Py<PyAny>,
+    #[pyo3(get)]
+    reference_pixels: Py<PyAny>,
+}
+
+#[pymethods]
+impl PyRunResult {
+    /// The recorded arrays by name.
+    #[getter]
+    fn arrays<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("time", self.time.bind(py))?;
+        d.set_item("pose", self.pose.bind(py))?;
+        d.set_item("twist", self.twist.bind(py))?;
+        d.set_item("joints", self.joints.bind(py))?;
+        d.set_item("pixels", self.pixels.bind(py))?;
+        d.set_item("visible", self.visible.bind(py))?;
+        d.set_item("invariant_error", self.invariant_error.bind(py))?;
+        d.set_item("eps", self.eps.bind(py))?;
+        d.set_item("eps_z", self.eps_z.bind(py))?;
+        d.set_item("image_error", self.image_error.bind(py))?;
+        d.set_item("translation_error", self.translation_error.bind(py))?;
+        d.set_item("rotation_error", self.rotation_error.bind(py))?;
+        d.set_item("reference_pixels", self.reference_pixels.bind(py))?;
+        Ok(d)
+    }
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let s = self.summary.bind(py);
+        let get = |k: &str| s.get_item(k).ok().flatten().map_or("?".into(), |v| v.to_string());
+        format!("RunResult(status={}, iterations={})", get("status"), get("iterations"))
+    }
+}
+
+/// Moves a buffer into NumPy (no copy) and views it with `shape`.
+fn array<T: numpy::Element>(py: Python<'_>, data: Vec<T>, shape: &[usize]) -> PyResult<Py<PyAny>> {
+    Ok(PyArray1::from_vec(py, data).reshape(shape)?.into_any().unbind())
+}
+
+/// The summary as a dictionary (millimetres and degrees for the pose errors).
+pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<Bound<'py, PyDict>> {
+    let s = &o.summary;
+    let d = PyDict::new(py);
+    d.set_item("name", name)?;
+    d.set_item("status", s.status.as_str())?;
+    d.set_item("message", &s.message)?;
+    d.set_item("iterations", s.iterations)?;
+    d.set_item("final_translation_error_mm", s.final_translation_error * 1e3)?;
+    d.set_item("final_rotation_error_deg", s.final_rotation_error.to_degrees())?;
+    d.set_item("final_image_error_px", s.final_image_error)?;
+    d.set_item("final_invariant_error", s.final_invariant_error)?;
+    d.set_item("final_tau_11", s.final_tau[0])?;
+    d.set_item("final_tau_21", s.final_tau[1])?;
+    d.set_item("final_tau_22", s.final_tau[2])?;
+    d.set_item("prop1", s.prop1)?;
+    d.set_item("prop2", s.prop2)?;
+    d.set_item("stop_rule", format!("{:?}", s.stop_rule).to_lowercase())?;
+    d.set_item("start_translation_error_mm", s.start_error.0 * 1e3)?;
+    d.set_item("start_rotation_error_deg", s.start_error.1.to_degrees())?;
+    d.set_item("basis", s.basis.to_vec())?;
+    d.set_item("max_line_deviation_mm", s.max_line_deviation * 1e3)?;
+    Ok(d)
+}
+
+/// Runs a scenario (a `Scenario`, dict, built-in name or TOML path) with the GIL released.
+/// `progress(done, total)` is called every 64 iterations if given; Ctrl-C stops the run.
+#[pyfunction]
+#[pyo3(signature = (scenario, record = true, progress = None))]
+pub fn run_scenario(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    record: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<PyRunResult> {
+    let scenario = scenario_arg(scenario)?;
+    let mut config = scenario.to_config().map_err(to_py)?;
+    config.record = record;
+    let mut raised: Option<PyErr> = None;
+    let outcome = py.detach(|| {
+        let mut tick = |done: usize, total: usize| {
+            Python::attach(|py| {
+                let result = py.check_signals().and_then(|_| match &progress {
+                    Some(cb) => cb.call1(py, (done, total)).map(|_| ()),
+                    None => Ok(()),
+                });
+                match result {
+                    Ok(()) => true,
+                    Err(e) => {
+                        raised = Some(e);
+                        false
+                    }
+                }
+            })
+        };
+        simulate(&config, &mut tick)
+    });
+    if let Some(e) = raised {
+        return Err(e);
+    }
+    let mut outcome = outcome.map_err(to_py)?;
+    let summary = summary_dict(py, &scenario.name, &outcome)?;
+    let r = outcome.recording.take().unwrap_or_default();
+    let (rows, n) = (r.len(), scenario.object.points.len());
+    let reference = std::mem::take(&mut outcome.reference_pixels);
+    Ok(PyRunResult {
+        summary: summary.unbind(),
+        scenario: Py::new(py, PyScenario { inner: scenario })?,
+        time: array(py, r.time, &[rows])?,
+        pose: array(py, r.pose, &[rows, 4, 4])?,
+        twist: array(py, r.twist, &[rows, 6])?,
+        joints: array(py, r.joints, &[rows, 6])?,
+        pixels: array(py, r.pixels, &[rows, n, 2])?,
+        visible: array(py, r.visible, &[rows, n])?,
+        invariant_error: array(py, r.invariant_error, &[rows])?,
+        eps: array(py, r.eps, &[rows, 5])?,
+        eps_z: array(py, r.eps_z, &[rows])?,
+        image_error: array(py, r.image_error, &[rows])?,
+        translation_error: array(py, r.translation_error, &[rows])?,
+        rotation_error: array(py, r.rotation_error, &[rows])?,
+        reference_pixels: array(py, reference.into_flattened(), &[n, 2])?,
+    })
+}
