@@ -11,7 +11,7 @@
 //! [camera]            same keys; zoom = { times = [...], fku = [...], fkv = [...] }  # K(t)
 //! [estimate]          fku, fkv, u0, v0, skew_deg                          # K_hat
 //! [start]             position = [x, y, z] (m, camera centre in F*), rotation = [rx, ry, rz] (theta-u, degrees)
-//! [control]           law = "invariant" | "ibvs", gain, gain_rz, dt, depths, feedforward, interaction
+//! [control]           law = "invariant" | "ibvs" | "none", gain, gain_rz, dt, depths, feedforward, interaction
 //! [robot]             kind = "free" | "cartesian", joint_min, joint_max, joint_velocity
 //! [noise]             pixel_sigma, seed, on_reference
 //! [stop]              max_iterations, pixel_error, invariant_error, tau21, window, divergence_distance
@@ -152,6 +152,8 @@ pub enum LawName {
     Invariant,
     /// Classic IBVS.
     Ibvs,
+    /// No control: a stationary camera (sec. 5.1).
+    None,
 }
 
 /// Depth source name.
@@ -421,6 +423,7 @@ impl Scenario {
         let min_points = match self.control.law {
             LawName::Invariant => crate::jacobian::MIN_POINTS,
             LawName::Ibvs => crate::ibvs::IBVS_MIN_POINTS,
+            LawName::None => 3,
         };
         if points.len() < min_points {
             return Err(scenario_error(
@@ -491,6 +494,7 @@ impl Scenario {
                 feedforward: c.feedforward,
                 ..Default::default()
             }),
+            LawName::None => Law::Observe,
             LawName::Ibvs => Law::Ibvs {
                 gain: c.gain,
                 interaction: c
@@ -580,7 +584,22 @@ impl Scenario {
 }
 
 /// The built-in scenarios: (name, TOML text).
-pub const BUILTIN: &[(&str, &str)] = &[("lens-12-6", include_str!("../scenarios/lens-12-6.toml"))];
+pub const BUILTIN: &[(&str, &str)] = &[
+    ("zoom-stationary", include_str!("../scenarios/zoom-stationary.toml")),
+    ("lens-12-12", include_str!("../scenarios/lens-12-12.toml")),
+    ("lens-12-6", include_str!("../scenarios/lens-12-6.toml")),
+    ("lens-25-12", include_str!("../scenarios/lens-25-12.toml")),
+    ("lens-6-12", include_str!("../scenarios/lens-6-12.toml")),
+    ("ibvs-12-12", include_str!("../scenarios/ibvs-12-12.toml")),
+    ("ibvs-12-6", include_str!("../scenarios/ibvs-12-6.toml")),
+    ("ibvs-25-12", include_str!("../scenarios/ibvs-25-12.toml")),
+    ("ibvs-6-12", include_str!("../scenarios/ibvs-6-12.toml")),
+    ("zoom-servo", include_str!("../scenarios/zoom-servo.toml")),
+    ("noise-12-6", include_str!("../scenarios/noise-12-6.toml")),
+    ("cartesian-12-6", include_str!("../scenarios/cartesian-12-6.toml")),
+    ("occlusion", include_str!("../scenarios/occlusion.toml")),
+    ("planar", include_str!("../scenarios/planar.toml")),
+];
 
 /// A built-in scenario by name.
 pub fn builtin(name: &str) -> Result<Scenario> {

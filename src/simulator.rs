@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
 use crate::camera::Intrinsics;
-use crate::control::{Controller, InvariantController, InvariantControllerConfig};
+use crate::control::{InvariantController, InvariantControllerConfig};
 use crate::error::{Error, Result, check_finite, check_positive};
 use crate::ibvs::{IbvsController, Interaction};
 use crate::invariant::{BasisFrame, RzReference, choose_basis, non_basis_indices, validate_basis};
@@ -126,6 +126,8 @@ impl CameraModel {
 pub enum Law {
     /// The invariant law of sec. 4.
     Invariant(InvariantControllerConfig),
+    /// No control: the camera stays still (sec. 5.1, a stationary zooming camera).
+    Observe,
     /// Classic pixel-space IBVS.
     Ibvs {
         /// lambda.
@@ -364,6 +366,62 @@ struct Metrics {
     image_error: f64,
 }
 
+/// The stop rules' low-pass filter: the error *vectors* (`tau_21`, `s - s*`, `p - p*`, NaN
+/// for hidden points) averaged over the last `window` images, so that zero-mean pixel noise
+/// averages out instead of adding up in a norm.
+struct StopWindow {
+    window: usize,
+    rows: std::collections::VecDeque<Vec<f64>>,
+    mean: Vec<f64>,
+}
+
+impl StopWindow {
+    fn new(window: usize) -> Self {
+        Self { window, rows: std::collections::VecDeque::with_capacity(window + 1), mean: Vec::new() }
+    }
+
+    /// Adds the errors of one image; returns the means once the window is full.
+    fn push(
+        &mut self,
+        tau21: f64,
+        pixels: &[[f64; 2]],
+        visible: &[bool],
+        reference: &[[f64; 2]],
+        frame: Option<&BasisFrame>,
+        others: &[usize],
+        s_star: &[Vector3<f64>],
+    ) -> Option<&[f64]> {
+        let mut row =
+            if self.rows.len() == self.window { self.rows.pop_front().unwrap_or_default() } else { Vec::new() };
+        row.clear();
+        row.push(tau21);
+        for (k, &i) in others.iter().enumerate() {
+            let e = match frame {
+                Some(f) if visible[i] => f.transform(pixels[i]) - s_star[k],
+                _ => Vector3::repeat(f64::NAN),
+            };
+            row.extend_from_slice(e.as_slice());
+        }
+        for (i, p) in pixels.iter().enumerate() {
+            let e = if visible[i] { [p[0] - reference[i][0], p[1] - reference[i][1]] } else { [f64::NAN; 2] };
+            row.extend_from_slice(&e);
+        }
+        self.rows.push_back(row);
+        if self.rows.len() < self.window {
+            return None;
+        }
+        let len = self.rows[0].len();
+        self.mean.clear();
+        self.mean.resize(len, 0.0);
+        for r in &self.rows {
+            self.mean.iter_mut().zip(r).for_each(|(m, v)| *m += v);
+        }
+        let w = self.window as f64;
+        self.mean.iter_mut().for_each(|m| *m /= w);
+        Some(&self.mean)
+    }
+}
+
 fn measure(
     pixels: &[[f64; 2]],
     visible: &[bool],
@@ -375,8 +433,8 @@ fn measure(
 ) -> Metrics {
     let image_error = (0..pixels.len())
         .filter(|&i| visible[i])
-        .map(|i| ((pixels[i][0] - reference[i][0]).powi(2) + (pixels[i][1] - reference[i][1]).powi(2)).sqrt())
-        .fold(0.0, f64::max);
+        .map(|i| (pixels[i][0] - reference[i][0]).hypot(pixels[i][1] - reference[i][1]))
+        .fold(f64::NAN, f64::max); // NaN when no point is visible
     let nan = Metrics { invariant_error: f64::NAN, tau: [f64::NAN; 3], eps_z: f64::NAN, image_error };
     if !basis.iter().all(|&b| visible[b]) {
         return nan;
@@ -396,13 +454,15 @@ fn measure(
 enum AnyController {
     Invariant(Box<InvariantController>),
     Ibvs(Box<IbvsController>),
+    Observe,
 }
 
 impl AnyController {
-    fn as_dyn(&mut self) -> &mut dyn Controller {
+    fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: &[bool]) -> Result<nalgebra::Vector6<f64>> {
         match self {
-            AnyController::Invariant(c) => c.as_mut(),
-            AnyController::Ibvs(c) => c.as_mut(),
+            AnyController::Invariant(c) => c.step_visible(pixels, depths, visible),
+            AnyController::Ibvs(c) => c.step_visible(pixels, depths, visible),
+            AnyController::Observe => Ok(nalgebra::Vector6::zeros()),
         }
     }
 }
@@ -488,6 +548,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             )?)),
             gain,
         ),
+        Law::Observe => (AnyController::Observe, 1.0),
     };
     let same_camera = config.camera.zoom.is_none() && config.camera.intrinsics == config.reference_camera.intrinsics;
     let stop_rule =
@@ -500,7 +561,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
     let mut rec = config.record.then(|| Recording { n_points: n, ..Default::default() });
     let mut pose = config.start;
     let mut joints = config.robot.joints(&pose);
-    let mut history: Vec<(f64, f64, f64)> = Vec::with_capacity(stop.window);
+    let mut history = StopWindow::new(stop.window);
     let mut max_line_deviation = 0.0_f64;
     let mut pixels = vec![[0.0; 2]; n];
     let mut iteration = 0;
@@ -536,7 +597,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         let seen = obs.visible.iter().filter(|&&v| v).count();
         let basis_seen = basis.iter().all(|&b| obs.visible[b]);
         let needed = match config.law {
-            Law::Invariant(_) => MIN_POINTS,
+            Law::Invariant(_) | Law::Observe => MIN_POINTS,
             Law::Ibvs { .. } => crate::ibvs::IBVS_MIN_POINTS,
         };
         if seen < needed || (matches!(config.law, Law::Invariant(_)) && !basis_seen) {
@@ -547,23 +608,30 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
                 m,
             );
         }
-        history.push((m.invariant_error, m.tau[1].abs(), m.image_error));
-        if history.len() > stop.window {
-            history.remove(0);
-        }
-        let full = history.len() == stop.window;
-        let mean = |f: fn(&(f64, f64, f64)) -> f64| history.iter().map(f).sum::<f64>() / history.len() as f64;
-        let all_seen = seen == n;
-        let converged = full
-            && match stop_rule {
-                StopRule::Pixel => all_seen && mean(|h| h.2) < stop.pixel_error,
-                StopRule::Invariant => {
-                    mean(|h| h.0) < stop.invariant_error
-                        && mean(|h| h.1) < stop.tau21
-                        && m.tau[0] > 0.0
-                        && m.tau[2] > 0.0
+        let frame = basis_seen.then(|| BasisFrame::new(&pixels, basis, "current").ok()).flatten();
+        let means = history.push(m.tau[1], &pixels, &obs.visible, &reference, frame.as_ref(), &others, &s_star);
+        let converged = match means {
+            None => false,
+            Some(_) if matches!(config.law, Law::Observe) => false,
+            Some(mean) => {
+                let m_inv = 3 * others.len();
+                let invariant = mean[1..1 + m_inv].iter().map(|v| v * v).sum::<f64>().sqrt();
+                let image = mean[1 + m_inv..]
+                    .chunks_exact(2)
+                    .map(|c| c[0].hypot(c[1]))
+                    .fold(0.0, |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+                match stop_rule {
+                    // NaN (a point hidden in the window) never passes a comparison.
+                    StopRule::Pixel => image < stop.pixel_error,
+                    StopRule::Invariant => {
+                        invariant < stop.invariant_error
+                            && mean[0].abs() < stop.tau21
+                            && m.tau[0] > 0.0
+                            && m.tau[2] > 0.0
+                    }
                 }
-            };
+            }
+        };
         if converged {
             break finish(Status::Converged, "stop rule met".into(), m);
         }
@@ -577,14 +645,14 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             DepthSource::True => &obs.depths,
             DepthSource::Reference => &reference_depths,
         };
-        let twist = match controller.as_dyn().step_visible(&pixels, depths, &obs.visible) {
+        let twist = match controller.step(&pixels, depths, &obs.visible) {
             Ok(tw) => tw,
             Err(e) => break finish(status_of(&e), e.to_string(), m),
         };
         if let Some(r) = rec.as_mut() {
             let eps = match &controller {
                 AnyController::Invariant(c) => c.state().map_or([f64::NAN; 5], |s| s.eps.into()),
-                AnyController::Ibvs(_) => [f64::NAN; 5],
+                AnyController::Ibvs(_) | AnyController::Observe => [f64::NAN; 5],
             };
             r.eps.extend_from_slice(&eps);
         }

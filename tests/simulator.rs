@@ -30,3 +30,12 @@ fn lens_change_12_to_6_converges() {
     assert_eq!(s.status, Status::Converged, "{}", report(&o));
     assert!(s.final_translation_error < 1e-3 && s.final_rotation_error.to_degrees() < 0.1, "{}", report(&o));
 }
+
+#[test]
+fn all_builtins_summary() {
+    for (name, _) in vsinv::scenario::BUILTIN {
+        let s = builtin(name).unwrap();
+        let o = run(&s);
+        eprintln!("{name:16} {}", report(&o));
+    }
+}

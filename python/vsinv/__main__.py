@@ -1,0 +1,7 @@
+"""``python -m vsinv``: the command-line interface (see :mod:`vsinv.cli`)."""
+
+import sys
+
+from .cli import main
+
+sys.exit(main())

@@ -1,0 +1,427 @@
+"""Figures in the style of the paper's experiments (sec. 5), and an archive of a run.
+
+matplotlib is imported inside the functions (with the non-interactive Agg backend) so that
+``import vsinv`` does not need it.
+
+>>> result = vsinv.run_scenario("lens-12-6")
+>>> save_figures(result, "out")      # six PNGs
+>>> save_npz(result, "out/trajectory.npz")
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from ._core import RunResult
+
+__all__ = ["FIGURES", "save_figures", "save_npz", "summary_json"]
+
+_PathLike = Union[str, "os.PathLike[str]"]
+
+#: File names written by :func:`save_figures`, in order.
+FIGURES = (
+    "image_trajectories.png",
+    "errors.png",
+    "task_functions.png",
+    "velocities.png",
+    "pose_errors.png",
+    "path3d.png",
+)
+
+DPI = 120
+
+
+def _json_safe(value: Any) -> Any:
+    """Replace NaN and infinities by None and NumPy scalars/arrays by Python values."""
+    if isinstance(value, dict):
+        return {str(k): _json_safe(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _json_safe(value.tolist())
+    if isinstance(value, np.generic):
+        return _json_safe(value.item())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def summary_json(summary: dict[str, Any], indent: Optional[int] = None) -> str:
+    """The summary as strict JSON (NaN and infinities written as null)."""
+    return json.dumps(_json_safe(summary), indent=indent, allow_nan=False)
+
+
+def save_npz(result: RunResult, path: _PathLike) -> Path:
+    """Write every recorded array and the summary (entry ``summary_json``, a JSON string)
+    to a compressed ``.npz`` archive; returns the path written."""
+    out = Path(path)
+    if out.suffix != ".npz":
+        out = out.with_name(out.name + ".npz")  # what numpy would write anyway
+    arrays: dict[str, Any] = dict(result.arrays)
+    arrays["summary_json"] = np.array(summary_json(result.summary))
+    np.savez_compressed(out, **arrays)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+
+
+def _use_agg() -> None:
+    """Select the non-interactive Agg backend unless pyplot is already in use (say in a
+    notebook, whose backend is left alone: every figure here is closed after saving)."""
+    if "matplotlib.pyplot" in sys.modules:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+
+
+def _title(fig: Figure, result: RunResult, what: str) -> None:
+    s = result.summary
+    status = s.get("status", "?")
+    iters = s.get("iterations", "?")
+    fig.suptitle(f"{s.get('name', result.scenario.name)}: {what}\n({status} after {iters} iterations)", fontsize=11)
+
+
+def _all_nan(a: npt.NDArray[Any]) -> bool:
+    return a.size == 0 or not bool(np.isfinite(a).any())
+
+
+def _no_data(ax: Axes, text: str) -> None:
+    ax.text(0.5, 0.5, text, ha="center", va="center", transform=ax.transAxes, color="0.4")
+    ax.set_yticks([])  # x ticks may be shared with another panel: leave them
+
+
+def _image_size(camera: Any) -> Optional[tuple[float, float]]:
+    if not isinstance(camera, dict):
+        return None
+    w, h = camera.get("width"), camera.get("height")
+    if w is None or h is None:
+        return None
+    return float(w), float(h)
+
+
+def _object_points(scenario: dict[str, Any]) -> npt.NDArray[np.float64]:
+    pts = (scenario.get("object") or {}).get("points") or []
+    arr = np.asarray(pts, dtype=float)
+    return arr.reshape(-1, 3)
+
+
+def _save(fig: Figure, out_dir: Path, name: str) -> Path:
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    path = out_dir / name
+    try:
+        fig.savefig(path, dpi=DPI)
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _finish_time_axis(ax: Axes, t: npt.NDArray[np.float64]) -> None:
+    ax.grid(True, alpha=0.3)
+    if t.size > 1:
+        ax.set_xlim(float(t[0]), float(t[-1]))
+    if t.size <= 2:  # too short for lines to show: mark the samples
+        for line in ax.get_lines():
+            x = np.asarray(line.get_xdata(), dtype=float)
+            if x.shape == t.shape and np.array_equal(x, t, equal_nan=True):
+                line.set_marker("o")
+
+
+# ---------------------------------------------------------------------------------------------
+# the figures
+
+
+def plot_image_trajectories(result: RunResult) -> Figure:
+    """Image trajectories of the points (current camera), start and reference pixels."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
+
+    scen = result.scenario.to_dict()
+    px = np.asarray(result.pixels, dtype=float)
+    ref = np.asarray(result.reference_pixels, dtype=float)
+    size = _image_size(scen.get("camera")) or _image_size(scen.get("reference_camera"))
+    ref_size = _image_size(scen.get("reference_camera"))
+
+    fig, ax = plt.subplots(figsize=(7.6, 6.6), constrained_layout=True)
+    if size is not None:
+        w, h = size
+        ax.add_patch(
+            Rectangle((0.0, 0.0), w, h, fill=False, edgecolor="0.3", linestyle="--", linewidth=1.0, label="image border")
+        )
+    if ref_size is not None and size is not None and ref_size != size:
+        w, h = ref_size
+        ax.add_patch(
+            Rectangle((0.0, 0.0), w, h, fill=False, edgecolor="darkgoldenrod", linestyle=":", linewidth=1.2,
+                          label="reference image border")
+        )
+    colors = plt.get_cmap("tab20")
+    n = px.shape[1] if px.ndim == 3 else 0
+    for i in range(n):
+        ax.plot(px[:, i, 0], px[:, i, 1], "-", color=colors(i % 20), linewidth=1.2, zorder=2)
+    if px.shape[0] > 0:
+        start = px[0]
+        ax.plot(start[:, 0], start[:, 1], "o", color="tab:green", markersize=7, markeredgecolor="darkgreen",
+                linestyle="none", label="start", zorder=4)
+        end = px[-1]
+        ax.plot(end[:, 0], end[:, 1], "x", color="tab:red", markersize=7, markeredgewidth=1.6,
+                linestyle="none", label="final", zorder=5)
+    ax.plot(ref[:, 0], ref[:, 1], "s", color="gold", markeredgecolor="saddlebrown", markeredgewidth=1.3,
+            markersize=8, linestyle="none", label="reference (p*)", zorder=3)
+    for i, (u, v) in enumerate(ref):
+        if np.isfinite(u) and np.isfinite(v):
+            ax.annotate(str(i), (u, v), xytext=(5, 4), textcoords="offset points", fontsize=7, color="saddlebrown")
+
+    # Limits: the image rectangle plus whatever the trajectories leave it by, with a margin.
+    finite = np.concatenate([px.reshape(-1, 2), ref.reshape(-1, 2)])
+    finite = finite[np.isfinite(finite).all(axis=1)]
+    lo = finite.min(axis=0) if finite.size else np.zeros(2)
+    hi = finite.max(axis=0) if finite.size else np.ones(2)
+    for wh in (size, ref_size):
+        if wh is not None:
+            lo = np.minimum(lo, 0.0)
+            hi = np.maximum(hi, wh)
+    pad = 0.04 * max(float((hi - lo).max()), 1.0)
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(hi[1] + pad, lo[1] - pad)  # image v axis points down
+    ax.set_aspect("equal")
+    ax.xaxis.tick_top()
+    ax.xaxis.set_label_position("top")
+    ax.set_xlabel("u (px)")
+    ax.set_ylabel("v (px)")
+    ax.grid(True, alpha=0.25)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=5, fontsize=9, frameon=False)
+    s = result.summary
+    fig.suptitle(f"{s.get('name', result.scenario.name)}: image trajectories ({s.get('status', '?')})", fontsize=11)
+    return fig
+
+
+def plot_errors(result: RunResult) -> Figure:
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(result.time, dtype=float)
+    inv = np.asarray(result.invariant_error, dtype=float)
+    img = np.asarray(result.image_error, dtype=float)
+    s = result.summary
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    if _all_nan(inv):
+        _no_data(a1, "no invariant error recorded")
+    else:
+        pos = np.where(inv > 0, inv, np.nan)
+        a1.semilogy(t, pos, color="tab:blue", label="||s - s*||")
+        tol = (result.scenario.to_dict().get("stop") or {}).get("invariant_error")
+        if tol is not None and tol > 0 and s.get("stop_rule") == "invariant":
+            a1.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g}")
+        a1.legend(loc="upper right", fontsize=9)
+        _finish_time_axis(a1, t)
+    a1.set_ylabel("||s - s*|| (invariant space)")
+    a1.set_title("invariant-space error", fontsize=10)
+    if _all_nan(img):
+        _no_data(a2, "no image error recorded")
+    else:
+        a2.plot(t, img, color="tab:orange", label="max_i ||p_i - p_i*||")
+        tol = (result.scenario.to_dict().get("stop") or {}).get("pixel_error")
+        if tol is not None and tol > 0 and s.get("stop_rule") == "pixel":
+            a2.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g} px")
+        a2.set_ylim(bottom=0.0)
+        a2.legend(loc="upper right", fontsize=9)
+        _finish_time_axis(a2, t)
+    a2.set_ylabel("image error (px)")
+    a2.set_title("largest distance to the reference pixel", fontsize=10)
+    a2.set_xlabel("time (s)")
+    _title(fig, result, "errors")
+    return fig
+
+
+def plot_task_functions(result: RunResult) -> Figure:
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(result.time, dtype=float)
+    eps = np.asarray(result.eps, dtype=float).reshape(len(t), -1)
+    eps_z = np.asarray(result.eps_z, dtype=float)
+    has_eps, has_z = not _all_nan(eps), not _all_nan(eps_z)
+    if not has_eps and not has_z:
+        fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+        law = (result.scenario.to_dict().get("control") or {}).get("law", "?")
+        _no_data(ax, f"no task function for the '{law}' law")
+        _title(fig, result, "task functions")
+        return fig
+    panels = int(has_eps) + int(has_z)
+    fig, axes = plt.subplots(panels, 1, figsize=(8, 3.1 * panels + 0.6), sharex=True, constrained_layout=True, squeeze=False)
+    k = 0
+    if has_eps:
+        ax = axes[k, 0]
+        labels = ["ε₁ (v_x, m)", "ε₂ (v_y, m)", "ε₃ (v_z, m)", "ε₄ (ω_x, rad)", "ε₅ (ω_y, rad)"]
+        for j in range(eps.shape[1]):
+            ax.plot(t, eps[:, j], label=labels[j] if j < len(labels) else f"ε{j + 1}")
+        ax.axhline(0.0, color="0.5", linewidth=0.8)
+        ax.set_ylabel("ε (m | rad)")
+        ax.set_title("task function ε = Ĵ⁺ (s − s*) (eq. 14)", fontsize=10)
+        ax.legend(loc="best", ncol=2, fontsize=8.5)
+        _finish_time_axis(ax, t)
+        k += 1
+    if has_z:
+        ax = axes[k, 0]
+        ax.plot(t, eps_z, color="tab:purple", label="ε_z = det(Q*) τ₂₁")
+        ax.axhline(0.0, color="0.5", linewidth=0.8)
+        ax.set_ylabel("ε_z (px²)")
+        ax.set_title("task function for the rotation about the optical axis (sec. 4.2)", fontsize=10)
+        ax.legend(loc="best", fontsize=9)
+        _finish_time_axis(ax, t)
+    axes[-1, 0].set_xlabel("time (s)")
+    _title(fig, result, "task functions" + ("" if has_eps else " (ε not defined for this law)"))
+    return fig
+
+
+def plot_velocities(result: RunResult) -> Figure:
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(result.time, dtype=float)
+    tw = np.asarray(result.twist, dtype=float).reshape(len(t), 6)
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    for j, name in enumerate(("v_x", "v_y", "v_z")):
+        a1.plot(t, tw[:, j], label=f"${name}$")
+    for j, name in enumerate(("\\omega_x", "\\omega_y", "\\omega_z")):
+        a2.plot(t, np.degrees(tw[:, 3 + j]), label=f"${name}$")
+    for ax in (a1, a2):
+        ax.axhline(0.0, color="0.5", linewidth=0.8)
+        ax.legend(loc="best", ncol=3, fontsize=9)
+        _finish_time_axis(ax, t)
+    a1.set_ylabel("translation (m/s)")
+    a1.set_title("translational velocity (camera frame)", fontsize=10)
+    a2.set_ylabel("rotation (deg/s)")
+    a2.set_title("rotational velocity (camera frame)", fontsize=10)
+    a2.set_xlabel("time (s)")
+    _title(fig, result, "camera velocity")
+    return fig
+
+
+def plot_pose_errors(result: RunResult) -> Figure:
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(result.time, dtype=float)
+    te = np.asarray(result.translation_error, dtype=float) * 1e3
+    re = np.degrees(np.asarray(result.rotation_error, dtype=float))
+    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    a1.plot(t, te, color="tab:blue", label="||t||")
+    a1.set_ylabel("translation error (mm)")
+    a1.set_title("distance of the camera centre to the goal", fontsize=10)
+    a2.plot(t, re, color="tab:red", label="|θ|")
+    a2.set_ylabel("rotation error (deg)")
+    a2.set_title("rotation angle to the goal orientation", fontsize=10)
+    a2.set_xlabel("time (s)")
+    for ax in (a1, a2):
+        ax.set_ylim(bottom=0.0)
+        _finish_time_axis(ax, t)
+    s = result.summary
+    ft, fr = s.get("final_translation_error_mm"), s.get("final_rotation_error_deg")
+    if isinstance(ft, (int, float)) and math.isfinite(ft):
+        a1.text(0.99, 0.9, f"final {ft:.3g} mm", ha="right", va="top", transform=a1.transAxes, fontsize=9)
+    if isinstance(fr, (int, float)) and math.isfinite(fr):
+        a2.text(0.99, 0.9, f"final {fr:.3g} deg", ha="right", va="top", transform=a2.transAxes, fontsize=9)
+    _title(fig, result, "pose errors")
+    return fig
+
+
+def _set_3d_limits(ax: Any, pts: npt.NDArray[np.float64], zoom: float, min_span: float = 10.0) -> None:
+    """Equal-aspect limits around pts (x, y, z in F*, drawn as x, z, y with y down)."""
+    from matplotlib.ticker import MaxNLocator
+
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = np.maximum(hi - lo, max(0.05 * float((hi - lo).max()), min_span))
+    mid = 0.5 * (lo + hi)
+    lo, hi = mid - 0.54 * span, mid + 0.54 * span
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[2], hi[2])
+    ax.set_zlim(hi[1], lo[1])  # y down
+    ax.set_box_aspect((float(hi[0] - lo[0]), float(hi[2] - lo[2]), float(hi[1] - lo[1])), zoom=zoom)
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(nbins=4))
+    ax.tick_params(labelsize=8, pad=1)
+    ax.set_xlabel("x (mm)", labelpad=2)
+    ax.set_ylabel("z (mm, optical axis)", labelpad=4)
+    ax.set_zlabel("y (mm, down)", labelpad=4)
+
+
+def plot_path3d(result: RunResult) -> Figure:
+    """The camera centre's path in F* (mm) against the straight line to the goal: the whole
+    scene with the object (left) and a close-up of the path (right)."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    scen = result.scenario.to_dict()
+    pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
+    c = pose[:, :3, 3] * 1e3
+    c = c[np.isfinite(c).all(axis=1)]
+    obj = _object_points(scen) * 1e3
+    fig = plt.figure(figsize=(12.0, 6.2))
+    left: Any = fig.add_axes((0.0, 0.1, 0.5, 0.76), projection="3d")
+    right: Any = fig.add_axes((0.5, 0.1, 0.5, 0.76), projection="3d")
+    origin = np.zeros((1, 3))
+
+    # F* has x right, y down, z along the optical axis: draw z as depth and y downwards.
+    for ax in (left, right):
+        if len(c):
+            ax.plot(c[:, 0], c[:, 2], c[:, 1], color="tab:blue", linewidth=2.0, label="camera centre path")
+            ax.plot([c[0, 0], 0.0], [c[0, 2], 0.0], [c[0, 1], 0.0], "--", color="0.35", linewidth=1.2,
+                    label="straight line to the goal")
+            ax.scatter(c[:1, 0], c[:1, 2], c[:1, 1], color="tab:green", edgecolors="darkgreen", s=55,
+                       depthshade=False, label="start")
+            if np.linalg.norm(c[-1]) > 1.0:
+                ax.scatter(c[-1:, 0], c[-1:, 2], c[-1:, 1], color="tab:red", marker="x", s=50,
+                           depthshade=False, label="final")
+        ax.scatter([0.0], [0.0], [0.0], color="gold", edgecolors="saddlebrown", s=130, marker="*",
+                   depthshade=False, label="goal (origin of F*)")
+        ax.view_init(elev=22, azim=-58)
+    if len(obj):
+        left.scatter(obj[:, 0], obj[:, 2], obj[:, 1], color="k", s=14, depthshade=False, label="object points")
+    _set_3d_limits(left, np.concatenate([origin, c, obj]), zoom=1.1)
+    _set_3d_limits(right, np.concatenate([origin, c]), zoom=1.0)
+    left.set_title("scene", fontsize=10)
+    right.set_title("close-up of the path", fontsize=10)
+    fig.legend(*left.get_legend_handles_labels(), loc="lower center", ncol=6, fontsize=9, frameon=False)
+    dev = result.summary.get("max_line_deviation_mm")
+    what = "camera path in F*"
+    if isinstance(dev, (int, float)) and math.isfinite(dev):
+        what += f" (largest deviation from the line {dev:.1f} mm)"
+    _title(fig, result, what)
+    return fig
+
+
+def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
+    """Write the six figures of a recorded run to ``out_dir`` (created if needed);
+    returns the paths written, in the order of :data:`FIGURES`."""
+    if len(result.time) == 0:
+        raise ValueError("the run was not recorded (run_scenario(..., record=False)): nothing to plot")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    makers = (
+        plot_image_trajectories,
+        plot_errors,
+        plot_task_functions,
+        plot_velocities,
+        plot_pose_errors,
+        plot_path3d,
+    )
+    return [_save(make(result), out, name) for make, name in zip(makers, FIGURES)]
