@@ -30,4 +30,5 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 
 run: install
-	cargo run --release --example lens_change
+	vsinv run lens-12-6 --out results/lens-12-6
+	vsinv run ibvs-12-6 --out results/ibvs-12-6

@@ -84,7 +84,7 @@ pub enum Error {
     },
     /// A scenario file or dictionary that does not describe a valid run; `key` names the
     /// offending entry (e.g. `control.gain`).
-    #[error("scenario: {key}: {reason}")]
+    #[error("scenario: {}{reason}", if key.is_empty() { String::new() } else { format!("{key}: ") })]
     Scenario {
         /// Dotted path of the key at fault (empty for the whole document).
         key: String,

@@ -358,6 +358,15 @@ fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> 
     (p - (a + ab * t)).norm()
 }
 
+/// What the reference image provides to the measurements.
+struct ReferenceImage {
+    pixels: Vec<[f64; 2]>,
+    basis: [usize; 3],
+    others: Vec<usize>,
+    s_star: Vec<Vector3<f64>>,
+    rz: RzReference,
+}
+
 /// Measurements that do not depend on the law, from the noisy pixels.
 struct Metrics {
     invariant_error: f64,
@@ -386,11 +395,10 @@ impl StopWindow {
         tau21: f64,
         pixels: &[[f64; 2]],
         visible: &[bool],
-        reference: &[[f64; 2]],
         frame: Option<&BasisFrame>,
-        others: &[usize],
-        s_star: &[Vector3<f64>],
+        r: &ReferenceImage,
     ) -> Option<&[f64]> {
+        let (reference, others, s_star) = (&r.pixels, &r.others, &r.s_star);
         let mut row =
             if self.rows.len() == self.window { self.rows.pop_front().unwrap_or_default() } else { Vec::new() };
         row.clear();
@@ -422,15 +430,8 @@ impl StopWindow {
     }
 }
 
-fn measure(
-    pixels: &[[f64; 2]],
-    visible: &[bool],
-    reference: &[[f64; 2]],
-    basis: [usize; 3],
-    others: &[usize],
-    rz: &RzReference,
-    s_star: &[Vector3<f64>],
-) -> Metrics {
+fn measure(pixels: &[[f64; 2]], visible: &[bool], r: &ReferenceImage) -> Metrics {
+    let (reference, basis, others, rz, s_star) = (&r.pixels, r.basis, &r.others, &r.rz, &r.s_star);
     let image_error = (0..pixels.len())
         .filter(|&i| visible[i])
         .map(|i| (pixels[i][0] - reference[i][0]).hypot(pixels[i][1] - reference[i][1]))
@@ -530,17 +531,18 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
     };
     let others = non_basis_indices(n, basis);
     let reference_frame = BasisFrame::new(&reference, basis, "reference")?;
-    let rz = RzReference::new(&reference_frame);
-    let s_star: Vec<Vector3<f64>> = others.iter().map(|&i| reference_frame.transform(reference[i])).collect();
+    let s_star = others.iter().map(|&i| reference_frame.transform(reference[i])).collect();
+    let refimg = ReferenceImage { pixels: reference, basis, others, s_star, rz: RzReference::new(&reference_frame) };
+    let reference = &refimg.pixels;
 
     let (mut controller, gain) = match config.law {
         Law::Invariant(c) => (
-            AnyController::Invariant(Box::new(InvariantController::new(&reference, config.estimate, basis, c)?)),
+            AnyController::Invariant(Box::new(InvariantController::new(reference, config.estimate, basis, c)?)),
             c.gain,
         ),
         Law::Ibvs { gain, interaction } => (
             AnyController::Ibvs(Box::new(IbvsController::new(
-                &reference,
+                reference,
                 config.estimate,
                 gain,
                 interaction,
@@ -571,7 +573,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         config.scene.observe(&pose, &k, config.camera.image, &mut obs);
         pixels.copy_from_slice(&obs.pixels);
         add_noise(&mut pixels, &obs.visible, &mut rng);
-        let m = measure(&pixels, &obs.visible, &reference, basis, &others, &rz, &s_star);
+        let m = measure(&pixels, &obs.visible, &refimg);
         let (dt_err, dr_err) = pose_error(&goal, &pose);
         max_line_deviation = max_line_deviation.max(distance_to_segment(&pose.translation.vector, &line_a, &line_b));
         if let Some(r) = rec.as_mut() {
@@ -609,12 +611,12 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             );
         }
         let frame = basis_seen.then(|| BasisFrame::new(&pixels, basis, "current").ok()).flatten();
-        let means = history.push(m.tau[1], &pixels, &obs.visible, &reference, frame.as_ref(), &others, &s_star);
+        let means = history.push(m.tau[1], &pixels, &obs.visible, frame.as_ref(), &refimg);
         let converged = match means {
             None => false,
             Some(_) if matches!(config.law, Law::Observe) => false,
             Some(mean) => {
-                let m_inv = 3 * others.len();
+                let m_inv = 3 * refimg.others.len();
                 let invariant = mean[1..1 + m_inv].iter().map(|v| v * v).sum::<f64>().sqrt();
                 let image = mean[1 + m_inv..]
                     .chunks_exact(2)
@@ -693,5 +695,5 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         basis,
         max_line_deviation,
     };
-    Ok(Outcome { summary, recording: rec, reference_pixels: reference })
+    Ok(Outcome { summary, recording: rec, reference_pixels: refimg.pixels })
 }
