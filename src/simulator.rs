@@ -137,13 +137,39 @@ pub enum Law {
     },
 }
 
+/// A depth estimator running inside the loop: from the current (noisy) pixels, the depths
+/// of all points up to one positive scale (`zeta_hat = kappa(t) zeta`, sec. 4.1). The
+/// appendix-A method plugs in here.
+pub trait DepthEstimator: Send {
+    /// Fills `depths` (one per point; entries of hidden points are ignored by the law).
+    fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()>;
+}
+
+/// Builds a fresh [`DepthEstimator`] for each run, from the scene and the reference image.
+pub trait DepthEstimatorFactory: Send + Sync {
+    /// The estimator for one run.
+    fn start(&self, scene: &Scene, reference_pixels: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>>;
+}
+
 /// Per-point depths given to the control law.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Clone)]
 pub enum DepthSource {
     /// The true current depths.
     True,
     /// The depths measured at the reference pose, zeta* (sec. 5.2).
     Reference,
+    /// Depths from an estimator (appendix A).
+    Estimated(std::sync::Arc<dyn DepthEstimatorFactory>),
+}
+
+impl std::fmt::Debug for DepthSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            DepthSource::True => "True",
+            DepthSource::Reference => "Reference",
+            DepthSource::Estimated(_) => "Estimated",
+        })
+    }
 }
 
 /// Gaussian pixel noise.
@@ -566,6 +592,11 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
     let mut history = StopWindow::new(stop.window);
     let mut max_line_deviation = 0.0_f64;
     let mut pixels = vec![[0.0; 2]; n];
+    let mut estimator = match &config.depths {
+        DepthSource::Estimated(factory) => Some(factory.start(&config.scene, &refimg.pixels)?),
+        _ => None,
+    };
+    let mut estimated = vec![0.0; n];
     let mut iteration = 0;
     let (status, message, last) = loop {
         let t = iteration as f64 * config.dt;
@@ -643,9 +674,15 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         if iteration % 64 == 0 && !progress(iteration, stop.max_iterations) {
             break finish(Status::MaxIterations, "stopped by the caller".into(), m);
         }
-        let depths = match config.depths {
-            DepthSource::True => &obs.depths,
-            DepthSource::Reference => &reference_depths,
+        let depths = match (&config.depths, estimator.as_mut()) {
+            (DepthSource::Reference, _) => &reference_depths,
+            (DepthSource::Estimated(_), Some(e)) => {
+                if let Err(err) = e.estimate(&pixels, &obs.visible, &mut estimated) {
+                    break finish(Status::Degenerate, format!("depth estimation failed: {err}"), m);
+                }
+                &estimated
+            }
+            _ => &obs.depths,
         };
         let twist = match controller.step(&pixels, depths, &obs.visible) {
             Ok(tw) => tw,

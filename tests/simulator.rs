@@ -271,3 +271,49 @@ fn scenario_round_trips() {
         assert_eq!(Scenario::from_json(&s.to_json().unwrap()).unwrap(), s, "{name}");
     }
 }
+
+/// The depth-estimator interface: an estimator giving depths up to a scale kappa (here the
+/// reference depths times 3) drives the law like any depth source (Prop. 1 holds for any
+/// kappa > 0), and a failing estimator ends the run with a clear message.
+#[test]
+fn depth_estimator_interface() {
+    use std::sync::Arc;
+    use vsinv::scene::Scene;
+    use vsinv::simulator::{DepthEstimator, DepthEstimatorFactory, DepthSource};
+
+    struct Scaled(Vec<f64>);
+    impl DepthEstimator for Scaled {
+        fn estimate(&mut self, _: &[[f64; 2]], _: &[bool], depths: &mut [f64]) -> vsinv::Result<()> {
+            depths.copy_from_slice(&self.0);
+            Ok(())
+        }
+    }
+    struct ScaledFactory;
+    impl DepthEstimatorFactory for ScaledFactory {
+        fn start(&self, scene: &Scene, _: &[[f64; 2]]) -> vsinv::Result<Box<dyn DepthEstimator>> {
+            Ok(Box::new(Scaled(scene.points().iter().map(|p| 3.0 * p[2]).collect())))
+        }
+    }
+    struct Failing;
+    impl DepthEstimator for Failing {
+        fn estimate(&mut self, _: &[[f64; 2]], _: &[bool], _: &mut [f64]) -> vsinv::Result<()> {
+            Err(vsinv::Error::InvalidParameter { name: "depths", reason: "no epipole".into() })
+        }
+    }
+    struct FailingFactory;
+    impl DepthEstimatorFactory for FailingFactory {
+        fn start(&self, _: &Scene, _: &[[f64; 2]]) -> vsinv::Result<Box<dyn DepthEstimator>> {
+            Ok(Box::new(Failing))
+        }
+    }
+
+    let mut config = builtin("lens-12-6").unwrap().to_config().unwrap();
+    config.depths = DepthSource::Estimated(Arc::new(ScaledFactory));
+    let o = simulate(&config, &mut |_, _| true).unwrap();
+    let (t, r) = mm_deg(&o);
+    assert!(o.summary.status == Status::Converged && t < 1.0 && r < 0.1, "{}", report(&o));
+    config.depths = DepthSource::Estimated(Arc::new(FailingFactory));
+    let o = simulate(&config, &mut |_, _| true).unwrap();
+    assert_eq!(o.summary.status, Status::Degenerate);
+    assert!(o.summary.message.contains("no epipole"), "{}", o.summary.message);
+}

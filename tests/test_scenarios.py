@@ -96,3 +96,15 @@ def test_progress_callback_and_its_errors():
 
     with pytest.raises(Stop):
         vsinv.run_scenario(d, progress=stop)
+
+
+@pytest.mark.parametrize("name", [n for n, _ in vsinv.list_scenarios()])
+def test_every_builtin_runs_from_the_command_line(name, capsys):
+    import json
+
+    from vsinv import cli
+
+    assert cli.main(["run", name, "--json", "--no-progress"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["name"] == name
+    assert summary["status"] in {"converged", "max_iterations", "lost_features", "diverged", "degenerate"}
