@@ -54,6 +54,7 @@ pub mod error;
 pub mod ibvs;
 pub mod invariant;
 pub mod jacobian;
+pub mod planning;
 pub mod robot;
 pub mod scenario;
 pub mod scene;
