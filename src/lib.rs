@@ -50,6 +50,7 @@
 
 pub mod camera;
 pub mod control;
+pub mod depth;
 pub mod error;
 pub mod ibvs;
 pub mod invariant;
