@@ -66,6 +66,9 @@ pub struct ControlState {
     pub t: Matrix3<f64>,
     /// The coefficient `a_hat` of eq. (24).
     pub a_hat: f64,
+    /// `J_hat^+ ds*/dt` (zero for a still reference), whether or not the law adds it: the
+    /// disturbance `b(t)` of eq. (19) is `(A - I)` times it with feed-forward, minus it without.
+    pub reference_rate_term: Vector5<f64>,
 }
 
 impl ControlState {
@@ -258,7 +261,8 @@ impl InvariantController {
         let (k, k_inv) = (&self.k, &self.k_inv);
         let l_basis = self.basis.map(|i| pixel_interaction(k, k_inv, pixels[i], depths[i]));
         let (q2, gram) = q_inv_gram(&frame.q_inv);
-        let feedforward = self.config.feedforward && self.reference_moves;
+        let moving = self.reference_moves;
+        let feedforward = self.config.feedforward && moving;
 
         // Accumulate J^T J, J^T (s - s*) and J^T ds*/dt point by point, J_k = Q^-1 N_k.
         let mut jtj = Matrix5::zeros();
@@ -278,7 +282,7 @@ impl InvariantController {
             let n5t = n5.transpose();
             jtj += n5t * (gram * n5);
             jte += n5t * (q2.tr_mul(&e));
-            if feedforward {
+            if moving {
                 jtr += n5t * (q2.tr_mul(&self.s_star_rate[j]));
             }
         }
@@ -313,9 +317,10 @@ impl InvariantController {
         }
         // eps = J_hat^+ (s - s*)  (eq. 14); mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
         let eps = chol.solve(&jte);
+        let rate_term = if moving { chol.solve(&jtr) } else { Vector5::zeros() };
         let mut mu = -self.config.gain * eps;
         if feedforward {
-            mu += chol.solve(&jtr);
+            mu += rate_term;
         }
 
         // eps_z = det(Q*) tau_21 and w_z = -(eta eps_z + c_hat^T mu) / a_hat  (eq. 24).
@@ -336,6 +341,7 @@ impl InvariantController {
             invariant_error: err2.sqrt(),
             t: self.reference.t_matrix(&frame),
             a_hat,
+            reference_rate_term: rate_term,
         });
         Ok(twist)
     }

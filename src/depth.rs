@@ -26,6 +26,14 @@ pub struct TranslationDepths {
     pub residual: f64,
 }
 
+const EPIPOLE: (&str, &str) =
+    ("epipole of the translation pair (eq. 26)", "the camera did not move, or all points lie on one line");
+const RESECTION: (&str, &str) = ("resection (DLT)", "the visible points are coplanar or fewer than 6");
+
+fn degenerate((what, hint): (&'static str, &'static str), ratio: f64) -> Error {
+    Error::DegenerateEstimate { what, ratio, hint }
+}
+
 fn homog(p: [f64; 2]) -> Vector3<f64> {
     Vector3::new(p[0], p[1], 1.0)
 }
@@ -47,10 +55,18 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
     check_finite_points("second image", second)?;
     let n = first.len();
     if second.len() != n {
-        return Err(Error::Shape { what: "second image", expected: format!("{n} points"), got: format!("{}", second.len()) });
+        return Err(Error::Shape {
+            what: "second image",
+            expected: format!("{n} points"),
+            got: format!("{}", second.len()),
+        });
     }
     if n < 3 {
-        return Err(Error::TooFewPoints { needed: 3, got: n, why: "the epipole of a translation needs several points" });
+        return Err(Error::TooFewPoints {
+            needed: 3,
+            got: n,
+            why: "the epipole of a translation needs several points",
+        });
     }
     let all: Vec<[f64; 2]> = first.iter().chain(second).copied().collect();
     let t = normalise_2d(&all);
@@ -63,16 +79,16 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
         }
     }
     let svd = lines.svd(false, true);
-    let v_t = svd.v_t.as_ref().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE })?;
+    let v_t = svd.v_t.as_ref().ok_or(degenerate(EPIPOLE, 0.0))?;
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
     let ratio = svd.singular_values[order[1]] / svd.singular_values[order[0]].max(f64::MIN_POSITIVE);
     if !(ratio > DEGENERATE) {
         // All lines through one line of points, or no motion at all.
-        return Err(Error::DegenerateStructure { ratio, threshold: DEGENERATE });
+        return Err(degenerate(EPIPOLE, ratio));
     }
     let e_n = Vector3::from_iterator(v_t.row(order[2]).iter().copied());
-    let t_inv = t.try_inverse().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE })?;
+    let t_inv = t.try_inverse().ok_or(degenerate(EPIPOLE, 0.0))?;
     let e = (t_inv * e_n).normalize();
     // p^I = a p^II + b e with b = |e| / zeta^I (eq. 26): depths ~ 1 / b.
     let mut inv_depth = Vec::with_capacity(n);
@@ -80,10 +96,7 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
     for k in 0..n {
         let a = nalgebra::Matrix3x2::from_columns(&[homog(second[k]), e]);
         let rhs = homog(first[k]);
-        let sol = (a.transpose() * a)
-            .lu()
-            .solve(&(a.transpose() * rhs))
-            .ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE })?;
+        let sol = (a.transpose() * a).lu().solve(&(a.transpose() * rhs)).ok_or(degenerate(EPIPOLE, 0.0))?;
         err2 += (a * sol - rhs).norm_squared();
         inv_depth.push(sol.y);
     }
@@ -132,17 +145,17 @@ pub fn resect(points: &[Vector3<f64>], pixels: &[[f64; 2]]) -> Result<Matrix3x4<
         }
     }
     let svd = a.svd(false, true);
-    let v_t = svd.v_t.as_ref().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE })?;
+    let v_t = svd.v_t.as_ref().ok_or(degenerate(RESECTION, 0.0))?;
     let mut order: Vec<usize> = (0..12).collect();
     order.sort_by(|&x, &y| svd.singular_values[y].total_cmp(&svd.singular_values[x]));
     let ratio = svd.singular_values[order[10]] / svd.singular_values[order[0]].max(f64::MIN_POSITIVE);
     if !(ratio > DEGENERATE) {
         // Coplanar (or collinear) points leave a family of cameras.
-        return Err(Error::DegenerateStructure { ratio, threshold: DEGENERATE });
+        return Err(degenerate(RESECTION, ratio));
     }
     let row: Vec<f64> = v_t.row(order[11]).iter().copied().collect();
     let p_n = Matrix3x4::from_row_slice(&row);
-    let t2_inv = t2.try_inverse().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE })?;
+    let t2_inv = t2.try_inverse().ok_or(degenerate(RESECTION, 0.0))?;
     Ok(t2_inv * p_n * t3)
 }
 
@@ -157,8 +170,22 @@ pub struct ResectionDepths {
 
 impl ResectionDepths {
     /// From the first image of the translation pair with its depths up to scale, and the
-    /// reference image (which fixes the scale of every later resection).
-    pub fn new(first: &[[f64; 2]], first_depths: &[f64], reference_pixels: &[[f64; 2]]) -> Result<Self> {
+    /// reference image, which fixes the scale of every later resection: the estimated depths
+    /// of the reference image average `reference_mean_depth` (a rough guess of the distance
+    /// to the object in metres, or 1 for "unknown"; the law is stable for any positive scale,
+    /// which only sets the speed of the translation, sec. 4.1).
+    pub fn new(
+        first: &[[f64; 2]],
+        first_depths: &[f64],
+        reference_pixels: &[[f64; 2]],
+        reference_mean_depth: f64,
+    ) -> Result<Self> {
+        if !(reference_mean_depth.is_finite() && reference_mean_depth > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "reference_mean_depth",
+                reason: format!("must be finite and > 0, got {reference_mean_depth}"),
+            });
+        }
         if first_depths.len() != first.len() || reference_pixels.len() != first.len() {
             return Err(Error::Shape {
                 what: "depth estimation",
@@ -168,10 +195,15 @@ impl ResectionDepths {
         }
         let reconstruction: Vec<Vector3<f64>> = first.iter().zip(first_depths).map(|(p, z)| homog(*p) * *z).collect();
         let p = resect(&reconstruction, reference_pixels)?;
-        let det_reference = p.fixed_view::<3, 3>(0, 0).determinant().abs();
-        if !(det_reference > 0.0 && det_reference.is_finite()) {
-            return Err(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE });
+        let det = p.fixed_view::<3, 3>(0, 0).determinant().abs();
+        if !(det > 0.0 && det.is_finite()) {
+            return Err(degenerate(RESECTION, 0.0));
         }
+        // Depths scale as det^(1/3): pick the det that gives the requested mean depth.
+        let row = p.row(2);
+        let mean = reconstruction.iter().map(|x| row[0] * x.x + row[1] * x.y + row[2] * x.z + row[3]).sum::<f64>()
+            / reconstruction.len() as f64;
+        let det_reference = det * (reference_mean_depth / mean.abs()).powi(3);
         Ok(Self { reconstruction, det_reference, scratch_points: Vec::new(), scratch_pixels: Vec::new() })
     }
 

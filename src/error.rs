@@ -82,6 +82,17 @@ pub enum Error {
         /// The threshold that was applied.
         threshold: f64,
     },
+    /// A geometric estimation without a unique answer: plane + parallax of a planar object
+    /// or without translation, an epipole without motion, a resection of coplanar points.
+    #[error("degenerate {what}: singular-value ratio {ratio:.3e}; {hint}")]
+    DegenerateEstimate {
+        /// What was being estimated.
+        what: &'static str,
+        /// The singular-value ratio that failed (0 when not applicable).
+        ratio: f64,
+        /// What usually causes it.
+        hint: &'static str,
+    },
     /// A scenario file or dictionary that does not describe a valid run; `key` names the
     /// offending entry (e.g. `control.gain`).
     #[error("scenario: {}{reason}", if key.is_empty() { String::new() } else { format!("{key}: ") })]
@@ -110,6 +121,7 @@ impl Error {
                 | Error::CollinearBasis { .. }
                 | Error::PointBehindCamera { .. }
                 | Error::DegenerateStructure { .. }
+                | Error::DegenerateEstimate { .. }
                 | Error::RzSingular { .. }
         )
     }

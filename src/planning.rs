@@ -8,7 +8,7 @@
 //! points"). Each non-basis point gives one equation: the linear method needs 5 of them
 //! (n >= 8), the minimal method 4 (n = 7) closed by the cubic `det F = 0`.
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 use crate::error::{Error, Result, check_finite};
 
@@ -18,6 +18,14 @@ const OFF: [(usize, usize); 6] = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)
 /// Below this ratio of singular values the epipolar system counts as degenerate (planar
 /// object, no translation, points too few or too close to a plane).
 pub const DEGENERATE_RATIO: f64 = 1e-9;
+
+fn degenerate(ratio: f64) -> Error {
+    Error::DegenerateEstimate {
+        what: "plane + parallax (eq. 9)",
+        ratio,
+        hint: "the object is planar, the camera did not translate, or the points are too few",
+    }
+}
 
 /// The plane + parallax parameters of eq. (9), with `gamma_3 = 1`.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,15 +56,6 @@ impl PlaneParallax {
     }
 }
 
-/// Builds F from its six off-diagonal entries.
-fn f_from(entries: &[f64]) -> Matrix3<f64> {
-    let mut f = Matrix3::zeros();
-    for (k, &(i, j)) in OFF.iter().enumerate() {
-        f[(i, j)] = entries[k];
-    }
-    f
-}
-
 /// `det F` for a zero-diagonal F: `F01 F12 F20 + F02 F10 F21`.
 fn det_zero_diag(e: &[f64; 6]) -> f64 {
     e[0] * e[3] * e[4] + e[1] * e[2] * e[5]
@@ -81,12 +80,8 @@ fn real_cubic_roots(a: f64, b: f64, c: f64, d: f64) -> Vec<f64> {
     }
     // Companion matrix eigenvalues: robust and good enough for three roots.
     let m = nalgebra::Matrix3::new(-b / a, -c / a, -d / a, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
-    let roots: Vec<f64> = m
-        .complex_eigenvalues()
-        .iter()
-        .filter(|z| z.im.abs() <= 1e-9 * (1.0 + z.re.abs()))
-        .map(|z| z.re)
-        .collect();
+    let roots: Vec<f64> =
+        m.complex_eigenvalues().iter().filter(|z| z.im.abs() <= 1e-9 * (1.0 + z.re.abs())).map(|z| z.re).collect();
     // One Newton step each, to polish.
     roots
         .into_iter()
@@ -142,14 +137,7 @@ fn decompose(f: &[f64; 6], q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> Optio
     if gamma_k.iter().any(|&g| !(g > 0.0)) {
         return None;
     }
-    Some(PlaneParallax {
-        gamma,
-        epipole,
-        mu_e,
-        gamma_k,
-        residual: (err2 / q.len() as f64).sqrt(),
-        candidates: 1,
-    })
+    Some(PlaneParallax { gamma, epipole, mu_e, gamma_k, residual: (err2 / q.len() as f64).sqrt(), candidates: 1 })
 }
 
 /// Estimates eq. (9) from the invariant points of the non-basis points in the current image
@@ -191,7 +179,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
         }
     }
     let svd = a.svd(false, true);
-    let v_t = svd.v_t.as_ref().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: DEGENERATE_RATIO })?;
+    let v_t = svd.v_t.as_ref().ok_or(degenerate(0.0))?;
     // Singular values sorted decreasingly by nalgebra's SVD? Sort explicitly.
     let mut order: Vec<usize> = (0..6).collect();
     order.sort_by(|&x, &y| svd.singular_values[y].total_cmp(&svd.singular_values[x]));
@@ -200,7 +188,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
     // The last `null_dim` singular values are (near) zero; the one before must not be.
     let ratio = sv[5 - null_dim] / sv[0].max(f64::MIN_POSITIVE);
     if !(ratio > DEGENERATE_RATIO) {
-        return Err(Error::DegenerateStructure { ratio, threshold: DEGENERATE_RATIO });
+        return Err(degenerate(ratio));
     }
     let unscale = |f: &[f64]| -> [f64; 6] {
         // F = D F' D* (undo the scaling).
@@ -212,7 +200,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
     let row = |i: usize| -> Vec<f64> { v_t.row(order[i]).iter().copied().collect() };
     if null_dim == 1 {
         let f = unscale(&row(5));
-        return decompose(&f, q, q_star).ok_or(Error::DegenerateStructure { ratio, threshold: DEGENERATE_RATIO });
+        return decompose(&f, q, q_star).ok_or(degenerate(ratio));
     }
     // Minimal method: F = F1 + x F2 with det F = 0, a cubic in x (plus F2 alone, x -> inf).
     let (f1, f2) = (unscale(&row(4)), unscale(&row(5)));
@@ -221,10 +209,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
     let xs = [-1.0, 0.0, 1.0, 2.0];
     let ys = xs.map(det_at);
     let vander = nalgebra::Matrix4::from_fn(|r, c| xs[r].powi(3 - c as i32));
-    let coeffs = vander.lu().solve(&nalgebra::Vector4::from(ys)).ok_or(Error::DegenerateStructure {
-        ratio,
-        threshold: DEGENERATE_RATIO,
-    })?;
+    let coeffs = vander.lu().solve(&nalgebra::Vector4::from(ys)).ok_or(degenerate(ratio))?;
     let mut candidates: Vec<[f64; 6]> = real_cubic_roots(coeffs[0], coeffs[1], coeffs[2], coeffs[3])
         .into_iter()
         .map(|x| std::array::from_fn(|c| f1[c] + x * f2[c]))
@@ -241,7 +226,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
             p.candidates = count;
             p
         })
-        .ok_or(Error::DegenerateStructure { ratio, threshold: DEGENERATE_RATIO })
+        .ok_or(degenerate(ratio))
 }
 
 /// The path of eq. (10) from the current image (t = 0) to the reference image (t = T), for

@@ -15,6 +15,8 @@
 //! [robot]             kind = "free" | "cartesian", joint_min, joint_max, joint_velocity
 //! [noise]             pixel_sigma, seed, on_reference
 //! [stop]              max_iterations, pixel_error, invariant_error, tau21, window, divergence_distance
+//! [path]              samples = N                                         # sec. 3, T = N dt
+//! [depth_estimation]  camera = {..}, position, rotation, translation      # appendix A
 //! ```
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -25,7 +27,9 @@ use crate::control::InvariantControllerConfig;
 use crate::error::{Error, Result};
 use crate::robot::{JointLimits, Robot};
 use crate::scene::{Body, ImageSize, Scene};
-use crate::simulator::{CameraModel, DepthSource, Law, Noise, SimulationConfig, StopRules, Zoom};
+use crate::simulator::{
+    CameraModel, DepthSource, Law, Noise, SimulationConfig, StopRules, TranslationPairDepths, Zoom,
+};
 
 fn default_skew() -> f64 {
     90.0
@@ -304,6 +308,33 @@ impl Default for StopSpec {
     }
 }
 
+/// `[path]`: plan a path in the invariant space from the first image (sec. 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathSpec {
+    /// Number of samples; the path lasts `samples * control.dt` seconds (the paper's N).
+    pub samples: usize,
+}
+
+/// `[depth_estimation]`: the pure-translation image pair of appendix A.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthEstimationSpec {
+    /// Any camera, unknown to the controller (fku, fkv, u0, v0, skew_deg).
+    pub camera: CameraSpec,
+    /// Camera centre of the first image in F*, metres.
+    pub position: [f64; 3],
+    /// Theta-u of that camera in F*, degrees.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// Pure translation of the camera centre to the second image, metres, in F*.
+    pub translation: [f64; 3],
+    /// The mean depth the estimates give the reference image: a rough guess of the distance
+    /// to the object in metres (default 1, "unknown"); it scales the translation speed only.
+    #[serde(default = "one")]
+    pub reference_mean_depth: f64,
+}
+
 /// A scenario: one simulated servoing run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -337,6 +368,12 @@ pub struct Scenario {
     /// Stop rules.
     #[serde(default)]
     pub stop: StopSpec,
+    /// Path planning in the invariant space.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathSpec>,
+    /// The translation pair for `control.depths = "estimated"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_estimation: Option<DepthEstimationSpec>,
 }
 
 fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
@@ -509,11 +546,40 @@ impl Scenario {
             DepthsName::True => DepthSource::True,
             DepthsName::Reference => DepthSource::Reference,
             DepthsName::Estimated => {
-                return Err(scenario_error(
-                    "control.depths",
-                    "\"estimated\" needs the appendix-A depth estimator, which this version does not provide yet",
-                ));
+                let d = self.depth_estimation.as_ref().ok_or_else(|| {
+                    scenario_error("control.depths", "\"estimated\" needs a [depth_estimation] section")
+                })?;
+                if d.camera.zoom.is_some() || d.camera.width.is_some() || d.camera.height.is_some() {
+                    return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
+                }
+                let values = d.position.iter().chain(&d.rotation).chain(&d.translation);
+                if values.clone().any(|v| !v.is_finite()) {
+                    return Err(scenario_error("depth_estimation", "non-finite position, rotation or translation"));
+                }
+                if !(d.reference_mean_depth.is_finite() && d.reference_mean_depth > 0.0) {
+                    return Err(scenario_error("depth_estimation.reference_mean_depth", "must be finite and > 0"));
+                }
+                if d.translation.iter().all(|&v| v == 0.0) {
+                    return Err(scenario_error("depth_estimation.translation", "must not be zero"));
+                }
+                DepthSource::Estimated(std::sync::Arc::new(TranslationPairDepths {
+                    camera: d.camera.intrinsics("depth_estimation.camera")?,
+                    first_pose: pose_of(d.position, d.rotation),
+                    translation: Vector3::from(d.translation),
+                    reference_mean_depth: d.reference_mean_depth,
+                }))
             }
+        };
+        if self.depth_estimation.is_some() && c.depths != DepthsName::Estimated {
+            return Err(scenario_error("depth_estimation", "is used only with control.depths = \"estimated\""));
+        }
+        let path_samples = match &self.path {
+            Some(p) if p.samples == 0 => return Err(scenario_error("path.samples", "must be >= 1")),
+            Some(_) if c.law != LawName::Invariant => {
+                return Err(scenario_error("path", "path planning drives the invariant law only"));
+            }
+            Some(p) => Some(p.samples),
+            None => None,
         };
         let robot = match self.robot.kind {
             RobotKind::Free => {
@@ -579,6 +645,7 @@ impl Scenario {
                 window: s.window,
                 divergence_distance: s.divergence_distance,
             },
+            path_samples,
             record: true,
         })
     }
@@ -596,6 +663,9 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("ibvs-25-12", include_str!("../scenarios/ibvs-25-12.toml")),
     ("ibvs-6-12", include_str!("../scenarios/ibvs-6-12.toml")),
     ("zoom-servo", include_str!("../scenarios/zoom-servo.toml")),
+    ("path-500", include_str!("../scenarios/path-500.toml")),
+    ("path-3000", include_str!("../scenarios/path-3000.toml")),
+    ("path-500-feedforward", include_str!("../scenarios/path-500-feedforward.toml")),
     ("noise-12-6", include_str!("../scenarios/noise-12-6.toml")),
     ("cartesian-12-6", include_str!("../scenarios/cartesian-12-6.toml")),
     ("occlusion", include_str!("../scenarios/occlusion.toml")),

@@ -9,13 +9,16 @@ use rand_distr::{Distribution, Normal};
 
 use crate::camera::Intrinsics;
 use crate::control::{InvariantController, InvariantControllerConfig};
+use crate::depth::{ResectionDepths, depths_from_translation};
 use crate::error::{Error, Result, check_finite, check_positive};
 use crate::ibvs::{IbvsController, Interaction};
 use crate::invariant::{BasisFrame, RzReference, choose_basis, non_basis_indices, validate_basis};
 use crate::jacobian::MIN_POINTS;
+use crate::planning::{InvariantPath, estimate_plane_parallax};
 use crate::robot::Robot;
 use crate::scene::{ImageSize, Observation, Scene};
 use crate::se3::pose_error;
+use crate::stability::a_matrix;
 use crate::stability::check_stability;
 
 /// A piecewise-linear schedule of the intrinsics in time (a zoom).
@@ -151,6 +154,50 @@ pub trait DepthEstimatorFactory: Send + Sync {
     fn start(&self, scene: &Scene, reference_pixels: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>>;
 }
 
+impl DepthEstimator for ResectionDepths {
+    fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()> {
+        ResectionDepths::estimate(self, pixels, visible, depths)
+    }
+}
+
+/// Appendix A in the simulator: two images of the object taken by `camera` (unknown to the
+/// controller) at `first_pose` and after a pure translation `translation` (F*, metres) give
+/// the depths up to scale; every iteration then resects the current camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TranslationPairDepths {
+    /// The camera of the pair.
+    pub camera: Intrinsics,
+    /// Its pose for the first image (camera frame in F*).
+    pub first_pose: Isometry3<f64>,
+    /// The translation of its centre to the second image, in F*.
+    pub translation: Vector3<f64>,
+    /// The mean depth the estimates give the reference image (see [`ResectionDepths::new`]).
+    pub reference_mean_depth: f64,
+}
+
+impl DepthEstimatorFactory for TranslationPairDepths {
+    fn start(&self, scene: &Scene, reference_pixels: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>> {
+        let second_pose = nalgebra::Translation3::from(self.translation) * self.first_pose;
+        let mut images = [Observation::default(), Observation::default()];
+        for (obs, pose) in images.iter_mut().zip([self.first_pose, second_pose]) {
+            scene.observe(&pose, &self.camera, None, obs);
+            if let Some(i) = obs.visible.iter().position(|v| !v) {
+                return Err(Error::InvalidParameter {
+                    name: "depth_estimation",
+                    reason: format!("point {i} is not seen by the translation pair (behind the camera or occluded)"),
+                });
+            }
+        }
+        let first = depths_from_translation(&images[0].pixels, &images[1].pixels)?;
+        Ok(Box::new(ResectionDepths::new(
+            &images[0].pixels,
+            &first.depths,
+            reference_pixels,
+            self.reference_mean_depth,
+        )?))
+    }
+}
+
 /// Per-point depths given to the control law.
 #[derive(Clone)]
 pub enum DepthSource {
@@ -249,6 +296,9 @@ pub struct SimulationConfig {
     pub noise: Noise,
     /// Stop rules.
     pub stop: StopRules,
+    /// Plan a path in the invariant space from the first image (sec. 3), sampled this many
+    /// times at the control period (`T = samples dt`); None keeps the reference still.
+    pub path_samples: Option<usize>,
     /// Keep the per-iteration record.
     pub record: bool,
 }
@@ -321,6 +371,27 @@ pub struct Summary {
     pub basis: [usize; 3],
     /// Largest distance of the camera centre from the segment between start and goal, metres.
     pub max_line_deviation: f64,
+    /// Prop. 3 figures along the planned path (None without a path).
+    pub tracking: Option<Tracking>,
+}
+
+/// Prop. 3 along the path: the bound `psi / phi` on `||eps(t)||` and what was observed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tracking {
+    /// Smallest eigenvalue of `A(t) + A(t)^T` along the path (sigma of Prop. 3).
+    pub sigma: f64,
+    /// `psi = 2 max ||b(t)||`.
+    pub psi: f64,
+    /// `phi = lambda sigma`.
+    pub phi: f64,
+    /// `psi / phi` (infinite when sigma <= 0).
+    pub bound: f64,
+    /// The largest `||eps(t)||` observed while the reference moved.
+    pub max_eps: f64,
+    /// Path duration T, seconds.
+    pub duration: f64,
+    /// RMS residual of the plane + parallax estimate.
+    pub plane_parallax_residual: f64,
 }
 
 /// The per-iteration record, in flat row-major buffers (one row per recorded iteration).
@@ -478,6 +549,21 @@ fn measure(pixels: &[[f64; 2]], visible: &[bool], r: &ReferenceImage) -> Metrics
     Metrics { invariant_error: err2.sqrt(), tau: [t[(0, 0)], t[(1, 0)], t[(1, 1)]], eps_z: rz.eps_z(&v), image_error }
 }
 
+/// Plans the path of sec. 3 from the current (first) image; returns it with the plane +
+/// parallax residual.
+fn plan_path(pixels: &[[f64; 2]], visible: &[bool], r: &ReferenceImage, duration: f64) -> Result<(InvariantPath, f64)> {
+    if let Some(i) = (0..pixels.len()).find(|&i| !visible[i]) {
+        return Err(Error::InvalidParameter {
+            name: "path",
+            reason: format!("point {i} is not visible in the first image; the path needs every point"),
+        });
+    }
+    let frame = BasisFrame::new(pixels, r.basis, "current")?;
+    let q: Vec<Vector3<f64>> = r.others.iter().map(|&i| frame.transform(pixels[i])).collect();
+    let estimate = estimate_plane_parallax(&q, &r.s_star)?;
+    Ok((InvariantPath::new(&r.s_star, &estimate, duration)?, estimate.residual))
+}
+
 enum AnyController {
     Invariant(Box<InvariantController>),
     Ibvs(Box<IbvsController>),
@@ -597,6 +683,11 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         _ => None,
     };
     let mut estimated = vec![0.0; n];
+    let mut path: Option<(InvariantPath, f64)> = None;
+    let m_others = refimg.others.len();
+    let (mut path_points, mut path_rates) = (vec![[0.0; 3]; m_others], vec![[0.0; 3]; m_others]);
+    let feedforward = matches!(config.law, Law::Invariant(c) if c.feedforward);
+    let (mut sigma_min, mut max_b, mut max_eps) = (f64::INFINITY, 0.0_f64, 0.0_f64);
     let mut iteration = 0;
     let (status, message, last) = loop {
         let t = iteration as f64 * config.dt;
@@ -684,10 +775,42 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             }
             _ => &obs.depths,
         };
+        // Sec. 3: plan the path from the first image, then move the reference along it.
+        if let (Some(samples), AnyController::Invariant(c)) = (config.path_samples, &mut controller) {
+            if path.is_none() {
+                match plan_path(&pixels, &obs.visible, &refimg, samples as f64 * config.dt) {
+                    Ok(p) => path = Some(p),
+                    Err(e) => break finish(Status::Degenerate, format!("path planning failed: {e}"), m),
+                }
+            }
+            if let Some((p, _)) = &path {
+                p.sample(t, &mut path_points, &mut path_rates);
+                if let Err(e) = c.set_reference(&path_points, Some(&path_rates)) {
+                    break finish(Status::Diverged, format!("path sample: {e}"), m);
+                }
+            }
+        }
         let twist = match controller.step(&pixels, depths, &obs.visible) {
             Ok(tw) => tw,
             Err(e) => break finish(status_of(&e), e.to_string(), m),
         };
+        // Prop. 3 along the path: A(t) from K(t), K_hat and kappa(t) (known here, since the
+        // simulator knows the true depths), b(t) and ||eps(t)||.
+        if let (Some((p, _)), AnyController::Invariant(c)) = (&path, &controller)
+            && t < p.duration()
+            && let Some(state) = c.state()
+        {
+            let (sum, count) = (0..n)
+                .filter(|&i| obs.visible[i])
+                .fold((0.0, 0.0), |(s, c), i| (s + depths[i] / obs.depths[i], c + 1.0));
+            if let Ok(a) = a_matrix(&k.matrix(), &config.estimate.matrix(), sum / count) {
+                sigma_min = sigma_min.min((a + a.transpose()).symmetric_eigenvalues().min());
+                let r = state.reference_rate_term;
+                let b = if feedforward { (a - nalgebra::Matrix5::identity()) * r } else { -r };
+                max_b = max_b.max(b.norm());
+            }
+            max_eps = max_eps.max(state.eps.norm());
+        }
         if let Some(r) = rec.as_mut() {
             let eps = match &controller {
                 AnyController::Invariant(c) => c.state().map_or([f64::NAN; 5], |s| s.eps.into()),
@@ -731,6 +854,19 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         start_error,
         basis,
         max_line_deviation,
+        tracking: path.map(|(p, residual)| {
+            let phi = gain * sigma_min;
+            let psi = 2.0 * max_b;
+            Tracking {
+                sigma: sigma_min,
+                psi,
+                phi,
+                bound: if phi > 0.0 { psi / phi } else { f64::INFINITY },
+                max_eps,
+                duration: p.duration(),
+                plane_parallax_residual: residual,
+            }
+        }),
     };
     Ok(Outcome { summary, recording: rec, reference_pixels: refimg.pixels })
 }

@@ -50,11 +50,13 @@ fn resection_depths_are_kappa_times_true_depths() {
     let first = depths_from_translation(&p1, &p2).unwrap();
     let k_star = lens(1200.0);
     let (reference, z_star) = view(&object_points(), &Isometry3::identity(), &k_star);
-    let mut est = ResectionDepths::new(&p1, &first.depths, &reference).unwrap();
+    let mut est = ResectionDepths::new(&p1, &first.depths, &reference, 1.0).unwrap();
     let n = reference.len();
     let mut out = vec![0.0; n];
     est.estimate(&reference, &vec![true; n], &mut out).unwrap();
     let kappa_ref = assert_proportional(&out, &z_star);
+    // The scale makes the reference depths average 1.
+    assert!((out.iter().sum::<f64>() / n as f64 - 1.0).abs() < 1e-9);
     let mut rng = Lcg(21);
     for _ in 0..20 {
         let k = random_intrinsics(&mut rng);
@@ -74,7 +76,8 @@ fn resection_depths_are_kappa_times_true_depths() {
 fn coplanar_points_are_refused() {
     let planar: Vec<Vector3<f64>> =
         object_points().iter().map(|p| Vector3::new(p[0], p[1], 0.6 + 0.2 * p[0])).collect();
-    let (px, _) = view(&planar.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>(), &Isometry3::identity(), &lens(800.0));
+    let (px, _) =
+        view(&planar.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>(), &Isometry3::identity(), &lens(800.0));
     assert!(vsinv::depth::resect(&planar, &px).is_err());
     assert!(vsinv::depth::resect(&planar[..5], &px[..5]).is_err());
 }

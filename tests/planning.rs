@@ -13,7 +13,12 @@ fn non_basis(q: &[[f64; 3]], basis: [usize; 3]) -> Vec<Vector3<f64>> {
 }
 
 /// Invariant points of the non-basis points in the reference image (K*) and at `pose` (K).
-fn pair(object: &[[f64; 3]], pose: &Isometry3<f64>, basis: [usize; 3], n: usize) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
+fn pair(
+    object: &[[f64; 3]],
+    pose: &Isometry3<f64>,
+    basis: [usize; 3],
+    n: usize,
+) -> (Vec<Vector3<f64>>, Vec<Vector3<f64>>) {
     let object = &object[..n];
     let (reference, _) = view(object, &Isometry3::identity(), &lens(1200.0));
     let k = Intrinsics::new(700.0, 650.0, 400.0, 250.0, 1.5).unwrap();
@@ -69,7 +74,7 @@ fn degenerate_configurations_are_refused() {
     let planar: Vec<[f64; 3]> = object_points().iter().map(|p| [p[0], p[1], 0.6 + 0.2 * p[0]]).collect();
     let pose = random_pose(&mut Lcg(2), 0.1, 0.3);
     let (q, q_star) = pair(&planar, &pose, [0, 3, 8], 12);
-    assert!(matches!(estimate_plane_parallax(&q, &q_star), Err(Error::DegenerateStructure { .. })));
+    assert!(matches!(estimate_plane_parallax(&q, &q_star), Err(Error::DegenerateEstimate { .. })));
     let (q, q_star) = pair(&object_points(), &pose, [0, 3, 5], 6);
     assert!(matches!(estimate_plane_parallax(&q, &q_star), Err(Error::TooFewPoints { .. })));
 }

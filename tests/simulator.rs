@@ -317,3 +317,39 @@ fn depth_estimator_interface() {
     assert_eq!(o.summary.status, Status::Degenerate);
     assert!(o.summary.message.contains("no epipole"), "{}", o.summary.message);
 }
+
+/// Sec. 5.3: K_hat 50% off, depths estimated from images only, a planned path: the camera
+/// ends within 1 mm and 0.1 degrees, follows the straight line more closely with N = 3000
+/// than with N = 500, and with feed-forward the observed max ||eps|| stays below psi/phi.
+#[test]
+fn path_planning_scenarios() {
+    let mut deviation = Vec::new();
+    for name in ["path-500", "path-3000", "path-500-feedforward"] {
+        let o = run(&builtin(name).unwrap());
+        let (t, r) = mm_deg(&o);
+        assert!(o.summary.status == Status::Converged && t < 1.0 && r < 0.1, "{name}: {}", report(&o));
+        let tracking = o.summary.tracking.expect("a path run reports Prop. 3");
+        assert!(tracking.plane_parallax_residual < 1e-9);
+        assert!(tracking.sigma > 0.0 && tracking.bound.is_finite());
+        if name.ends_with("feedforward") {
+            assert!(tracking.max_eps <= tracking.bound, "{tracking:?}");
+        }
+        eprintln!(
+            "{name}: {} | line {:.3} mm | sigma {:.4} psi {:.4} phi {:.4} bound {:.4} max eps {:.4}",
+            report(&o),
+            o.summary.max_line_deviation * 1e3,
+            tracking.sigma,
+            tracking.psi,
+            tracking.phi,
+            tracking.bound,
+            tracking.max_eps
+        );
+        deviation.push(o.summary.max_line_deviation);
+    }
+    assert!(deviation[1] < deviation[0], "N = 3000 must stay closer to the line: {deviation:?}");
+    // Without a path the same start leaves the line much further.
+    let mut no_path = builtin("path-500").unwrap();
+    no_path.path = None;
+    let o = run(&no_path);
+    assert!(o.summary.max_line_deviation > 2.0 * deviation[0], "{}", o.summary.max_line_deviation);
+}

@@ -30,6 +30,11 @@ __all__ = [
     "load_scenario",
     "list_scenarios",
     "run_scenario",
+    "PlaneParallax",
+    "InvariantPath",
+    "ResectionDepths",
+    "estimate_plane_parallax",
+    "depths_from_translation",
     "__version__",
 ]
 
@@ -205,3 +210,50 @@ def list_scenarios() -> list[tuple[str, str]]: ...
 def run_scenario(
     scenario: _ScenarioLike, record: bool = True, progress: Callable[[int, int], object] | None = None
 ) -> RunResult: ...
+
+@final
+class PlaneParallax:
+    """The plane + parallax parameters of eq. (9), gamma_3 = 1."""
+
+    @property
+    def gamma(self) -> _F64Array: ...
+    @property
+    def epipole(self) -> _F64Array: ...
+    @property
+    def mu_e(self) -> _F64Array: ...
+    @property
+    def gamma_k(self) -> _F64Array: ...
+    @property
+    def residual(self) -> float: ...
+    @property
+    def candidates(self) -> int: ...
+
+def estimate_plane_parallax(
+    current_pixels: _ArrayLike, reference_pixels: _ArrayLike, basis: _Basis = (0, 1, 2)
+) -> PlaneParallax: ...
+@final
+class InvariantPath:
+    """The path of eq. (10) from the current image (t = 0) to the reference image (t = T)."""
+
+    def __new__(
+        cls, current_pixels: _ArrayLike, reference_pixels: _ArrayLike, duration: float, basis: _Basis = (0, 1, 2)
+    ) -> InvariantPath: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def plane_parallax(self) -> PlaneParallax: ...
+    def sample(self, t: float) -> tuple[_F64Array, _F64Array]: ...
+
+def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]: ...
+@final
+class ResectionDepths:
+    """Appendix A on line: current depths up to kappa(t) > 0 by DLT resection."""
+
+    def __new__(
+        cls,
+        first_pixels: _ArrayLike,
+        first_depths: _ArrayLike,
+        reference_pixels: _ArrayLike,
+        reference_mean_depth: float = 1.0,
+    ) -> ResectionDepths: ...
+    def estimate(self, pixels: _ArrayLike, visible: Sequence[bool] | None = None) -> _F64Array: ...

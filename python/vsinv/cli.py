@@ -83,8 +83,22 @@ def format_summary(summary: dict[str, Any]) -> str:
         ),
         ("basis", _fmt_basis(s.get("basis"))),
         ("line deviation", f"{_fmt(s.get('max_line_deviation_mm'), '.4g', ' mm')} (largest, camera centre path)"),
-        ("message", str(s.get("message", ""))),
     ]
+    if s.get("path_duration_s") is not None:
+        rows += [
+            (
+                "path (sec. 3)",
+                f"T = {_fmt(s.get('path_duration_s'), '.4g', ' s')}, plane + parallax residual "
+                f"{_fmt(s.get('plane_parallax_residual'), '.2e')}",
+            ),
+            (
+                "Prop. 3",
+                f"max ||eps|| {_fmt(s.get('observed_max_eps'), '.4g')} <= psi/phi "
+                f"{_fmt(s.get('tracking_bound'), '.4g')} (sigma {_fmt(s.get('tracking_sigma'), '.4g')}, "
+                f"psi {_fmt(s.get('tracking_psi'), '.4g')}, phi {_fmt(s.get('tracking_phi'), '.4g')})",
+            ),
+        ]
+    rows.append(("message", str(s.get("message", ""))))
     width = max(len(k) for k, _ in rows)
     lines = [f"scenario {s.get('name', '?')}"]
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]

@@ -4,6 +4,7 @@
 
 mod arrays;
 mod errors;
+mod planning;
 mod sim;
 
 use nalgebra::Matrix3;
@@ -22,7 +23,7 @@ use crate::stability::{StabilityReport, check_upper_triangular};
 /// A basis argument: three point indices, or "auto" for the widest triangle of the
 /// reference (or given) image.
 #[derive(Clone, Copy)]
-enum BasisArg {
+pub(crate) enum BasisArg {
     Fixed([usize; 3]),
     Auto,
 }
@@ -46,7 +47,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
 }
 
 impl BasisArg {
-    fn resolve(self, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
+    pub(crate) fn resolve(self, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
         match self {
             BasisArg::Fixed(b) => Ok(b),
             BasisArg::Auto => crate::invariant::choose_basis(pixels).map_err(to_py),
@@ -123,7 +124,7 @@ fn intrinsics(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Intrinsics> {
     Intrinsics::from_matrix(&matrix3(obj, what)?).map_err(to_py)
 }
 
-fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<'py>> {
+pub(crate) fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<'py>> {
     f64_array(obj, what, &[None, Some(2)])
 }
 
@@ -538,6 +539,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(choose_basis, m)?)?;
     m.add_function(wrap_pyfunction!(check_stability, m)?)?;
     m.add_function(wrap_pyfunction!(tracking_bound, m)?)?;
+    m.add_class::<planning::PyPlaneParallax>()?;
+    m.add_class::<planning::PyInvariantPath>()?;
+    m.add_class::<planning::PyResectionDepths>()?;
+    m.add_function(wrap_pyfunction!(planning::estimate_plane_parallax, m)?)?;
+    m.add_function(wrap_pyfunction!(planning::depths_from_translation, m)?)?;
     m.add_class::<sim::PyScenario>()?;
     m.add_class::<sim::PyRunResult>()?;
     m.add_function(wrap_pyfunction!(sim::load_scenario, m)?)?;

@@ -195,6 +195,14 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("start_rotation_error_deg", s.start_error.1.to_degrees())?;
     d.set_item("basis", s.basis.to_vec())?;
     d.set_item("max_line_deviation_mm", s.max_line_deviation * 1e3)?;
+    let t = s.tracking.as_ref();
+    d.set_item("path_duration_s", t.map(|t| t.duration))?;
+    d.set_item("plane_parallax_residual", t.map(|t| t.plane_parallax_residual))?;
+    d.set_item("tracking_sigma", t.map(|t| t.sigma))?;
+    d.set_item("tracking_psi", t.map(|t| t.psi))?;
+    d.set_item("tracking_phi", t.map(|t| t.phi))?;
+    d.set_item("tracking_bound", t.map(|t| t.bound))?;
+    d.set_item("observed_max_eps", t.map(|t| t.max_eps))?;
     Ok(d)
 }
 

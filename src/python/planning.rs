@@ -1,0 +1,217 @@
+//! Bindings of path planning (sec. 3) and depth estimation (appendix A).
+// Tuples of NumPy arrays are the natural Python return values here.
+#![allow(clippy::type_complexity)]
+
+use nalgebra::Vector3;
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+
+use super::arrays::{f64_array, mat, points2, vec1};
+use super::errors::{invalid_input, to_py};
+use super::{BasisArg, pixels_arg};
+use crate::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
+use crate::invariant::{BasisFrame, non_basis_indices, validate_basis};
+use crate::planning::{InvariantPath, PlaneParallax, estimate_plane_parallax as core_estimate};
+
+/// Invariant points of the non-basis points of a current and a reference image.
+fn invariant_pairs(
+    current: &[[f64; 2]],
+    reference: &[[f64; 2]],
+    basis: BasisArg,
+) -> PyResult<(Vec<Vector3<f64>>, Vec<Vector3<f64>>)> {
+    if current.len() != reference.len() {
+        return Err(invalid_input(format!(
+            "current_pixels has {} points, reference_pixels {}",
+            current.len(),
+            reference.len()
+        )));
+    }
+    crate::error::check_finite_points("current_pixels", current).map_err(to_py)?;
+    crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
+    let basis = validate_basis(basis.resolve(reference)?, reference.len()).map_err(to_py)?;
+    let cur = BasisFrame::new(current, basis, "current").map_err(to_py)?;
+    let star = BasisFrame::new(reference, basis, "reference").map_err(to_py)?;
+    let others = non_basis_indices(current.len(), basis);
+    Ok((
+        others.iter().map(|&i| cur.transform(current[i])).collect(),
+        others.iter().map(|&i| star.transform(reference[i])).collect(),
+    ))
+}
+
+fn rows<'py>(py: Python<'py>, v: &[Vector3<f64>]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    mat(py, v.len(), 3, v.iter().flat_map(|x| [x.x, x.y, x.z]).collect())
+}
+
+/// The plane + parallax parameters of eq. (9) (gamma_3 = 1).
+#[pyclass(name = "PlaneParallax", module = "vsinv._core", frozen)]
+pub struct PyPlaneParallax {
+    inner: PlaneParallax,
+}
+
+#[pymethods]
+impl PyPlaneParallax {
+    /// Gamma / gamma_3, (3,).
+    #[getter]
+    fn gamma<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, self.inner.gamma.as_slice())
+    }
+    /// The epipole e* (unit norm), (3,).
+    #[getter]
+    fn epipole<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, self.inner.epipole.as_slice())
+    }
+    /// mu_k* e* for each non-basis point, (n-3, 3).
+    #[getter]
+    fn mu_e<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        rows(py, &self.inner.mu_e)
+    }
+    /// gamma_k / gamma_3 for each non-basis point, (n-3,).
+    #[getter]
+    fn gamma_k<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, &self.inner.gamma_k)
+    }
+    /// RMS distance between the current invariant points and those eq. (9) predicts.
+    #[getter]
+    fn residual(&self) -> f64 {
+        self.inner.residual
+    }
+    /// Number of det F = 0 candidates of the minimal method (1 for the linear method).
+    #[getter]
+    fn candidates(&self) -> usize {
+        self.inner.candidates
+    }
+}
+
+/// Eq. (9) from a current and a reference image (n >= 7 points; linear method for n >= 8,
+/// minimal 7-point method otherwise).
+#[pyfunction]
+#[pyo3(signature = (current_pixels, reference_pixels, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(current_pixels, reference_pixels, basis=(0, 1, 2))")]
+pub fn estimate_plane_parallax(
+    current_pixels: &Bound<'_, PyAny>,
+    reference_pixels: &Bound<'_, PyAny>,
+    basis: BasisArg,
+) -> PyResult<PyPlaneParallax> {
+    let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
+    let (q, q_star) = invariant_pairs(points2(&c)?, points2(&r)?, basis)?;
+    Ok(PyPlaneParallax { inner: core_estimate(&q, &q_star).map_err(to_py)? })
+}
+
+/// The path of eq. (10) from the current image (t = 0) to the reference image (t = T).
+#[pyclass(name = "InvariantPath", module = "vsinv._core", frozen)]
+pub struct PyInvariantPath {
+    inner: InvariantPath,
+    estimate: Py<PyPlaneParallax>,
+}
+
+#[pymethods]
+impl PyInvariantPath {
+    #[new]
+    #[pyo3(signature = (current_pixels, reference_pixels, duration, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(current_pixels, reference_pixels, duration, basis=(0, 1, 2))")]
+    fn new(
+        py: Python<'_>,
+        current_pixels: &Bound<'_, PyAny>,
+        reference_pixels: &Bound<'_, PyAny>,
+        duration: f64,
+        basis: BasisArg,
+    ) -> PyResult<Self> {
+        let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
+        let (q, q_star) = invariant_pairs(points2(&c)?, points2(&r)?, basis)?;
+        let estimate = core_estimate(&q, &q_star).map_err(to_py)?;
+        let inner = InvariantPath::new(&q_star, &estimate, duration).map_err(to_py)?;
+        Ok(Self { inner, estimate: Py::new(py, PyPlaneParallax { inner: estimate })? })
+    }
+    /// T, seconds.
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.duration()
+    }
+    /// The plane + parallax estimate the path was built from.
+    #[getter]
+    fn plane_parallax(&self, py: Python<'_>) -> Py<PyPlaneParallax> {
+        self.estimate.clone_ref(py)
+    }
+    /// (q_k*(t), dq_k*/dt) for the non-basis points, two (n-3, 3) arrays; pass them to
+    /// `InvariantController.set_reference`.
+    fn sample<'py>(&self, py: Python<'py>, t: f64) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+        if !t.is_finite() {
+            return Err(invalid_input(format!("t must be finite, got {t}")));
+        }
+        let m = self.estimate.get().inner.mu_e.len();
+        let (mut p, mut r) = (vec![[0.0; 3]; m], vec![[0.0; 3]; m]);
+        self.inner.sample(t, &mut p, &mut r);
+        Ok((mat(py, m, 3, p.into_flattened())?, mat(py, m, 3, r.into_flattened())?))
+    }
+}
+
+/// Eq. (26): depths of the first image of a pure-translation pair (any camera), up to one
+/// positive scale (mean 1). Returns (depths (n,), epipole (3,), residual).
+#[pyfunction]
+pub fn depths_from_translation<'py>(
+    py: Python<'py>,
+    first_pixels: &Bound<'py, PyAny>,
+    second_pixels: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
+    let (a, b) = (pixels_arg(first_pixels, "first_pixels")?, pixels_arg(second_pixels, "second_pixels")?);
+    let d = core_depths_from_translation(points2(&a)?, points2(&b)?).map_err(to_py)?;
+    Ok((PyArray1::from_vec(py, d.depths), vec1(py, d.epipole.as_slice()), d.residual))
+}
+
+/// Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera
+/// against the reconstruction from the translation pair.
+#[pyclass(name = "ResectionDepths", module = "vsinv._core")]
+pub struct PyResectionDepths {
+    inner: ResectionDepths,
+    n: usize,
+}
+
+#[pymethods]
+impl PyResectionDepths {
+    #[new]
+    #[pyo3(signature = (first_pixels, first_depths, reference_pixels, reference_mean_depth = 1.0))]
+    fn new(
+        first_pixels: &Bound<'_, PyAny>,
+        first_depths: &Bound<'_, PyAny>,
+        reference_pixels: &Bound<'_, PyAny>,
+        reference_mean_depth: f64,
+    ) -> PyResult<Self> {
+        let a = pixels_arg(first_pixels, "first_pixels")?;
+        let z = f64_array(first_depths, "first_depths", &[None])?;
+        let r = pixels_arg(reference_pixels, "reference_pixels")?;
+        let (first, reference) = (points2(&a)?, points2(&r)?);
+        crate::error::check_finite_points("first_pixels", first).map_err(to_py)?;
+        crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
+        crate::error::check_depths(z.as_slice()?, first.len()).map_err(to_py)?;
+        let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth).map_err(to_py)?;
+        Ok(Self { inner, n: first.len() })
+    }
+
+    /// Depths (n,) of the current image up to kappa(t) > 0, from the pixels of the visible
+    /// points (all by default; at least 6, not coplanar).
+    #[pyo3(signature = (pixels, visible = None))]
+    fn estimate<'py>(
+        &mut self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        visible: Option<Vec<bool>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let a = pixels_arg(pixels, "pixels")?;
+        let px = points2(&a)?;
+        let visible = visible.unwrap_or_else(|| vec![true; self.n]);
+        if px.len() != self.n || visible.len() != self.n {
+            return Err(invalid_input(format!(
+                "expected {} pixels and visibility flags, got {} and {}",
+                self.n,
+                px.len(),
+                visible.len()
+            )));
+        }
+        for (i, p) in px.iter().enumerate() {
+            if visible[i] && !(p[0].is_finite() && p[1].is_finite()) {
+                return Err(to_py(crate::Error::NonFinite { what: "pixels", index: 2 * i }));
+            }
+        }
+        let mut out = vec![0.0; self.n];
+        self.inner.estimate(px, &visible, &mut out).map_err(to_py)?;
+        Ok(PyArray1::from_vec(py, out))
+    }
+}
