@@ -411,8 +411,11 @@ pub struct Recording {
     pub pixels: Vec<f64>,
     /// Visibility: (N, n).
     pub visible: Vec<bool>,
-    /// `||s - s*||`: (N,).
+    /// `||s - s*||` (to the reference image): (N,).
     pub invariant_error: Vec<f64>,
+    /// `||s - s*(t)||` (to the moving reference of a planned path; NaN outside the invariant
+    /// law): (N,).
+    pub tracking_error: Vec<f64>,
     /// Task function eps (NaN for IBVS): (N, 5).
     pub eps: Vec<f64>,
     /// eps_z = det(Q*) tau_21: (N,).
@@ -812,11 +815,14 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             max_eps = max_eps.max(state.eps.norm());
         }
         if let Some(r) = rec.as_mut() {
-            let eps = match &controller {
-                AnyController::Invariant(c) => c.state().map_or([f64::NAN; 5], |s| s.eps.into()),
-                AnyController::Ibvs(_) | AnyController::Observe => [f64::NAN; 5],
+            let (eps, tracking) = match &controller {
+                AnyController::Invariant(c) => {
+                    c.state().map_or(([f64::NAN; 5], f64::NAN), |s| (s.eps.into(), s.invariant_error))
+                }
+                AnyController::Ibvs(_) | AnyController::Observe => ([f64::NAN; 5], f64::NAN),
             };
             r.eps.extend_from_slice(&eps);
+            r.tracking_error.push(tracking);
         }
         if !twist.iter().all(|v| v.is_finite()) {
             break finish(Status::Diverged, "non-finite twist".into(), m);
@@ -837,6 +843,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         let rows = r.time.len();
         r.twist.resize(rows * 6, f64::NAN);
         r.eps.resize(rows * 5, f64::NAN);
+        r.tracking_error.resize(rows, f64::NAN);
     }
     let (final_t, final_r) = pose_error(&goal, &pose);
     let summary = Summary {

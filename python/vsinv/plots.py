@@ -226,6 +226,13 @@ def plot_errors(result: RunResult) -> Figure:
     else:
         pos = np.where(inv > 0, inv, np.nan)
         a1.semilogy(t, pos, color="tab:blue", label="||s - s*||")
+        if s.get("path_duration_s") is not None:
+            track = np.asarray(result.tracking_error, dtype=float)
+            a1.semilogy(t, np.where(track > 0, track, np.nan), color="tab:green", label="||s - s*(t)|| (path tracking)")
+            a1.axvline(float(s["path_duration_s"]), color="0.5", linestyle="--", linewidth=1.0, label="end of the path")
+            # The path starts exactly at the current image (error ~1e-15): keep the axis readable.
+            top = float(np.nanmax(np.concatenate([pos, np.where(track > 0, track, np.nan)])))
+            a1.set_ylim(bottom=top * 1e-5)
         tol = (result.scenario.to_dict().get("stop") or {}).get("invariant_error")
         if tol is not None and tol > 0 and s.get("stop_rule") == "invariant":
             a1.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g}")

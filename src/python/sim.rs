@@ -127,6 +127,8 @@ pub struct PyRunResult {
     #[pyo3(get)]
     invariant_error: Py<PyAny>,
     #[pyo3(get)]
+    tracking_error: Py<PyAny>,
+    #[pyo3(get)]
     eps: Py<PyAny>,
     #[pyo3(get)]
     eps_z: Py<PyAny>,
@@ -153,6 +155,7 @@ impl PyRunResult {
         d.set_item("pixels", self.pixels.bind(py))?;
         d.set_item("visible", self.visible.bind(py))?;
         d.set_item("invariant_error", self.invariant_error.bind(py))?;
+        d.set_item("tracking_error", self.tracking_error.bind(py))?;
         d.set_item("eps", self.eps.bind(py))?;
         d.set_item("eps_z", self.eps_z.bind(py))?;
         d.set_item("image_error", self.image_error.bind(py))?;
@@ -256,6 +259,7 @@ pub fn run_scenario(
         pixels: array(py, r.pixels, &[rows, n, 2])?,
         visible: array(py, r.visible, &[rows, n])?,
         invariant_error: array(py, r.invariant_error, &[rows])?,
+        tracking_error: array(py, r.tracking_error, &[rows])?,
         eps: array(py, r.eps, &[rows, 5])?,
         eps_z: array(py, r.eps_z, &[rows])?,
         image_error: array(py, r.image_error, &[rows])?,
