@@ -48,6 +48,7 @@
 //! # Ok::<(), vsinv::Error>(())
 //! ```
 
+pub mod batch;
 pub mod camera;
 pub mod control;
 pub mod depth;

@@ -1,7 +1,7 @@
 """Type stubs for the compiled core (Rust, PyO3)."""
 
 import os
-from typing import Any, Callable, Literal, Sequence, Union, final
+from typing import Any, Callable, Iterable, Literal, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -30,6 +30,7 @@ __all__ = [
     "load_scenario",
     "list_scenarios",
     "run_scenario",
+    "run_batch",
     "PlaneParallax",
     "InvariantPath",
     "ResectionDepths",
@@ -209,6 +210,7 @@ class RunResult:
 
 def load_scenario(source: _ScenarioLike) -> Scenario: ...
 def list_scenarios() -> list[tuple[str, str]]: ...
+def run_batch(scenarios: Iterable[_ScenarioLike], threads: int | None = None) -> dict[str, npt.NDArray[Any]]: ...
 def run_scenario(
     scenario: _ScenarioLike, record: bool = True, progress: Callable[[int, int], object] | None = None
 ) -> RunResult: ...

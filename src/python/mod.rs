@@ -549,6 +549,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sim::load_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(sim::list_scenarios, m)?)?;
     m.add_function(wrap_pyfunction!(sim::run_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(sim::run_batch, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -268,3 +268,76 @@ pub fn run_scenario(
         reference_pixels: array(py, reference.into_flattened(), &[n, 2])?,
     })
 }
+
+/// Runs many scenarios in parallel with the GIL released (recording off) and returns the
+/// table as a dict of NumPy arrays, one row per scenario: status (str), iterations,
+/// final_translation_error_mm, final_rotation_error_deg, final_image_error_px,
+/// final_invariant_error, prop1, prop2, max_line_deviation_mm, message (str). A scenario
+/// whose configuration is invalid raises before anything runs; a run that fails on the way
+/// has status "error" and its message.
+#[pyfunction]
+#[pyo3(signature = (scenarios, threads = None))]
+pub fn run_batch<'py>(
+    py: Python<'py>,
+    scenarios: &Bound<'py, PyAny>,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut configs = Vec::new();
+    for (i, item) in scenarios.try_iter()?.enumerate() {
+        let s = scenario_arg(&item?).map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?;
+        configs.push(s.to_config().map_err(|e| invalid_input(format!("scenario {i}: {e}")))?);
+    }
+    let results = py.detach(|| crate::batch::run_batch(&configs, threads)).map_err(to_py)?;
+    let m = results.len();
+    let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    let mut iterations = Vec::with_capacity(m);
+    let mut cols = [(); 6].map(|_| Vec::with_capacity(m));
+    let (mut prop1, mut prop2) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    for r in &results {
+        match r {
+            Ok(s) => {
+                status.push(s.status.as_str().to_string());
+                message.push(s.message.clone());
+                iterations.push(s.iterations as i64);
+                let values = [
+                    s.final_translation_error * 1e3,
+                    s.final_rotation_error.to_degrees(),
+                    s.final_image_error,
+                    s.final_invariant_error,
+                    s.max_line_deviation * 1e3,
+                    s.tracking.map_or(f64::NAN, |t| t.max_eps),
+                ];
+                cols.iter_mut().zip(values).for_each(|(c, v)| c.push(v));
+                prop1.push(s.prop1);
+                prop2.push(s.prop2);
+            }
+            Err(e) => {
+                status.push("error".to_string());
+                message.push(e.to_string());
+                iterations.push(0);
+                cols.iter_mut().for_each(|c| c.push(f64::NAN));
+                prop1.push(false);
+                prop2.push(false);
+            }
+        }
+    }
+    let np = py.import("numpy")?;
+    let d = PyDict::new(py);
+    d.set_item("status", np.call_method1("array", (status,))?)?;
+    d.set_item("iterations", PyArray1::from_vec(py, iterations))?;
+    let names = [
+        "final_translation_error_mm",
+        "final_rotation_error_deg",
+        "final_image_error_px",
+        "final_invariant_error",
+        "max_line_deviation_mm",
+        "observed_max_eps",
+    ];
+    for (name, c) in names.iter().zip(cols) {
+        d.set_item(*name, PyArray1::from_vec(py, c))?;
+    }
+    d.set_item("prop1", PyArray1::from_vec(py, prop1))?;
+    d.set_item("prop2", PyArray1::from_vec(py, prop2))?;
+    d.set_item("message", np.call_method1("array", (message,))?)?;
+    Ok(d)
+}
