@@ -261,53 +261,6 @@ impl Default for RobotSpec {
     }
 }
 
-/// `[noise]`.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct NoiseSpec {
-    /// Pixel standard deviation.
-    #[serde(default)]
-    pub pixel_sigma: f64,
-    /// Generator seed.
-    #[serde(default)]
-    pub seed: u64,
-    /// Also perturb the reference image.
-    #[serde(default)]
-    pub on_reference: bool,
-}
-
-/// `[stop]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct StopSpec {
-    /// Iteration limit.
-    pub max_iterations: usize,
-    /// Pixel rule threshold (px).
-    pub pixel_error: f64,
-    /// Invariant rule threshold on `||s - s*||`.
-    pub invariant_error: f64,
-    /// Invariant rule threshold on `|tau_21|`.
-    pub tau21: f64,
-    /// Averaging window (iterations).
-    pub window: usize,
-    /// Divergence distance, metres.
-    pub divergence_distance: f64,
-}
-
-impl Default for StopSpec {
-    fn default() -> Self {
-        let d = StopRules::default();
-        Self {
-            max_iterations: d.max_iterations,
-            pixel_error: d.pixel_error,
-            invariant_error: d.invariant_error,
-            tau21: d.tau21,
-            window: d.window,
-            divergence_distance: d.divergence_distance,
-        }
-    }
-}
-
 /// `[path]`: plan a path in the invariant space from the first image (sec. 3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -364,10 +317,10 @@ pub struct Scenario {
     pub robot: RobotSpec,
     /// Pixel noise.
     #[serde(default)]
-    pub noise: NoiseSpec,
+    pub noise: Noise,
     /// Stop rules.
     #[serde(default)]
-    pub stop: StopSpec,
+    pub stop: StopRules,
     /// Path planning in the invariant space.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathSpec>,
@@ -636,15 +589,8 @@ impl Scenario {
             law,
             depths,
             dt: c.dt,
-            noise: Noise { pixel_sigma: n.pixel_sigma, seed: n.seed, on_reference: n.on_reference },
-            stop: StopRules {
-                max_iterations: s.max_iterations,
-                pixel_error: s.pixel_error,
-                invariant_error: s.invariant_error,
-                tau21: s.tau21,
-                window: s.window,
-                divergence_distance: s.divergence_distance,
-            },
+            noise: *n,
+            stop: *s,
             path_samples,
             record: true,
         })

@@ -219,8 +219,9 @@ impl std::fmt::Debug for DepthSource {
     }
 }
 
-/// Gaussian pixel noise.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Gaussian pixel noise (the `[noise]` table of a scenario).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct Noise {
     /// Standard deviation in pixels, on each coordinate.
     pub pixel_sigma: f64,
@@ -236,8 +237,9 @@ impl Default for Noise {
     }
 }
 
-/// When a run stops.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// When a run stops (the `[stop]` table of a scenario).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct StopRules {
     /// Iteration limit.
     pub max_iterations: usize,
