@@ -4,17 +4,42 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::scenario::Scenario;
 use crate::simulator::{SimulationConfig, Summary, simulate};
 
 /// Runs every configuration (recording off) on `threads` worker threads (None: one per
 /// core) and returns one result per configuration, in order. A run that cannot start
 /// (invalid configuration) gives its error in place; the others are unaffected.
 pub fn run_batch(configs: &[SimulationConfig], threads: Option<usize>) -> Result<Vec<Result<Summary>>> {
-    let run = |c: &SimulationConfig| {
-        let mut c = c.clone();
-        c.record = false;
-        simulate(&c, &mut |_, _| true).map(|o| o.summary)
-    };
+    Ok(pool(threads)?.install(|| configs.par_iter().map(run_one).collect()))
+}
+
+/// Like [`run_batch`] for scenarios given as JSON texts, parsed in parallel too. Every
+/// scenario is validated before any runs: the first invalid one fails the whole batch with
+/// its index in the key (`[17].control.gain`).
+pub fn run_json_batch(texts: &[String], threads: Option<usize>) -> Result<Vec<Result<Summary>>> {
+    pool(threads)?.install(|| {
+        let configs: Vec<Result<SimulationConfig>> = texts.par_iter().map(|t| Scenario::config_from_json(t)).collect();
+        if let Some((i, err)) = configs.iter().enumerate().find_map(|(i, c)| c.as_ref().err().map(|e| (i, e))) {
+            return Err(match err {
+                Error::Scenario { key, reason } => Error::Scenario {
+                    key: if key.is_empty() { format!("[{i}]") } else { format!("[{i}].{key}") },
+                    reason: reason.clone(),
+                },
+                other => Error::Scenario { key: format!("[{i}]"), reason: other.to_string() },
+            });
+        }
+        Ok(configs.into_par_iter().flatten().collect::<Vec<_>>().par_iter().map(run_one).collect())
+    })
+}
+
+fn run_one(c: &SimulationConfig) -> Result<Summary> {
+    let mut c = c.clone();
+    c.record = false;
+    simulate(&c, &mut |_, _| true).map(|o| o.summary)
+}
+
+fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         if n == 0 {
@@ -22,11 +47,9 @@ pub fn run_batch(configs: &[SimulationConfig], threads: Option<usize>) -> Result
         }
         builder = builder.num_threads(n);
     }
-    let pool = builder.build().map_err(|e| Error::InvalidParameter {
-        name: "threads",
-        reason: format!("cannot start the thread pool: {e}"),
-    })?;
-    Ok(pool.install(|| configs.par_iter().map(run).collect()))
+    builder
+        .build()
+        .map_err(|e| Error::InvalidParameter { name: "threads", reason: format!("cannot start the thread pool: {e}") })
 }
 
 #[cfg(test)]
@@ -50,5 +73,20 @@ mod tests {
             assert_eq!(r.as_ref().unwrap(), &alone);
         }
         assert!(run_batch(&configs, Some(0)).is_err());
+    }
+
+    #[test]
+    fn json_batch_equals_config_batch_and_names_the_bad_index() {
+        let s = builtin("lens-12-6").unwrap();
+        let texts = vec![s.to_json().unwrap(); 3];
+        let a = run_json_batch(&texts, Some(2)).unwrap();
+        let b = run_batch(&[s.to_config().unwrap()], Some(1)).unwrap();
+        assert!(a.iter().all(|r| r.as_ref().unwrap() == b[0].as_ref().unwrap()));
+        let mut bad = texts.clone();
+        bad[1] = bad[1].replace("\"gain\":1.0", "\"gain\":-1.0");
+        match run_json_batch(&bad, None) {
+            Err(Error::Scenario { key, .. }) => assert_eq!(key, "[1].control.gain"),
+            other => panic!("{other:?}"),
+        }
     }
 }

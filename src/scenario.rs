@@ -381,16 +381,25 @@ impl Scenario {
 
     /// Parses JSON text (the form Python dictionaries take on their way in).
     pub fn from_json(text: &str) -> Result<Self> {
+        let scenario = Self::parse_json(text)?;
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// The simulation described by JSON text, parsed and validated once (batch runs).
+    pub fn config_from_json(text: &str) -> Result<SimulationConfig> {
+        Self::parse_json(text)?.to_config()
+    }
+
+    fn parse_json(text: &str) -> Result<Self> {
         let mut de = serde_json::Deserializer::from_str(text);
-        let scenario: Scenario = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();
             let message = e.into_inner().to_string();
             // serde_json appends the position in the JSON text, meaningless for a dictionary.
             let message = message.split(" at line ").next().unwrap_or_default().to_string();
             scenario_error(&key, message)
-        })?;
-        scenario.validate()?;
-        Ok(scenario)
+        })
     }
 
     /// The scenario as JSON text.

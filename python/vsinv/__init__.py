@@ -39,6 +39,7 @@ from ._core import (
     structure_ratio,
     tracking_bound,
 )
+from .sweep import Choice, LogUniform, SweepResult, Uniform, sweep
 
 __all__ = [
     "DegenerateGeometry",
@@ -70,4 +71,9 @@ __all__ = [
     "rz_coefficients",
     "structure_ratio",
     "tracking_bound",
+    "sweep",
+    "Uniform",
+    "LogUniform",
+    "Choice",
+    "SweepResult",
 ]

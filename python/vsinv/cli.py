@@ -1,7 +1,9 @@
-"""Command-line interface: ``vsinv list``, ``vsinv run NAME|FILE [--json] [--out DIR]``.
+"""Command-line interface: ``vsinv list``, ``vsinv run NAME|FILE [--json] [--out DIR]``,
+``vsinv sweep NAME|FILE --vary KEY=START:STOP:COUNT [...] [--out DIR]``.
 
-Exit codes: 0 when a run ends (whatever its status, which is reported), 2 for bad input
-(unknown scenario, invalid scenario file, unwritable output directory), 130 on Ctrl-C.
+Exit codes: 0 when a run or sweep ends (whatever the statuses, which are reported), 2 for bad
+input (unknown scenario, invalid scenario file, bad --vary/--random, unwritable output
+directory), 130 on Ctrl-C.
 """
 
 from __future__ import annotations
@@ -14,6 +16,8 @@ import sys
 import textwrap
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence, TextIO
+
+import numpy as np
 
 from . import VsinvError, __version__, list_scenarios, load_scenario, run_scenario
 
@@ -131,6 +135,38 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object (NaN as null)")
     run.add_argument("--out", metavar="DIR", type=Path, help="write trajectory.npz and the figures (PNG) to DIR")
     run.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+
+    sw = sub.add_parser(
+        "sweep",
+        help="run a scenario over a grid / random draws of parameters",
+        description="Run a scenario for every combination of the varied parameters (vsinv.sweep) and print the "
+        "convergence rate and median final errors per grid point. Keys: any dotted scenario key "
+        "(noise.pixel_sigma, control.gain, start.position.2, ...) or a derived key: "
+        "focal_error, principal_point_error, roll_deg, lens_ratio.",
+    )
+    sw.add_argument("scenario", metavar="NAME|FILE", help="a built-in scenario name (see `vsinv list`) or a TOML file")
+    sw.add_argument(
+        "--vary",
+        metavar="KEY=START:STOP:COUNT",
+        action="append",
+        default=[],
+        help="a grid axis: COUNT values from START to STOP (linspace), or KEY=V1,V2,... (repeatable)",
+    )
+    sw.add_argument(
+        "--random",
+        metavar="KEY=LO:HI[:log]",
+        action="append",
+        default=[],
+        help="a random key, uniform on [LO, HI) (log-uniform with :log), sampled --draws times (repeatable)",
+    )
+    sw.add_argument("--draws", metavar="N", type=int, help="random samples when --random is given (default 100)")
+    sw.add_argument("--repeats", metavar="N", type=int, default=1, help="runs per point, each with its own noise seed")
+    sw.add_argument("--seed", metavar="S", type=int, default=0, help="seed of the draws and the noise seeds (default 0)")
+    sw.add_argument(
+        "--workers", metavar="N", type=int, default=1, help="worker processes (ProcessPoolExecutor when > 1)"
+    )
+    sw.add_argument("--out", metavar="DIR", type=Path, help="write sweep.parquet (or sweep.csv) and stability_map.png")
+    sw.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     return parser
 
 
@@ -202,6 +238,190 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+class UsageError(ValueError):
+    """A bad command-line value (exit code 2)."""
+
+
+def _parse_scalar(text: str) -> Any:
+    t = text.strip()
+    low = t.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    for conv in (int, float):
+        try:
+            return conv(t)
+        except ValueError:
+            pass
+    return t
+
+
+def _parse_number(text: str, what: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise UsageError(f"{what}: {text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise UsageError(f"{what}: {text!r} is not a finite number")
+    return v
+
+
+def _split_assignment(text: str, option: str, form: str) -> tuple[str, str]:
+    key, sep, spec = text.partition("=")
+    if not sep or not key.strip() or not spec.strip():
+        raise UsageError(f"{option} {text!r}: expected {form}")
+    return key.strip(), spec.strip()
+
+
+def parse_vary(text: str) -> tuple[str, list[Any]]:
+    """``KEY=START:STOP:COUNT`` (COUNT values, like numpy.linspace; integers when START, STOP
+    and the step are integers) or ``KEY=V1,V2,...``."""
+    form = "KEY=START:STOP:COUNT or KEY=V1,V2,..."
+    key, spec = _split_assignment(text, "--vary", form)
+    if ":" in spec:
+        parts = spec.split(":")
+        if len(parts) != 3:
+            raise UsageError(f"--vary {text!r}: expected {form}")
+        start = _parse_number(parts[0], f"--vary {key} START")
+        stop = _parse_number(parts[1], f"--vary {key} STOP")
+        try:
+            count = int(parts[2])
+        except ValueError:
+            raise UsageError(f"--vary {text!r}: COUNT {parts[2]!r} is not an integer") from None
+        if count < 1:
+            raise UsageError(f"--vary {text!r}: COUNT must be >= 1")
+        if count == 1:
+            values: list[Any] = [start]
+        else:
+            values = [float(v) for v in np.linspace(start, stop, count)]
+        is_int = [re.fullmatch(r"[+-]?\d+", p.strip()) is not None for p in parts[:2]]
+        if all(is_int) and all(float(v).is_integer() for v in values):
+            values = [int(v) for v in values]
+        return key, values
+    values = [_parse_scalar(v) for v in spec.split(",") if v.strip()]
+    if not values:
+        raise UsageError(f"--vary {text!r}: expected {form}")
+    return key, values
+
+
+def parse_random(text: str) -> tuple[str, Any]:
+    """``KEY=LO:HI`` (uniform) or ``KEY=LO:HI:log`` (log-uniform)."""
+    from .sweep import LogUniform, Uniform
+
+    form = "KEY=LO:HI or KEY=LO:HI:log"
+    key, spec = _split_assignment(text, "--random", form)
+    parts = spec.split(":")
+    if len(parts) not in (2, 3) or (len(parts) == 3 and parts[2].strip().lower() != "log"):
+        raise UsageError(f"--random {text!r}: expected {form}")
+    lo = _parse_number(parts[0], f"--random {key} LO")
+    hi = _parse_number(parts[1], f"--random {key} HI")
+    try:
+        return key, (LogUniform(lo, hi) if len(parts) == 3 else Uniform(lo, hi))
+    except ValueError as exc:
+        raise UsageError(f"--random {text!r}: {exc}") from None
+
+
+def format_sweep_table(result: Any, keys: Sequence[str], bins: Optional[int] = None) -> str:
+    """Per group of ``keys``: runs, converged %, median final errors, Prop. 1/2 %."""
+    s = result.summary_by(list(keys), bins=bins)
+    head = [*keys, "runs", "converged", "median err (mm)", "median err (deg)", "Prop. 1", "Prop. 2"]
+    rows = []
+    for i in range(len(s["runs"])):
+        rows.append(
+            [
+                *(_fmt(_native_value(s[k][i]), ".6g") for k in keys),
+                str(int(s["runs"][i])),
+                f"{100 * float(s['convergence_rate'][i]):.0f}%",
+                _fmt(float(s["median_translation_error_mm"][i]), ".3g"),
+                _fmt(float(s["median_rotation_error_deg"][i]), ".3g"),
+                f"{100 * float(s['prop1_rate'][i]):.0f}%",
+                f"{100 * float(s['prop2_rate'][i]):.0f}%",
+            ]
+        )
+    widths = [max(len(h), *(len(r[j]) for r in rows)) if rows else len(h) for j, h in enumerate(head)]
+    nk = len(keys)
+    lines = ["  ".join(h.ljust(w) if j < nk else h.rjust(w) for j, (h, w) in enumerate(zip(head, widths)))]
+    for r in rows:
+        lines.append("  ".join(c.ljust(w) if j < nk else c.rjust(w) for j, (c, w) in enumerate(zip(r, widths))))
+    return "\n".join(lines)
+
+
+def _native_value(v: Any) -> Any:
+    return v.item() if isinstance(v, np.generic) else v
+
+
+def _cmd_sweep(args: argparse.Namespace) -> int:
+    import os
+
+    from .sweep import sweep
+
+    vary: dict[str, Any] = {}
+    for text in args.vary:
+        key, values = parse_vary(text)
+        if key in vary:
+            raise UsageError(f"--vary {key}: given twice")
+        vary[key] = values
+    for text in args.random:
+        key, dist = parse_random(text)
+        if key in vary:
+            raise UsageError(f"--random {key}: given twice")
+        vary[key] = dist
+    if not vary:
+        raise UsageError("sweep: give at least one --vary or --random")
+    randoms = [k for k in vary if not isinstance(vary[k], list)]
+    draws = args.draws
+    if randoms and draws is None:
+        draws = 100
+    if draws is not None and not randoms:
+        raise UsageError("--draws: needs a --random key")
+    if draws is not None and draws < 1:
+        raise UsageError("--draws: must be >= 1")
+    if args.repeats < 1:
+        raise UsageError("--repeats: must be >= 1")
+    if args.workers < 1:
+        raise UsageError("--workers: must be >= 1")
+    if args.seed < 0:
+        raise UsageError("--seed: must be >= 0")
+    out_dir: Optional[Path] = args.out
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)  # fail before a long sweep, not after
+
+    progress = False if args.no_progress else None
+    if args.workers > 1:
+        import concurrent.futures
+        import multiprocessing
+
+        method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
+        threads = max(1, (os.cpu_count() or 1) // args.workers)
+        with concurrent.futures.ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context(method)) as ex:
+            result = sweep(
+                args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed,
+                executor=ex, threads=threads, progress=progress,
+            )
+    else:
+        result = sweep(args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed, progress=progress)
+
+    grid = list(result.grid_keys)
+    details = [f"{len(result.summary_by(grid)['runs'])} grid points"] if grid else []
+    details += [f"{draws} draws"] if draws else []
+    details += [f"{args.repeats} repeats"] if args.repeats > 1 else []
+    print(f"sweep {result.base_name}: {len(result)} runs ({', '.join(details)}) in {result.elapsed_s:.1f} s")
+    if grid:
+        print(format_sweep_table(result, grid))
+    else:
+        print(format_sweep_table(result, list(result.random_keys), bins=10))
+
+    if out_dir is not None:
+        from .sweep_plots import plot_stability_map
+
+        written = [result.write(out_dir / "sweep.parquet")]
+        plot_keys = grid[:2] if len(grid) >= 2 else list(result.keys)[:2]
+        written.append(plot_stability_map(result, out_dir / "stability_map.png", keys=plot_keys))
+        print(f"wrote {len(written)} files to {out_dir}:")
+        for path in written:
+            print(f"  {path}")
+    return 0
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Entry point of the ``vsinv`` console script; returns the exit code."""
     parser = _build_parser()
@@ -213,6 +433,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if args.command == "list":
             return _cmd_list(sys.stdout)
+        if args.command == "sweep":
+            return _cmd_sweep(args)
         return _cmd_run(args)
     except (VsinvError, ValueError, OSError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

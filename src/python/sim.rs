@@ -269,7 +269,8 @@ pub fn run_scenario(
     })
 }
 
-/// Runs many scenarios in parallel with the GIL released (recording off) and returns the
+/// Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths)
+/// in parallel with the GIL released (recording off) and returns the
 /// table as a dict of NumPy arrays, one row per scenario: status (str), iterations,
 /// final_translation_error_mm, final_rotation_error_deg, final_image_error_px,
 /// final_invariant_error, prop1, prop2, max_line_deviation_mm, message (str). A scenario
@@ -282,12 +283,25 @@ pub fn run_batch<'py>(
     scenarios: &Bound<'py, PyAny>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut configs = Vec::new();
+    // Dictionaries become JSON here (the GIL is needed); parsing, validation and the runs
+    // happen in parallel with the GIL released.
+    let dumps = py.import("json")?.getattr("dumps")?;
+    let mut texts = Vec::new();
     for (i, item) in scenarios.try_iter()?.enumerate() {
-        let s = scenario_arg(&item?).map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?;
-        configs.push(s.to_config().map_err(|e| invalid_input(format!("scenario {i}: {e}")))?);
+        let item = item?;
+        let text = if item.cast::<PyDict>().is_ok() {
+            dumps.call1((&item,)).and_then(|t| t.extract::<String>())
+        } else if let Ok(s) = item.cast::<PyString>()
+            && s.to_str()?.trim_start().starts_with('{')
+        {
+            // A scenario already written as JSON (sweeps serialise while the previous chunk runs).
+            s.extract::<String>()
+        } else {
+            scenario_arg(&item).and_then(|s| s.to_json().map_err(to_py))
+        };
+        texts.push(text.map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?);
     }
-    let results = py.detach(|| crate::batch::run_batch(&configs, threads)).map_err(to_py)?;
+    let results = py.detach(|| crate::batch::run_json_batch(&texts, threads)).map_err(to_py)?;
     let m = results.len();
     let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let mut iterations = Vec::with_capacity(m);
