@@ -28,6 +28,7 @@ lint:
 bench: install
 	cargo bench --bench vsinv
 	$(PYTHON) benches/bench_step.py
+	$(PYTHON) benches/compare.py
 
 run: install
 	vsinv run lens-12-6 --out results/lens-12-6

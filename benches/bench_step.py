@@ -107,6 +107,7 @@ class NumpyInvariantController:
     """The invariant control law of sec. 4 in plain NumPy (no feed-forward, still reference).
 
     Everything that depends only on the reference image is computed once, as vsinv does.
+    Also imported by ``benches/compare.py`` (its NumPy closed loop).
     """
 
     def __init__(self, reference: np.ndarray, k_hat: np.ndarray, basis, gain: float = 1.0, gain_rz: float = 1.0):
@@ -136,20 +137,28 @@ class NumpyInvariantController:
         )
         return self.k2 @ L
 
-    def step(self, pixels: np.ndarray, depths: np.ndarray) -> np.ndarray:
-        """The twist (vx, vy, vz, wx, wy, wz) of eqs. (17) and (24)."""
+    def step(self, pixels: np.ndarray, depths: np.ndarray, visible: np.ndarray | None = None) -> np.ndarray:
+        """The twist (vx, vy, vz, wx, wy, wz) of eqs. (17) and (24).
+
+        ``visible`` (optional, (n,) bool) drops hidden non-basis points from s and J, as
+        vsinv's ``step_visible`` does; the basis points must be visible.
+        """
         n = len(pixels)
+        others, s_star = self.others, self.s_star
+        if visible is not None and not visible[others].all():
+            keep = visible[others]
+            others, s_star = others[keep], s_star[keep]
         p = np.column_stack([pixels, np.ones(n)])
         q_mat = p[self.basis].T  # Q = [p1 p2 p3]
         q_inv = np.linalg.inv(q_mat)
-        q = p[self.others] @ q_inv.T  # q_k = Q^-1 p_k, (n-3, 3)
+        q = p[others] @ q_inv.T  # q_k = Q^-1 p_k, (n-3, 3)
         L = self.pixel_interaction(p, depths)
         l_basis = L[self.basis]  # (3, 2, 6)
         # L_k - q1k L_1 - q2k L_2 - q3k L_3, with a zero third row, then Q^-1 (...)[:, :5].
-        combined = L[self.others] - np.einsum("kj,jrc->krc", q, l_basis)
-        combined = np.concatenate([combined, np.zeros((len(self.others), 1, 6))], axis=1)
-        J = (q_inv @ combined)[:, :, :5].reshape(-1, 5)  # (3(n-3), 5)
-        eps = np.linalg.pinv(J) @ (q - self.s_star).ravel()
+        combined = L[others] - np.einsum("kj,jrc->krc", q, l_basis)
+        combined = np.concatenate([combined, np.zeros((len(others), 1, 6))], axis=1)
+        J = (q_inv @ combined)[:, :, :5].reshape(-1, 5)  # (3(m), 5), m visible non-basis points
+        eps = np.linalg.pinv(J) @ (q - s_star).ravel()
         mu = -self.gain * eps
         # rz law: eps_z = sum_j adj(Q*)[j, 0] v_j, and its derivative's coefficients a, c.
         eps_z = self.adj_col0 @ pixels[self.basis, 1]

@@ -6,6 +6,22 @@
 //!   classic pixel-space law, on the same inputs.
 //! - `pose_integration/exp_twist`: [`vsinv::se3::exp_twist`], the SE(3) exponential that
 //!   integrates the twist in a closed-loop simulation.
+//! - `simulation/step`: the cost of *one* closed-loop iteration of the built-in scenario
+//!   `lens-12-6` (12 points, free-flying camera): observe (projection and image-bounds
+//!   visibility), measure, stop rule, control step, SE(3) integration. Measured by
+//!   difference, so that the one-time set-up of a run (reference image, basis, controller,
+//!   Prop. 1/2 check) cancels out: each sample times runs with `stop.max_iterations` = 201
+//!   and = 1 (both end as `max_iterations`; the scenario converges only at 213) and reports
+//!   `(T(201) - T(1)) / 200` per iteration (`iter_custom`).
+//! - `simulation/lens-12-6`: a full sec. 5.2 run, [`vsinv::simulator::simulate`] of the
+//!   built-in `lens-12-6` with `record = false` (213 iterations, set-up included). Its
+//!   throughput is set to 213 elements, so criterion also prints iterations per second
+//!   (full run divided by its iteration count: the amortised per-iteration cost).
+//! - `simulation/lens-12-6-recorded`: the same run with `record = true` (the per-iteration
+//!   arrays the Python API hands to NumPy).
+//! - `batch/lens-12-6x256/threads`: [`vsinv::batch::run_batch`] of 256 copies of the
+//!   `lens-12-6` configuration on 1 and 2 worker threads (thread-pool creation included,
+//!   as every call to `run_batch` pays it); throughput in runs per second.
 //!
 //! The scene is synthetic and deterministic: a non-planar object (a grid about 0.6 m in
 //! front of the reference camera with +-60 mm relief), a reference image taken with a
@@ -14,15 +30,18 @@
 //! the steady-state cost of a step (the one-time structure check of the first step is paid
 //! during warm-up).
 //!
-//! Run with `cargo bench --bench vsinv` (add `-- --quick` for a faster, rougher run).
+//! Run with `cargo bench --bench vsinv` (add `-- --quick` for a faster, rougher run; add a
+//! filter such as `-- simulation` to run one group). The slow groups use fewer samples and a
+//! short measurement time so that the whole target takes about a minute and a half.
 
 #![allow(clippy::expect_used, clippy::unwrap_used)]
 
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use vsinv::simulator::{SimulationConfig, Status, simulate};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, choose_basis};
 
 /// Point counts benchmarked.
@@ -123,6 +142,78 @@ fn pose_integration(c: &mut Criterion) {
     group.finish();
 }
 
+/// The built-in sec. 5.2 scenario as a simulation configuration.
+fn lens_12_6(record: bool, max_iterations: Option<usize>) -> SimulationConfig {
+    let mut c = vsinv::scenario::builtin("lens-12-6").expect("built-in scenario").to_config().expect("config");
+    c.record = record;
+    if let Some(m) = max_iterations {
+        c.stop.max_iterations = m;
+    }
+    c
+}
+
+/// One run; panics unless it ends with `status` after `iterations` iterations, so that a
+/// change of behaviour cannot go unnoticed as a change of speed.
+fn run_checked(config: &SimulationConfig, status: Status, iterations: usize) {
+    let s = simulate(config, &mut |_, _| true).expect("simulation").summary;
+    assert_eq!((s.status, s.iterations), (status, iterations), "lens-12-6 changed: {}", s.message);
+}
+
+/// Iterations of the full `lens-12-6` run (the README's table).
+const LENS_12_6_ITERATIONS: usize = 213;
+
+fn simulation(c: &mut Criterion) {
+    let mut group = c.benchmark_group("simulation");
+    group.warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4)).sample_size(30);
+
+    // Per iteration, by difference of a 201- and a 1-iteration run (set-up cancels out).
+    const LONG: usize = 201;
+    let (long, short) = (lens_12_6(false, Some(LONG)), lens_12_6(false, Some(1)));
+    run_checked(&long, Status::MaxIterations, LONG);
+    run_checked(&short, Status::MaxIterations, 1);
+    group.bench_function("step", |b| {
+        b.iter_custom(|iters| {
+            let (mut t_long, mut t_short) = (Duration::ZERO, Duration::ZERO);
+            for _ in 0..iters {
+                let start = Instant::now();
+                black_box(simulate(black_box(&long), &mut |_, _| true).expect("run"));
+                t_long += start.elapsed();
+                let start = Instant::now();
+                black_box(simulate(black_box(&short), &mut |_, _| true).expect("run"));
+                t_short += start.elapsed();
+            }
+            t_long.saturating_sub(t_short) / (LONG as u32 - 1)
+        })
+    });
+
+    // Full sec. 5.2 runs, with and without recording.
+    group.throughput(Throughput::Elements(LENS_12_6_ITERATIONS as u64));
+    for (name, record) in [("lens-12-6", false), ("lens-12-6-recorded", true)] {
+        let config = lens_12_6(record, None);
+        run_checked(&config, Status::Converged, LENS_12_6_ITERATIONS);
+        group.bench_function(name, |b| b.iter(|| simulate(black_box(&config), &mut |_, _| true).expect("run")));
+    }
+    group.finish();
+}
+
+fn batch(c: &mut Criterion) {
+    const RUNS: usize = 256;
+    let configs = vec![lens_12_6(false, None); RUNS];
+    let mut group = c.benchmark_group("batch");
+    group.warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(5)).sample_size(10);
+    // ~0.1 s per call: every sample runs the same number of calls.
+    group.sampling_mode(SamplingMode::Flat);
+    group.throughput(Throughput::Elements(RUNS as u64));
+    for threads in [1, 2] {
+        let out = vsinv::batch::run_batch(&configs, Some(threads)).expect("batch");
+        assert!(out.iter().all(|r| r.as_ref().is_ok_and(|s| s.iterations == LENS_12_6_ITERATIONS)));
+        group.bench_with_input(BenchmarkId::new("lens-12-6x256", threads), &threads, |b, &t| {
+            b.iter(|| vsinv::batch::run_batch(black_box(&configs), Some(t)).expect("batch"))
+        });
+    }
+    group.finish();
+}
+
 fn config() -> Criterion {
     Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(2)).sample_size(50)
 }
@@ -130,6 +221,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = control_step, pose_integration
+    targets = control_step, pose_integration, simulation, batch
 }
 criterion_main!(benches);
