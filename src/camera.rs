@@ -116,10 +116,7 @@ impl Intrinsics {
 
     /// Pixel of a point given in the camera frame, with its depth (eqs. 2-3).
     pub fn project(&self, point: &Point3<f64>) -> ([f64; 2], f64) {
-        let k = self.matrix();
-        let z = point.z;
-        let p = k * (point.coords / z);
-        ([p.x, p.y], z)
+        (project_with(&self.matrix(), point), point.z)
     }
 
     /// Normalised coordinates `m = K^-1 p` of a pixel (x, y; the third coordinate is 1).
@@ -129,6 +126,13 @@ impl Intrinsics {
         let x = (pixel[0] - self.u0 + self.fku * cot * y) / self.fku;
         [x, y]
     }
+}
+
+/// The pixel of a point in the camera frame for a matrix K (eq. 3): `K (X/Z, Y/Z, 1)`.
+#[inline]
+pub fn project_with(k: &Matrix3<f64>, point: &Point3<f64>) -> [f64; 2] {
+    let (x, y) = (point.x / point.z, point.y / point.z);
+    [k[(0, 0)] * x + k[(0, 1)] * y + k[(0, 2)], k[(1, 1)] * y + k[(1, 2)]]
 }
 
 /// F(K) of sec. 4.1 written with the entries of K:

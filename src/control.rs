@@ -3,11 +3,11 @@
 
 use nalgebra::{Matrix3, Matrix5, Vector3, Vector5, Vector6};
 
-use crate::camera::{Intrinsics, pixel_interaction};
+use crate::camera::{Intrinsics, normalised_interaction};
 use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
 use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::jacobian::{
-    DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction, q_inv_gram,
+    DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction,
     rz_from_interactions,
 };
 
@@ -258,14 +258,22 @@ impl InvariantController {
             }
         }
         let frame = BasisFrame::new(pixels, self.basis, "current")?;
-        let (k, k_inv) = (&self.k, &self.k_inv);
-        let l_basis = self.basis.map(|i| pixel_interaction(k, k_inv, pixels[i], depths[i]));
-        let (q2, gram) = q_inv_gram(&frame.q_inv);
+        // Work in normalised coordinates: the pixel interaction matrices are K[0..2, 0..2]
+        // times the normalised ones, so `J_k = Q^-1[:, 0..2] K[0..2, 0..2] M_k` with
+        // `M_k = L_k - q_1k L_1 - q_2k L_2 - q_3k L_3` in normalised coordinates (sec. 4.1).
+        let k_inv = &self.k_inv;
+        let normalised = |i: usize| {
+            let m = k_inv * Vector3::new(pixels[i][0], pixels[i][1], 1.0);
+            normalised_interaction(m.x, m.y, depths[i])
+        };
+        let lx_basis = self.basis.map(normalised);
+        let a = frame.q_inv.fixed_columns::<2>(0) * self.k.fixed_view::<2, 2>(0, 0);
+        let gram = a.tr_mul(&a);
         let moving = self.reference_moves;
         let feedforward = self.config.feedforward && moving;
 
-        // Accumulate J^T J, J^T (s - s*) and J^T ds*/dt point by point, J_k = Q^-1 N_k.
-        let mut jtj = Matrix5::zeros();
+        // Accumulate J^T J (upper triangle), J^T (s - s*) and J^T ds*/dt point by point.
+        let mut upper = [0.0; 15];
         let mut jte = Vector5::zeros();
         let mut jtr = Vector5::zeros();
         let mut err2 = 0.0;
@@ -276,17 +284,36 @@ impl InvariantController {
             let q = frame.transform(pixels[idx]);
             let e = q - self.s_star[j];
             err2 += e.norm_squared();
-            let l_k = pixel_interaction(k, k_inv, pixels[idx], depths[idx]);
-            let n_k = combined_interaction(&l_k, &l_basis, &q);
-            let n5 = n_k.fixed_columns::<5>(0);
-            let n5t = n5.transpose();
-            jtj += n5t * (gram * n5);
-            jte += n5t * (q2.tr_mul(&e));
+            let m_k = combined_interaction(&normalised(idx), &lx_basis, &q);
+            let w = gram * m_k; // 2x6
+            let mut t = 0;
+            for r in 0..5 {
+                let (m0, m1) = (m_k[(0, r)], m_k[(1, r)]);
+                for c in r..5 {
+                    upper[t] += m0 * w[(0, c)] + m1 * w[(1, c)];
+                    t += 1;
+                }
+            }
+            let h = a.tr_mul(&e);
+            for r in 0..5 {
+                jte[r] += m_k[(0, r)] * h.x + m_k[(1, r)] * h.y;
+            }
             if moving {
-                jtr += n5t * (q2.tr_mul(&self.s_star_rate[j]));
+                let h = a.tr_mul(&self.s_star_rate[j]);
+                for r in 0..5 {
+                    jtr[r] += m_k[(0, r)] * h.x + m_k[(1, r)] * h.y;
+                }
             }
         }
-
+        let mut jtj = Matrix5::zeros();
+        let mut t = 0;
+        for r in 0..5 {
+            for c in r..5 {
+                jtj[(r, c)] = upper[t];
+                jtj[(c, r)] = upper[t];
+                t += 1;
+            }
+        }
         let (depth_sum, depth_count) =
             (0..self.n).filter(|&i| seen(i)).fold((0.0, 0usize), |(s, c), i| (s + depths[i], c + 1));
         let mean_depth = depth_sum / depth_count as f64;
@@ -327,8 +354,11 @@ impl InvariantController {
         let [b0, b1, b2] = self.basis;
         let v = Vector3::new(pixels[b0][1], pixels[b1][1], pixels[b2][1]);
         let eps_z = self.reference.eps_z(&v);
-        let (a_hat, c_hat) = rz_from_interactions(&self.reference, &l_basis);
-        let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * l_basis[j][(1, 5)]).abs()).sum();
+        // The v-row of a pixel interaction matrix is K[1,1] times the normalised y-row (K[1,0] = 0).
+        let k11 = self.k[(1, 1)];
+        let (a_x, c_x) = rz_from_interactions(&self.reference, &lx_basis);
+        let (a_hat, c_hat) = (a_x * k11, c_x * k11);
+        let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * lx_basis[j][(1, 5)] * k11).abs()).sum();
         if a_hat.is_nan() || a_hat.abs() <= 1e-9 * scale {
             return Err(Error::RzSingular { a_hat });
         }

@@ -180,7 +180,11 @@ pub(crate) fn check_step_inputs(pixels: &[[f64; 2]], depths: &[f64], visible: Op
     if depths.len() != n {
         return check_depths(depths, n);
     }
-    for (index, ((p, &z), _)) in pixels.iter().zip(depths).zip(visible).enumerate().filter(|(_, (_, v))| **v) {
+    for index in 0..n {
+        if !visible[index] {
+            continue;
+        }
+        let (p, z) = (pixels[index], depths[index]);
         if !(p[0].is_finite() && p[1].is_finite()) {
             return Err(Error::NonFinite { what: "pixels", index: 2 * index });
         }

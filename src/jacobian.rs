@@ -5,7 +5,7 @@
 //! of point i. The sixth column (w_z) vanishes, so `J_k` is the first five columns. The same
 //! matrix factors as `J_k = [Phi_k Psi_k] diag(K, F(K))` (NOTES.md item 2).
 
-use nalgebra::{DMatrix, Matrix2, Matrix2x6, Matrix3, Matrix5, Vector3, Vector5};
+use nalgebra::{DMatrix, Matrix2x6, Matrix3, Matrix5, Vector3, Vector5};
 
 use crate::camera::{Intrinsics, f_of_matrix, pixel_interaction};
 use crate::error::{Error, Result, check_depths, check_finite_points};
@@ -194,12 +194,4 @@ pub(crate) fn balanced_ratio(jtj: &Matrix5<f64>, mean_depth: f64) -> f64 {
     let eig = balanced.symmetric_eigenvalues();
     let (lo, hi) = (eig.min().max(0.0), eig.max());
     if hi > 0.0 && hi.is_finite() { (lo / hi).sqrt() } else { 0.0 }
-}
-
-/// The 2x2 Gram matrix `(Q^-1[:, 0..2])^T Q^-1[:, 0..2]` used to accumulate `J^T J` point by
-/// point without forming J.
-#[inline]
-pub(crate) fn q_inv_gram(q_inv: &Matrix3<f64>) -> (nalgebra::Matrix3x2<f64>, Matrix2<f64>) {
-    let q2 = q_inv.fixed_columns::<2>(0).into_owned();
-    (q2, q2.transpose() * q2)
 }

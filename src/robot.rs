@@ -177,6 +177,19 @@ impl Robot {
                 let pose = pose * exp_twist(&(twist * dt).into());
                 Ok(RobotStep { joints: self.joints(&pose), pose, twist: *twist, limited: false })
             }
+            Robot::Cartesian(_) => self.step_pose(pose, twist, dt),
+        }
+    }
+
+    /// [`Robot::step`] without the joint positions of the free-flying camera (its theta-u
+    /// costs an atan2 that a simulation loop only needs when it records).
+    pub fn step_pose(&self, pose: &Isometry3<f64>, twist: &Vector6<f64>, dt: f64) -> Result<RobotStep> {
+        check_finite("twist", twist.as_slice())?;
+        match self {
+            Robot::FreeFlying => {
+                let pose = pose * exp_twist(&(twist * dt).into());
+                Ok(RobotStep { joints: [f64::NAN; 6], pose, twist: *twist, limited: false })
+            }
             Robot::Cartesian(limits) => {
                 let q = cartesian_joints(pose);
                 let mut dq = cartesian_joint_velocities(&q, twist)?;

@@ -627,11 +627,15 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("planar", include_str!("../scenarios/planar.toml")),
 ];
 
-/// A built-in scenario by name.
+/// A built-in scenario by name (parsed once, then cloned).
 pub fn builtin(name: &str) -> Result<Scenario> {
-    let text = BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, t)| *t).ok_or_else(|| {
-        let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
-        scenario_error("", format!("no built-in scenario {name:?}; known: {}", names.join(", ")))
-    })?;
-    Scenario::from_toml(text)
+    static PARSED: std::sync::OnceLock<Vec<Result<Scenario>>> = std::sync::OnceLock::new();
+    let parsed = PARSED.get_or_init(|| BUILTIN.iter().map(|(_, text)| Scenario::from_toml(text)).collect());
+    match BUILTIN.iter().position(|(n, _)| *n == name) {
+        Some(i) => parsed[i].clone(),
+        None => {
+            let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
+            Err(scenario_error("", format!("no built-in scenario {name:?}; known: {}", names.join(", "))))
+        }
+    }
 }

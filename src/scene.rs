@@ -158,18 +158,20 @@ impl Scene {
         out.pixels.resize(n, [0.0; 2]);
         out.depths.resize(n, 0.0);
         out.visible.resize(n, false);
-        let inv = pose.inverse();
+        // X_c = R^T (X - c): one rotation matrix for all points.
+        let rt = pose.rotation.to_rotation_matrix().transpose();
+        let km = k.matrix();
         let center = Point3::from(pose.translation.vector);
         for (i, p) in self.points.iter().enumerate() {
             let world_point = Point3::new(p[0], p[1], p[2]);
-            let c = inv * world_point;
+            let c = Point3::from(rt * (world_point - center));
             out.depths[i] = c.z;
             if c.z <= MIN_DEPTH {
                 out.pixels[i] = [f64::NAN; 2];
                 out.visible[i] = false;
                 continue;
             }
-            let (px, _) = k.project(&c);
+            let px = crate::camera::project_with(&km, &c);
             out.pixels[i] = px;
             let inside = image.is_none_or(|s| px[0] >= 0.0 && px[0] < s.width && px[1] >= 0.0 && px[1] < s.height);
             out.visible[i] = inside && !self.occluded(&center, &world_point);

@@ -19,7 +19,7 @@ use crate::robot::Robot;
 use crate::scene::{ImageSize, Observation, Scene};
 use crate::se3::pose_error;
 use crate::stability::a_matrix;
-use crate::stability::check_stability;
+use crate::stability::stability_verdicts;
 
 /// A piecewise-linear schedule of the intrinsics in time (a zoom).
 #[derive(Debug, Clone, PartialEq)]
@@ -491,34 +491,22 @@ impl StopWindow {
         Self { window, rows: std::collections::VecDeque::with_capacity(window + 1), mean: Vec::new() }
     }
 
-    /// Adds the errors of one image; returns the means once the window is full.
-    fn push(
-        &mut self,
-        tau21: f64,
-        pixels: &[[f64; 2]],
-        visible: &[bool],
-        frame: Option<&BasisFrame>,
-        r: &ReferenceImage,
-    ) -> Option<&[f64]> {
-        let (reference, others, s_star) = (&r.pixels, &r.others, &r.s_star);
+    /// A row to fill with [`measure`] (the oldest row, recycled, once the window is full).
+    fn next_row(&mut self) -> Vec<f64> {
         let mut row =
             if self.rows.len() == self.window { self.rows.pop_front().unwrap_or_default() } else { Vec::new() };
         row.clear();
-        row.push(tau21);
-        for (k, &i) in others.iter().enumerate() {
-            let e = match frame {
-                Some(f) if visible[i] => f.transform(pixels[i]) - s_star[k],
-                _ => Vector3::repeat(f64::NAN),
-            };
-            row.extend_from_slice(e.as_slice());
-        }
-        for (i, p) in pixels.iter().enumerate() {
-            let e = if visible[i] { [p[0] - reference[i][0], p[1] - reference[i][1]] } else { [f64::NAN; 2] };
-            row.extend_from_slice(&e);
-        }
+        row
+    }
+
+    /// Adds the errors of one image; returns the means once the window is full.
+    fn push(&mut self, row: Vec<f64>) -> Option<&[f64]> {
         self.rows.push_back(row);
         if self.rows.len() < self.window {
             return None;
+        }
+        if self.window == 1 {
+            return self.rows.front().map(Vec::as_slice);
         }
         let len = self.rows[0].len();
         self.mean.clear();
@@ -532,26 +520,44 @@ impl StopWindow {
     }
 }
 
-fn measure(pixels: &[[f64; 2]], visible: &[bool], r: &ReferenceImage) -> Metrics {
+/// Measures one image against the reference: the summary metrics, and the error vectors of
+/// the stop rule written into `row` (`tau_21`, then `s - s*`, then `p - p*`; NaN for
+/// hidden points).
+fn measure(pixels: &[[f64; 2]], visible: &[bool], r: &ReferenceImage, row: &mut Vec<f64>) -> Metrics {
     let (reference, basis, others, rz, s_star) = (&r.pixels, r.basis, &r.others, &r.rz, &r.s_star);
-    let image_error = (0..pixels.len())
-        .filter(|&i| visible[i])
-        .map(|i| (pixels[i][0] - reference[i][0]).hypot(pixels[i][1] - reference[i][1]))
-        .fold(f64::NAN, f64::max); // NaN when no point is visible
-    let nan = Metrics { invariant_error: f64::NAN, tau: [f64::NAN; 3], eps_z: f64::NAN, image_error };
-    if !basis.iter().all(|&b| visible[b]) {
-        return nan;
+    let frame = if basis.iter().all(|&b| visible[b]) { BasisFrame::new(pixels, basis, "current").ok() } else { None };
+    let (tau, eps_z) = match &frame {
+        Some(f) => {
+            let t = rz.t_matrix(f);
+            let v = Vector3::new(pixels[basis[0]][1], pixels[basis[1]][1], pixels[basis[2]][1]);
+            ([t[(0, 0)], t[(1, 0)], t[(1, 1)]], rz.eps_z(&v))
+        }
+        None => ([f64::NAN; 3], f64::NAN),
+    };
+    row.push(tau[1]);
+    let mut err2 = 0.0;
+    for (k, &i) in others.iter().enumerate() {
+        let e = match &frame {
+            Some(f) if visible[i] => f.transform(pixels[i]) - s_star[k],
+            _ => Vector3::repeat(f64::NAN),
+        };
+        if visible[i] {
+            err2 += e.norm_squared();
+        }
+        row.extend_from_slice(e.as_slice());
     }
-    let Ok(frame) = BasisFrame::new(pixels, basis, "current") else { return nan };
-    let err2: f64 = others
-        .iter()
-        .zip(s_star)
-        .filter(|(i, _)| visible[**i])
-        .map(|(&i, q)| (frame.transform(pixels[i]) - q).norm_squared())
-        .sum();
-    let t = rz.t_matrix(&frame);
-    let v = Vector3::new(pixels[basis[0]][1], pixels[basis[1]][1], pixels[basis[2]][1]);
-    Metrics { invariant_error: err2.sqrt(), tau: [t[(0, 0)], t[(1, 0)], t[(1, 1)]], eps_z: rz.eps_z(&v), image_error }
+    let mut image_error = f64::NAN; // NaN when no point is visible
+    for (i, p) in pixels.iter().enumerate() {
+        if visible[i] {
+            let (du, dv) = (p[0] - reference[i][0], p[1] - reference[i][1]);
+            image_error = image_error.max((du * du + dv * dv).sqrt());
+            row.extend_from_slice(&[du, dv]);
+        } else {
+            row.extend_from_slice(&[f64::NAN; 2]);
+        }
+    }
+    let invariant_error = if frame.is_some() { err2.sqrt() } else { f64::NAN };
+    Metrics { invariant_error, tau, eps_z, image_error }
 }
 
 /// Plans the path of sec. 3 from the current (first) image; returns it with the plane +
@@ -672,7 +678,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
     let same_camera = config.camera.zoom.is_none() && config.camera.intrinsics == config.reference_camera.intrinsics;
     let stop_rule =
         if same_camera || matches!(config.law, Law::Ibvs { .. }) { StopRule::Pixel } else { StopRule::Invariant };
-    let stability = check_stability(&config.camera.schedule()?, &config.estimate.matrix(), 1.0, gain)?;
+    let (prop1, prop2, _) = stability_verdicts(&config.camera.schedule()?, &config.estimate.matrix(), 1.0, gain)?;
 
     let goal = Isometry3::identity();
     let start_error = pose_error(&goal, &config.start);
@@ -700,8 +706,10 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         config.scene.observe(&pose, &k, config.camera.image, &mut obs);
         pixels.copy_from_slice(&obs.pixels);
         add_noise(&mut pixels, &obs.visible, &mut rng);
-        let m = measure(&pixels, &obs.visible, &refimg);
-        let (dt_err, dr_err) = pose_error(&goal, &pose);
+        let mut row = history.next_row();
+        let m = measure(&pixels, &obs.visible, &refimg, &mut row);
+        // The goal is the identity: the distance is |t|, the angle that of the rotation.
+        let dt_err = pose.translation.vector.norm();
         max_line_deviation = max_line_deviation.max(distance_to_segment(&pose.translation.vector, &line_a, &line_b));
         if let Some(r) = rec.as_mut() {
             r.time.push(t);
@@ -716,7 +724,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             r.eps_z.push(m.eps_z);
             r.image_error.push(m.image_error);
             r.translation_error.push(dt_err);
-            r.rotation_error.push(dr_err);
+            r.rotation_error.push(pose.rotation.angle());
         }
         let finish = |status: Status, message: String, m: Metrics| (status, message, m);
 
@@ -737,8 +745,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
                 m,
             );
         }
-        let frame = basis_seen.then(|| BasisFrame::new(&pixels, basis, "current").ok()).flatten();
-        let means = history.push(m.tau[1], &pixels, &obs.visible, frame.as_ref(), &refimg);
+        let means = history.push(row);
         let converged = match means {
             None => false,
             Some(_) if matches!(config.law, Law::Observe) => false,
@@ -747,7 +754,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
                 let invariant = mean[1..1 + m_inv].iter().map(|v| v * v).sum::<f64>().sqrt();
                 let image = mean[1 + m_inv..]
                     .chunks_exact(2)
-                    .map(|c| c[0].hypot(c[1]))
+                    .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
                     .fold(0.0, |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
                 match stop_rule {
                     // NaN (a point hidden in the window) never passes a comparison.
@@ -829,7 +836,7 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         if !twist.iter().all(|v| v.is_finite()) {
             break finish(Status::Diverged, "non-finite twist".into(), m);
         }
-        let moved = match config.robot.step(&pose, &twist, config.dt) {
+        let moved = match config.robot.step_pose(&pose, &twist, config.dt) {
             Ok(s) => s,
             Err(e) => break finish(Status::Diverged, e.to_string(), m),
         };
@@ -837,7 +844,9 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
             r.twist.extend_from_slice(moved.twist.as_slice());
         }
         pose = moved.pose;
-        joints = moved.joints;
+        if rec.is_some() {
+            joints = if moved.joints[0].is_nan() { config.robot.joints(&pose) } else { moved.joints };
+        }
         iteration += 1;
     };
     // Pad the per-step columns of the last recorded row (no step followed it).
@@ -857,8 +866,8 @@ pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize
         final_image_error: last.image_error,
         final_invariant_error: last.invariant_error,
         final_tau: last.tau,
-        prop1: stability.prop1,
-        prop2: stability.prop2,
+        prop1,
+        prop2,
         stop_rule,
         start_error,
         basis,

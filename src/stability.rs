@@ -79,6 +79,29 @@ pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
     Ok(if sigma > 0.0 { 2.0 * max_b / (gain * sigma) } else { f64::INFINITY })
 }
 
+/// Props. 1 and 2 verdicts and sigma only (no eigenvalues of A): what a simulation summary
+/// needs, cheaper than [`check_stability`]. `A + A^T` is block diagonal, so its smallest
+/// eigenvalue is the smaller of its two blocks'.
+pub fn stability_verdicts(
+    k_schedule: &[Matrix3<f64>],
+    k_hat: &Matrix3<f64>,
+    kappa: f64,
+    gain: f64,
+) -> Result<(bool, bool, f64)> {
+    check_finite("gain", &[gain, kappa])?;
+    let mut sigma = f64::INFINITY;
+    for k in k_schedule {
+        let a = a_matrix(k, k_hat, kappa)?;
+        let top = a.fixed_view::<3, 3>(0, 0);
+        let bottom = a.fixed_view::<2, 2>(3, 3);
+        let s3 = (top + top.transpose()).symmetric_eigenvalues().min();
+        let s2 = (bottom + bottom.transpose()).symmetric_eigenvalues().min();
+        sigma = sigma.min(s3.min(s2));
+    }
+    let base = gain > 0.0 && kappa > 0.0;
+    Ok((base && k_hat[(0, 0)] > 0.0 && k_hat[(1, 1)] > 0.0, base && sigma > 0.0, sigma))
+}
+
 /// Props. 1 and 2 for a schedule of true intrinsics `k_schedule` (one matrix for a fixed
 /// camera), an estimate `k_hat` (any signs), the depth scale `kappa` and the gain lambda.
 pub fn check_stability(

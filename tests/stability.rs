@@ -77,3 +77,20 @@ fn tracking_bound_formula() {
     assert_relative_eq!(r.tracking_bound(0.5).unwrap(), 0.25, epsilon = 1e-12);
     assert!(vsinv::tracking_bound(0.0, 1.0, 1.0).is_err());
 }
+
+/// The cheap verdicts agree with the full report.
+#[test]
+fn verdicts_agree_with_the_report() {
+    let k = Intrinsics::new(1200.0, 1150.0, 390.0, 280.0, 1.5).unwrap().matrix();
+    for &fku in &[-600.0, 300.0, 1200.0, 5000.0] {
+        for &k01 in &[-3000.0, 0.0, 300.0] {
+            for &v0 in &[0.0, 250.0, 2000.0] {
+                let k_hat = Matrix3::new(fku, k01, 300.0, 0.0, 900.0, v0, 0.0, 0.0, 1.0);
+                let r = check_stability(&[k], &k_hat, 0.8, 1.0).unwrap();
+                let (p1, p2, sigma) = vsinv::stability::stability_verdicts(&[k], &k_hat, 0.8, 1.0).unwrap();
+                assert_eq!((p1, p2), (r.prop1, r.prop2));
+                assert!((sigma - r.sigma).abs() < 1e-9 * (1.0 + r.sigma.abs()));
+            }
+        }
+    }
+}

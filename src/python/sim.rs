@@ -287,8 +287,15 @@ pub fn run_batch<'py>(
     // happen in parallel with the GIL released.
     let dumps = py.import("json")?.getattr("dumps")?;
     let mut texts = Vec::new();
+    // Names and paths repeat in a batch: load each once.
+    let mut loaded: std::collections::HashMap<String, String> = std::collections::HashMap::new();
     for (i, item) in scenarios.try_iter()?.enumerate() {
         let item = item?;
+        let key = item.cast::<PyString>().ok().map(|s| s.to_string());
+        if let Some(text) = key.as_ref().and_then(|k| loaded.get(k)) {
+            texts.push(text.clone());
+            continue;
+        }
         let text = if item.cast::<PyDict>().is_ok() {
             dumps.call1((&item,)).and_then(|t| t.extract::<String>())
         } else if let Ok(s) = item.cast::<PyString>()
@@ -299,7 +306,11 @@ pub fn run_batch<'py>(
         } else {
             scenario_arg(&item).and_then(|s| s.to_json().map_err(to_py))
         };
-        texts.push(text.map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?);
+        let text = text.map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?;
+        if let Some(k) = key {
+            loaded.insert(k, text.clone());
+        }
+        texts.push(text);
     }
     let results = py.detach(|| crate::batch::run_json_batch(&texts, threads)).map_err(to_py)?;
     let m = results.len();
