@@ -31,5 +31,5 @@ bench: install
 	$(PYTHON) benches/compare.py
 
 run: install
-	vsinv run lens-12-6 --out results/lens-12-6
-	vsinv run ibvs-12-6 --out results/ibvs-12-6
+	$(PYTHON) -m vsinv run lens-12-6 --out results/lens-12-6
+	$(PYTHON) -m vsinv run ibvs-12-6 --out results/ibvs-12-6
