@@ -393,11 +393,33 @@ def _apply_principal_point_error(d: dict[str, Any], px: float) -> None:
     d["estimate"] = est
 
 
+def _quaternion_from_thetau_deg(tu_deg: Sequence[float]) -> tuple[float, float, float, float]:
+    """Unit quaternion (w, x, y, z) of a theta-u vector in degrees (pure Python: this runs
+    once per sweep run, where NumPy's per-call overhead on 3x3 arrays would dominate)."""
+    x, y, z = (math.radians(float(v)) for v in tu_deg)
+    th = math.sqrt(x * x + y * y + z * z)
+    if th < 1e-15:
+        return (1.0, 0.5 * x, 0.5 * y, 0.5 * z)
+    s = math.sin(0.5 * th) / th
+    return (math.cos(0.5 * th), x * s, y * s, z * s)
+
+
 def _apply_roll(d: dict[str, Any], deg: float) -> None:
+    # R' = R Rz(roll) as quaternions: q' = q (cos(a/2), 0, 0, sin(a/2)); back to theta-u
+    # with the angle in [0, pi] (w >= 0).
     start = dict(d["start"])
-    tu = np.radians(np.asarray(start.get("rotation", [0.0, 0.0, 0.0]), dtype=float))
-    new = rotation_from_thetau(tu) @ _rz(deg)
-    start["rotation"] = [float(x) for x in np.degrees(thetau_from_rotation(new))]
+    w, x, y, z = _quaternion_from_thetau_deg(start.get("rotation", [0.0, 0.0, 0.0]))
+    h = 0.5 * math.radians(deg)
+    c, s = math.cos(h), math.sin(h)
+    w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s
+    if w < 0.0:
+        w, x, y, z = -w, -x, -y, -z
+    n = math.sqrt(x * x + y * y + z * z)
+    if n < 1e-15:
+        start["rotation"] = [0.0, 0.0, 0.0]
+    else:
+        scale = math.degrees(2.0 * math.atan2(n, w)) / n
+        start["rotation"] = [x * scale, y * scale, z * scale]
     d["start"] = start
 
 
@@ -729,8 +751,18 @@ def _run_chunk(scenarios: list[str], threads: Optional[int] = None) -> dict[str,
     return run_batch(scenarios, threads=threads)
 
 
-def _texts(chunk: list[dict[str, Any]]) -> list[str]:
-    return [json.dumps(d) for d in chunk]
+def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
+    """The chunk's scenarios as JSON texts. A run's dict shares the sections it does not
+    change with ``base`` (same objects), so those are serialised once per chunk."""
+    cache: dict[int, str] = {id(v): json.dumps(v) for v in base.values()}
+    out = []
+    for d in chunk:
+        parts = []
+        for k, v in d.items():
+            text = cache.get(id(v)) if base.get(k) is v else None
+            parts.append(json.dumps(k) + ":" + (text if text is not None else json.dumps(v)))
+        out.append("{" + ",".join(parts) + "}")
+    return out
 
 
 def _executor_workers(executor: Optional[cf.Executor], threads: Optional[int]) -> int:
@@ -831,7 +863,7 @@ def sweep(
                         bar.update(r_stop - r_start)
                         running = None
                     if chunk:
-                        running = (start, stop, chunk, runner.submit(_run_chunk, _texts(chunk), threads))
+                        running = (start, stop, chunk, runner.submit(_run_chunk, _texts(chunk, plan.base), threads))
         else:
             _run_on(executor, plan, n, chunk_size, threads, max(2, 2 * workers), parts, bar)
     finally:
@@ -873,7 +905,7 @@ def _run_on(
                 nxt = next(todo, None)
                 if nxt is None:
                     break
-                pending[executor.submit(_run_chunk, _texts(plan.scenarios(*nxt)), threads)] = nxt
+                pending[executor.submit(_run_chunk, _texts(plan.scenarios(*nxt), plan.base), threads)] = nxt
             if not pending:
                 return
             done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
