@@ -255,11 +255,16 @@ def main(argv: list[str] | None = None) -> int:
             "machine": platform.machine(),
             "results": [{**asdict(r), "numpy_over_vsinv": r.ratio} for r in rows],
         }
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(out, f, indent=2)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        write_json(args.json, out)
     return 0
+
+
+def write_json(path: str, payload: dict) -> None:
+    """Write a benchmark's results as indented JSON and say so."""
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(payload, f, indent=2)
+        f.write("\n")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":

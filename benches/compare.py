@@ -36,7 +36,6 @@ of calls per round, at least 0.2 s per round). The last column is NumPy time / v
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import platform
@@ -49,7 +48,7 @@ import numpy as np
 import vsinv
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_step import GAIN, GAIN_RZ, NumpyInvariantController, check_same_twist, make_scene  # noqa: E402
+from bench_step import GAIN, GAIN_RZ, NumpyInvariantController, check_same_twist, make_scene, write_json  # noqa: E402
 
 SCENARIO = "lens-12-6"
 BATCH_RUNS = 1000
@@ -284,10 +283,7 @@ def main(argv: list[str] | None = None) -> int:
             "full_run": {"scenario": SCENARIO, **run, "numpy_over_vsinv": run["numpy_s"] / run["vsinv_s"]},
             "batch": {"scenario": SCENARIO, **batch, "speedup_2_threads": r2 / r1},
         }
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(out, f, indent=2)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        write_json(args.json, out)
     return 0
 
 
