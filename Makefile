@@ -2,16 +2,28 @@
 # the package and runs the main job.
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
+RUST_EXAMPLES := control_loop simulation batch
 
-.PHONY: install test test-rust test-python stubtest lint bench run
+.PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench run
 
 install:
 	$(PIP) install -q -e ".[test]"
 
-test: install test-rust test-python stubtest
+install-run:
+	$(PIP) install -q -e .
+
+test: install test-rust test-embedded test-examples test-python stubtest
 
 test-rust:
 	cargo test
+
+# The core alone, as a controller embeds it: a 100 Hz loop and the zero-allocation test.
+test-embedded:
+	cargo test -p vsinv-embedded
+	cargo run -q -p vsinv-embedded
+
+test-examples:
+	for ex in $(RUST_EXAMPLES); do cargo run -q --release --example $$ex || exit 1; done
 
 test-python:
 	$(PYTHON) -m pytest -q
@@ -21,8 +33,9 @@ stubtest:
 	$(PYTHON) -m mypy python/vsinv
 
 lint:
-	cargo fmt --check
-	cargo clippy --all-targets -- -D warnings
+	cargo fmt --all --check
+	cargo clippy --workspace --all-targets -- -D warnings
+	cargo clippy --no-default-features -- -D warnings
 	cargo clippy --features python -- -D warnings
 
 bench: install
@@ -30,6 +43,6 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
 
-run: install
+run: install-run
 	$(PYTHON) -m vsinv run lens-12-6 --out results/lens-12-6
 	$(PYTHON) -m vsinv run ibvs-12-6 --out results/ibvs-12-6

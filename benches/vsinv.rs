@@ -4,7 +4,7 @@
 //!   eqs. (14), (17) and the rz law of eq. (24), for n = 6, 12, 50, 200 points.
 //! - `control_step/ibvs/n`: [`IbvsController::step`] with [`Interaction::Current`], the
 //!   classic pixel-space law, on the same inputs.
-//! - `pose_integration/exp_twist`: [`vsinv::se3::exp_twist`], the SE(3) exponential that
+//! - `pose_integration/exp_twist`: [`vsinv::core::se3::exp_twist`], the SE(3) exponential that
 //!   integrates the twist in a closed-loop simulation.
 //! - `simulation/step`: the cost of *one* closed-loop iteration of the built-in scenario
 //!   `lens-12-6` (12 points, free-flying camera): observe (projection and image-bounds
@@ -13,13 +13,13 @@
 //!   Prop. 1/2 check) cancels out: each sample times runs with `stop.max_iterations` = 201
 //!   and = 1 (both end as `max_iterations`; the scenario converges only at 213) and reports
 //!   `(T(201) - T(1)) / 200` per iteration (`iter_custom`).
-//! - `simulation/lens-12-6`: a full sec. 5.2 run, [`vsinv::simulator::simulate`] of the
+//! - `simulation/lens-12-6`: a full sec. 5.2 run, [`vsinv::sim::simulate`] of the
 //!   built-in `lens-12-6` with `record = false` (213 iterations, set-up included). Its
 //!   throughput is set to 213 elements, so criterion also prints iterations per second
 //!   (full run divided by its iteration count: the amortised per-iteration cost).
 //! - `simulation/lens-12-6-recorded`: the same run with `record = true` (the per-iteration
 //!   arrays the Python API hands to NumPy).
-//! - `batch/lens-12-6x256/threads`: [`vsinv::batch::run_batch`] of 256 copies of the
+//! - `batch/lens-12-6x256/threads`: [`vsinv::sim::batch::run_batch`] of 256 copies of the
 //!   `lens-12-6` configuration on 1 and 2 worker threads (thread-pool creation included,
 //!   as every call to `run_batch` pays it); throughput in runs per second.
 //!
@@ -41,7 +41,7 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
-use vsinv::simulator::{SimulationConfig, Status, simulate};
+use vsinv::sim::{SimulationConfig, Status, simulate};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, choose_basis};
 
 /// Point counts benchmarked.
@@ -138,13 +138,13 @@ fn pose_integration(c: &mut Criterion) {
     let dt = 0.04;
     let scaled = twist.map(|x| x * dt);
     let mut group = c.benchmark_group("pose_integration");
-    group.bench_function("exp_twist", |b| b.iter(|| vsinv::se3::exp_twist(black_box(&scaled))));
+    group.bench_function("exp_twist", |b| b.iter(|| vsinv::core::se3::exp_twist(black_box(&scaled))));
     group.finish();
 }
 
 /// The built-in sec. 5.2 scenario as a simulation configuration.
 fn lens_12_6(record: bool, max_iterations: Option<usize>) -> SimulationConfig {
-    let mut c = vsinv::scenario::builtin("lens-12-6").expect("built-in scenario").to_config().expect("config");
+    let mut c = vsinv::sim::scenario::builtin("lens-12-6").expect("built-in scenario").to_config().expect("config");
     c.record = record;
     if let Some(m) = max_iterations {
         c.stop.max_iterations = m;
@@ -205,10 +205,10 @@ fn batch(c: &mut Criterion) {
     group.sampling_mode(SamplingMode::Flat);
     group.throughput(Throughput::Elements(RUNS as u64));
     for threads in [1, 2] {
-        let out = vsinv::batch::run_batch(&configs, Some(threads)).expect("batch");
+        let out = vsinv::sim::batch::run_batch(&configs, Some(threads)).expect("batch");
         assert!(out.iter().all(|r| r.as_ref().is_ok_and(|s| s.iterations == LENS_12_6_ITERATIONS)));
         group.bench_with_input(BenchmarkId::new("lens-12-6x256", threads), &threads, |b, &t| {
-            b.iter(|| vsinv::batch::run_batch(black_box(&configs), Some(t)).expect("batch"))
+            b.iter(|| vsinv::sim::batch::run_batch(black_box(&configs), Some(t)).expect("batch"))
         });
     }
     group.finish();

@@ -72,7 +72,7 @@ pub enum Error {
         depth: f64,
     },
     /// The invariant Jacobian has lost rank: planar object, equal depth estimates,
-    /// or points too close to a plane (NOTES.md: planar failure mode).
+    /// or points too close to a plane (paper-corrections: planar object).
     #[error(
         "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof"
     )]

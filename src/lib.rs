@@ -5,16 +5,31 @@
 //! non-planar object from a reference image that may have been taken with another camera,
 //! lens or zoom.
 //!
-//! ## Where each concept lives
+//! ## Layers and features
+//! | layer | module | Cargo feature | dependencies |
+//! |---|---|---|---|
+//! | the control core: the paper's mathematics | [`core`] | always | nalgebra, thiserror |
+//! | the one error type | [`error`] | always | |
+//! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
+//! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
+//! | Python bindings (the only module that knows about Python) | `python` (private) | `python` | pyo3, numpy |
+//!
+//! A controller that needs only the control law depends on
+//! `vsinv = { version = "0.1", default-features = false }` and gets nalgebra and thiserror
+//! alone; [`nalgebra`] is re-exported so that dependents use the same version.
+//!
+//! ## Where each concept of the paper lives
 //! | paper | module |
 //! |---|---|
-//! | camera model, eq. (4), point interaction matrix | [`camera`] |
-//! | projective invariant transform, sec. 2.3, eq. (21) | [`invariant`] |
-//! | invariant Jacobian, sec. 4.1, eqs. (11)-(13), (23) | [`jacobian`] |
-//! | control laws, eqs. (14), (17), (24) | [`control`] |
-//! | classic IBVS baseline | [`ibvs`] |
-//! | Props. 1-3, appendix B | [`stability`] |
-//! | rigid motions, exact twist integration | [`se3`] |
+//! | camera model, eq. (4), point interaction matrix | [`core::camera`] |
+//! | projective invariant transform, sec. 2.3, eq. (21) | [`core::invariant`] |
+//! | invariant Jacobian, sec. 4.1, eqs. (11)-(13), (23) | [`core::jacobian`] |
+//! | control laws, eqs. (14), (17), (24) | [`core::control`] |
+//! | classic IBVS baseline | [`core::ibvs`] |
+//! | Props. 1-3, appendix B | [`core::stability`] |
+//! | plane + parallax (eq. 9), the invariant-space path (eq. 10) | [`core::planning`] |
+//! | depths up to scale (eq. 26, appendix A) | [`core::depth`] |
+//! | rigid motions, exact twist integration | [`core::se3`] |
 //!
 //! ## Conventions
 //! - SI units: metres, radians, seconds; pixels for image points.
@@ -28,8 +43,9 @@
 //! - Depths passed to the controllers are per-point estimates; any common positive scale
 //!   (`kappa` of sec. 4.1) is allowed for the invariant law.
 //!
-//! The paper's misprints and their corrections (`shared/paper/NOTES.md`) are cited as
-//! "NOTES.md item N" next to the code they affect.
+//! The paper's formulas contain misprints; `docs/paper-corrections.md` lists them with the
+//! readings this crate implements and the tests that check them, and the code cites them
+//! as "correction N" next to the formulas they affect.
 //!
 //! ## Example
 //! ```
@@ -48,29 +64,22 @@
 //! # Ok::<(), vsinv::Error>(())
 //! ```
 
-pub mod batch;
-pub mod camera;
-pub mod control;
-pub mod depth;
+pub mod core;
 pub mod error;
-pub mod ibvs;
-pub mod invariant;
-pub mod jacobian;
-pub mod planning;
-pub mod robot;
-pub mod scenario;
-pub mod scene;
-pub mod se3;
-pub mod simulator;
-pub mod stability;
+#[cfg(feature = "sim")]
+pub mod sim;
 
 #[cfg(feature = "python")]
 mod python;
 
-pub use camera::{Intrinsics, project_points};
-pub use control::{ControlState, Controller, InvariantController, InvariantControllerConfig};
+pub use nalgebra;
+
+pub use crate::core::camera::{Intrinsics, project_points};
+pub use crate::core::control::{ControlState, Controller, InvariantController, InvariantControllerConfig};
+pub use crate::core::ibvs::{IbvsController, Interaction};
+pub use crate::core::invariant::{choose_basis, invariant_points, task_vector};
+pub use crate::core::jacobian::{
+    invariant_interaction, invariant_jacobian, jacobian_factors, rz_coefficients, structure_ratio,
+};
+pub use crate::core::stability::{StabilityReport, a_matrix, check_stability, tracking_bound};
 pub use error::{Error, Result};
-pub use ibvs::{IbvsController, Interaction};
-pub use invariant::{choose_basis, invariant_points, task_vector};
-pub use jacobian::{invariant_interaction, invariant_jacobian, jacobian_factors, rz_coefficients, structure_ratio};
-pub use stability::{StabilityReport, a_matrix, check_stability, tracking_bound};

@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
-use vsinv::se3::pose_error;
+use vsinv::core::se3::pose_error;
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig};
 
 const DT: f64 = 0.04;
@@ -106,7 +106,7 @@ fn ibvs_ends_far_from_the_goal_after_a_lens_change() {
 }
 
 /// At the reference position rotated by pi about the optical axis, q = q* and tau_21 = 0,
-/// yet the pose is wrong: converged() must refuse it (NOTES.md item 8).
+/// yet the pose is wrong: converged() must refuse it (correction 8).
 #[test]
 fn converged_rejects_the_rz_pi_equilibrium() {
     let object = object_points();
@@ -143,7 +143,7 @@ fn feedforward_reduces_tracking_error() {
     let s_of = |pose: &Isometry3<f64>| -> Vec<[f64; 3]> {
         let (px, _) = view(&object, pose, &k);
         let q = vsinv::invariant_points(&px, basis).unwrap();
-        vsinv::invariant::non_basis_indices(px.len(), basis).into_iter().map(|i| q[i]).collect()
+        vsinv::core::invariant::non_basis_indices(px.len(), basis).into_iter().map(|i| q[i]).collect()
     };
     let mut worst = [0.0f64; 2];
     for (slot, feedforward) in [true, false].into_iter().enumerate() {

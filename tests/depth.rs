@@ -1,4 +1,4 @@
-//! Depth estimation up to scale (appendix A, NOTES.md item 10).
+//! Depth estimation up to scale (appendix A, correction 10).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 mod common;
@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vsinv::Intrinsics;
-use vsinv::depth::{ResectionDepths, depths_from_translation};
+use vsinv::core::depth::{ResectionDepths, depths_from_translation};
 
 /// The translation pair: a camera unknown to the controller, a first pose and a pure
 /// translation.
@@ -78,6 +78,6 @@ fn coplanar_points_are_refused() {
         object_points().iter().map(|p| Vector3::new(p[0], p[1], 0.6 + 0.2 * p[0])).collect();
     let (px, _) =
         view(&planar.iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>(), &Isometry3::identity(), &lens(800.0));
-    assert!(vsinv::depth::resect(&planar, &px).is_err());
-    assert!(vsinv::depth::resect(&planar[..5], &px[..5]).is_err());
+    assert!(vsinv::core::depth::resect(&planar, &px).is_err());
+    assert!(vsinv::core::depth::resect(&planar[..5], &px[..5]).is_err());
 }

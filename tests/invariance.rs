@@ -8,7 +8,8 @@ use approx::assert_relative_eq;
 use common::*;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
-use vsinv::{Intrinsics, invariant_jacobian, invariant_points, jacobian_factors, se3::exp_twist};
+use vsinv::core::se3::exp_twist;
+use vsinv::{Intrinsics, invariant_jacobian, invariant_points, jacobian_factors};
 
 fn q_at(pose: &Isometry3<f64>, k: &Intrinsics, basis: [usize; 3]) -> Vec<[f64; 3]> {
     let (px, _) = view(&object_points(), pose, k);
@@ -102,7 +103,7 @@ fn jacobian_matches_finite_differences() {
     }
 }
 
-/// The direct form equals the factorization `[Phi K, Psi F(K)]` (NOTES.md item 2).
+/// The direct form equals the factorization `[Phi K, Psi F(K)]` (correction 2).
 #[test]
 fn factorization_equals_direct_form() {
     let mut rng = Lcg(7);
@@ -112,7 +113,7 @@ fn factorization_equals_direct_form() {
         let (px, z) = view(&object_points(), &pose, &k);
         let direct = invariant_jacobian(&px, &z, &k, [0, 5, 11]).unwrap();
         let (phi, psi) = jacobian_factors(&px, &z, [0, 5, 11]).unwrap();
-        let fact = vsinv::jacobian::jacobian_from_factors(&phi, &psi, &k.matrix());
+        let fact = vsinv::core::jacobian::jacobian_from_factors(&phi, &psi, &k.matrix());
         assert_relative_eq!(direct, fact, max_relative = 1e-8, epsilon = 1e-12);
     }
 }
@@ -131,9 +132,9 @@ fn rz_coefficients_match_finite_differences() {
         let (a, c) = vsinv::rz_coefficients(&px, &z, &reference, &k, basis).unwrap();
         let eps_z = |p: &Isometry3<f64>| {
             let (q, _) = view(&object_points(), p, &k);
-            let star = vsinv::invariant::BasisFrame::new(&reference, basis, "reference").unwrap();
-            let cur = vsinv::invariant::BasisFrame::new(&q, basis, "current").unwrap();
-            let rz = vsinv::invariant::RzReference::new(&star);
+            let star = vsinv::core::invariant::BasisFrame::new(&reference, basis, "reference").unwrap();
+            let cur = vsinv::core::invariant::BasisFrame::new(&q, basis, "current").unwrap();
+            let rz = vsinv::core::invariant::RzReference::new(&star);
             rz.det_q_star * rz.t_matrix(&cur)[(1, 0)]
         };
         let h = 1e-6;

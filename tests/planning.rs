@@ -5,11 +5,11 @@ mod common;
 
 use common::*;
 use nalgebra::{Isometry3, Vector3};
-use vsinv::planning::{InvariantPath, estimate_plane_parallax};
+use vsinv::core::planning::{InvariantPath, estimate_plane_parallax};
 use vsinv::{Error, Intrinsics, invariant_points};
 
 fn non_basis(q: &[[f64; 3]], basis: [usize; 3]) -> Vec<Vector3<f64>> {
-    vsinv::invariant::non_basis_indices(q.len(), basis).into_iter().map(|i| Vector3::from(q[i])).collect()
+    vsinv::core::invariant::non_basis_indices(q.len(), basis).into_iter().map(|i| Vector3::from(q[i])).collect()
 }
 
 /// Invariant points of the non-basis points in the reference image (K*) and at `pose` (K).

@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use vsinv::Error;
-use vsinv::scenario::{BUILTIN, Scenario, builtin};
-use vsinv::simulator::{Outcome, Status, simulate};
+use vsinv::sim::scenario::{BUILTIN, Scenario, builtin};
+use vsinv::sim::{Outcome, Status, simulate};
 
 fn run(s: &Scenario) -> Outcome {
     simulate(&s.to_config().unwrap(), &mut |_, _| true).unwrap()
@@ -112,7 +112,7 @@ fn occluded_basis_point_is_lost_features() {
     let d: Vec<f64> = (0..3).map(|i| p[i] - center[i]).collect();
     let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
     let position = [0, 1, 2].map(|i| p[i] - d[i] / len * 0.2);
-    s.object.bodies.push(vsinv::scenario::BodySpec::Cuboid {
+    s.object.bodies.push(vsinv::sim::scenario::BodySpec::Cuboid {
         half_extents: [0.004, 0.004, 0.001],
         position,
         rotation: [0.0; 3],
@@ -152,7 +152,7 @@ fn cartesian_robot_respects_joint_limits() {
     s.robot.joint_velocity = Some(vel);
     s.stop.max_iterations = 400;
     let config = s.to_config().unwrap();
-    let vsinv::robot::Robot::Cartesian(limits) = config.robot else { panic!("not cartesian") };
+    let vsinv::sim::robot::Robot::Cartesian(limits) = config.robot else { panic!("not cartesian") };
     let o = simulate(&config, &mut |_, _| true).unwrap();
     let rec = o.recording.unwrap();
     let rows = rec.len();
@@ -278,8 +278,8 @@ fn scenario_round_trips() {
 #[test]
 fn depth_estimator_interface() {
     use std::sync::Arc;
-    use vsinv::scene::Scene;
-    use vsinv::simulator::{DepthEstimator, DepthEstimatorFactory, DepthSource};
+    use vsinv::sim::scene::Scene;
+    use vsinv::sim::{DepthEstimator, DepthEstimatorFactory, DepthSource};
 
     struct Scaled(Vec<f64>);
     impl DepthEstimator for Scaled {

@@ -87,7 +87,7 @@ fn verdicts_agree_with_the_report() {
             for &v0 in &[0.0, 250.0, 2000.0] {
                 let k_hat = Matrix3::new(fku, k01, 300.0, 0.0, 900.0, v0, 0.0, 0.0, 1.0);
                 let r = check_stability(&[k], &k_hat, 0.8, 1.0).unwrap();
-                let (p1, p2, sigma) = vsinv::stability::stability_verdicts(&[k], &k_hat, 0.8, 1.0).unwrap();
+                let (p1, p2, sigma) = vsinv::core::stability::stability_verdicts(&[k], &k_hat, 0.8, 1.0).unwrap();
                 assert_eq!((p1, p2), (r.prop1, r.prop2));
                 assert!((sigma - r.sigma).abs() < 1e-9 * (1.0 + r.sigma.abs()));
             }

@@ -15,10 +15,10 @@ use pyo3::types::PyString;
 use arrays::{F64Array, f64_array, from_matrix, mat, points2, points3, vec1};
 use errors::{invalid_input, to_py};
 
-use crate::camera::Intrinsics;
-use crate::control::{Controller, InvariantController, InvariantControllerConfig};
-use crate::ibvs::{IbvsController, Interaction};
-use crate::stability::{StabilityReport, check_upper_triangular};
+use crate::core::camera::Intrinsics;
+use crate::core::control::{Controller, InvariantController, InvariantControllerConfig};
+use crate::core::ibvs::{IbvsController, Interaction};
+use crate::core::stability::{StabilityReport, check_upper_triangular};
 
 /// A basis argument: three point indices, or "auto" for the widest triangle of the
 /// reference (or given) image.
@@ -50,7 +50,7 @@ impl BasisArg {
     pub(crate) fn resolve(self, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
         match self {
             BasisArg::Fixed(b) => Ok(b),
-            BasisArg::Auto => crate::invariant::choose_basis(pixels).map_err(to_py),
+            BasisArg::Auto => crate::core::invariant::choose_basis(pixels).map_err(to_py),
         }
     }
 }
@@ -142,7 +142,7 @@ type PixelsPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 fn project<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, K: &Bound<'py, PyAny>) -> PyResult<PixelsAndDepths<'py>> {
     let pts = f64_array(points, "points", &[None, Some(3)])?;
     let k = intrinsics(K, "K")?;
-    let (px, z) = crate::camera::project_points(points3(&pts)?, &k).map_err(to_py)?;
+    let (px, z) = crate::core::camera::project_points(points3(&pts)?, &k).map_err(to_py)?;
     Ok((mat(py, px.len(), 2, px.into_flattened())?, PyArray1::from_vec(py, z)))
 }
 
@@ -156,7 +156,7 @@ fn invariant_points<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let a = pixels_arg(pixels, "pixels")?;
     let px = points2(&a)?;
-    let q = crate::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
+    let q = crate::core::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
     mat(py, q.len(), 3, q.into_flattened())
 }
 
@@ -174,7 +174,7 @@ fn invariant_jacobian<'py>(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
-    let j = crate::jacobian::invariant_jacobian(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    let j = crate::core::jacobian::invariant_jacobian(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
     from_matrix(py, &j)
 }
 
@@ -190,7 +190,7 @@ fn interaction_matrix<'py>(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let (px, z) = (points2(&a)?, z.as_slice()?);
     let k = intrinsics(K, "K")?;
-    let ls = crate::camera::pixel_interactions(px, z, &k).map_err(to_py)?;
+    let ls = crate::core::camera::pixel_interactions(px, z, &k).map_err(to_py)?;
     let flat: Vec<f64> = ls.iter().flat_map(|l| (0..2).flat_map(move |r| (0..6).map(move |c| l[(r, c)]))).collect();
     PyArray1::from_vec(py, flat).reshape([ls.len(), 2, 6])
 }
@@ -206,7 +206,7 @@ fn jacobian_factors<'py>(
 ) -> PyResult<PixelsPair<'py>> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
-    let (phi, psi) = crate::jacobian::jacobian_factors(px, z.as_slice()?, basis.resolve(px)?).map_err(to_py)?;
+    let (phi, psi) = crate::core::jacobian::jacobian_factors(px, z.as_slice()?, basis.resolve(px)?).map_err(to_py)?;
     Ok((from_matrix(py, &phi)?, from_matrix(py, &psi)?))
 }
 
@@ -227,7 +227,7 @@ fn rz_coefficients<'py>(
     let (px, rpx) = (points2(&a)?, points2(&r)?);
     let k = intrinsics(K, "K")?;
     let (coef_a, c) =
-        crate::jacobian::rz_coefficients(px, z.as_slice()?, rpx, &k, basis.resolve(rpx)?).map_err(to_py)?;
+        crate::core::jacobian::rz_coefficients(px, z.as_slice()?, rpx, &k, basis.resolve(rpx)?).map_err(to_py)?;
     Ok((coef_a, vec1(py, c.as_slice())))
 }
 
@@ -244,14 +244,14 @@ fn structure_ratio(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
-    crate::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)
+    crate::core::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)
 }
 
 /// Three points well spread in the image (the widest triangle), sorted.
 #[pyfunction]
 fn choose_basis(pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
     let a = pixels_arg(pixels, "pixels")?;
-    let [i, j, k] = crate::invariant::choose_basis(points2(&a)?).map_err(to_py)?;
+    let [i, j, k] = crate::core::invariant::choose_basis(points2(&a)?).map_err(to_py)?;
     Ok((i, j, k))
 }
 
@@ -273,7 +273,7 @@ struct PyInvariantController {
     inner: InvariantController,
 }
 
-fn state_of(c: &InvariantController) -> PyResult<&crate::control::ControlState> {
+fn state_of(c: &InvariantController) -> PyResult<&crate::core::control::ControlState> {
     c.state().ok_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("no control step has run yet"))
 }
 
@@ -282,7 +282,7 @@ impl PyInvariantController {
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
-        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::jacobian::DEFAULT_MIN_STRUCTURE_RATIO),
+        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO),
         text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis=(0, 1, 2), feedforward=True, min_structure_ratio=0.001)"
     )]
     fn new(
@@ -512,14 +512,14 @@ fn check_stability(
         Err(_) => matrix3(K_hat, "K_hat")?,
     };
     check_upper_triangular("K_hat", &k_hat).map_err(to_py)?;
-    let inner = crate::stability::check_stability(&ks, &k_hat, kappa, gain).map_err(to_py)?;
+    let inner = crate::core::stability::check_stability(&ks, &k_hat, kappa, gain).map_err(to_py)?;
     Ok(PyStabilityReport { inner, single })
 }
 
 /// Prop. 3 bound psi/phi = 2 max_b / (gain sigma) (eq. 20).
 #[pyfunction]
 fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> PyResult<f64> {
-    crate::stability::tracking_bound(gain, sigma, max_b).map_err(to_py)
+    crate::core::stability::tracking_bound(gain, sigma, max_b).map_err(to_py)
 }
 
 #[pymodule]

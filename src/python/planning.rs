@@ -9,9 +9,9 @@ use pyo3::prelude::*;
 use super::arrays::{f64_array, mat, points2, vec1};
 use super::errors::{invalid_input, to_py};
 use super::{BasisArg, pixels_arg};
-use crate::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
-use crate::invariant::{BasisFrame, non_basis_indices, validate_basis};
-use crate::planning::{InvariantPath, PlaneParallax, estimate_plane_parallax as core_estimate};
+use crate::core::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
+use crate::core::invariant::{BasisFrame, non_basis_indices, validate_basis};
+use crate::core::planning::{InvariantPath, PlaneParallax, estimate_plane_parallax as core_estimate};
 
 /// Invariant points of the non-basis points of a current and a reference image.
 fn invariant_pairs(

@@ -6,8 +6,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use super::errors::{invalid_input, to_py};
-use crate::scenario::{BUILTIN, Scenario, builtin};
-use crate::simulator::{Outcome, simulate};
+use crate::sim::scenario::{BUILTIN, Scenario, builtin};
+use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).
 #[pyclass(name = "Scenario", module = "vsinv._core", frozen, skip_from_py_object)]
@@ -312,7 +312,7 @@ pub fn run_batch<'py>(
         }
         texts.push(text);
     }
-    let results = py.detach(|| crate::batch::run_json_batch(&texts, threads)).map_err(to_py)?;
+    let results = py.detach(|| crate::sim::batch::run_json_batch(&texts, threads)).map_err(to_py)?;
     let m = results.len();
     let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let mut iterations = Vec::with_capacity(m);

@@ -5,13 +5,17 @@
 
 use nalgebra::{Matrix6, Vector6};
 
-use crate::camera::{Intrinsics, pixel_interaction};
+use crate::core::camera::{Intrinsics, pixel_interaction};
 use crate::error::{Error, Result, check_depths, check_finite_points, check_positive, check_step_inputs};
 
-/// Where the interaction matrix is evaluated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Where the interaction matrix is evaluated (`"current"`, `"desired"` or `"mean"` in
+/// scenario files and Python).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
 pub enum Interaction {
     /// At the current pixels and depths.
+    #[default]
     Current,
     /// At the reference pixels and reference depths (constant).
     Desired,
@@ -37,7 +41,7 @@ impl std::str::FromStr for Interaction {
 /// Minimum number of points for a six-dof pixel-space law.
 pub const IBVS_MIN_POINTS: usize = 4;
 
-impl crate::control::Controller for IbvsController {
+impl crate::core::control::Controller for IbvsController {
     fn step(&mut self, pixels: &[[f64; 2]], depths: &[f64]) -> Result<Vector6<f64>> {
         self.step_masked(pixels, depths, None)
     }

@@ -4,8 +4,8 @@
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::scenario::Scenario;
-use crate::simulator::{SimulationConfig, Summary, simulate};
+use crate::sim::scenario::Scenario;
+use crate::sim::{SimulationConfig, Summary, simulate};
 
 /// Runs every configuration (recording off) on `threads` worker threads (None: one per
 /// core) and returns one result per configuration, in order. A run that cannot start
@@ -56,7 +56,7 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
-    use crate::scenario::builtin;
+    use crate::sim::scenario::builtin;
 
     #[test]
     fn batch_equals_sequential_runs() {

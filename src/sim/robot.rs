@@ -8,8 +8,8 @@
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
+use crate::core::se3::exp_twist;
 use crate::error::{Error, Result, check_finite};
-use crate::se3::exp_twist;
 
 /// Joint limits of the Cartesian robot: `q = (x, y, z, a, b, c)` with the camera centre at
 /// `(x, y, z)` (metres, in F*) and the orientation `R = Rx(a) Ry(b) Rz(c)` (radians).
@@ -229,7 +229,7 @@ impl Robot {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
-    use crate::se3::pose_error;
+    use crate::core::se3::pose_error;
 
     #[test]
     fn kinematics_round_trip() {

@@ -3,13 +3,13 @@
 
 use nalgebra::{Matrix3, Matrix5, Vector3, Vector5, Vector6};
 
-use crate::camera::{Intrinsics, normalised_interaction};
-use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
-use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
-use crate::jacobian::{
+use crate::core::camera::{Intrinsics, normalised_interaction};
+use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
+use crate::core::jacobian::{
     DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction,
     rz_from_interactions,
 };
+use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
 
 /// A visual-servoing control law: current pixels and depth estimates in, camera twist
 /// `(vx, vy, vz, wx, wy, wz)` (camera frame) out. Implemented by [`InvariantController`] and
@@ -378,7 +378,7 @@ impl InvariantController {
 
     /// The stop rule for different cameras (sec. 5.2): `||s - s*|| < invariant_tol`,
     /// `|tau_21| < tau21_tol`, and `tau_11 > 0`, `tau_22 > 0`, which rule out the attracting
-    /// equilibrium at rz = pi (NOTES.md item 8). False before the first step.
+    /// equilibrium at rz = pi (correction 8). False before the first step.
     pub fn converged(&self, invariant_tol: f64, tau21_tol: f64) -> bool {
         self.state.as_ref().is_some_and(|s| {
             s.invariant_error < invariant_tol && s.tau21().abs() < tau21_tol && s.tau11() > 0.0 && s.tau22() > 0.0

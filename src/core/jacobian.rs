@@ -1,18 +1,18 @@
 //! Jacobians in the invariant space (sec. 4.1) and the coefficients of the rz task (eq. 23).
 //!
 //! For a non-basis point k, `dq_k/dt = Q^-1 (L_k - q_1k L_1 - q_2k L_2 - q_3k L_3) (v, w)`
-//! (eq. 12 with NOTES.md item 1: `P` reads `Q`), where `L_i` is the pixel interaction matrix
+//! (eq. 12 with correction 1: `P` reads `Q`), where `L_i` is the pixel interaction matrix
 //! of point i. The sixth column (w_z) vanishes, so `J_k` is the first five columns. The same
-//! matrix factors as `J_k = [Phi_k Psi_k] diag(K, F(K))` (NOTES.md item 2).
+//! matrix factors as `J_k = [Phi_k Psi_k] diag(K, F(K))` (correction 2).
 
 use nalgebra::{DMatrix, Matrix2x6, Matrix3, Matrix5, Vector3, Vector5};
 
-use crate::camera::{Intrinsics, f_of_matrix, pixel_interaction};
+use crate::core::camera::{Intrinsics, f_of_matrix, pixel_interaction};
+use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::error::{Error, Result, check_depths, check_finite_points};
-use crate::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 
 /// Minimum number of points for the five-dof law: each non-basis point gives two
-/// independent rows, so rank J = 5 needs `n >= 6` (NOTES.md, "How many points").
+/// independent rows, so rank J = 5 needs `n >= 6` (paper-corrections, "How many points").
 pub const MIN_POINTS: usize = 6;
 
 /// Default threshold on `sigma_5 / sigma_1` of the depth-balanced invariant Jacobian below
@@ -115,7 +115,7 @@ pub fn jacobian_factors(
         let q = frame.transform(pixels[idx]);
         let (uk, vk, zk) = (pixels[idx][0], pixels[idx][1], depths[idx]);
         let qz = q.component_div(&z);
-        // Diagonal term read as sum_i q_ik/zeta_i - 1/zeta_k (NOTES.md item 2).
+        // Diagonal term read as sum_i q_ik/zeta_i - 1/zeta_k (correction 2).
         let diag = qz.sum() - 1.0 / zk;
         let inner_phi = Matrix3::new(diag, 0.0, uk / zk - u.dot(&qz), 0.0, diag, vk / zk - v.dot(&qz), 0.0, 0.0, 0.0);
         let uv = u.component_mul(&v);
@@ -134,7 +134,7 @@ pub fn jacobian_factors(
 }
 
 /// `[Phi K, Psi F(K)]`: the Jacobian assembled from its factors for a (possibly estimated)
-/// upper-triangular K (eq. 13 with `Phi(zeta_hat) = Phi(zeta) / kappa`, NOTES.md item 3).
+/// upper-triangular K (eq. 13 with `Phi(zeta_hat) = Phi(zeta) / kappa`, correction 3).
 pub fn jacobian_from_factors(phi: &DMatrix<f64>, psi: &DMatrix<f64>, k: &Matrix3<f64>) -> DMatrix<f64> {
     let mut j = DMatrix::zeros(phi.nrows(), 5);
     j.columns_mut(0, 3).copy_from(&(phi * k));
@@ -178,7 +178,7 @@ pub(crate) fn rz_from_interactions(reference: &RzReference, l_basis: &[Matrix2x6
 }
 
 /// `sigma_5 / sigma_1` of the depth-balanced Jacobian `J diag(Z, Z, Z, 1, 1)`, Z the mean
-/// depth: the degenerate-structure measure of NOTES.md (independent of the depth scale).
+/// depth: the degenerate-structure measure (paper corrections, "Planar object"), independent of the depth scale.
 pub fn structure_ratio(pixels: &[[f64; 2]], depths: &[f64], intrinsics: &Intrinsics, basis: [usize; 3]) -> Result<f64> {
     let basis = check_inputs(pixels, depths, basis, MIN_POINTS)?;
     let j = invariant_jacobian(pixels, depths, intrinsics, basis)?;

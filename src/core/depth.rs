@@ -1,4 +1,4 @@
-//! Depth estimation up to scale without calibration (appendix A, NOTES.md item 10).
+//! Depth estimation up to scale without calibration (appendix A, correction 10).
 //!
 //! Off line, two images of the object related by an unknown pure translation, taken with
 //! any camera, give the depths `zeta^I` of the first image up to one scale (eq. 26). Then

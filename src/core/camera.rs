@@ -233,7 +233,7 @@ mod tests {
 
     #[test]
     fn pixel_interaction_matches_finite_differences() {
-        use crate::se3::exp_twist;
+        use crate::core::se3::exp_twist;
         let k = Intrinsics::new(800.0, 750.0, 320.0, 240.0, 1.45).unwrap();
         let km = k.matrix();
         let kinv = km.try_inverse().unwrap();

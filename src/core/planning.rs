@@ -4,7 +4,7 @@
 //!
 //! Eq. (9), `gamma_k q_k = Gamma (q_k* + mu_k* e*)`, makes `q_k`, `Gamma q_k*` and
 //! `Gamma e*` linearly dependent, so `q_k^T F q_k* = 0` with `F = [Gamma e*]_x Gamma`: a
-//! matrix with a zero diagonal, six unknowns up to scale and `det F = 0` (NOTES.md, "How many
+//! matrix with a zero diagonal, six unknowns up to scale and `det F = 0` (paper-corrections, "How many
 //! points"). Each non-basis point gives one equation: the linear method needs 5 of them
 //! (n >= 8), the minimal method 4 (n = 7) closed by the cubic `det F = 0`.
 
@@ -34,7 +34,7 @@ pub struct PlaneParallax {
     pub gamma: Vector3<f64>,
     /// The epipole `e*` in the reference invariant space, unit norm.
     pub epipole: Vector3<f64>,
-    /// `mu_k* e*` for each non-basis point (the identifiable product, NOTES.md item 7).
+    /// `mu_k* e*` for each non-basis point (the identifiable product, correction 7).
     pub mu_e: Vec<Vector3<f64>>,
     /// `gamma_k / gamma_3` for each non-basis point.
     pub gamma_k: Vec<f64>,
@@ -242,7 +242,7 @@ pub struct InvariantPath {
 impl InvariantPath {
     /// The path for the reference invariant points `q_star`, the plane + parallax estimate
     /// and a duration `T` (the paper samples it N times at the control period: T = N dt).
-    /// `beta_k(0) e*/||e*|| = mu_k* e*` (NOTES.md item 7), `Delta(0) = Gamma / gamma_3`.
+    /// `beta_k(0) e*/||e*|| = mu_k* e*` (correction 7), `Delta(0) = Gamma / gamma_3`.
     pub fn new(q_star: &[Vector3<f64>], estimate: &PlaneParallax, duration: f64) -> Result<Self> {
         if !(duration.is_finite() && duration > 0.0) {
             return Err(Error::InvalidParameter { name: "path duration", reason: "must be finite and > 0".into() });

@@ -4,7 +4,7 @@
 use nalgebra::{Isometry3, Point3};
 use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, QueryFilter, Ray, RigidBodyBuilder, Vector};
 
-use crate::camera::Intrinsics;
+use crate::core::camera::Intrinsics;
 use crate::error::{Error, Result, check_finite};
 
 /// A rigid body that can hide feature points (a plate or box carrying the dots, a ball, a
@@ -171,7 +171,7 @@ impl Scene {
                 out.visible[i] = false;
                 continue;
             }
-            let px = crate::camera::project_with(&km, &c);
+            let px = crate::core::camera::project_with(&km, &c);
             out.pixels[i] = px;
             let inside = image.is_none_or(|s| px[0] >= 0.0 && px[0] < s.width && px[1] >= 0.0 && px[1] < s.height);
             out.visible[i] = inside && !self.occluded(&center, &world_point);

@@ -2,11 +2,11 @@
 //!
 //! Linearised about the reference path, the closed loop is `d eps/dt = -lambda A eps + b`
 //! (eq. 19) with `A = J_hat^+ J = blockdiag(kappa K_hat^-1 K, F(K_hat)^-1 F(K))`
-//! (NOTES.md items 4-5), which holds wherever the depth estimates are `kappa zeta`.
+//! (corrections 4-5), which holds wherever the depth estimates are `kappa zeta`.
 
 use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
 
-use crate::camera::f_of_matrix;
+use crate::core::camera::f_of_matrix;
 use crate::error::{Error, Result, check_finite};
 
 /// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
@@ -48,7 +48,7 @@ pub fn a_matrix(k: &Matrix3<f64>, k_hat: &Matrix3<f64>, kappa: f64) -> Result<Ma
 #[derive(Debug, Clone, PartialEq)]
 pub struct StabilityReport {
     /// Prop. 1 (constant K, if and only if): `lambda > 0`, `kappa > 0`, `K_hat[0,0] > 0`,
-    /// `K_hat[1,1] > 0` (NOTES.md item 5), for every K of the schedule taken as constant.
+    /// `K_hat[1,1] > 0` (correction 5), for every K of the schedule taken as constant.
     pub prop1: bool,
     /// Prop. 2 (time-varying K, sufficient): `lambda > 0`, `kappa > 0` and the symmetric
     /// parts of both blocks of A positive definite for every K of the schedule.
@@ -119,7 +119,7 @@ pub fn check_stability(
     let mut eigenvalues = Vec::with_capacity(k_schedule.len());
     let mut sigma = f64::INFINITY;
     for k in k_schedule {
-        crate::camera::Intrinsics::from_matrix(k)?;
+        crate::core::camera::Intrinsics::from_matrix(k)?;
         let a = a_matrix(k, k_hat, kappa)?;
         let ev = a.complex_eigenvalues();
         eigenvalues.push([ev[0], ev[1], ev[2], ev[3], ev[4]]);

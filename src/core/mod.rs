@@ -1,0 +1,24 @@
+//! The control core: the paper's mathematics, with no dependency beyond nalgebra and
+//! thiserror. This is what a controller embeds.
+//!
+//! | paper | module |
+//! |---|---|
+//! | camera model, eq. (4), point interaction matrix | [`camera`] |
+//! | projective invariant transform, sec. 2.3, eq. (21) | [`invariant`] |
+//! | invariant Jacobian, sec. 4.1, eqs. (11)-(13), (23) | [`jacobian`] |
+//! | control laws, eqs. (14), (17), (24) | [`control`] |
+//! | classic IBVS baseline | [`ibvs`] |
+//! | Props. 1-3, appendix B | [`stability`] |
+//! | plane + parallax (eq. 9), the invariant-space path (eq. 10), sec. 3 | [`planning`] |
+//! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
+//! | rigid motions, exact twist integration | [`se3`] |
+
+pub mod camera;
+pub mod control;
+pub mod depth;
+pub mod ibvs;
+pub mod invariant;
+pub mod jacobian;
+pub mod planning;
+pub mod se3;
+pub mod stability;

@@ -1,0 +1,36 @@
+//! The kinematic simulator (feature `sim`): a camera on a robot servoing on an object in a
+//! rapier3d-f64 scene, cameras that may differ between the reference image (K*) and the
+//! servo (K(t), with a zoom), pixel noise, depth sources, stop rules and a recording;
+//! scenario files describe runs, and [`batch`] runs many at once (feature `batch`).
+//!
+//! | concept | module |
+//! |---|---|
+//! | feature points, occluding bodies, visibility | [`scene`] |
+//! | free-flying camera, Cartesian robot with joint limits | [`robot`] |
+//! | fixed cameras and zooms | [`camera_model`] |
+//! | true, reference and estimated depths (appendix A) | [`depth_source`] |
+//! | what a run needs: law, noise, stop rules | [`config`] |
+//! | the closed loop, one named step at a time | [`simulate`](mod@simulate) |
+//! | per-image measurements and the stop rules' window | `measure` (private) |
+//! | status, summary, recording | [`outcome`] |
+//! | scenario files (TOML, JSON) and the built-in scenarios | [`scenario`] |
+//! | many runs in parallel (rayon) | [`batch`] |
+
+#[cfg(feature = "batch")]
+pub mod batch;
+pub mod camera_model;
+pub mod config;
+pub mod depth_source;
+mod measure;
+pub mod outcome;
+pub mod robot;
+pub mod scenario;
+pub mod scene;
+pub mod simulate;
+
+pub use camera_model::{CameraModel, Zoom};
+pub use config::{Law, Noise, SimulationConfig, StopRules};
+pub use depth_source::{DepthEstimator, DepthEstimatorFactory, DepthSource, TranslationPairDepths};
+pub use outcome::{Outcome, Recording, Status, StopRule, Summary, Tracking};
+pub use scenario::Scenario;
+pub use simulate::simulate;

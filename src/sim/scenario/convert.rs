@@ -1,0 +1,267 @@
+//! From a parsed scenario to a [`SimulationConfig`], one table at a time, checking what the
+//! schema alone cannot (counts, signs, an object in front of the cameras) with errors that
+//! name the key at fault.
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+
+use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, DepthsName, LawName, RobotKind};
+use super::{Scenario, scenario_error};
+use crate::core::camera::Intrinsics;
+use crate::core::control::InvariantControllerConfig;
+use crate::core::ibvs::IBVS_MIN_POINTS;
+use crate::core::jacobian::MIN_POINTS;
+use crate::error::Result;
+use crate::sim::camera_model::CameraModel;
+use crate::sim::config::{Law, SimulationConfig};
+use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
+use crate::sim::robot::{JointLimits, Robot};
+use crate::sim::scene::{Body, ImageSize, MIN_DEPTH, Scene};
+
+/// A pose from a position (metres) and a theta-u rotation in degrees.
+fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(position[0], position[1], position[2]),
+        UnitQuaternion::from_scaled_axis(Vector3::from(rotation_deg.map(f64::to_radians))),
+    )
+}
+
+fn check_positive(key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(scenario_error(key, format!("must be finite and > 0, got {v}"))) }
+}
+
+impl CameraSpec {
+    fn intrinsics(&self, key: &str) -> Result<Intrinsics> {
+        Intrinsics::new(self.fku, self.fkv, self.u0, self.v0, self.skew_deg.to_radians())
+            .map_err(|e| scenario_error(key, e.to_string()))
+    }
+
+    fn model(&self, key: &str) -> Result<CameraModel> {
+        let image = match (self.width, self.height) {
+            (Some(width), Some(height)) => Some(ImageSize { width, height }),
+            (None, None) => None,
+            _ => return Err(scenario_error(key, "give both width and height, or neither")),
+        };
+        let model = CameraModel { intrinsics: self.intrinsics(key)?, zoom: self.zoom.clone(), image };
+        model.validate().map_err(|e| scenario_error(key, e.to_string()))?;
+        Ok(model)
+    }
+}
+
+impl Scenario {
+    /// Checks everything that the schema alone cannot: counts, signs, that the object is in
+    /// front of the reference camera and of the start pose.
+    pub fn validate(&self) -> Result<()> {
+        self.to_config().map(|_| ())
+    }
+
+    /// The simulation this scenario describes.
+    pub fn to_config(&self) -> Result<SimulationConfig> {
+        let scene = self.scene()?;
+        let (reference_camera, camera, estimate) = self.cameras()?;
+        let start = self.start_pose()?;
+        let c = &self.control;
+        self.check_numbers()?;
+        Ok(SimulationConfig {
+            scene,
+            basis: self.object.basis,
+            reference_camera,
+            camera,
+            estimate,
+            start,
+            robot: self.robot(&start)?,
+            law: law_of(c)?,
+            depths: self.depth_source()?,
+            dt: c.dt,
+            noise: self.noise,
+            stop: self.stop,
+            path: self.path_plan()?,
+            record: true,
+        })
+    }
+
+    /// `[object]`: enough finite points, a valid basis, valid bodies.
+    fn scene(&self) -> Result<Scene> {
+        let points = &self.object.points;
+        let min_points = match self.control.law {
+            LawName::Invariant => MIN_POINTS,
+            LawName::Ibvs => IBVS_MIN_POINTS,
+            LawName::None => 3,
+        };
+        if points.len() < min_points {
+            let reason = format!("{} points given, at least {min_points} needed", points.len());
+            return Err(scenario_error("object.points", reason));
+        }
+        if let Some(i) = points.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
+            return Err(scenario_error(&format!("object.points[{i}]"), "non-finite coordinate"));
+        }
+        if let Some(i) = points.iter().position(|p| p[2] <= MIN_DEPTH) {
+            let reason = format!("the object is behind the reference camera (z = {} m in F*)", points[i][2]);
+            return Err(scenario_error(&format!("object.points[{i}]"), reason));
+        }
+        if let Some(b) = self.object.basis {
+            crate::core::invariant::validate_basis(b, points.len())
+                .map_err(|e| scenario_error("object.basis", e.to_string()))?;
+        }
+        let bodies = self.object.bodies.iter().map(body_of).collect();
+        Scene::new(points.clone(), bodies).map_err(|e| scenario_error("object.bodies", e.to_string()))
+    }
+
+    /// `[reference_camera]`, `[camera]`, `[estimate]`: K*, K(t) and K_hat.
+    fn cameras(&self) -> Result<(CameraModel, CameraModel, Intrinsics)> {
+        if self.reference_camera.zoom.is_some() {
+            return Err(scenario_error("reference_camera.zoom", "the reference image is taken with one camera"));
+        }
+        let reference_camera = self.reference_camera.model("reference_camera")?;
+        let camera = match &self.camera {
+            Some(c) => c.model("camera")?,
+            None => reference_camera.clone(),
+        };
+        let estimate = match &self.estimate {
+            Some(e) if e.zoom.is_some() => return Err(scenario_error("estimate.zoom", "K_hat is one fixed estimate")),
+            Some(e) => e.intrinsics("estimate")?,
+            None => camera.at(0.0).map_err(|e| scenario_error("camera", e.to_string()))?,
+        };
+        Ok((reference_camera, camera, estimate))
+    }
+
+    /// `[start]`: a finite pose with the whole object in front of the camera.
+    fn start_pose(&self) -> Result<Isometry3<f64>> {
+        if let Some(i) = self.start.position.iter().chain(&self.start.rotation).position(|v| !v.is_finite()) {
+            return Err(scenario_error("start", format!("non-finite value at index {i}")));
+        }
+        let start = pose_of(self.start.position, self.start.rotation);
+        let inv = start.inverse();
+        if let Some(i) = self.object.points.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
+            return Err(scenario_error("start", format!("object point {i} is behind the camera at the start pose")));
+        }
+        Ok(start)
+    }
+
+    /// `[control]` gains and period, `[noise]` and `[stop]`.
+    fn check_numbers(&self) -> Result<()> {
+        let c = &self.control;
+        for (key, v) in [("control.gain", c.gain), ("control.gain_rz", c.gain_rz), ("control.dt", c.dt)] {
+            check_positive(key, v)?;
+        }
+        if !(self.noise.pixel_sigma.is_finite() && self.noise.pixel_sigma >= 0.0) {
+            return Err(scenario_error("noise.pixel_sigma", "must be finite and >= 0"));
+        }
+        let s = &self.stop;
+        if s.max_iterations == 0 || s.window == 0 {
+            return Err(scenario_error("stop", "max_iterations and window must be >= 1"));
+        }
+        for (key, v) in [
+            ("stop.pixel_error", s.pixel_error),
+            ("stop.invariant_error", s.invariant_error),
+            ("stop.tau21", s.tau21),
+            ("stop.divergence_distance", s.divergence_distance),
+        ] {
+            check_positive(key, v)?;
+        }
+        Ok(())
+    }
+
+    /// `control.depths` and `[depth_estimation]`.
+    fn depth_source(&self) -> Result<DepthSource> {
+        let depths = self.control.depths;
+        if self.depth_estimation.is_some() && depths != DepthsName::Estimated {
+            return Err(scenario_error("depth_estimation", "is used only with control.depths = \"estimated\""));
+        }
+        Ok(match depths {
+            DepthsName::True => DepthSource::True,
+            DepthsName::Reference => DepthSource::Reference,
+            DepthsName::Estimated => {
+                let d = self.depth_estimation.as_ref().ok_or_else(|| {
+                    scenario_error("control.depths", "\"estimated\" needs a [depth_estimation] section")
+                })?;
+                DepthSource::Estimated(std::sync::Arc::new(translation_pair(d)?))
+            }
+        })
+    }
+
+    /// `[path]`: drives the invariant law only.
+    fn path_plan(&self) -> Result<Option<crate::sim::config::PathPlan>> {
+        match self.path {
+            Some(p) if p.samples == 0 => Err(scenario_error("path.samples", "must be >= 1")),
+            Some(_) if self.control.law != LawName::Invariant => {
+                Err(scenario_error("path", "path planning drives the invariant law only"))
+            }
+            other => Ok(other),
+        }
+    }
+
+    /// `[robot]`: joint values are metres for x, y, z and degrees for the wrist.
+    fn robot(&self, start: &Isometry3<f64>) -> Result<Robot> {
+        let r = &self.robot;
+        match r.kind {
+            RobotKind::Free => {
+                if r.joint_min.is_some() || r.joint_max.is_some() || r.joint_velocity.is_some() {
+                    return Err(scenario_error("robot", "joint limits apply to kind = \"cartesian\" only"));
+                }
+                Ok(Robot::FreeFlying)
+            }
+            RobotKind::Cartesian => {
+                let d = JointLimits::default();
+                let conv = |v: [f64; 6]| [v[0], v[1], v[2], v[3].to_radians(), v[4].to_radians(), v[5].to_radians()];
+                let limits = JointLimits {
+                    min: r.joint_min.map_or(d.min, conv),
+                    max: r.joint_max.map_or(d.max, conv),
+                    velocity: r.joint_velocity.map_or(d.velocity, conv),
+                };
+                limits.validate().map_err(|e| scenario_error("robot", e.to_string()))?;
+                let robot = Robot::Cartesian(limits);
+                // The start must be reachable; the goal need not be (the run then ends at the
+                // limits, which is worth simulating).
+                robot.check_reachable(start).map_err(|e| scenario_error("start", e.to_string()))?;
+                Ok(robot)
+            }
+        }
+    }
+}
+
+fn body_of(b: &BodySpec) -> Body {
+    match *b {
+        BodySpec::Cuboid { half_extents, position, rotation } => {
+            Body::Cuboid { half_extents, pose: pose_of(position, rotation) }
+        }
+        BodySpec::Ball { radius, position } => Body::Ball { radius, center: position },
+        BodySpec::Cylinder { half_height, radius, position, rotation } => {
+            Body::Cylinder { half_height, radius, pose: pose_of(position, rotation) }
+        }
+    }
+}
+
+fn law_of(c: &ControlSpec) -> Result<Law> {
+    Ok(match c.law {
+        LawName::Invariant => Law::Invariant(InvariantControllerConfig {
+            gain: c.gain,
+            gain_rz: c.gain_rz,
+            feedforward: c.feedforward,
+            ..Default::default()
+        }),
+        LawName::None => Law::Observe,
+        LawName::Ibvs => Law::Ibvs { gain: c.gain, interaction: c.interaction },
+    })
+}
+
+/// `[depth_estimation]`: the pure-translation image pair of appendix A.
+fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
+    if d.camera.zoom.is_some() || d.camera.width.is_some() || d.camera.height.is_some() {
+        return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
+    }
+    if d.position.iter().chain(&d.rotation).chain(&d.translation).any(|v| !v.is_finite()) {
+        return Err(scenario_error("depth_estimation", "non-finite position, rotation or translation"));
+    }
+    if !(d.reference_mean_depth.is_finite() && d.reference_mean_depth > 0.0) {
+        return Err(scenario_error("depth_estimation.reference_mean_depth", "must be finite and > 0"));
+    }
+    if d.translation.iter().all(|&v| v == 0.0) {
+        return Err(scenario_error("depth_estimation.translation", "must not be zero"));
+    }
+    Ok(TranslationPairDepths {
+        camera: d.camera.intrinsics("depth_estimation.camera")?,
+        first_pose: pose_of(d.position, d.rotation),
+        translation: Vector3::from(d.translation),
+        reference_mean_depth: d.reference_mean_depth,
+    })
+}

@@ -1,0 +1,279 @@
+//! The scenario schema: one struct per table of a scenario file. The README's "Scenario
+//! files" block describes every key with its unit and default, and a test checks that it
+//! parses and covers the whole schema. Tables that the simulator can take as they are
+//! (`[noise]`, `[stop]`, `[path]`, `zoom`) deserialize straight into its types.
+
+use serde::{Deserialize, Serialize};
+
+use crate::core::ibvs::Interaction;
+use crate::sim::camera_model::Zoom;
+use crate::sim::config::{Noise, PathPlan, StopRules};
+
+fn default_skew() -> f64 {
+    90.0
+}
+fn one() -> f64 {
+    1.0
+}
+fn default_dt() -> f64 {
+    0.04
+}
+fn yes() -> bool {
+    true
+}
+
+/// `[object]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// Feature points in F*, metres.
+    pub points: Vec<[f64; 3]>,
+    /// Basis indices (default: the widest triangle of the reference image).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub basis: Option<[usize; 3]>,
+    /// Occluding bodies.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodySpec>,
+}
+
+/// One `[[object.bodies]]` entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "lowercase", deny_unknown_fields)]
+pub enum BodySpec {
+    /// A box.
+    Cuboid {
+        /// Half extents, metres.
+        half_extents: [f64; 3],
+        /// Centre in F*, metres.
+        position: [f64; 3],
+        /// Theta-u rotation, degrees.
+        #[serde(default)]
+        rotation: [f64; 3],
+    },
+    /// A ball.
+    Ball {
+        /// Radius, metres.
+        radius: f64,
+        /// Centre in F*, metres.
+        position: [f64; 3],
+    },
+    /// A cylinder along its y axis.
+    Cylinder {
+        /// Half height, metres.
+        half_height: f64,
+        /// Radius, metres.
+        radius: f64,
+        /// Centre in F*, metres.
+        position: [f64; 3],
+        /// Theta-u rotation, degrees.
+        #[serde(default)]
+        rotation: [f64; 3],
+    },
+}
+
+/// `[reference_camera]`, `[camera]`, `[estimate]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// f ku, pixels.
+    pub fku: f64,
+    /// f kv, pixels.
+    pub fkv: f64,
+    /// Principal point u0, pixels.
+    pub u0: f64,
+    /// Principal point v0, pixels.
+    pub v0: f64,
+    /// Angle between the image axes, degrees.
+    #[serde(default = "default_skew")]
+    pub skew_deg: f64,
+    /// Image width, pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<f64>,
+    /// Image height, pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// Zoom schedule (servo camera only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub zoom: Option<Zoom>,
+}
+
+/// `[start]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartSpec {
+    /// Camera centre in F*, metres.
+    pub position: [f64; 3],
+    /// Theta-u of the camera frame in F*, degrees.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+}
+
+/// Control law name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LawName {
+    /// Sec. 4.
+    Invariant,
+    /// Classic IBVS.
+    Ibvs,
+    /// No control: a stationary camera (sec. 5.1).
+    None,
+}
+
+/// Depth source name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DepthsName {
+    /// True depths.
+    True,
+    /// Reference depths zeta*.
+    Reference,
+    /// Estimated up to scale (appendix A).
+    Estimated,
+}
+
+/// `[control]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControlSpec {
+    /// Which law.
+    #[serde(default = "default_law")]
+    pub law: LawName,
+    /// lambda, 1/s.
+    #[serde(default = "one")]
+    pub gain: f64,
+    /// eta, 1/s.
+    #[serde(default = "one")]
+    pub gain_rz: f64,
+    /// Control period, s.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Depths given to the law.
+    #[serde(default = "default_depths")]
+    pub depths: DepthsName,
+    /// Feed-forward term of eq. (17).
+    #[serde(default = "yes")]
+    pub feedforward: bool,
+    /// IBVS interaction matrix.
+    #[serde(default)]
+    pub interaction: Interaction,
+}
+
+fn default_law() -> LawName {
+    LawName::Invariant
+}
+fn default_depths() -> DepthsName {
+    DepthsName::Reference
+}
+
+impl Default for ControlSpec {
+    fn default() -> Self {
+        Self {
+            law: default_law(),
+            gain: 1.0,
+            gain_rz: 1.0,
+            dt: default_dt(),
+            depths: default_depths(),
+            feedforward: true,
+            interaction: Interaction::Current,
+        }
+    }
+}
+
+/// Robot kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RobotKind {
+    /// Free-flying camera.
+    Free,
+    /// Cartesian robot with limits.
+    Cartesian,
+}
+
+/// `[robot]`: joint values are `(x, y, z)` in metres then the wrist `(a, b, c)` in degrees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotSpec {
+    /// Which robot.
+    #[serde(default = "default_robot")]
+    pub kind: RobotKind,
+    /// Lower joint limits (m, m, m, deg, deg, deg).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_min: Option<[f64; 6]>,
+    /// Upper joint limits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_max: Option<[f64; 6]>,
+    /// Joint speed limits (m/s, m/s, m/s, deg/s, deg/s, deg/s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint_velocity: Option<[f64; 6]>,
+}
+
+fn default_robot() -> RobotKind {
+    RobotKind::Free
+}
+
+impl Default for RobotSpec {
+    fn default() -> Self {
+        Self { kind: RobotKind::Free, joint_min: None, joint_max: None, joint_velocity: None }
+    }
+}
+
+/// `[depth_estimation]`: the pure-translation image pair of appendix A.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DepthEstimationSpec {
+    /// Any camera, unknown to the controller (fku, fkv, u0, v0, skew_deg).
+    pub camera: CameraSpec,
+    /// Camera centre of the first image in F*, metres.
+    pub position: [f64; 3],
+    /// Theta-u of that camera in F*, degrees.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// Pure translation of the camera centre to the second image, metres, in F*.
+    pub translation: [f64; 3],
+    /// The mean depth the estimates give the reference image: a rough guess of the distance
+    /// to the object in metres (default 1, "unknown"); it scales the translation speed only.
+    #[serde(default = "one")]
+    pub reference_mean_depth: f64,
+}
+
+/// A scenario: one simulated servoing run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name.
+    pub name: String,
+    /// What it shows.
+    #[serde(default)]
+    pub description: String,
+    /// The object.
+    pub object: ObjectSpec,
+    /// K* and the reference image size.
+    pub reference_camera: CameraSpec,
+    /// K(t) while servoing (default: the reference camera).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraSpec>,
+    /// K_hat (default: the servo camera at t = 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimate: Option<CameraSpec>,
+    /// Start pose.
+    pub start: StartSpec,
+    /// The control law.
+    #[serde(default)]
+    pub control: ControlSpec,
+    /// The robot.
+    #[serde(default)]
+    pub robot: RobotSpec,
+    /// Pixel noise.
+    #[serde(default)]
+    pub noise: Noise,
+    /// Stop rules.
+    #[serde(default)]
+    pub stop: StopRules,
+    /// Path planning in the invariant space.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathPlan>,
+    /// The translation pair for `control.depths = "estimated"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_estimation: Option<DepthEstimationSpec>,
+}
