@@ -1,7 +1,7 @@
 //! The invariant control laws of sec. 4: the five-dof task-function law (eqs. 14, 17) and
 //! the law for the rotation about the optical axis (eq. 24).
 
-use nalgebra::{Matrix3, Matrix5, Vector3, Vector5, Vector6};
+use nalgebra::{Matrix2x6, Matrix3, Matrix5, Vector2, Vector3, Vector5, Vector6};
 
 use crate::core::camera::{Intrinsics, normalised_interaction};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
@@ -238,6 +238,35 @@ impl InvariantController {
     }
 
     fn step_masked(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<Vector6<f64>> {
+        self.check_step(pixels, depths, visible)?;
+        let frame = BasisFrame::new(pixels, self.basis, "current")?;
+        // Work in normalised coordinates: the pixel interaction matrices are K[0..2, 0..2]
+        // times the normalised ones, so `J_k = Q^-1[:, 0..2] K[0..2, 0..2] M_k` with
+        // `M_k = L_k - q_1k L_1 - q_2k L_2 - q_3k L_3` in normalised coordinates (sec. 4.1).
+        let lx_basis = self.basis.map(|i| self.normalised_interaction(pixels, depths, i));
+        let normal = self.normal_equations(pixels, depths, visible, &frame, &lx_basis);
+        let (eps, rate_term) = self.solve_five_dof(&normal, mean_visible(depths, visible))?;
+        // mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
+        let mut mu = -self.config.gain * eps;
+        if self.config.feedforward && self.reference_moves {
+            mu += rate_term;
+        }
+        let (wz, eps_z, a_hat) = self.rz_velocity(pixels, &lx_basis, &mu)?;
+        let twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
+        self.state = Some(ControlState {
+            twist,
+            eps,
+            eps_z,
+            invariant_error: normal.err2.sqrt(),
+            t: self.reference.t_matrix(&frame),
+            a_hat,
+            reference_rate_term: rate_term,
+        });
+        Ok(twist)
+    }
+
+    /// Sizes, finiteness, depths, and that the basis and three more points are visible.
+    fn check_step(&self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<()> {
         if pixels.len() != self.n {
             return Err(Error::Shape {
                 what: "pixels",
@@ -246,134 +275,109 @@ impl InvariantController {
             });
         }
         check_step_inputs(pixels, depths, visible)?;
-        let seen = |i: usize| visible.is_none_or(|v| v[i]);
-        if let Some(v) = visible {
-            let others_seen = self.others.iter().filter(|&&i| v[i]).count();
-            if !self.basis.iter().all(|&b| v[b]) || others_seen < MIN_POINTS - 3 {
-                return Err(Error::TooFewPoints {
-                    needed: MIN_POINTS,
-                    got: 3 * usize::from(self.basis.iter().all(|&b| v[b])) + others_seen,
-                    why: "the three basis points and three more must be visible",
-                });
-            }
+        let Some(v) = visible else { return Ok(()) };
+        let others_seen = self.others.iter().filter(|&&i| v[i]).count();
+        let basis_seen = self.basis.iter().all(|&b| v[b]);
+        if !basis_seen || others_seen < MIN_POINTS - 3 {
+            return Err(Error::TooFewPoints {
+                needed: MIN_POINTS,
+                got: 3 * usize::from(basis_seen) + others_seen,
+                why: "the three basis points and three more must be visible",
+            });
         }
-        let frame = BasisFrame::new(pixels, self.basis, "current")?;
-        // Work in normalised coordinates: the pixel interaction matrices are K[0..2, 0..2]
-        // times the normalised ones, so `J_k = Q^-1[:, 0..2] K[0..2, 0..2] M_k` with
-        // `M_k = L_k - q_1k L_1 - q_2k L_2 - q_3k L_3` in normalised coordinates (sec. 4.1).
-        let k_inv = &self.k_inv;
-        let normalised = |i: usize| {
-            let m = k_inv * Vector3::new(pixels[i][0], pixels[i][1], 1.0);
-            normalised_interaction(m.x, m.y, depths[i])
-        };
-        let lx_basis = self.basis.map(normalised);
+        Ok(())
+    }
+
+    /// The interaction matrix of point `i` in normalised coordinates.
+    #[inline]
+    fn normalised_interaction(&self, pixels: &[[f64; 2]], depths: &[f64], i: usize) -> Matrix2x6<f64> {
+        let m = self.k_inv * Vector3::new(pixels[i][0], pixels[i][1], 1.0);
+        normalised_interaction(m.x, m.y, depths[i])
+    }
+
+    /// `J^T J`, `J^T (s - s*)` and `J^T ds*/dt` accumulated point by point (only the upper
+    /// triangle of the symmetric `J^T J` is summed), with `||s - s*||^2`.
+    #[inline]
+    fn normal_equations(
+        &self,
+        pixels: &[[f64; 2]],
+        depths: &[f64],
+        visible: Option<&[bool]>,
+        frame: &BasisFrame,
+        lx_basis: &[Matrix2x6<f64>; 3],
+    ) -> NormalEquations {
         let a = frame.q_inv.fixed_columns::<2>(0) * self.k.fixed_view::<2, 2>(0, 0);
         let gram = a.tr_mul(&a);
-        let moving = self.reference_moves;
-        let feedforward = self.config.feedforward && moving;
-
-        // Accumulate J^T J (upper triangle), J^T (s - s*) and J^T ds*/dt point by point.
         let mut upper = [0.0; 15];
-        let mut jte = Vector5::zeros();
-        let mut jtr = Vector5::zeros();
-        let mut err2 = 0.0;
+        let (mut jte, mut jtr, mut err2) = (Vector5::zeros(), Vector5::zeros(), 0.0);
         for (j, &idx) in self.others.iter().enumerate() {
-            if !seen(idx) {
+            if !visible.is_none_or(|v| v[idx]) {
                 continue;
             }
             let q = frame.transform(pixels[idx]);
             let e = q - self.s_star[j];
             err2 += e.norm_squared();
-            let m_k = combined_interaction(&normalised(idx), &lx_basis, &q);
-            let w = gram * m_k; // 2x6
-            let mut t = 0;
-            for r in 0..5 {
-                let (m0, m1) = (m_k[(0, r)], m_k[(1, r)]);
-                for c in r..5 {
-                    upper[t] += m0 * w[(0, c)] + m1 * w[(1, c)];
-                    t += 1;
-                }
-            }
-            let h = a.tr_mul(&e);
-            for r in 0..5 {
-                jte[r] += m_k[(0, r)] * h.x + m_k[(1, r)] * h.y;
-            }
-            if moving {
-                let h = a.tr_mul(&self.s_star_rate[j]);
-                for r in 0..5 {
-                    jtr[r] += m_k[(0, r)] * h.x + m_k[(1, r)] * h.y;
-                }
+            let m_k = combined_interaction(&self.normalised_interaction(pixels, depths, idx), lx_basis, &q);
+            add_gram_upper(&mut upper, &m_k, &(gram * m_k));
+            add_projected(&mut jte, &m_k, &a.tr_mul(&e));
+            if self.reference_moves {
+                add_projected(&mut jtr, &m_k, &a.tr_mul(&self.s_star_rate[j]));
             }
         }
-        let mut jtj = Matrix5::zeros();
-        let mut t = 0;
-        for r in 0..5 {
-            for c in r..5 {
-                jtj[(r, c)] = upper[t];
-                jtj[(c, r)] = upper[t];
-                t += 1;
-            }
-        }
-        let (depth_sum, depth_count) =
-            (0..self.n).filter(|&i| seen(i)).fold((0.0, 0usize), |(s, c), i| (s + depths[i], c + 1));
-        let mean_depth = depth_sum / depth_count as f64;
+        NormalEquations { jtj: symmetric_from_upper(&upper), jte, jtr, err2 }
+    }
+
+    /// eps = J_hat^+ (s - s*) (eq. 14) and J_hat^+ ds*/dt, by Cholesky on `J^T J`; refuses a
+    /// degenerate structure (planar object, equal depths) at the first step and on rank loss.
+    #[inline]
+    fn solve_five_dof(&mut self, normal: &NormalEquations, mean_depth: f64) -> Result<(Vector5<f64>, Vector5<f64>)> {
+        let jtj = &normal.jtj;
         let threshold = self.config.min_structure_ratio;
         let degenerate = |jtj: &Matrix5<f64>| {
             let ratio = balanced_ratio(jtj, mean_depth);
             (ratio < threshold.max(1e-7)).then_some(Error::DegenerateStructure { ratio, threshold })
         };
         if !self.structure_checked {
-            if let Some(err) = degenerate(&jtj) {
+            if let Some(err) = degenerate(jtj) {
                 return Err(err);
             }
             self.structure_checked = true;
         }
-        let chol = match jtj.cholesky() {
-            Some(c) => c,
-            None => {
-                let ratio = balanced_ratio(&jtj, mean_depth);
-                return Err(Error::DegenerateStructure { ratio, threshold });
-            }
+        let Some(chol) = jtj.cholesky() else {
+            return Err(Error::DegenerateStructure { ratio: balanced_ratio(jtj, mean_depth), threshold });
         };
         // A pivot that lost almost all of its diagonal means rank loss since the first step.
         let l = chol.l_dirty();
         if (0..5).any(|i| l[(i, i)] * l[(i, i)] < 1e-14 * jtj[(i, i)])
-            && let Some(err) = degenerate(&jtj)
+            && let Some(err) = degenerate(jtj)
         {
             return Err(err);
         }
-        // eps = J_hat^+ (s - s*)  (eq. 14); mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
-        let eps = chol.solve(&jte);
-        let rate_term = if moving { chol.solve(&jtr) } else { Vector5::zeros() };
-        let mut mu = -self.config.gain * eps;
-        if feedforward {
-            mu += rate_term;
-        }
+        let rate_term = if self.reference_moves { chol.solve(&normal.jtr) } else { Vector5::zeros() };
+        Ok((chol.solve(&normal.jte), rate_term))
+    }
 
-        // eps_z = det(Q*) tau_21 and w_z = -(eta eps_z + c_hat^T mu) / a_hat  (eq. 24).
+    /// eps_z = det(Q*) tau_21 and w_z = -(eta eps_z + c_hat^T mu) / a_hat (eq. 24); returns
+    /// `(w_z, eps_z, a_hat)`.
+    #[inline]
+    fn rz_velocity(
+        &self,
+        pixels: &[[f64; 2]],
+        lx_basis: &[Matrix2x6<f64>; 3],
+        mu: &Vector5<f64>,
+    ) -> Result<(f64, f64, f64)> {
         let [b0, b1, b2] = self.basis;
         let v = Vector3::new(pixels[b0][1], pixels[b1][1], pixels[b2][1]);
         let eps_z = self.reference.eps_z(&v);
         // The v-row of a pixel interaction matrix is K[1,1] times the normalised y-row (K[1,0] = 0).
         let k11 = self.k[(1, 1)];
-        let (a_x, c_x) = rz_from_interactions(&self.reference, &lx_basis);
+        let (a_x, c_x) = rz_from_interactions(&self.reference, lx_basis);
         let (a_hat, c_hat) = (a_x * k11, c_x * k11);
         let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * lx_basis[j][(1, 5)] * k11).abs()).sum();
         if a_hat.is_nan() || a_hat.abs() <= 1e-9 * scale {
             return Err(Error::RzSingular { a_hat });
         }
-        let wz = -(self.config.gain_rz * eps_z + c_hat.dot(&mu)) / a_hat;
-        let twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
-        self.state = Some(ControlState {
-            twist,
-            eps,
-            eps_z,
-            invariant_error: err2.sqrt(),
-            t: self.reference.t_matrix(&frame),
-            a_hat,
-            reference_rate_term: rate_term,
-        });
-        Ok(twist)
+        Ok((-(self.config.gain_rz * eps_z + c_hat.dot(mu)) / a_hat, eps_z, a_hat))
     }
 
     /// The stop rule for different cameras (sec. 5.2): `||s - s*|| < invariant_tol`,
@@ -384,4 +388,55 @@ impl InvariantController {
             s.invariant_error < invariant_tol && s.tau21().abs() < tau21_tol && s.tau11() > 0.0 && s.tau22() > 0.0
         })
     }
+}
+
+/// The normal equations of the five-dof task for one image.
+struct NormalEquations {
+    jtj: Matrix5<f64>,
+    jte: Vector5<f64>,
+    jtr: Vector5<f64>,
+    err2: f64,
+}
+
+/// Adds the upper triangle of `M^T W` (row-major, 15 entries) for a 2x6 `M` and `W = G M`.
+#[inline]
+fn add_gram_upper(upper: &mut [f64; 15], m: &Matrix2x6<f64>, w: &Matrix2x6<f64>) {
+    let mut t = 0;
+    for r in 0..5 {
+        let (m0, m1) = (m[(0, r)], m[(1, r)]);
+        for c in r..5 {
+            upper[t] += m0 * w[(0, c)] + m1 * w[(1, c)];
+            t += 1;
+        }
+    }
+}
+
+/// The symmetric 5x5 matrix whose upper triangle is `upper` (row-major).
+#[inline]
+fn symmetric_from_upper(upper: &[f64; 15]) -> Matrix5<f64> {
+    let mut m = Matrix5::zeros();
+    let mut t = 0;
+    for r in 0..5 {
+        for c in r..5 {
+            m[(r, c)] = upper[t];
+            m[(c, r)] = upper[t];
+            t += 1;
+        }
+    }
+    m
+}
+
+/// Adds `M[:, 0..5]^T h` for a 2x6 `M`.
+#[inline]
+fn add_projected(acc: &mut Vector5<f64>, m: &Matrix2x6<f64>, h: &Vector2<f64>) {
+    for r in 0..5 {
+        acc[r] += m[(0, r)] * h.x + m[(1, r)] * h.y;
+    }
+}
+
+/// The mean depth of the points in use.
+fn mean_visible(depths: &[f64], visible: Option<&[bool]>) -> f64 {
+    let seen = |i: &usize| visible.is_none_or(|v| v[*i]);
+    let (sum, count) = (0..depths.len()).filter(seen).fold((0.0, 0usize), |(s, c), i| (s + depths[i], c + 1));
+    sum / count as f64
 }

@@ -145,6 +145,17 @@ fn decompose(f: &[f64; 6], q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> Optio
 /// (n >= 8), the minimal method with the cubic `det F = 0` for exactly 4 (n = 7).
 /// Coordinates are scaled per component (which keeps F's zero diagonal) before solving.
 pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> Result<PlaneParallax> {
+    check_plane_parallax_inputs(q, q_star)?;
+    let null_dim = if q.len() >= 5 { 1 } else { 2 };
+    let (null_space, ratio) = scaled_null_space(q, q_star, null_dim)?;
+    match null_space.as_slice() {
+        [f] => decompose(f, q, q_star).ok_or(degenerate(ratio)),
+        [f1, f2] => minimal_method(f1, f2, q, q_star).ok_or(degenerate(ratio)),
+        _ => Err(degenerate(ratio)),
+    }
+}
+
+fn check_plane_parallax_inputs(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> Result<()> {
     let m = q.len();
     if q_star.len() != m {
         return Err(Error::Shape {
@@ -163,6 +174,14 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
     for v in q.iter().chain(q_star) {
         check_finite("invariant points", v.as_slice())?;
     }
+    Ok(())
+}
+
+/// The `null_dim` right singular vectors of the smallest singular values of the linear
+/// system `q_k^T F q*_k = 0` (F with a zero diagonal, six unknowns), solved on per-component
+/// scaled coordinates and unscaled, with the ratio of the last kept singular value to the
+/// largest (which must not be near zero).
+fn scaled_null_space(q: &[Vector3<f64>], q_star: &[Vector3<f64>], null_dim: usize) -> Result<(Vec<[f64; 6]>, f64)> {
     // Per-component scaling: q' = D q, q*' = D* q*, F' = D^-1 F D*^-1 keeps the zero diagonal.
     let rms = |pts: &[Vector3<f64>]| {
         Vector3::from_fn(|i, _| {
@@ -171,6 +190,7 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
         })
     };
     let (d, ds) = (rms(q), rms(q_star));
+    let m = q.len();
     let mut a = DMatrix::zeros(m.max(6), 6);
     for k in 0..m {
         let (u, w) = (q[k].component_mul(&d), q_star[k].component_mul(&ds));
@@ -180,53 +200,46 @@ pub fn estimate_plane_parallax(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
     }
     let svd = a.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(0.0))?;
-    // Singular values sorted decreasingly by nalgebra's SVD? Sort explicitly.
+    // Sort the singular values decreasingly (nalgebra does not promise an order).
     let mut order: Vec<usize> = (0..6).collect();
     order.sort_by(|&x, &y| svd.singular_values[y].total_cmp(&svd.singular_values[x]));
     let sv: Vec<f64> = order.iter().map(|&i| svd.singular_values[i]).collect();
-    let null_dim = if m >= 5 { 1 } else { 2 };
     // The last `null_dim` singular values are (near) zero; the one before must not be.
     let ratio = sv[5 - null_dim] / sv[0].max(f64::MIN_POSITIVE);
     if !(ratio > DEGENERATE_RATIO) {
         return Err(degenerate(ratio));
     }
-    let unscale = |f: &[f64]| -> [f64; 6] {
-        // F = D F' D* (undo the scaling).
+    // F = D F' D* (undo the scaling).
+    let unscaled = |row: usize| -> [f64; 6] {
         std::array::from_fn(|c| {
             let (i, j) = OFF[c];
-            f[c] * d[i] * ds[j]
+            v_t[(order[row], c)] * d[i] * ds[j]
         })
     };
-    let row = |i: usize| -> Vec<f64> { v_t.row(order[i]).iter().copied().collect() };
-    if null_dim == 1 {
-        let f = unscale(&row(5));
-        return decompose(&f, q, q_star).ok_or(degenerate(ratio));
-    }
-    // Minimal method: F = F1 + x F2 with det F = 0, a cubic in x (plus F2 alone, x -> inf).
-    let (f1, f2) = (unscale(&row(4)), unscale(&row(5)));
+    Ok(((6 - null_dim..6).map(unscaled).collect(), ratio))
+}
+
+/// Minimal method: F = F1 + x F2 with det F = 0, a cubic in x (plus F2 alone, x -> inf);
+/// the candidate with the smallest residual wins.
+fn minimal_method(f1: &[f64; 6], f2: &[f64; 6], q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> Option<PlaneParallax> {
     let det_at = |x: f64| det_zero_diag(&std::array::from_fn(|c| f1[c] + x * f2[c]));
     // Fit the cubic through four samples of det (exact for a cubic).
     let xs = [-1.0, 0.0, 1.0, 2.0];
     let ys = xs.map(det_at);
     let vander = nalgebra::Matrix4::from_fn(|r, c| xs[r].powi(3 - c as i32));
-    let coeffs = vander.lu().solve(&nalgebra::Vector4::from(ys)).ok_or(degenerate(ratio))?;
+    let coeffs = vander.lu().solve(&nalgebra::Vector4::from(ys))?;
     let mut candidates: Vec<[f64; 6]> = real_cubic_roots(coeffs[0], coeffs[1], coeffs[2], coeffs[3])
         .into_iter()
         .map(|x| std::array::from_fn(|c| f1[c] + x * f2[c]))
         .collect();
-    if det_zero_diag(&f2).abs() <= 1e-12 * f2.iter().map(|v| v.abs()).fold(0.0, f64::max).powi(3) {
-        candidates.push(f2);
+    if det_zero_diag(f2).abs() <= 1e-12 * f2.iter().map(|v| v.abs()).fold(0.0, f64::max).powi(3) {
+        candidates.push(*f2);
     }
     let count = candidates.len();
-    candidates
-        .iter()
-        .filter_map(|f| decompose(f, q, q_star))
-        .min_by(|a, b| a.residual.total_cmp(&b.residual))
-        .map(|mut p| {
-            p.candidates = count;
-            p
-        })
-        .ok_or(degenerate(ratio))
+    let mut best =
+        candidates.iter().filter_map(|f| decompose(f, q, q_star)).min_by(|a, b| a.residual.total_cmp(&b.residual))?;
+    best.candidates = count;
+    Some(best)
 }
 
 /// The path of eq. (10) from the current image (t = 0) to the reference image (t = T), for
