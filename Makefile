@@ -37,6 +37,7 @@ lint:
 	cargo clippy --workspace --all-targets -- -D warnings
 	cargo clippy --no-default-features -- -D warnings
 	cargo clippy --features python -- -D warnings
+	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -q
 
 bench: install
 	cargo bench --bench vsinv

@@ -1,6 +1,6 @@
 //! Scenario files (TOML, or the same structure as JSON or a Python dictionary): parsing with
 //! errors that name the key at fault, the conversion to a
-//! [`SimulationConfig`](crate::sim::SimulationConfig), and the built-in scenarios reproducing
+//! [`SimulationConfig`], and the built-in scenarios reproducing
 //! the paper's experiments. The keys are described once, in the README's "Scenario files"
 //! block (a test parses it and checks that it covers the schema).
 
