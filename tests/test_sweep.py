@@ -12,7 +12,7 @@ import pytest
 import vsinv
 from conftest import rotation
 from vsinv.cli import main
-from vsinv.sweep import Choice, LogUniform, SweepResult, Uniform, build_scenarios, sweep
+from vsinv.sweep import Choice, LogUniform, SweepResult, Uniform, build_scenarios, run_sweep
 
 BASE = "lens-12-6"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -39,7 +39,7 @@ def assert_same_results(a: SweepResult, b: SweepResult) -> None:
 def test_grid_is_the_cartesian_product_with_one_column_per_key():
     gains = [0.5, 1.0, 2.0]
     sigmas = [0.0, 0.3]
-    res = sweep(BASE, {"control.gain": gains, "noise.pixel_sigma": sigmas}, repeats=2, progress=False)
+    res = run_sweep(BASE, {"control.gain": gains, "noise.pixel_sigma": sigmas}, repeats=2, progress=False)
     assert len(res) == 3 * 2 * 2
     assert res.grid_keys == ("control.gain", "noise.pixel_sigma") and res.random_keys == ()
     # Last key fastest, repeats innermost.
@@ -69,21 +69,21 @@ def test_list_index_keys_and_scalar_axes():
 
 
 def test_repeats_have_distinct_seeds_and_different_noise():
-    res = sweep("noise-12-6", {"control.gain": [1.0, 1.5]}, repeats=4, seed=3, progress=False)
+    res = run_sweep("noise-12-6", {"control.gain": [1.0, 1.5]}, repeats=4, seed=3, progress=False)
     seeds = res["seed"].tolist()
     assert len(set(seeds)) == len(seeds) == 8
     assert all(0 <= s < 2**63 for s in seeds)
     # With 0.5 px noise, the repetitions of a point end differently.
     first = res["final_invariant_error"][res["control.gain"] == 1.0]
     assert len(set(first.tolist())) == 4
-    again = sweep("noise-12-6", {"control.gain": [1.0, 1.5]}, repeats=4, seed=3, progress=False)
+    again = run_sweep("noise-12-6", {"control.gain": [1.0, 1.5]}, repeats=4, seed=3, progress=False)
     assert_same_results(res, again)
     other = build_scenarios("noise-12-6", {"control.gain": [1.0, 1.5]}, repeats=4, seed=4)
     assert not set(seeds) & {d["noise"]["seed"] for d in other}
 
 
 def test_varying_noise_seed_itself_is_used_verbatim():
-    res = sweep("noise-12-6", {"noise.seed": [5, 6]}, progress=False)
+    res = run_sweep("noise-12-6", {"noise.seed": [5, 6]}, progress=False)
     assert res["seed"].tolist() == [5, 6]
     assert res["final_invariant_error"][0] != res["final_invariant_error"][1]
 
@@ -136,7 +136,7 @@ def test_lens_ratio_changes_the_servo_lens_and_k_hat_follows():
     # A zoom schedule is scaled with the lens.
     (z,) = build_scenarios("zoom-servo", {"lens_ratio": [0.5]})
     assert z["camera"]["zoom"]["fku"] == pytest.approx([600.0, 350.0])
-    res = sweep(BASE, {"lens_ratio": [0.5, 1.0]}, progress=False)
+    res = run_sweep(BASE, {"lens_ratio": [0.5, 1.0]}, progress=False)
     assert res["status"].tolist() == ["converged", "converged"]
 
 
@@ -178,9 +178,9 @@ def test_roll_there_and_back():
 
 def test_random_draws_are_reproducible_and_combined_with_every_grid_point():
     vary = {"focal_error": [0.0, 0.5], "roll_deg": Uniform(-20, 20), "control.gain": LogUniform(0.5, 2.0)}
-    a = sweep(BASE, vary, draws=3, seed=11, progress=False)
-    b = sweep(BASE, vary, draws=3, seed=11, progress=False)
-    c = sweep(BASE, vary, draws=3, seed=12, progress=False)
+    a = run_sweep(BASE, vary, draws=3, seed=11, progress=False)
+    b = run_sweep(BASE, vary, draws=3, seed=11, progress=False)
+    c = run_sweep(BASE, vary, draws=3, seed=12, progress=False)
     assert len(a) == 6 and a.grid_keys == ("focal_error",) and a.random_keys == ("roll_deg", "control.gain")
     assert_same_results(a, b)
     assert not np.array_equal(a["roll_deg"], c["roll_deg"])
@@ -200,9 +200,9 @@ def test_choice_draws_from_the_given_values():
 
 def test_draws_must_match_random_keys():
     with pytest.raises(vsinv.InvalidInput, match="draws"):
-        sweep(BASE, {"roll_deg": Uniform(0, 1)}, progress=False)
+        run_sweep(BASE, {"roll_deg": Uniform(0, 1)}, progress=False)
     with pytest.raises(vsinv.InvalidInput, match="draws"):
-        sweep(BASE, {"roll_deg": [0.0]}, draws=5, progress=False)
+        run_sweep(BASE, {"roll_deg": [0.0]}, draws=5, progress=False)
     with pytest.raises(vsinv.InvalidInput, match="LogUniform"):
         LogUniform(0.0, 1.0)
     with pytest.raises(ValueError):
@@ -229,7 +229,7 @@ def test_draws_must_match_random_keys():
     ],
 )
 def test_bad_keys_and_values_raise_before_running(monkeypatch, key, values, match):
-    module = sys.modules["vsinv.sweep"]  # `vsinv.sweep` is the function
+    module = sys.modules["vsinv.sweep.execute"]  # where the chunks run
 
     def no_run(*args, **kwargs):
         raise AssertionError("ran before validating")
@@ -237,7 +237,7 @@ def test_bad_keys_and_values_raise_before_running(monkeypatch, key, values, matc
     monkeypatch.setattr(module, "run_batch", no_run)
     draws = 2 if not isinstance(values, (list, str)) else None
     with pytest.raises(vsinv.InvalidInput, match=match.replace(".", r"\.")):
-        sweep(BASE, {key: values}, draws=draws, progress=False)
+        run_sweep(BASE, {key: values}, draws=draws, progress=False)
     assert issubclass(vsinv.InvalidInput, ValueError)
 
 
@@ -247,7 +247,7 @@ def test_bad_keys_and_values_raise_before_running(monkeypatch, key, values, matc
 
 def test_prop2_fails_for_large_principal_point_errors_and_is_conservative():
     values = [0.0, 400.0, 1000.0, 1500.0]
-    res = sweep(BASE, {"principal_point_error": values}, progress=False)
+    res = run_sweep(BASE, {"principal_point_error": values}, progress=False)
     assert res["prop1"].tolist() == [True] * 4  # K_hat's focal terms stay positive
     assert res["prop2"].tolist() == [True, True, False, False]
     # The columns agree with check_stability on the scenarios' K and K_hat.
@@ -261,11 +261,11 @@ def test_prop2_fails_for_large_principal_point_errors_and_is_conservative():
 
 
 def test_focal_errors_keep_prop2_a_large_skew_error_breaks_it():
-    res = sweep(BASE, {"focal_error": [-0.8, 0.0, 3.0]}, progress=False)
+    res = run_sweep(BASE, {"focal_error": [-0.8, 0.0, 3.0]}, progress=False)
     assert res["prop2"].all() and res["prop1"].all()
-    res = sweep(BASE, {"estimate.fku": [300.0, 2400.0], "estimate.fkv": [300.0, 2400.0]}, progress=False)
+    res = run_sweep(BASE, {"estimate.fku": [300.0, 2400.0], "estimate.fkv": [300.0, 2400.0]}, progress=False)
     assert res["prop2"].all()  # anisotropic too: K_hat^-1 K stays close to a positive diagonal
-    res = sweep(BASE, {"estimate.skew_deg": [90.0, 10.0]}, progress=False)
+    res = run_sweep(BASE, {"estimate.skew_deg": [90.0, 10.0]}, progress=False)
     assert res["prop1"].tolist() == [True, True] and res["prop2"].tolist() == [True, False]
     d = build_scenarios(BASE, {"estimate.skew_deg": [10.0]})[0]
     k = vsinv.Intrinsics(*(d["camera"][f] for f in ("fku", "fkv", "u0", "v0")))
@@ -287,20 +287,20 @@ VARY = {"focal_error": [-0.3, 0.4, 1.2], "roll_deg": [0.0, -30.0], "noise.pixel_
 
 
 def test_process_pool_gives_the_same_results_as_in_process():
-    here = sweep(BASE, VARY, repeats=2, chunk_size=5, progress=False)
+    here = run_sweep(BASE, VARY, repeats=2, chunk_size=5, progress=False)
     with concurrent.futures.ProcessPoolExecutor(max_workers=2, mp_context=_pool_context()) as ex:
-        there = sweep(BASE, VARY, repeats=2, chunk_size=5, executor=ex, threads=1, progress=False)
+        there = run_sweep(BASE, VARY, repeats=2, chunk_size=5, executor=ex, threads=1, progress=False)
     assert len(here) == 12
     assert_same_results(here, there)
 
 
 def test_dask_executor_gives_the_same_table():
     distributed = pytest.importorskip("dask.distributed")
-    here = sweep(BASE, VARY, repeats=2, chunk_size=4, progress=False)
+    here = run_sweep(BASE, VARY, repeats=2, chunk_size=4, progress=False)
     with distributed.LocalCluster(
         n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
     ) as cluster, distributed.Client(cluster) as client:
-        there = sweep(BASE, VARY, repeats=2, chunk_size=4, executor=client.get_executor(), threads=1, progress=False)
+        there = run_sweep(BASE, VARY, repeats=2, chunk_size=4, executor=client.get_executor(), threads=1, progress=False)
     assert_same_results(here, there)
     a, b = here.summary_by(), there.summary_by()
     assert a.keys() == b.keys()
@@ -309,8 +309,8 @@ def test_dask_executor_gives_the_same_table():
 
 
 def test_chunk_sizes_do_not_change_results():
-    a = sweep(BASE, {"focal_error": np.linspace(-0.5, 1.0, 7)}, chunk_size=1, progress=False)
-    b = sweep(BASE, {"focal_error": np.linspace(-0.5, 1.0, 7)}, progress=False)
+    a = run_sweep(BASE, {"focal_error": np.linspace(-0.5, 1.0, 7)}, chunk_size=1, progress=False)
+    b = run_sweep(BASE, {"focal_error": np.linspace(-0.5, 1.0, 7)}, progress=False)
     assert_same_results(a, b)
 
 
@@ -319,7 +319,7 @@ def test_chunk_sizes_do_not_change_results():
 
 
 def test_summary_by_and_pandas():
-    res = sweep("noise-12-6", {"focal_error": [0.0, 0.5], "control.gain": [1.0, 2.0]}, repeats=3, progress=False)
+    res = run_sweep("noise-12-6", {"focal_error": [0.0, 0.5], "control.gain": [1.0, 2.0]}, repeats=3, progress=False)
     s = res.summary_by("focal_error")
     assert s["focal_error"].tolist() == [0.0, 0.5]
     assert s["runs"].tolist() == [6, 6]
@@ -337,7 +337,7 @@ def test_summary_by_and_pandas():
 
 
 def test_write_parquet_and_csv_fallback(tmp_path, monkeypatch):
-    res = sweep(BASE, {"focal_error": [0.0, 0.5], "start.position": [[0.2, -0.15, -0.15]]}, progress=False)
+    res = run_sweep(BASE, {"focal_error": [0.0, 0.5], "start.position": [[0.2, -0.15, -0.15]]}, progress=False)
     pq = pytest.importorskip("pyarrow.parquet")
     path = res.write(tmp_path / "runs.parquet")
     assert path == tmp_path / "runs.parquet"
@@ -359,25 +359,45 @@ def test_write_parquet_and_csv_fallback(tmp_path, monkeypatch):
 
 def test_stability_maps(tmp_path):
     pytest.importorskip("matplotlib")
-    from vsinv.sweep_plots import plot_stability_map
+    from vsinv.sweep.plots import plot_stability_map
 
-    one = sweep(BASE, {"principal_point_error": [0.0, 500.0, 1000.0]}, progress=False)
-    two = sweep(BASE, {"focal_error": [0.0, 1.0], "principal_point_error": [0.0, 1000.0]}, progress=False)
-    rnd = sweep(BASE, {"roll_deg": Uniform(-30, 30)}, draws=70, progress=False)  # binned
+    one = run_sweep(BASE, {"principal_point_error": [0.0, 500.0, 1000.0]}, progress=False)
+    two = run_sweep(BASE, {"focal_error": [0.0, 1.0], "principal_point_error": [0.0, 1000.0]}, progress=False)
+    rnd = run_sweep(BASE, {"roll_deg": Uniform(-30, 30)}, draws=70, progress=False)  # binned
     for name, res in (("one", one), ("two", two), ("rnd", rnd)):
         path = plot_stability_map(res, tmp_path / f"{name}.png")
         assert path.read_bytes()[:8] == PNG_MAGIC
     with pytest.raises(ValueError, match="keys"):
-        plot_stability_map(sweep(BASE, {"focal_error": [0.0], "roll_deg": [0.0], "control.gain": [1.0]},
+        plot_stability_map(run_sweep(BASE, {"focal_error": [0.0], "roll_deg": [0.0], "control.gain": [1.0]},
                                  progress=False), tmp_path / "x.png")
 
 
 def test_exports():
-    assert vsinv.sweep is sweep and vsinv.SweepResult is SweepResult
+    import types
+
+    import vsinv.sweep.plots
+
+    assert vsinv.run_sweep is run_sweep and vsinv.SweepResult is SweepResult
     assert vsinv.Uniform is Uniform and vsinv.LogUniform is LogUniform and vsinv.Choice is Choice
-    assert vsinv.sweep.Uniform is Uniform  # `vsinv.sweep` is the function; the names hang on it
-    for name in ("sweep", "Uniform", "LogUniform", "Choice", "SweepResult"):
+    # `vsinv.sweep` is the package, not hidden by a function of the same name.
+    assert isinstance(vsinv.sweep, types.ModuleType) and vsinv.sweep.Uniform is Uniform
+    assert vsinv.sweep.run_sweep is run_sweep and callable(vsinv.sweep.plots.plot_stability_map)
+    for name in ("run_sweep", "sweep", "Uniform", "LogUniform", "Choice", "SweepResult"):
         assert name in vsinv.__all__
+
+
+def test_readme_sweep_example_type_checks(tmp_path):
+    """The README's use of `vsinv.sweep.Uniform` and `vsinv.run_sweep` passes mypy."""
+    api = pytest.importorskip("mypy.api")
+    snippet = tmp_path / "snippet.py"
+    snippet.write_text(
+        "import numpy as np\nimport vsinv\n"
+        "res = vsinv.run_sweep('lens-12-6', {'focal_error': np.linspace(-0.5, 1.0, 3),\n"
+        "                                    'roll_deg': vsinv.sweep.Uniform(-120, 120)}, draws=2, seed=1)\n"
+        "table = res.summary_by('focal_error')\n"
+    )
+    out, err, status = api.run([str(snippet), "--no-incremental", "--cache-dir", str(tmp_path / ".mypy")])
+    assert status == 0, out + err
 
 
 # ---------------------------------------------------------------------------------------------

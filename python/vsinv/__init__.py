@@ -39,7 +39,8 @@ from ._core import (
     structure_ratio,
     tracking_bound,
 )
-from .sweep import Choice, LogUniform, SweepResult, Uniform, sweep
+from . import sweep
+from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
 __all__ = [
     "DegenerateGeometry",
@@ -71,6 +72,7 @@ __all__ = [
     "rz_coefficients",
     "structure_ratio",
     "tracking_bound",
+    "run_sweep",
     "sweep",
     "Uniform",
     "LogUniform",

@@ -139,7 +139,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sw = sub.add_parser(
         "sweep",
         help="run a scenario over a grid / random draws of parameters",
-        description="Run a scenario for every combination of the varied parameters (vsinv.sweep) and print the "
+        description="Run a scenario for every combination of the varied parameters (vsinv.run_sweep) and print the "
         "convergence rate and median final errors per grid point. Keys: any dotted scenario key "
         "(noise.pixel_sigma, control.gain, start.position.2, ...) or a derived key: "
         "focal_error, principal_point_error, roll_deg, lens_ratio.",
@@ -352,7 +352,7 @@ def _native_value(v: Any) -> Any:
 def _cmd_sweep(args: argparse.Namespace) -> int:
     import os
 
-    from .sweep import sweep
+    from .sweep import run_sweep
 
     vary: dict[str, Any] = {}
     for text in args.vary:
@@ -393,12 +393,12 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         method = "forkserver" if "forkserver" in multiprocessing.get_all_start_methods() else "spawn"
         threads = max(1, (os.cpu_count() or 1) // args.workers)
         with concurrent.futures.ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context(method)) as ex:
-            result = sweep(
+            result = run_sweep(
                 args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed,
                 executor=ex, threads=threads, progress=progress,
             )
     else:
-        result = sweep(args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed, progress=progress)
+        result = run_sweep(args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed, progress=progress)
 
     grid = list(result.grid_keys)
     details = [f"{len(result.summary_by(grid)['runs'])} grid points"] if grid else []
@@ -411,7 +411,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         print(format_sweep_table(result, list(result.random_keys), bins=10))
 
     if out_dir is not None:
-        from .sweep_plots import plot_stability_map
+        from .sweep.plots import plot_stability_map
 
         written = [result.write(out_dir / "sweep.parquet")]
         plot_keys = grid[:2] if len(grid) >= 2 else list(result.keys)[:2]

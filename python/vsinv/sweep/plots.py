@@ -1,6 +1,6 @@
-"""Stability maps of a parameter sweep (:func:`vsinv.sweep`).
+"""Stability maps of a parameter sweep (:func:`vsinv.run_sweep`).
 
->>> res = vsinv.sweep("lens-12-6", {"principal_point_error": np.linspace(-2000, 2000, 41)})
+>>> res = vsinv.run_sweep("lens-12-6", {"principal_point_error": np.linspace(-2000, 2000, 41)})
 >>> plot_stability_map(res, "stability_map.png")
 
 One varied key: the convergence rate and the median final translation error against the
@@ -23,14 +23,14 @@ from typing import TYPE_CHECKING, Any, Optional, Sequence, Union
 import numpy as np
 import numpy.typing as npt
 
-from .plots import DPI, _use_agg
-from .sweep import _binned
+from ..plots import DPI, _use_agg
+from .columns import _binned
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .sweep import SweepResult
+    from .result import SweepResult
 
 __all__ = ["plot_stability_map", "stability_map_figure"]
 

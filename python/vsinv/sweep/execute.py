@@ -1,0 +1,198 @@
+"""Running a sweep: chunks through :func:`vsinv.run_batch`, in this process or on any
+:class:`concurrent.futures.Executor` (a bounded number in flight), with a progress bar."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from collections.abc import Iterator, Mapping
+from typing import TYPE_CHECKING, Any, Optional
+
+import numpy as np
+
+from .._core import InvalidInput, VsinvError, load_scenario, run_batch
+from .columns import Column
+from .plan import _Plan, _plan
+from .result import SweepResult
+
+if TYPE_CHECKING:
+    import concurrent.futures as cf
+
+
+def _run_chunk(scenarios: list[str], threads: Optional[int] = None) -> dict[str, Column]:
+    """Run a chunk of scenarios written as JSON texts with :func:`vsinv.run_batch` (module
+    level: picklable, for executors; texts pickle faster than nested dicts)."""
+    return run_batch(scenarios, threads=threads)
+
+
+def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
+    """The chunk's scenarios as JSON texts. A run's dict shares the sections it does not
+    change with ``base`` (same objects), so those are serialised once per chunk."""
+    cache: dict[int, str] = {id(v): json.dumps(v) for v in base.values()}
+    out = []
+    for d in chunk:
+        parts = []
+        for k, v in d.items():
+            text = cache.get(id(v)) if base.get(k) is v else None
+            parts.append(json.dumps(k) + ":" + (text if text is not None else json.dumps(v)))
+        out.append("{" + ",".join(parts) + "}")
+    return out
+
+
+def _executor_workers(executor: Optional[cf.Executor], threads: Optional[int]) -> int:
+    if executor is None:
+        return max(1, threads or os.cpu_count() or 1)
+    n = getattr(executor, "_max_workers", None)  # Process/ThreadPoolExecutor
+    return n if isinstance(n, int) and n > 0 else (os.cpu_count() or 1)
+
+
+def _explain(plan: _Plan, start: int, chunk: list[dict[str, Any]], exc: BaseException) -> BaseException:
+    """An error of a chunk with the run at fault (index and varied values), when it can be
+    reproduced by validating the chunk's scenarios here."""
+    for j, d in enumerate(chunk):
+        try:
+            load_scenario(d)
+        except (VsinvError, ValueError) as inner:
+            i = start + j
+            return InvalidInput(f"sweep run {i} ({plan.values(i)}, seed {int(plan.columns['seed'][i])}): {inner}")
+    return exc
+
+
+class _Bar:
+    def __init__(self, enabled: Optional[bool], total: int, desc: str) -> None:
+        if enabled is None:
+            enabled = sys.stderr.isatty()
+        self.bar: Any = None
+        if enabled:
+            from tqdm import tqdm  # type: ignore[import-untyped, unused-ignore]
+
+            self.bar = tqdm(total=total, desc=desc, unit="run", file=sys.stderr, dynamic_ncols=True)
+
+    def update(self, n: int) -> None:
+        if self.bar is not None:
+            self.bar.update(n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _chunks(n: int, size: int) -> Iterator[tuple[int, int]]:
+    for start in range(0, n, size):
+        yield start, min(start + size, n)
+
+
+def run_sweep(
+    base: Any,
+    vary: Mapping[str, Any],
+    *,
+    repeats: int = 1,
+    draws: Optional[int] = None,
+    seed: int = 0,
+    executor: Optional[cf.Executor] = None,
+    chunk_size: Optional[int] = None,
+    threads: Optional[int] = None,
+    progress: Optional[bool] = None,
+) -> SweepResult:
+    """Run ``base`` (a built-in name, a TOML path, a dict or a Scenario) for every
+    combination of the values in ``vary`` (see the module docstring for keys, grids,
+    distributions, seeds and errors).
+
+    - ``repeats``: runs per point, each with its own noise seed.
+    - ``draws``: number of random samples (required when a distribution is given).
+    - ``seed``: seeds the random draws and the noise seeds (same seed, same sweep).
+    - ``executor``: a ``concurrent.futures.Executor`` to run the chunks on (None: here).
+    - ``chunk_size``: runs per :func:`vsinv.run_batch` call; default
+      ``max(64, ceil(n / (4 * workers)))``, at most 1024 (each run in flight holds
+      a few kB: the cap keeps memory flat).
+    - ``threads``: rayon threads per chunk (None: all cores).
+    - ``progress``: a tqdm bar over runs (None: when stderr is a terminal).
+    """
+    t0 = time.perf_counter()
+    plan = _plan(base, vary, repeats, draws, seed)
+    n = len(plan)
+    workers = _executor_workers(executor, threads)
+    if chunk_size is None:
+        chunk_size = min(max(64, math.ceil(n / (4 * workers))), 1024)
+    if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
+        raise InvalidInput(f"chunk_size: expected an integer >= 1, got {chunk_size!r}")
+
+    bar = _Bar(progress, n, f"sweep {plan.base.get('name', '')}")
+    parts: dict[int, dict[str, Column]] = {}
+    try:
+        if executor is None:
+            # One chunk runs in Rust (GIL released) while the next one is built here.
+            import concurrent.futures as cf
+
+            with cf.ThreadPoolExecutor(max_workers=1) as runner:
+                running: Optional[tuple[int, int, list[dict[str, Any]], cf.Future[dict[str, Column]]]] = None
+                for start, stop in [*_chunks(n, chunk_size), (n, n)]:
+                    chunk = plan.scenarios(start, stop) if start < n else []
+                    if running is not None:
+                        r_start, r_stop, r_chunk, fut = running
+                        try:
+                            parts[r_start] = fut.result()
+                        except (VsinvError, ValueError) as exc:
+                            raise _explain(plan, r_start, r_chunk, exc) from exc
+                        bar.update(r_stop - r_start)
+                        running = None
+                    if chunk:
+                        running = (start, stop, chunk, runner.submit(_run_chunk, _texts(chunk, plan.base), threads))
+        else:
+            _run_on(executor, plan, n, chunk_size, threads, max(2, 2 * workers), parts, bar)
+    finally:
+        bar.close()
+
+    columns: dict[str, Column] = dict(plan.columns)
+    ordered = [parts.pop(s) for s in sorted(parts)]
+    for name in list(ordered[0]) if ordered else []:  # column by column: the chunks are freed as we go
+        columns[name] = np.concatenate([p.pop(name) for p in ordered])
+    return SweepResult(
+        columns=columns,
+        grid_keys=plan.grid_keys,
+        random_keys=plan.random_keys,
+        base_name=str(plan.base.get("name", "")),
+        repeats=repeats,
+        seed=int(seed),
+        elapsed_s=time.perf_counter() - t0,
+    )
+
+
+def _run_on(
+    executor: cf.Executor,
+    plan: _Plan,
+    n: int,
+    chunk_size: int,
+    threads: Optional[int],
+    window: int,
+    parts: dict[int, dict[str, Column]],
+    bar: _Bar,
+) -> None:
+    """Submit the chunks to ``executor``, at most ``window`` in flight."""
+    import concurrent.futures as cf
+
+    todo = _chunks(n, chunk_size)
+    pending: dict[cf.Future[dict[str, Column]], tuple[int, int]] = {}
+    try:
+        while True:
+            while len(pending) < window:
+                nxt = next(todo, None)
+                if nxt is None:
+                    break
+                pending[executor.submit(_run_chunk, _texts(plan.scenarios(*nxt), plan.base), threads)] = nxt
+            if not pending:
+                return
+            done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
+            for fut in done:
+                start, stop = pending.pop(fut)
+                try:
+                    parts[start] = fut.result()
+                except (VsinvError, ValueError) as exc:
+                    raise _explain(plan, start, plan.scenarios(start, stop), exc) from exc
+                bar.update(stop - start)
+    finally:
+        for fut in pending:
+            fut.cancel()
