@@ -102,6 +102,14 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// An image that cannot be used: wrong size, empty, unreadable file, nothing to detect.
+    #[error("{what}: {reason}")]
+    InvalidImage {
+        /// Which image (argument name or file path).
+        what: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]

@@ -12,6 +12,7 @@
 //! | the one error type | [`error`] | always | |
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
+//! | images: rendering, dot detection and tracking | `vision` | `vision` (default) | image, imageproc |
 //! | Python bindings (the only module that knows about Python) | `python` (private) | `python` | pyo3, numpy |
 //!
 //! A controller that needs only the control law depends on
@@ -68,6 +69,8 @@ pub mod core;
 pub mod error;
 #[cfg(feature = "sim")]
 pub mod sim;
+#[cfg(feature = "vision")]
+pub mod vision;
 
 #[cfg(feature = "python")]
 mod python;

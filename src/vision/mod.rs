@@ -1,0 +1,12 @@
+//! Images in the loop (feature `vision`): what the camera sees and what a dot tracker
+//! extracts from it.
+//!
+//! | concept | module |
+//! |---|---|
+//! | 8-bit grey images, PNG files | [`image`](mod@image) |
+//!
+//! Images are row-major `(height, width)` 8-bit grey levels ([`GreyImage`]).
+
+pub mod image;
+
+pub use self::image::{GreyImage, load_png, save_png};
