@@ -15,7 +15,7 @@ install-run:
 test: install test-rust test-embedded test-examples test-python stubtest
 
 test-rust:
-	cargo test
+	cargo test --release
 
 # The core alone, as a controller embeds it: a 100 Hz loop and the zero-allocation test.
 test-embedded:

@@ -108,6 +108,8 @@ pub struct SimulationConfig {
     /// Plan a path in the invariant space from the first image (sec. 3); None keeps the
     /// reference still.
     pub path: Option<PathPlan>,
+    /// Images in the loop: render, detect and track the dots (None: exact projections).
+    pub vision: Option<crate::vision::RenderConfig>,
     /// Keep the per-iteration record.
     pub record: bool,
 }

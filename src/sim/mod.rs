@@ -12,6 +12,7 @@
 //! | what a run needs: law, noise, stop rules | [`config`] |
 //! | the closed loop, one named step at a time | [`simulate`](mod@simulate) |
 //! | per-image measurements and the stop rules' window | `measure` (private) |
+//! | images in the loop: render, detect, track (`[vision]`) | `image_loop` (private) |
 //! | status, summary, recording | [`outcome`] |
 //! | scenario files (TOML, JSON) and the built-in scenarios | [`scenario`] |
 //! | many runs in parallel (rayon) | [`batch`] |
@@ -21,6 +22,7 @@ pub mod batch;
 pub mod camera_model;
 pub mod config;
 pub mod depth_source;
+mod image_loop;
 mod measure;
 pub mod outcome;
 pub mod robot;

@@ -70,6 +70,9 @@ pub struct Summary {
     pub max_line_deviation: f64,
     /// Prop. 3 figures along the planned path (None without a path).
     pub tracking: Option<Tracking>,
+    /// Images in the loop: median and largest distance of a tracked centroid from the true
+    /// projection of its dot's centre, pixels (None without `[vision]`).
+    pub detection_error: Option<(f64, f64)>,
 }
 
 /// Prop. 3 along the path: the bound `psi / phi` on `||eps(t)||` and what was observed.
@@ -123,6 +126,9 @@ pub struct Recording {
     pub translation_error: Vec<f64>,
     /// Angle from the reference pose, radians: (N,).
     pub rotation_error: Vec<f64>,
+    /// Images in the loop: distance of each tracked centroid from the true projection of its
+    /// dot's centre, pixels (NaN where not found; empty without `[vision]`): (N, n).
+    pub detection_error: Vec<f64>,
 }
 
 impl Recording {

@@ -18,6 +18,7 @@ use crate::core::stability::{a_matrix, stability_verdicts};
 use crate::error::{Error, Result, check_positive};
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthEstimator, DepthSource};
+use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::measure::{Metrics, ReferenceImage, StopWindow, measure, stop_rule_met};
 use crate::sim::outcome::{Outcome, Recording, Status, StopRule, Summary, Tracking};
 use crate::sim::scene::Observation;
@@ -70,6 +71,10 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
             name: "object",
             reason: format!("point {i} is not visible in the reference image (outside the image or occluded)"),
         });
+    }
+    if let Some(vision) = config.vision {
+        let size = pixel_size(config.reference_camera.image, "reference_camera")?;
+        ImageLoop::reference(vision, &config.scene, &k_star, size, &mut obs)?;
     }
     let depths = obs.depths.clone();
     Ok((obs, depths))
@@ -232,6 +237,10 @@ struct Run<'a> {
     noise: PixelNoise,
     obs: Observation,
     pixels: Vec<[f64; 2]>,
+    /// Points in use: visible in the scene (and found by the tracker with images).
+    visible: Vec<bool>,
+    images: Option<ImageLoop>,
+    detection: Vec<f64>,
     pose: Isometry3<f64>,
     joints: [f64; 6],
     window: StopWindow,
@@ -262,6 +271,10 @@ impl<'a> Run<'a> {
             config.camera.zoom.is_none() && config.camera.intrinsics == config.reference_camera.intrinsics;
         let pixel_rule = same_camera || matches!(config.law, Law::Ibvs { .. });
         let (prop1, prop2, _) = stability_verdicts(&config.camera.schedule()?, &config.estimate.matrix(), 1.0, gain)?;
+        let images = match config.vision {
+            Some(v) => Some(ImageLoop::new(v, pixel_size(config.camera.image, "camera")?)?),
+            None => None,
+        };
         let estimator = match &config.depths {
             DepthSource::Estimated(factory) => Some(factory.start(&config.scene, &reference.pixels)?),
             _ => None,
@@ -278,6 +291,9 @@ impl<'a> Run<'a> {
             noise,
             obs,
             pixels: vec![[0.0; 2]; n],
+            visible: vec![false; n],
+            images,
+            detection: vec![f64::NAN; n],
             pose: config.start,
             joints: config.robot.joints(&config.start),
             window: StopWindow::new(config.stop.window),
@@ -295,7 +311,10 @@ impl<'a> Run<'a> {
     fn iterate(&mut self, progress: &mut dyn FnMut(usize, usize) -> bool) -> Result<Option<End>> {
         let t = self.iteration as f64 * self.config.dt;
         let k = self.config.camera.at(t)?;
-        let converged = self.observe_and_measure(t, &k);
+        if let Err(e) = self.observe(&k) {
+            return Ok(Some((Status::LostFeatures, format!("dot tracking failed: {e}"))));
+        }
+        let converged = self.measure_and_record(t);
         if let Some(end) = self.stop_check(converged, progress) {
             return Ok(Some(end));
         }
@@ -310,14 +329,30 @@ impl<'a> Run<'a> {
         Ok(None)
     }
 
-    /// Observes the scene with K(t), adds noise, measures against the reference and records;
-    /// returns whether the stop rule is met.
-    fn observe_and_measure(&mut self, t: f64, k: &Intrinsics) -> bool {
-        self.config.scene.observe(&self.pose, k, self.config.camera.image, &mut self.obs);
-        self.pixels.copy_from_slice(&self.obs.pixels);
-        self.noise.add(&mut self.pixels, &self.obs.visible);
+    /// Observes the scene with K(t): the exact projections with pixel noise, or the dots
+    /// tracked in the rendered image.
+    fn observe(&mut self, k: &Intrinsics) -> Result<()> {
+        let (scene, pose) = (&self.config.scene, &self.pose);
+        scene.observe(pose, k, self.config.camera.image, &mut self.obs);
+        self.visible.copy_from_slice(&self.obs.visible);
+        match self.images.as_mut() {
+            Some(images) => {
+                let run =
+                    Tracked { pixels: &mut self.pixels, visible: &mut self.visible, detection: &mut self.detection };
+                images.observe(scene, pose, k, &self.obs, run)
+            }
+            None => {
+                self.pixels.copy_from_slice(&self.obs.pixels);
+                self.noise.add(&mut self.pixels, &self.visible);
+                Ok(())
+            }
+        }
+    }
+
+    /// Measures against the reference and records; returns whether the stop rule is met.
+    fn measure_and_record(&mut self, t: f64) -> bool {
         let mut row = self.window.next_row();
-        self.metrics = measure(&self.pixels, &self.obs.visible, &self.reference, &mut row);
+        self.metrics = measure(&self.pixels, &self.visible, &self.reference, &mut row);
         // The goal is the identity, so the line from start to goal ends at the origin.
         let position = self.pose.translation.vector;
         let deviation = distance_to_segment(&position, &self.config.start.translation.vector, &Vector3::zeros());
@@ -339,15 +374,18 @@ impl<'a> Run<'a> {
         let h = pose.to_homogeneous();
         r.pose.extend((0..16).map(|i| h[(i / 4, i % 4)]));
         r.joints.extend_from_slice(&self.joints);
-        for (p, &v) in self.pixels.iter().zip(&self.obs.visible) {
+        for (p, &v) in self.pixels.iter().zip(&self.visible) {
             r.pixels.extend_from_slice(&if v { *p } else { [f64::NAN; 2] });
         }
-        r.visible.extend_from_slice(&self.obs.visible);
+        r.visible.extend_from_slice(&self.visible);
         r.invariant_error.push(m.invariant_error);
         r.eps_z.push(m.eps_z);
         r.image_error.push(m.image_error);
         r.translation_error.push(pose.translation.vector.norm());
         r.rotation_error.push(pose.rotation.angle());
+        if self.images.is_some() {
+            r.detection_error.extend_from_slice(&self.detection);
+        }
     }
 
     /// The stop rules, in order: divergence, lost features, convergence, limits.
@@ -373,7 +411,7 @@ impl<'a> Run<'a> {
     }
 
     fn lost_features(&self) -> Option<End> {
-        let visible = &self.obs.visible;
+        let visible = &self.visible;
         let (n, basis) = (visible.len(), self.reference.basis);
         let seen = visible.iter().filter(|&&v| v).count();
         let invariant = matches!(self.config.law, Law::Invariant(_));
@@ -394,15 +432,13 @@ impl<'a> Run<'a> {
             DepthSource::Reference => &self.reference_depths,
             DepthSource::Estimated(_) => &self.estimated,
         };
-        let twist = self
-            .controller
-            .step(&self.pixels, depths, &self.obs.visible)
-            .map_err(|e| (status_of(&e), e.to_string()))?;
+        let twist =
+            self.controller.step(&self.pixels, depths, &self.visible).map_err(|e| (status_of(&e), e.to_string()))?;
         if let (Some(path), AnyController::Invariant(c)) = (self.path.as_mut(), &self.controller)
             && t < path.path.duration()
         {
             let (sum, count) = (0..depths.len())
-                .filter(|&i| self.obs.visible[i])
+                .filter(|&i| self.visible[i])
                 .fold((0.0, 0.0), |(s, c), i| (s + depths[i] / self.obs.depths[i], c + 1.0));
             path.observe(c, k, &self.config.estimate, sum / count, c.config().feedforward);
         }
@@ -419,7 +455,7 @@ impl<'a> Run<'a> {
 
     fn estimate_depths(&mut self) -> std::result::Result<(), End> {
         let Some(e) = self.estimator.as_mut() else { return Ok(()) };
-        e.estimate(&self.pixels, &self.obs.visible, &mut self.estimated)
+        e.estimate(&self.pixels, &self.visible, &mut self.estimated)
             .map_err(|err| (Status::Degenerate, format!("depth estimation failed: {err}")))
     }
 
@@ -430,7 +466,7 @@ impl<'a> Run<'a> {
         };
         if self.path.is_none() {
             let duration = plan.samples as f64 * self.config.dt;
-            let planned = PathTracking::plan(&self.pixels, &self.obs.visible, &self.reference, duration)
+            let planned = PathTracking::plan(&self.pixels, &self.visible, &self.reference, duration)
                 .map_err(|e| (Status::Degenerate, format!("path planning failed: {e}")))?;
             self.path = Some(planned);
         }
@@ -481,6 +517,7 @@ impl<'a> Run<'a> {
             basis: self.reference.basis,
             max_line_deviation: self.max_line_deviation,
             tracking: self.path.as_ref().map(|p| p.summary(self.gain)),
+            detection_error: self.images.as_ref().map(ImageLoop::error_summary),
         };
         Outcome { summary, recording: self.recording, reference_pixels: self.reference.pixels }
     }

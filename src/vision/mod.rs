@@ -4,12 +4,18 @@
 //! | concept | module |
 //! |---|---|
 //! | 8-bit grey images, PNG files | [`image`](mod@image) |
+//! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
 //! | rendering the white discs of the feature points (perspective ellipses, anti-aliasing, blur, noise) | [`render`] |
+//! | dot tracking from image to image, never swapping two dots | [`tracker`] |
 //!
 //! Images are row-major `(height, width)` 8-bit grey levels ([`GreyImage`]).
 
+pub mod dots;
 pub mod image;
 pub mod render;
+pub mod tracker;
 
+pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyImage, load_png, save_png};
 pub use self::render::{Disc, RenderConfig, Rendered, Renderer};
+pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

@@ -52,7 +52,12 @@ impl Disc {
 
 /// How the images are made (the `[vision]` table of a scenario).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields, default))]
 pub struct RenderConfig {
+    /// Radius of the white discs drawn at the feature points, metres
+    /// ([`Renderer::render_points`]).
+    pub dot_radius: f64,
     /// Gaussian blur (optical PSF), standard deviation in pixels (0: none).
     pub blur_sigma: f64,
     /// Additive Gaussian sensor noise, standard deviation in grey levels (0: none).
@@ -67,7 +72,7 @@ pub struct RenderConfig {
 
 impl Default for RenderConfig {
     fn default() -> Self {
-        Self { blur_sigma: 0.8, noise_sigma: 2.0, background: 30, foreground: 220, seed: 0 }
+        Self { dot_radius: 0.004, blur_sigma: 0.8, noise_sigma: 2.0, background: 30, foreground: 220, seed: 0 }
     }
 }
 
@@ -75,6 +80,9 @@ impl RenderConfig {
     /// Checks the values.
     pub fn validate(&self) -> Result<()> {
         let bad = |name, reason: String| Err(Error::InvalidParameter { name, reason });
+        if !(self.dot_radius.is_finite() && self.dot_radius > 0.0) {
+            return bad("dot_radius", format!("must be > 0 metres, got {}", self.dot_radius));
+        }
         if !(self.blur_sigma.is_finite() && (0.0..=20.0).contains(&self.blur_sigma)) {
             return bad("blur_sigma", format!("must be in [0, 20] pixels, got {}", self.blur_sigma));
         }
@@ -195,6 +203,22 @@ impl Renderer {
             }
         }
         Ok(Rendered { image, drawn })
+    }
+
+    /// [`Renderer::render`] of discs of radius `dot_radius` at `points` (F*), facing the
+    /// reference camera.
+    pub fn render_points(
+        &self,
+        points: &[[f64; 3]],
+        visible: Option<&[bool]>,
+        pose: &Isometry3<f64>,
+        k: &Intrinsics,
+        size: (u32, u32),
+        frame: u64,
+    ) -> Result<Rendered> {
+        let discs: Vec<Disc> =
+            points.iter().map(|&p| Disc::facing_reference(p, self.config.dot_radius)).collect::<Result<_>>()?;
+        self.render(&discs, visible, pose, k, size, frame)
     }
 
     /// The background with its noise.
@@ -430,7 +454,8 @@ mod tests {
 
     #[test]
     fn fronto_parallel_disc_has_the_area_of_its_circle() {
-        let config = RenderConfig { blur_sigma: 0.0, noise_sigma: 0.0, background: 20, foreground: 220, seed: 0 };
+        let config =
+            RenderConfig { blur_sigma: 0.0, noise_sigma: 0.0, background: 20, foreground: 220, ..Default::default() };
         let renderer = Renderer::new(config).unwrap();
         let k = Intrinsics::pinhole(1000.0, 1000.0, 160.0, 120.0).unwrap();
         // radius 0.006 m at 0.5 m: 12 px.

@@ -22,6 +22,9 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("cartesian-12-6", include_str!("../../../scenarios/cartesian-12-6.toml")),
     ("occlusion", include_str!("../../../scenarios/occlusion.toml")),
     ("planar", include_str!("../../../scenarios/planar.toml")),
+    ("vision-12-12", include_str!("../../../scenarios/vision-12-12.toml")),
+    ("vision-12-6", include_str!("../../../scenarios/vision-12-6.toml")),
+    ("vision-25-12", include_str!("../../../scenarios/vision-25-12.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).

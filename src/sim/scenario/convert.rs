@@ -75,6 +75,7 @@ impl Scenario {
             noise: self.noise,
             stop: self.stop,
             path: self.path_plan()?,
+            vision: self.vision_config()?,
             record: true,
         })
     }
@@ -188,6 +189,23 @@ impl Scenario {
             }
             other => Ok(other),
         }
+    }
+
+    /// `[vision]`: valid values, image sizes for both cameras, no coordinate noise on top.
+    fn vision_config(&self) -> Result<Option<crate::vision::RenderConfig>> {
+        let Some(v) = self.vision else { return Ok(None) };
+        v.validate().map_err(|e| scenario_error("vision", e.to_string()))?;
+        let sized = |c: &CameraSpec| c.width.is_some() && c.height.is_some();
+        if !sized(&self.reference_camera) || !self.camera.as_ref().is_none_or(sized) {
+            return Err(scenario_error("vision", "images need width and height in the camera tables"));
+        }
+        if self.noise.pixel_sigma > 0.0 {
+            return Err(scenario_error(
+                "noise.pixel_sigma",
+                "with [vision] the noise is in the images (vision.noise_sigma)",
+            ));
+        }
+        Ok(Some(v))
     }
 
     /// `[robot]`: joint values are metres for x, y, z and degrees for the wrist.

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::core::ibvs::Interaction;
 use crate::sim::camera_model::Zoom;
 use crate::sim::config::{Noise, PathPlan, StopRules};
+use crate::vision::RenderConfig;
 
 fn default_skew() -> f64 {
     90.0
@@ -273,6 +274,9 @@ pub struct Scenario {
     /// Path planning in the invariant space.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathPlan>,
+    /// Images in the loop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vision: Option<RenderConfig>,
     /// The translation pair for `control.depths = "estimated"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_estimation: Option<DepthEstimationSpec>,
