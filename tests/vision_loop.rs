@@ -45,3 +45,33 @@ fn zoomed_reference_through_images_converges() {
     assert_eq!(s.status, Status::Converged, "{}", s.message);
     assert!(s.final_translation_error < 2e-3 && s.final_rotation_error.to_degrees() < 0.2);
 }
+
+#[test]
+fn rendered_views_show_the_dots_at_their_projections() {
+    use vsinv::sim::{Shot, render_view};
+    use vsinv::vision::{DetectConfig, detect_dots};
+    let config = builtin("vision-12-6").unwrap().to_config().unwrap();
+    for shot in [Shot::Reference, Shot::Servo { time: 0.0 }] {
+        let view = render_view(&config, shot, None).unwrap();
+        let dots = detect_dots(&view.image, &DetectConfig::default()).unwrap();
+        assert_eq!(dots.len(), view.pixels.len(), "{shot:?}");
+        for p in &view.pixels {
+            let nearest =
+                dots.iter().map(|d| (d.centroid[0] - p[0]).hypot(d.centroid[1] - p[1])).fold(f64::MAX, f64::min);
+            assert!(nearest < 0.2, "{shot:?}: {nearest} px");
+        }
+    }
+    // The servo camera at the reference pose with the 6 mm lens sees the object smaller.
+    let at_goal =
+        render_view(&config, Shot::Servo { time: 0.0 }, Some(&vsinv::nalgebra::Isometry3::identity())).unwrap();
+    let reference = render_view(&config, Shot::Reference, None).unwrap();
+    let spread = |v: &vsinv::sim::View| {
+        v.pixels.iter().map(|p| p[0]).fold(f64::MIN, f64::max) - v.pixels.iter().map(|p| p[0]).fold(f64::MAX, f64::min)
+    };
+    assert!((spread(&at_goal) / spread(&reference) - 0.5).abs() < 1e-9);
+    assert!(render_view(&config, Shot::Servo { time: f64::NAN }, None).is_err());
+    let mut no_size = config.clone();
+    no_size.camera.image = None;
+    let err = render_view(&no_size, Shot::Servo { time: 0.0 }, None).unwrap_err().to_string();
+    assert!(err.contains("camera") && err.contains("width"), "{err}");
+}

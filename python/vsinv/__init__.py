@@ -10,6 +10,8 @@ poses are 4x4 homogeneous matrices of the camera frame in F*, the frame of the r
 
 from ._core import (
     DegenerateGeometry,
+    DotTracker,
+    Dots,
     IbvsController,
     Intrinsics,
     InvariantPath,
@@ -25,6 +27,7 @@ from ._core import (
     check_stability,
     choose_basis,
     depths_from_translation,
+    detect_dots,
     estimate_plane_parallax,
     interaction_matrix,
     invariant_jacobian,
@@ -33,6 +36,8 @@ from ._core import (
     list_scenarios,
     load_scenario,
     project,
+    render,
+    render_view,
     run_batch,
     run_scenario,
     rz_coefficients,
@@ -44,6 +49,8 @@ from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
 __all__ = [
     "DegenerateGeometry",
+    "DotTracker",
+    "Dots",
     "IbvsController",
     "Intrinsics",
     "InvariantPath",
@@ -59,6 +66,7 @@ __all__ = [
     "check_stability",
     "choose_basis",
     "depths_from_translation",
+    "detect_dots",
     "estimate_plane_parallax",
     "interaction_matrix",
     "invariant_jacobian",
@@ -67,6 +75,8 @@ __all__ = [
     "list_scenarios",
     "load_scenario",
     "project",
+    "render",
+    "render_view",
     "run_batch",
     "run_scenario",
     "rz_coefficients",

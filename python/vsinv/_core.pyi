@@ -36,6 +36,11 @@ __all__ = [
     "ResectionDepths",
     "estimate_plane_parallax",
     "depths_from_translation",
+    "render",
+    "render_view",
+    "Dots",
+    "detect_dots",
+    "DotTracker",
     "__version__",
 ]
 
@@ -207,6 +212,10 @@ class RunResult:
     def rotation_error(self) -> _F64Array: ...
     @property
     def reference_pixels(self) -> _F64Array: ...
+    @property
+    def detection_error(self) -> _F64Array | None:
+        """Per iteration and point, the tracked centroid's distance to the true projection
+        of the dot's centre (pixels, NaN where not found); None without `[vision]`."""
 
 def load_scenario(source: _ScenarioLike) -> Scenario: ...
 def list_scenarios() -> list[tuple[str, str]]: ...
@@ -261,3 +270,65 @@ class ResectionDepths:
         reference_mean_depth: float = 1.0,
     ) -> ResectionDepths: ...
     def estimate(self, pixels: _ArrayLike, visible: Sequence[bool] | None = None) -> _F64Array: ...
+
+_U8Image = npt.NDArray[np.uint8]
+
+def render(
+    scenario: _ScenarioLike,
+    pose: npt.ArrayLike | None = None,
+    time: float = 0.0,
+    reference: bool = False,
+) -> _U8Image:
+    """The (height, width) uint8 image a scenario's camera sees: the servo camera K(time) at
+    `pose` (4x4, camera frame in F*; default the start pose), or the reference camera K*
+    (default at F*) when `reference` is true."""
+
+def render_view(
+    scenario: _ScenarioLike,
+    pose: npt.ArrayLike | None = None,
+    time: float = 0.0,
+    reference: bool = False,
+) -> tuple[_U8Image, _F64Array, npt.NDArray[np.bool_]]:
+    """`render` with the true projections of the dots' centres (n, 2) and their visibility."""
+
+@final
+class Dots:
+    """Dots found in an image, sorted by row then column of their centroids."""
+
+    @property
+    def centroids(self) -> _F64Array:
+        """Subpixel centroids (u, v), (m, 2)."""
+    @property
+    def areas(self) -> _F64Array:
+        """Pixels above the threshold, (m,)."""
+    @property
+    def bboxes(self) -> npt.NDArray[np.int64]:
+        """Bounding boxes [u_min, v_min, u_max, v_max] (inclusive), (m, 4)."""
+    def __len__(self) -> int: ...
+
+def detect_dots(
+    image: _U8Image,
+    threshold: int | None = None,
+    min_area: int = 4,
+    max_area: int | None = None,
+) -> Dots:
+    """Bright dots on a dark background, with subpixel intensity-weighted centroids."""
+
+@final
+class DotTracker:
+    """Tracks dots through images from one approximate pixel per dot in the first image."""
+
+    def __new__(
+        cls,
+        image: _U8Image,
+        initial_pixels: npt.ArrayLike,
+        search_radius: float = 20.0,
+        max_search_radius: float = 80.0,
+        min_area: int = 4,
+    ) -> DotTracker: ...
+    def track(self, image: _U8Image) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
+        """Finds the dots in the next image: (pixels (n, 2), found (n,))."""
+    @property
+    def positions(self) -> _F64Array:
+        """The last known position of every dot, (n, 2)."""
+    def __len__(self) -> int: ...

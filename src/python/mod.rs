@@ -6,6 +6,7 @@ mod arrays;
 mod errors;
 mod planning;
 mod sim;
+mod vision;
 
 use nalgebra::Matrix3;
 use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
@@ -550,6 +551,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sim::list_scenarios, m)?)?;
     m.add_function(wrap_pyfunction!(sim::run_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(sim::run_batch, m)?)?;
+    m.add_class::<vision::PyDots>()?;
+    m.add_class::<vision::PyDotTracker>()?;
+    m.add_function(wrap_pyfunction!(vision::render, m)?)?;
+    m.add_function(wrap_pyfunction!(vision::render_view, m)?)?;
+    m.add_function(wrap_pyfunction!(vision::detect_dots, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -140,6 +140,8 @@ pub struct PyRunResult {
     rotation_error: Py<PyAny>,
     #[pyo3(get)]
     reference_pixels: Py<PyAny>,
+    #[pyo3(get)]
+    detection_error: Option<Py<PyAny>>,
 }
 
 #[pymethods]
@@ -162,6 +164,9 @@ impl PyRunResult {
         d.set_item("translation_error", self.translation_error.bind(py))?;
         d.set_item("rotation_error", self.rotation_error.bind(py))?;
         d.set_item("reference_pixels", self.reference_pixels.bind(py))?;
+        if let Some(e) = &self.detection_error {
+            d.set_item("detection_error", e.bind(py))?;
+        }
         Ok(d)
     }
     fn __repr__(&self, py: Python<'_>) -> String {
@@ -206,6 +211,8 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("tracking_phi", t.map(|t| t.phi))?;
     d.set_item("tracking_bound", t.map(|t| t.bound))?;
     d.set_item("observed_max_eps", t.map(|t| t.max_eps))?;
+    d.set_item("detection_error_median_px", s.detection_error.map(|e| e.0))?;
+    d.set_item("detection_error_max_px", s.detection_error.map(|e| e.1))?;
     Ok(d)
 }
 
@@ -266,6 +273,10 @@ pub fn run_scenario(
         translation_error: array(py, r.translation_error, &[rows])?,
         rotation_error: array(py, r.rotation_error, &[rows])?,
         reference_pixels: array(py, reference.into_flattened(), &[n, 2])?,
+        detection_error: match outcome.summary.detection_error {
+            Some(_) => Some(array(py, r.detection_error, &[rows, n])?),
+            None => None,
+        },
     })
 }
 

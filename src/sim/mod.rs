@@ -13,6 +13,7 @@
 //! | the closed loop, one named step at a time | [`simulate`](mod@simulate) |
 //! | per-image measurements and the stop rules' window | `measure` (private) |
 //! | images in the loop: render, detect, track (`[vision]`) | `image_loop` (private) |
+//! | a scenario's views as images (reference, start, any pose) | [`views`] |
 //! | status, summary, recording | [`outcome`] |
 //! | scenario files (TOML, JSON) and the built-in scenarios | [`scenario`] |
 //! | many runs in parallel (rayon) | [`batch`] |
@@ -29,6 +30,7 @@ pub mod robot;
 pub mod scenario;
 pub mod scene;
 pub mod simulate;
+pub mod views;
 
 pub use camera_model::{CameraModel, Zoom};
 pub use config::{Law, Noise, SimulationConfig, StopRules};
@@ -36,3 +38,4 @@ pub use depth_source::{DepthEstimator, DepthEstimatorFactory, DepthSource, Trans
 pub use outcome::{Outcome, Recording, Status, StopRule, Summary, Tracking};
 pub use scenario::Scenario;
 pub use simulate::simulate;
+pub use views::{Shot, View, render_view};

@@ -8,7 +8,7 @@ use imageproc::contrast::otsu_level;
 use imageproc::region_labelling::{Connectivity, connected_components};
 
 use crate::error::{Error, Result};
-use crate::vision::image::{GreyImage, check_image};
+use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
 
 /// Pixels added around a component's bounding box for its centroid.
 const MARGIN: u32 = 2;
@@ -56,13 +56,13 @@ pub struct Window {
 
 impl Window {
     /// The whole image.
-    pub fn full(image: &GreyImage) -> Self {
+    pub fn full<C: Pixels>(image: &GreyBuffer<C>) -> Self {
         Self { u0: 0, v0: 0, u1: image.width() - 1, v1: image.height() - 1 }
     }
 
     /// The square of half-side `radius` around `(u, v)`, clipped to the image; None when it
     /// falls outside.
-    pub fn around(image: &GreyImage, center: [f64; 2], radius: f64) -> Option<Self> {
+    pub fn around<C: Pixels>(image: &GreyBuffer<C>, center: [f64; 2], radius: f64) -> Option<Self> {
         let (w, h) = (f64::from(image.width()), f64::from(image.height()));
         let (u0, u1) = ((center[0] - radius).round().max(0.0), (center[0] + radius).round().min(w - 1.0));
         let (v0, v1) = ((center[1] - radius).round().max(0.0), (center[1] + radius).round().min(h - 1.0));
@@ -78,27 +78,31 @@ impl Window {
     }
 }
 
-/// Detects the dots of a whole image, sorted by `(v, u)` of their centroids. An image with
-/// nothing above the threshold (all dark, or uniform) gives no dot.
-pub fn detect_dots(image: &GreyImage, config: &DetectConfig) -> Result<Vec<Dot>> {
+/// Detects the dots of a whole image, sorted by `(v, u)` of their centroids. A uniform image
+/// (all black, say) is an error: nothing can stand out in it.
+pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Vec<Dot>> {
     check_image("image", image)?;
     if config.max_area.is_some_and(|m| m < config.min_area) {
         return Err(Error::InvalidParameter { name: "max_area", reason: "must be >= min_area".into() });
     }
     let (lo, hi) = image.pixels().fold((u8::MAX, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
     if lo == hi {
-        return Ok(Vec::new()); // uniform: nothing stands out
+        return Err(Error::InvalidImage {
+            what: "image".into(),
+            reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
+        });
     }
-    let threshold = config.threshold.unwrap_or_else(|| otsu_level(image));
-    let mut dots = detect_in(image, Window::full(image), threshold, config.min_area, config.max_area);
+    let whole = Window::full(image);
+    let threshold = config.threshold.unwrap_or_else(|| automatic_threshold(&crop(image, whole)));
+    let mut dots = detect_in(image, whole, threshold, config.min_area, config.max_area);
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
     Ok(dots)
 }
 
 /// The dots of a window with a given threshold (components cut by the window's border that is
 /// not the image's are dropped: they are not whole).
-pub fn detect_in(
-    image: &GreyImage,
+pub fn detect_in<C: Pixels>(
+    image: &GreyBuffer<C>,
     window: Window,
     threshold: u8,
     min_area: usize,
@@ -119,8 +123,40 @@ pub fn detect_in(
         .collect()
 }
 
-fn crop(image: &GreyImage, w: Window) -> GreyImage {
-    image::imageops::crop_imm(image, w.u0, w.v0, w.width(), w.height()).to_image()
+/// Otsu's threshold, raised to at least [`NOISE_SIGMAS`] noise deviations above the median
+/// (the background): when the dots cover little of the image, Otsu's level falls inside the
+/// background's noise and would cut it into specks.
+fn automatic_threshold(image: &GreyImage) -> u8 {
+    let mut histogram = [0usize; 256];
+    image.pixels().for_each(|p| histogram[usize::from(p[0])] += 1);
+    let median = histogram_median(&histogram);
+    let mut deviations = [0usize; 256];
+    for (level, &count) in histogram.iter().enumerate() {
+        deviations[level.abs_diff(median)] += count;
+    }
+    // The median absolute deviation of Gaussian noise is 0.6745 sigma.
+    let sigma = histogram_median(&deviations) as f64 / 0.6745;
+    let floor = (median as f64 + (NOISE_SIGMAS * sigma).max(1.0)).min(254.0) as u8;
+    otsu_level(image).max(floor)
+}
+
+/// Noise deviations between the background and the automatic threshold.
+const NOISE_SIGMAS: f64 = 6.0;
+
+fn histogram_median(histogram: &[usize; 256]) -> usize {
+    let half = histogram.iter().sum::<usize>().div_ceil(2);
+    let mut seen = 0;
+    histogram
+        .iter()
+        .position(|&c| {
+            seen += c;
+            seen >= half
+        })
+        .unwrap_or(0)
+}
+
+fn crop<C: Pixels>(image: &GreyBuffer<C>, w: Window) -> GreyImage {
+    GreyImage::from_fn(w.width(), w.height(), |u, v| *image.get_pixel(u + w.u0, v + w.v0))
 }
 
 /// Area and bounding box of one label, in window coordinates.
@@ -147,7 +183,7 @@ fn component_stats(labels: &image::ImageBuffer<image::Luma<u32>, Vec<u32>>) -> V
     stats
 }
 
-fn cut_by_window(s: &Stats, w: Window, image: &GreyImage) -> bool {
+fn cut_by_window<C: Pixels>(s: &Stats, w: Window, image: &GreyBuffer<C>) -> bool {
     let (iw, ih) = (image.width(), image.height());
     (s.bbox[0] == 0 && w.u0 > 0)
         || (s.bbox[1] == 0 && w.v0 > 0)
@@ -263,11 +299,14 @@ mod tests {
     }
 
     #[test]
-    fn empty_and_uniform_images_have_no_dots() {
+    fn empty_and_uniform_images_are_errors() {
         let black = GreyImage::new(40, 30);
-        assert!(detect_dots(&black, &DetectConfig::default()).unwrap().is_empty());
+        assert!(matches!(detect_dots(&black, &DetectConfig::default()), Err(Error::InvalidImage { .. })));
         let grey = GreyImage::from_pixel(40, 30, image::Luma([128]));
-        assert!(detect_dots(&grey, &DetectConfig::default()).unwrap().is_empty());
+        assert!(detect_dots(&grey, &DetectConfig::default()).is_err());
+        let mut one = black.clone();
+        one.put_pixel(3, 3, image::Luma([200]));
+        assert!(detect_dots(&one, &DetectConfig::default()).unwrap().is_empty(), "a 1-pixel speck is not a dot");
         assert!(detect_dots(&GreyImage::new(0, 0), &DetectConfig::default()).is_err());
         let bad = DetectConfig { min_area: 10, max_area: Some(5), ..Default::default() };
         assert!(detect_dots(&black, &bad).is_err());

@@ -8,25 +8,43 @@ use crate::error::{Error, Result};
 /// An 8-bit grey image, row-major: pixel `(u, v)` is `data[v * width + u]`.
 pub type GreyImage = ::image::GrayImage;
 
+/// An 8-bit grey image over any row-major buffer: an owned [`GreyImage`], or borrowed bytes
+/// (`GreyBuffer<&[u8]>`, e.g. a NumPy array read in place).
+pub type GreyBuffer<C> = ::image::ImageBuffer<::image::Luma<u8>, C>;
+
+/// What the detection and tracking functions read: any grey buffer of bytes.
+pub trait Pixels: std::ops::Deref<Target = [u8]> {}
+impl<C: std::ops::Deref<Target = [u8]>> Pixels for C {}
+
+/// Borrows row-major bytes as an image; `what` names the argument in errors.
+pub fn view<'a>(what: &str, width: u32, height: u32, data: &'a [u8]) -> Result<GreyBuffer<&'a [u8]>> {
+    check_size(what, width, height, data.len())?;
+    GreyBuffer::from_raw(width, height, data).ok_or_else(|| image_error(what, "inconsistent size"))
+}
+
+fn check_size(what: &str, width: u32, height: u32, len: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(image_error(what, format!("empty image ({height} x {width})")));
+    }
+    let expected = width as usize * height as usize;
+    if len != expected {
+        return Err(image_error(what, format!("{len} values for a {height} x {width} image ({expected} expected)")));
+    }
+    Ok(())
+}
+
 fn image_error(what: &str, reason: impl Into<String>) -> Error {
     Error::InvalidImage { what: what.to_string(), reason: reason.into() }
 }
 
 /// A grey image from row-major data; `what` names the argument in errors.
 pub fn from_raw(what: &str, width: u32, height: u32, data: Vec<u8>) -> Result<GreyImage> {
-    if width == 0 || height == 0 {
-        return Err(image_error(what, format!("empty image ({height} x {width})")));
-    }
-    let expected = width as usize * height as usize;
-    if data.len() != expected {
-        let reason = format!("{} values for a {height} x {width} image ({expected} expected)", data.len());
-        return Err(image_error(what, reason));
-    }
+    check_size(what, width, height, data.len())?;
     GreyImage::from_raw(width, height, data).ok_or_else(|| image_error(what, "inconsistent size"))
 }
 
 /// Checks that an image is not empty.
-pub fn check_image(what: &str, image: &GreyImage) -> Result<()> {
+pub fn check_image<C: Pixels>(what: &str, image: &GreyBuffer<C>) -> Result<()> {
     if image.width() == 0 || image.height() == 0 {
         return Err(image_error(what, format!("empty image ({} x {})", image.height(), image.width())));
     }

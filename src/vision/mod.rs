@@ -16,6 +16,6 @@ pub mod render;
 pub mod tracker;
 
 pub use self::dots::{DetectConfig, Dot, detect_dots};
-pub use self::image::{GreyImage, load_png, save_png};
+pub use self::image::{GreyBuffer, GreyImage, load_png, save_png};
 pub use self::render::{Disc, RenderConfig, Rendered, Renderer};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

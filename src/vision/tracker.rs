@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::vision::dots::{Dot, Window, detect_in};
-use crate::vision::image::{GreyImage, check_image};
+use crate::vision::image::{GreyBuffer, Pixels, check_image};
 
 /// How the tracker searches.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -79,7 +79,7 @@ pub struct DotTracker {
 
 impl DotTracker {
     /// Detects each dot in a window around its click in the first image.
-    pub fn new(image: &GreyImage, initial_pixels: &[[f64; 2]], config: TrackerConfig) -> Result<Self> {
+    pub fn new<C: Pixels>(image: &GreyBuffer<C>, initial_pixels: &[[f64; 2]], config: TrackerConfig) -> Result<Self> {
         config.validate()?;
         check_image("image", image)?;
         if initial_pixels.is_empty() {
@@ -110,7 +110,7 @@ impl DotTracker {
     }
 
     /// Finds the dots in the next image.
-    pub fn track(&mut self, image: &GreyImage) -> Result<TrackResult> {
+    pub fn track<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<TrackResult> {
         if image.dimensions() != self.size {
             return Err(Error::InvalidImage {
                 what: "image".into(),
@@ -133,7 +133,7 @@ impl DotTracker {
     }
 
     /// The component nearest to the dot's prediction in a window grown until one is found.
-    fn search(&self, image: &GreyImage, dot: &TrackedDot) -> Option<Dot> {
+    fn search<C: Pixels>(&self, image: &GreyBuffer<C>, dot: &TrackedDot) -> Option<Dot> {
         let mut radius = if dot.lost_for > 0 { self.config.max_search_radius } else { self.config.search_radius };
         loop {
             let window = Window::around(image, dot.predicted, radius)?;
@@ -179,7 +179,12 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// The dot around a click: Otsu's threshold of the window, the component nearest the click.
-fn initial_dot(image: &GreyImage, i: usize, click: [f64; 2], config: &TrackerConfig) -> Result<TrackedDot> {
+fn initial_dot<C: Pixels>(
+    image: &GreyBuffer<C>,
+    i: usize,
+    click: [f64; 2],
+    config: &TrackerConfig,
+) -> Result<TrackedDot> {
     if !(click[0].is_finite() && click[1].is_finite()) {
         return Err(Error::NonFinite { what: "initial_pixels", index: 2 * i + usize::from(click[0].is_finite()) });
     }
@@ -217,7 +222,7 @@ fn initial_dot(image: &GreyImage, i: usize, click: [f64; 2], config: &TrackerCon
 const MIN_CONTRAST: u8 = 24;
 
 /// The median and the largest grey level of a window.
-fn window_levels(image: &GreyImage, w: Window) -> (u8, u8) {
+fn window_levels<C: Pixels>(image: &GreyBuffer<C>, w: Window) -> (u8, u8) {
     let mut values: Vec<u8> =
         (w.v0..=w.v1).flat_map(|v| (w.u0..=w.u1).map(move |u| image.get_pixel(u, v)[0])).collect();
     values.sort_unstable();

@@ -1,0 +1,230 @@
+//! Images in Python: `render`, `render_view`, `detect_dots` and `DotTracker`. Images are
+//! `(height, width)` uint8 arrays, read in place (a non-contiguous array is copied once) and
+//! returned without a copy; the work runs with the GIL released.
+
+use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+
+use super::arrays::{f64_array, mat, points2};
+use super::errors::{invalid_input, to_py};
+use super::sim::scenario_arg;
+use crate::core::se3::pose_from_matrix;
+use crate::sim::views::{Shot, View, render_view as render_scenario_view};
+use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
+use crate::vision::image::{GreyBuffer, GreyImage, view};
+use crate::vision::tracker::{DotTracker, TrackerConfig};
+
+/// `(n, 2)` pixels and `(n,)` flags, as returned to Python.
+type PixelArray<'py> = Bound<'py, PyArray2<f64>>;
+type FlagArray<'py> = Bound<'py, PyArray1<bool>>;
+type ImageArray<'py> = Bound<'py, PyArray2<u8>>;
+
+/// A `(height, width)` uint8 array borrowed from Python, C-contiguous.
+struct ImageArg<'py> {
+    array: numpy::PyReadonlyArray2<'py, u8>,
+}
+
+impl ImageArg<'_> {
+    fn buffer(&self, what: &str) -> PyResult<GreyBuffer<&[u8]>> {
+        let shape = self.array.shape();
+        let data = self.array.as_slice().map_err(|e| invalid_input(format!("{what}: {e}")))?;
+        let (h, w) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
+        let (Ok(h), Ok(w)) = (h, w) else { return Err(invalid_input(format!("{what}: image too large {shape:?}"))) };
+        view(what, w, h, data).map_err(to_py)
+    }
+}
+
+/// Reads `obj` as an 8-bit grey image: a 2-d uint8 NumPy array (anything else is refused with
+/// `InvalidInput` naming its dtype or shape).
+fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
+    let py = obj.py();
+    let Ok(any) = obj.cast::<numpy::PyUntypedArray>() else {
+        let kind = obj.get_type().name()?.to_string();
+        return Err(invalid_input(format!("{what}: expected a (height, width) uint8 NumPy array, got {kind}")));
+    };
+    let dtype = any.dtype().str()?.to_string();
+    if any.ndim() != 2 || dtype != "uint8" {
+        let shape = any.shape().to_vec();
+        let reason = format!("expected a (height, width) uint8 array, got dtype {dtype} with shape {shape:?}");
+        return Err(invalid_input(format!("{what}: {reason} (convert colour images to grey first)")));
+    }
+    let mut array = obj.cast::<PyArray2<u8>>()?.clone();
+    if !array.is_c_contiguous() {
+        static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+        let f = CONTIGUOUS
+            .get_or_try_init(py, || Ok::<_, PyErr>(py.import("numpy")?.getattr("ascontiguousarray")?.unbind()))?;
+        array = f.call1(py, (obj,))?.bind(py).cast::<PyArray2<u8>>()?.clone();
+    }
+    let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
+    Ok(ImageArg { array })
+}
+
+/// A `GreyImage` moved into a `(height, width)` uint8 array without a copy.
+fn image_out(py: Python<'_>, image: GreyImage) -> PyResult<Bound<'_, PyArray2<u8>>> {
+    let (w, h) = image.dimensions();
+    PyArray1::from_vec(py, image.into_raw()).reshape([h as usize, w as usize])
+}
+
+/// The view of a scenario (built-in name, file, dict or Scenario).
+fn scenario_view(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    pose: Option<&Bound<'_, PyAny>>,
+    time: f64,
+    reference: bool,
+) -> PyResult<View> {
+    let config = scenario_arg(scenario)?.to_config().map_err(to_py)?;
+    let pose = match pose {
+        Some(p) => {
+            let a = f64_array(p, "pose", &[Some(4), Some(4)])?;
+            Some(pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?)).map_err(to_py)?)
+        }
+        None => None,
+    };
+    let shot = if reference { Shot::Reference } else { Shot::Servo { time } };
+    py.detach(|| render_scenario_view(&config, shot, pose.as_ref())).map_err(to_py)
+}
+
+/// The image a scenario's camera sees: the servo camera K(time) at `pose` (a 4x4 camera
+/// frame in F*; default the start pose), or the reference camera K* (default at F*) when
+/// `reference` is true; rendered with the scenario's `[vision]` settings.
+#[pyfunction]
+#[pyo3(signature = (scenario, pose = None, time = 0.0, reference = false))]
+pub fn render<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    pose: Option<&Bound<'py, PyAny>>,
+    time: f64,
+    reference: bool,
+) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    image_out(py, scenario_view(py, scenario, pose, time, reference)?.image)
+}
+
+/// `render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true
+/// projections of the dots' centres and which dots are in the image.
+#[pyfunction]
+#[pyo3(signature = (scenario, pose = None, time = 0.0, reference = false))]
+pub fn render_view<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    pose: Option<&Bound<'py, PyAny>>,
+    time: f64,
+    reference: bool,
+) -> PyResult<(ImageArray<'py>, PixelArray<'py>, FlagArray<'py>)> {
+    let v = scenario_view(py, scenario, pose, time, reference)?;
+    let n = v.pixels.len();
+    Ok((image_out(py, v.image)?, mat(py, n, 2, v.pixels.into_flattened())?, PyArray1::from_vec(py, v.visible)))
+}
+
+/// Dots found in an image, sorted by row then column of their centroids.
+#[pyclass(name = "Dots", module = "vsinv._core", frozen)]
+pub struct PyDots {
+    /// Subpixel centroids `(u, v)`, `(m, 2)` float64.
+    #[pyo3(get)]
+    centroids: Py<PyArray2<f64>>,
+    /// Pixels above the threshold, `(m,)` float64.
+    #[pyo3(get)]
+    areas: Py<PyArray1<f64>>,
+    /// Bounding boxes `[u_min, v_min, u_max, v_max]` (inclusive), `(m, 4)` int64.
+    #[pyo3(get)]
+    bboxes: Py<PyArray2<i64>>,
+    count: usize,
+}
+
+#[pymethods]
+impl PyDots {
+    fn __len__(&self) -> usize {
+        self.count
+    }
+    fn __repr__(&self) -> String {
+        format!("Dots({} found)", self.count)
+    }
+}
+
+fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
+    let m = dots.len();
+    let centroids = mat(py, m, 2, dots.iter().flat_map(|d| d.centroid).collect())?;
+    let areas = PyArray1::from_vec(py, dots.iter().map(|d| d.area).collect());
+    let bboxes: Vec<i64> = dots.iter().flat_map(|d| d.bbox.map(i64::from)).collect();
+    let bboxes = PyArray1::from_vec(py, bboxes).reshape([m, 4])?;
+    Ok(PyDots { centroids: centroids.unbind(), areas: areas.unbind(), bboxes: bboxes.unbind(), count: m })
+}
+
+/// Bright dots on a dark background: threshold (Otsu's, kept above the background's noise,
+/// unless given), 8-connected components with `min_area <= area <= max_area` (pixels),
+/// intensity-weighted subpixel centroids. A uniform image raises `InvalidInput`.
+#[pyfunction]
+#[pyo3(signature = (image, threshold = None, min_area = 4, max_area = None))]
+pub fn detect_dots(
+    py: Python<'_>,
+    image: &Bound<'_, PyAny>,
+    threshold: Option<u8>,
+    min_area: usize,
+    max_area: Option<usize>,
+) -> PyResult<PyDots> {
+    let image = image_arg(image, "image")?;
+    let buffer = image.buffer("image")?;
+    let config = DetectConfig { threshold, min_area, max_area };
+    let dots = py.detach(|| detect(&buffer, &config)).map_err(to_py)?;
+    dots_out(py, &dots)
+}
+
+/// Tracks dots through images: `DotTracker(image, initial_pixels (n, 2), search_radius=20.0,
+/// max_search_radius=80.0, min_area=4)` finds each dot near its click in the first image;
+/// `track(image)` returns `(pixels (n, 2), found (n,) bool)`. A dot not found keeps its last
+/// position with `found` false; two dots are never swapped.
+#[pyclass(name = "DotTracker", module = "vsinv._core")]
+pub struct PyDotTracker {
+    inner: DotTracker,
+}
+
+#[pymethods]
+impl PyDotTracker {
+    #[new]
+    #[pyo3(signature = (image, initial_pixels, search_radius = 20.0, max_search_radius = 80.0, min_area = 4))]
+    fn new(
+        py: Python<'_>,
+        image: &Bound<'_, PyAny>,
+        initial_pixels: &Bound<'_, PyAny>,
+        search_radius: f64,
+        max_search_radius: f64,
+        min_area: usize,
+    ) -> PyResult<Self> {
+        let image = image_arg(image, "image")?;
+        let buffer = image.buffer("image")?;
+        let clicks = f64_array(initial_pixels, "initial_pixels", &[None, Some(2)])?;
+        let clicks = points2(&clicks)?;
+        let config = TrackerConfig { search_radius, max_search_radius, min_area, ..TrackerConfig::default() };
+        let inner = py.detach(|| DotTracker::new(&buffer, clicks, config)).map_err(to_py)?;
+        Ok(Self { inner })
+    }
+
+    /// Finds the dots in the next image: `(pixels (n, 2), found (n,) bool)`.
+    fn track<'py>(
+        &mut self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+    ) -> PyResult<(PixelArray<'py>, FlagArray<'py>)> {
+        let image = image_arg(image, "image")?;
+        let buffer = image.buffer("image")?;
+        let tracker = &mut self.inner;
+        let result = py.detach(|| tracker.track(&buffer)).map_err(to_py)?;
+        let n = result.found.len();
+        Ok((mat(py, n, 2, result.pixels.into_flattened())?, PyArray1::from_vec(py, result.found)))
+    }
+
+    /// The last known position of every dot, `(n, 2)`.
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        mat(py, self.inner.len(), 2, self.inner.positions().as_flattened().to_vec())
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("DotTracker({} dots)", self.inner.len())
+    }
+}
