@@ -75,3 +75,14 @@ fn rendered_views_show_the_dots_at_their_projections() {
     let err = render_view(&no_size, Shot::Servo { time: 0.0 }, None).unwrap_err().to_string();
     assert!(err.contains("camera") && err.contains("width"), "{err}");
 }
+
+#[test]
+fn stationary_zoom_through_images_keeps_the_invariant_error_near_zero() {
+    // Sec. 5.1 with images: the image error grows with the zoom, the invariant error does not.
+    let (s, rec) = run("vision-zoom");
+    assert_eq!(rec.len(), 6, "six images");
+    assert!(rec.image_error[5] > 50.0 * rec.image_error[0].max(0.1), "{:?}", rec.image_error);
+    let max_q = rec.invariant_error.iter().fold(0.0f64, |m, &e| m.max(e));
+    assert!(max_q < 1e-3, "invariant error {:?}", rec.invariant_error);
+    assert!(s.detection_error.unwrap().1 < 0.2);
+}

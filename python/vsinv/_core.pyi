@@ -41,6 +41,8 @@ __all__ = [
     "Dots",
     "detect_dots",
     "DotTracker",
+    "load_image",
+    "save_image",
     "__version__",
 ]
 
@@ -332,3 +334,9 @@ class DotTracker:
     def positions(self) -> _F64Array:
         """The last known position of every dot, (n, 2)."""
     def __len__(self) -> int: ...
+
+def load_image(path: str | os.PathLike[str]) -> _U8Image:
+    """Reads an image file (PNG, or a GIF's first frame) as (height, width) uint8 grey."""
+
+def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
+    """Writes a (height, width) uint8 array as a PNG file."""

@@ -1,5 +1,7 @@
 """Command-line interface: ``vsinv list``, ``vsinv run NAME|FILE [--json] [--out DIR]``,
-``vsinv sweep NAME|FILE --vary KEY=START:STOP:COUNT [...] [--out DIR]``.
+``vsinv sweep NAME|FILE --vary KEY=START:STOP:COUNT [...] [--out DIR]``,
+``vsinv render NAME|FILE --out DIR`` and ``vsinv invariance REF.png IMG.png ... --points CSV``
+(the image commands, in :mod:`vsinv.cli_images`).
 
 Exit codes: 0 when a run or sweep ends (whatever the statuses, which are reported), 2 for bad
 input (unknown scenario, invalid scenario file, bad --vary/--random, unwritable output
@@ -20,6 +22,7 @@ from typing import Any, Callable, Optional, Sequence, TextIO
 import numpy as np
 
 from . import VsinvError, __version__, list_scenarios, load_scenario, run_scenario
+from .cli_images import add_image_commands, cmd_invariance, cmd_render
 
 __all__ = ["main"]
 
@@ -167,6 +170,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument("--out", metavar="DIR", type=Path, help="write sweep.parquet (or sweep.csv) and stability_map.png")
     sw.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    add_image_commands(sub)
     return parser
 
 
@@ -225,6 +229,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if out_dir is not None:
         written.append(save_npz(result, out_dir / "trajectory.npz"))
         written.extend(save_figures(result, out_dir))
+        if result.detection_error is not None:
+            from .view_plots import save_view_figures
+
+            written.extend(save_view_figures(result, out_dir))
 
     if args.json:
         print(summary_json(summary))
@@ -435,6 +443,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return _cmd_list(sys.stdout)
         if args.command == "sweep":
             return _cmd_sweep(args)
+        if args.command == "render":
+            return cmd_render(args)
+        if args.command == "invariance":
+            return cmd_invariance(args)
         return _cmd_run(args)
     except (VsinvError, ValueError, OSError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -556,6 +556,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(vision::render, m)?)?;
     m.add_function(wrap_pyfunction!(vision::render_view, m)?)?;
     m.add_function(wrap_pyfunction!(vision::detect_dots, m)?)?;
+    m.add_function(wrap_pyfunction!(vision::load_image, m)?)?;
+    m.add_function(wrap_pyfunction!(vision::save_image, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

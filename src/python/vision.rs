@@ -12,7 +12,7 @@ use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
-use crate::vision::image::{GreyBuffer, GreyImage, view};
+use crate::vision::image::{GreyBuffer, GreyImage, load_png, save_png, view};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// `(n, 2)` pixels and `(n,)` flags, as returned to Python.
@@ -227,4 +227,22 @@ impl PyDotTracker {
     fn __repr__(&self) -> String {
         format!("DotTracker({} dots)", self.inner.len())
     }
+}
+
+/// Reads an image file (PNG, or GIF's first frame) as a `(height, width)` uint8 array;
+/// colour images are converted to grey.
+#[pyfunction]
+pub fn load_image<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<ImageArray<'py>> {
+    let image = py.detach(|| load_png(&path)).map_err(to_py)?;
+    image_out(py, image)
+}
+
+/// Writes a `(height, width)` uint8 array as a PNG file.
+#[pyfunction]
+pub fn save_image(py: Python<'_>, image: &Bound<'_, PyAny>, path: std::path::PathBuf) -> PyResult<()> {
+    let image = image_arg(image, "image")?;
+    let buffer = image.buffer("image")?;
+    let owned = GreyImage::from_raw(buffer.width(), buffer.height(), buffer.as_raw().to_vec())
+        .ok_or_else(|| invalid_input("image: inconsistent size".into()))?;
+    py.detach(|| save_png(&owned, &path)).map_err(to_py)
 }

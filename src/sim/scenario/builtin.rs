@@ -25,6 +25,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("vision-12-12", include_str!("../../../scenarios/vision-12-12.toml")),
     ("vision-12-6", include_str!("../../../scenarios/vision-12-6.toml")),
     ("vision-25-12", include_str!("../../../scenarios/vision-25-12.toml")),
+    ("vision-zoom", include_str!("../../../scenarios/vision-zoom.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).

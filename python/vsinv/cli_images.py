@@ -1,0 +1,104 @@
+"""The image commands of ``vsinv``: ``render`` (a scenario's views as PNG files with their
+dots' CSVs) and ``invariance`` (dots tracked through image files: the image and invariant
+errors per image, the paper's Fig. 3)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
+
+__all__ = ["add_image_commands", "cmd_invariance", "cmd_render"]
+
+
+def add_image_commands(sub: Any) -> None:
+    """Adds ``render`` and ``invariance`` to the subcommand parsers."""
+    r = sub.add_parser(
+        "render",
+        help="write a scenario's reference and start images (PNG) with their dots (CSV)",
+        description="Render the reference view (K* at F*) and the start view (K(0) at the start pose) of a scenario "
+        "as PNG files, with point CSVs (point,u,v,visible: the true projections of the dots' centres). A stationary "
+        "camera (law = \"none\", e.g. vision-zoom) also gets image-K.png for every later image of its run.",
+    )
+    r.add_argument("scenario", metavar="NAME|FILE", help="a built-in scenario name (see `vsinv list`) or a TOML file")
+    r.add_argument("--out", metavar="DIR", type=Path, required=True, help="output directory (created if needed)")
+
+    inv = sub.add_parser(
+        "invariance",
+        help="track dots through image files and print the image and invariant errors (Fig. 3)",
+        description="Detect the reference dots near the approximate positions of --points, track them through the "
+        "images in order, and print per image and point the image error ||p - p*|| (pixels) and the invariant "
+        "error ||q - q*||.",
+    )
+    inv.add_argument("reference", metavar="REF.png", type=Path, help="the reference image")
+    inv.add_argument("images", metavar="IMG.png", type=Path, nargs="+", help="the images, in tracking order")
+    inv.add_argument("--points", metavar="CSV", type=Path, required=True, help="approximate dot positions (u, v columns)")
+    inv.add_argument("--basis", metavar="I,J,K", help="the three basis points (default: the widest triangle)")
+    inv.add_argument("--search-radius", metavar="PX", type=float, default=20.0, help="tracker window half-side (20)")
+    inv.add_argument("--out", metavar="DIR", type=Path, help="write invariance.csv and invariance.png to DIR")
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    written = write_scenario_images(args.scenario, args.out)
+    print(f"wrote {len(written)} files to {args.out}:")
+    for path in written:
+        print(f"  {path}")
+    return 0
+
+
+def _parse_basis(text: Optional[str]) -> Optional[Sequence[int]]:
+    if text is None:
+        return None
+    try:
+        basis = [int(x) for x in text.split(",")]
+    except ValueError:
+        basis = []
+    if len(basis) != 3 or min(basis) < 0:
+        raise ValueError(f"--basis: expected three point indices I,J,K, got {text!r}")
+    return basis
+
+
+def _fmt(x: float, spec: str) -> str:
+    return "lost" if not math.isfinite(x) else format(x, spec)
+
+
+def format_invariance(result: InvarianceResult) -> str:
+    """A row per point, a column per image: image error (px) / invariant error."""
+    n = result.pixels.shape[1]
+    lines = [f"basis {list(result.basis)}; image error ||p - p*|| (px) / invariant error ||q - q*||"]
+    lines.append("point".ljust(6) + "".join(f"{name[:18]:>20}" for name in result.names))
+    for i in range(n):
+        cells = [
+            f"{_fmt(result.image_error[k, i], '.2f')} / {_fmt(result.invariant_error[k, i], '.1e')}"
+            for k in range(len(result.names))
+        ]
+        lines.append(str(i).ljust(6) + "".join(f"{c:>20}" for c in cells))
+    img, q = result.image_error, result.invariant_error
+    lines.append(
+        f"max image error {np.nanmax(img, initial=0.0):.2f} px, max invariant error {np.nanmax(q, initial=0.0):.2e}; "
+        f"{int((~result.found).sum())} of {result.found.size} dots not found"
+    )
+    return "\n".join(lines)
+
+
+def cmd_invariance(args: argparse.Namespace) -> int:
+    result = track_invariance(
+        args.reference, args.images, args.points, _parse_basis(args.basis), search_radius=args.search_radius
+    )
+    print(format_invariance(result))
+    if args.out is not None:
+        from .plots import _save
+        from .view_plots import plot_invariance
+
+        args.out.mkdir(parents=True, exist_ok=True)
+        paths = [write_invariance_csv(result, args.out / "invariance.csv")]
+        paths.append(_save(plot_invariance(result), args.out, "invariance.png"))
+        print(f"wrote {len(paths)} files to {args.out}:")
+        for path in paths:
+            print(f"  {path}")
+    return 0

@@ -1,0 +1,161 @@
+"""Images on disk: the views of a scenario written as PNG files with the CSV of their dots
+(``vsinv render``), and the image and invariant errors of dots tracked through image files
+(``vsinv invariance``, the paper's Fig. 3).
+
+A points CSV has a header and one row per dot: ``point,u,v,visible`` as written here (the
+true projection of the dot's centre, pixels, and 1 if the dot is in the image); a file
+written by hand needs only the ``u`` and ``v`` columns, approximate (within the tracker's
+search radius, 20 px by default), in the order that the dots should keep.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ._core import (
+    DotTracker,
+    InvalidInput,
+    Scenario,
+    choose_basis,
+    invariant_points,
+    load_image,
+    load_scenario,
+    render_view,
+    save_image,
+)
+
+__all__ = ["InvarianceResult", "read_points", "track_invariance", "write_points", "write_scenario_images"]
+
+_PathLike = Union[str, Path]
+
+
+def write_points(path: Path, pixels: npt.NDArray[np.float64], visible: npt.NDArray[np.bool_]) -> Path:
+    """Writes the ``point,u,v,visible`` CSV of a view."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["point", "u", "v", "visible"])
+        for i, ((u, v), seen) in enumerate(zip(pixels, visible)):
+            w.writerow([i, f"{u:.6f}", f"{v:.6f}", int(bool(seen))])
+    return path
+
+
+def read_points(path: _PathLike) -> npt.NDArray[np.float64]:
+    """The ``u`` and ``v`` columns of a points CSV as an (n, 2) array; a missing column or a
+    value that is not a finite number raises ``InvalidInput`` naming the file, row and column."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    if not rows or any(c not in rows[0] for c in ("u", "v")):
+        raise InvalidInput(f"{path}: expected a header with columns u and v and one row per dot")
+    out = np.empty((len(rows), 2))
+    for r, row in enumerate(rows):
+        for c, key in enumerate(("u", "v")):
+            try:
+                out[r, c] = float(row[key])
+            except (TypeError, ValueError):
+                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {row[key]!r} is not a number") from None
+            if not np.isfinite(out[r, c]):
+                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {row[key]!r} is not finite")
+    return out
+
+
+def _write_view(out_dir: Path, stem: str, scenario: Scenario, **view: Any) -> list[Path]:
+    image, pixels, visible = render_view(scenario, **view)
+    png = out_dir / f"{stem}.png"
+    save_image(image, png)
+    return [png, write_points(out_dir / f"{stem}.csv", pixels, visible)]
+
+
+def write_scenario_images(scenario: Union[Scenario, _PathLike], out_dir: _PathLike) -> list[Path]:
+    """Writes ``reference.png`` (K* at F*) and ``start.png`` (K(0) at the start pose) with
+    their points CSVs; a stationary camera (``law = "none"``) also gets ``image-K.png`` for
+    each later image of its run (t = K dt, K = 1 .. max_iterations): the zoom sequence of
+    sec. 5.1. Returns the paths written."""
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    written = _write_view(out, "reference", sc, reference=True)
+    written += _write_view(out, "start", sc)
+    d = sc.to_dict()
+    control = d.get("control") or {}
+    if control.get("law") == "none":
+        dt = float(control.get("dt") or 0.04)
+        count = int((d.get("stop") or {}).get("max_iterations") or 0)
+        for k in range(1, count + 1):
+            written += _write_view(out, f"image-{k}", sc, time=k * dt)
+    return written
+
+
+@dataclass
+class InvarianceResult:
+    """Dots tracked through image files: per image and point, the centroid, whether it was
+    found, the image error ||p - p*|| (pixels) and the invariant error ||q - q*||."""
+
+    names: list[str]
+    reference_pixels: npt.NDArray[np.float64]
+    basis: tuple[int, int, int]
+    pixels: npt.NDArray[np.float64]
+    found: npt.NDArray[np.bool_]
+    image_error: npt.NDArray[np.float64]
+    invariant_error: npt.NDArray[np.float64]
+
+
+def _invariant_errors(pixels: npt.NDArray[np.float64], found: npt.NDArray[np.bool_], q_star: Any, basis: Any) -> Any:
+    """||q - q*|| per point (NaN where a point, or any basis point, was not found)."""
+    if not all(found[list(basis)]):
+        return np.full(len(pixels), np.nan)
+    q = invariant_points(pixels, basis)
+    err = np.linalg.norm(q - q_star, axis=1)
+    return np.where(found, err, np.nan)
+
+
+def track_invariance(
+    reference: _PathLike,
+    images: Sequence[_PathLike],
+    points: _PathLike,
+    basis: Optional[Sequence[int]] = None,
+    search_radius: float = 20.0,
+) -> InvarianceResult:
+    """Detects the reference dots near the approximate positions of ``points`` (a CSV), tracks
+    them through ``images`` in order and measures the image and invariant errors of eq. (7)."""
+    ref_image = load_image(reference)
+    tracker = DotTracker(ref_image, read_points(points), search_radius=search_radius)
+    p_star = tracker.positions
+    b = tuple(int(i) for i in basis) if basis is not None else choose_basis(p_star)
+    q_star = invariant_points(p_star, b)
+    rows = [_track_one(tracker, load_image(path), p_star, q_star, b) for path in images]
+    return InvarianceResult(
+        names=[Path(p).name for p in images],
+        reference_pixels=p_star,
+        basis=(b[0], b[1], b[2]),
+        pixels=np.array([r[0] for r in rows]).reshape(len(rows), len(p_star), 2),
+        found=np.array([r[1] for r in rows], dtype=bool).reshape(len(rows), len(p_star)),
+        image_error=np.array([r[2] for r in rows]).reshape(len(rows), len(p_star)),
+        invariant_error=np.array([r[3] for r in rows]).reshape(len(rows), len(p_star)),
+    )
+
+
+def _track_one(tracker: DotTracker, image: Any, p_star: Any, q_star: Any, basis: Any) -> tuple[Any, Any, Any, Any]:
+    pixels, found = tracker.track(image)
+    image_error = np.where(found, np.linalg.norm(pixels - p_star, axis=1), np.nan)
+    return pixels, found, image_error, _invariant_errors(pixels, found, q_star, basis)
+
+
+def write_invariance_csv(result: InvarianceResult, path: Path) -> Path:
+    """One row per image and point: image, point, u, v, found, image_error_px, invariant_error."""
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["image", "point", "u", "v", "found", "image_error_px", "invariant_error"])
+        for k, name in enumerate(result.names):
+            for i in range(result.pixels.shape[1]):
+                u, v = result.pixels[k, i]
+                w.writerow(
+                    [name, i, f"{u:.6f}", f"{v:.6f}", int(result.found[k, i]),
+                     f"{result.image_error[k, i]:.6g}", f"{result.invariant_error[k, i]:.6g}"]
+                )
+    return path

@@ -1,0 +1,148 @@
+"""Figures of images: the camera views of a run with ``[vision]`` (reference view, first and
+last views with the tracked centroids, an animated GIF of the servo) and the paper's Fig. 3
+for dots tracked through image files.
+
+The views are rendered again from the recorded poses (``vsinv.render`` is deterministic: the
+same pose, time and seed give the simulator's image).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Union
+
+import numpy as np
+import numpy.typing as npt
+
+from ._core import render
+from .plots import _save, _use_agg
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from ._core import RunResult
+    from .images import InvarianceResult
+
+__all__ = ["VIEW_FIGURES", "plot_invariance", "plot_view", "save_servo_gif", "save_view_figures"]
+
+_PathLike = Union[str, "os.PathLike[str]"]
+
+#: File names written by :func:`save_view_figures`, in order.
+VIEW_FIGURES = ("view_reference.png", "view_first.png", "view_last.png", "camera.gif")
+
+#: Frames of the GIF at most (iterations are subsampled evenly).
+GIF_FRAMES = 80
+
+
+def plot_view(
+    image: npt.NDArray[np.uint8],
+    tracked: npt.NDArray[np.float64],
+    reference: npt.NDArray[np.float64],
+    title: str,
+) -> Figure:
+    """A camera view with the tracked centroids (red +) and the reference positions (green o)."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    h, w = image.shape
+    fig, ax = plt.subplots(figsize=(8, 8 * h / w + 0.6))
+    ax.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+    ax.plot(reference[:, 0], reference[:, 1], "o", mfc="none", mec="tab:green", ms=10, label="reference image p* (K*)")
+    ax.plot(tracked[:, 0], tracked[:, 1], "+", color="tab:red", ms=10, mew=1.5, label="tracked centroid")
+    for i, (u, v) in enumerate(tracked):
+        if np.isfinite(u):
+            ax.annotate(str(i), (u, v), xytext=(6, -6), textcoords="offset points", color="yellow", fontsize=8)
+    ax.set_xlim(-0.5, w - 0.5)
+    ax.set_ylim(h - 0.5, -0.5)
+    ax.set_title(title, fontsize=10)
+    ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def _frame_indices(rows: int) -> npt.NDArray[np.int64]:
+    return np.unique(np.linspace(0, rows - 1, min(rows, GIF_FRAMES)).round().astype(np.int64))
+
+
+def _mark(rgb: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], colour: tuple[int, int, int], size: int) -> None:
+    """Draws a small cross at each finite pixel (a few array slices per dot)."""
+    h, w, _ = rgb.shape
+    for u, v in pixels:
+        if not (np.isfinite(u) and np.isfinite(v)):
+            continue
+        iu, iv = int(round(u)), int(round(v))
+        if 0 <= iv < h:
+            rgb[iv, max(iu - size, 0) : min(iu + size + 1, w)] = colour
+        if 0 <= iu < w:
+            rgb[max(iv - size, 0) : min(iv + size + 1, h), iu] = colour
+
+
+def _half(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
+    """2 x 2 block means (odd edges dropped)."""
+    h, w = image.shape[0] // 2 * 2, image.shape[1] // 2 * 2
+    blocks = image[:h, :w].reshape(h // 2, 2, w // 2, 2).astype(np.uint16)
+    return (blocks.sum(axis=(1, 3)) // 4).astype(np.uint8)
+
+
+def save_servo_gif(result: RunResult, path: _PathLike, frame_ms: int = 80) -> Path:
+    """An animated GIF of the camera view during the servo: up to :data:`GIF_FRAMES` frames
+    evenly spaced over the run at half resolution, tracked centroids in red, reference
+    positions in green; 32 colours, so that the sensor noise does not swell the file."""
+    from PIL import Image
+
+    scenario, poses, times = result.scenario, result.pose, result.time
+    frames = []
+    for k in _frame_indices(len(times)):
+        grey = _half(render(scenario, pose=poses[k], time=float(times[k])))
+        rgb = np.repeat(grey[:, :, None], 3, axis=2)
+        _mark(rgb, result.reference_pixels / 2, (40, 200, 40), 3)
+        _mark(rgb, result.pixels[k] / 2, (230, 40, 40), 4)
+        frames.append(Image.fromarray(rgb).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
+    out = Path(path)
+    frames[0].save(out, save_all=True, append_images=frames[1:], duration=frame_ms, loop=0, optimize=True)
+    return out
+
+
+def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
+    """The reference view, the first and last camera views with the tracked centroids, and
+    the servo GIF of a recorded ``[vision]`` run (:data:`VIEW_FIGURES`)."""
+    out = Path(out_dir)
+    sc, last = result.scenario, len(result.time) - 1
+    ref = result.reference_pixels
+    views = [
+        (render(sc, reference=True), ref, "reference view (K* at F*), detected centroids"),
+        (render(sc, pose=result.pose[0], time=float(result.time[0])), result.pixels[0], "first camera view"),
+        (render(sc, pose=result.pose[last], time=float(result.time[last])), result.pixels[last], "last camera view"),
+    ]
+    paths = []
+    for (image, tracked, what), name in zip(views, VIEW_FIGURES):
+        title = f"{sc.name}: {what}, iteration {0 if 'first' in what else last if 'last' in what else '-'}"
+        paths.append(_save(plot_view(image, tracked, ref, title), out, name))
+    paths.append(save_servo_gif(result, out / VIEW_FIGURES[3]))
+    return paths
+
+
+def plot_invariance(result: InvarianceResult) -> Figure:
+    """The paper's Fig. 3: per image, the image error ||p - p*|| and the invariant error
+    ||q - q*|| of every point."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    x = np.arange(1, len(result.names) + 1)
+    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    for i in range(result.image_error.shape[1]):
+        a.plot(x, result.image_error[:, i], "o-", ms=3, lw=1)
+        b.plot(x, result.invariant_error[:, i], "o-", ms=3, lw=1)
+    a.set_title("image error ||p - p*|| (pixels)", fontsize=10)
+    b.set_title("invariant error ||q - q*||", fontsize=10)
+    for ax in (a, b):
+        ax.set_xlabel("image")
+        ax.set_xticks(x)
+        ax.grid(True, alpha=0.3)
+    b.set_ylim(bottom=0.0)
+    fig.suptitle(f"{len(x)} images, basis {list(result.basis)}", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
