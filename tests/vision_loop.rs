@@ -86,3 +86,28 @@ fn stationary_zoom_through_images_keeps_the_invariant_error_near_zero() {
     assert!(max_q < 1e-3, "invariant error {:?}", rec.invariant_error);
     assert!(s.detection_error.unwrap().1 < 0.2);
 }
+
+#[test]
+fn dot_normals_tilt_the_rendered_discs() {
+    use vsinv::sim::{Shot, render_view};
+    use vsinv::vision::{DetectConfig, detect_dots};
+    let facing = builtin("vision-12-12").unwrap();
+    let mut tilted = facing.clone();
+    let n = tilted.object.points.len();
+    // 60 degrees from the optical axis: each dot's image has half the area.
+    let (s, c) = 60f64.to_radians().sin_cos();
+    tilted.object.normals = Some(vec![[s, 0.0, -c]; n]);
+    let area = |sc: &vsinv::sim::Scenario| {
+        let view = render_view(&sc.to_config().unwrap(), Shot::Reference, None).unwrap();
+        let dots = detect_dots(&view.image, &DetectConfig::default()).unwrap();
+        assert_eq!(dots.len(), n);
+        dots.iter().map(|d| d.area).sum::<f64>()
+    };
+    let ratio = area(&tilted) / area(&facing);
+    assert!((ratio - 0.5).abs() < 0.1, "area ratio {ratio}");
+    tilted.object.normals = Some(vec![[0.0, 0.0, -1.0]; n - 1]);
+    let err = tilted.to_config().unwrap_err().to_string();
+    assert!(err.contains("object.normals"), "{err}");
+    tilted.object.normals = Some(vec![[0.0, 0.0, 0.0]; n]);
+    assert!(tilted.to_config().unwrap_err().to_string().contains("normal 0"));
+}

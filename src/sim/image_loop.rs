@@ -10,13 +10,23 @@ use crate::core::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
-use crate::vision::render::{RenderConfig, Renderer};
+use crate::vision::render::{Disc, RenderConfig, Renderer};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// The image size of a camera, which vision needs.
 pub(crate) fn pixel_size(image: Option<ImageSize>, key: &'static str) -> Result<(u32, u32)> {
     let s = image.ok_or(Error::InvalidParameter { name: key, reason: "[vision] needs width and height".into() })?;
     Ok((s.width.ceil() as u32, s.height.ceil() as u32))
+}
+
+/// The dots of a scene: discs of `radius` at its points, with its normals (default: facing
+/// the reference camera).
+pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
+    let points = scene.points().iter();
+    match scene.normals() {
+        Some(normals) => points.zip(normals).map(|(&p, &n)| Disc::new(p, n, radius)).collect(),
+        None => points.map(|&p| Disc::facing_reference(p, radius)).collect(),
+    }
 }
 
 /// What tracking gives the run, per point.
@@ -29,24 +39,23 @@ pub(crate) struct Tracked<'a> {
 /// Rendering and tracking through a run.
 pub(crate) struct ImageLoop {
     renderer: Renderer,
+    discs: Vec<Disc>,
     size: (u32, u32),
     tracker: Option<DotTracker>,
     frame: u64,
     /// Every detection error of a found point, pixels.
     pub(crate) errors: Vec<f64>,
-    /// The last image rendered.
-    pub(crate) last_image: Option<GreyImage>,
 }
 
 impl ImageLoop {
-    pub(crate) fn new(config: RenderConfig, size: (u32, u32)) -> Result<Self> {
+    pub(crate) fn new(config: RenderConfig, scene: &Scene, size: (u32, u32)) -> Result<Self> {
         Ok(Self {
+            discs: scene_discs(scene, config.dot_radius)?,
             renderer: Renderer::new(config)?,
             size,
             tracker: None,
             frame: 0,
             errors: Vec::new(),
-            last_image: None,
         })
     }
 
@@ -60,8 +69,14 @@ impl ImageLoop {
         obs: &mut Observation,
     ) -> Result<GreyImage> {
         let renderer = Renderer::new(config)?;
-        let rendered =
-            renderer.render_points(scene.points(), Some(&obs.visible), &Isometry3::identity(), k_star, size, 0)?;
+        let rendered = renderer.render(
+            &scene_discs(scene, config.dot_radius)?,
+            Some(&obs.visible),
+            &Isometry3::identity(),
+            k_star,
+            size,
+            0,
+        )?;
         let tracker =
             DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default()).map_err(|e| reference_error(&e))?;
         obs.pixels.copy_from_slice(tracker.positions());
@@ -73,15 +88,14 @@ impl ImageLoop {
     /// visibility and each point's detection error (NaN if not found).
     pub(crate) fn observe(
         &mut self,
-        scene: &Scene,
+
         pose: &Isometry3<f64>,
         k: &Intrinsics,
         obs: &Observation,
         run: Tracked<'_>,
     ) -> Result<()> {
         self.frame += 1;
-        let rendered =
-            self.renderer.render_points(scene.points(), Some(&obs.visible), pose, k, self.size, self.frame)?;
+        let rendered = self.renderer.render(&self.discs, Some(&obs.visible), pose, k, self.size, self.frame)?;
         let tracker = match self.tracker.as_mut() {
             Some(t) => t,
             None => self.tracker.insert(DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default())?),
@@ -98,7 +112,6 @@ impl ImageLoop {
                 f64::NAN
             };
         }
-        self.last_image = Some(rendered.image);
         Ok(())
     }
 

@@ -61,6 +61,7 @@ pub struct Scene {
     points: Vec<[f64; 3]>,
     world: Option<PhysicsWorld>,
     bodies: Vec<Body>,
+    normals: Option<Vec<[f64; 3]>>,
 }
 
 impl std::fmt::Debug for Scene {
@@ -72,7 +73,7 @@ impl std::fmt::Debug for Scene {
 impl Clone for Scene {
     fn clone(&self) -> Self {
         // Rebuilding from validated parts cannot fail.
-        Self::build(self.points.clone(), self.bodies.clone())
+        Self { normals: self.normals.clone(), ..Self::build(self.points.clone(), self.bodies.clone()) }
     }
 }
 
@@ -124,7 +125,32 @@ impl Scene {
             world.step();
             world
         });
-        Self { points, world, bodies }
+        Self { points, world, bodies, normals: None }
+    }
+
+    /// The same scene with a normal per point (F*; the orientation of each point's dot when
+    /// images are rendered): one finite, non-zero normal per point.
+    pub fn with_normals(mut self, normals: Vec<[f64; 3]>) -> Result<Self> {
+        if normals.len() != self.points.len() {
+            return Err(Error::Shape {
+                what: "normals",
+                expected: format!("one per point ({})", self.points.len()),
+                got: normals.len().to_string(),
+            });
+        }
+        if let Some(i) = normals.iter().position(|n| !n.iter().all(|v| v.is_finite()) || n.iter().all(|&v| v == 0.0)) {
+            return Err(Error::InvalidParameter {
+                name: "normals",
+                reason: format!("normal {i} must be finite and non-zero"),
+            });
+        }
+        self.normals = Some(normals);
+        Ok(self)
+    }
+
+    /// The dots' normals, if given (None: each dot faces the reference camera).
+    pub fn normals(&self) -> Option<&[[f64; 3]]> {
+        self.normals.as_deref()
     }
 
     /// The feature points in F*.

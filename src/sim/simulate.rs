@@ -272,7 +272,7 @@ impl<'a> Run<'a> {
         let pixel_rule = same_camera || matches!(config.law, Law::Ibvs { .. });
         let (prop1, prop2, _) = stability_verdicts(&config.camera.schedule()?, &config.estimate.matrix(), 1.0, gain)?;
         let images = match config.vision {
-            Some(v) => Some(ImageLoop::new(v, pixel_size(config.camera.image, "camera")?)?),
+            Some(v) => Some(ImageLoop::new(v, &config.scene, pixel_size(config.camera.image, "camera")?)?),
             None => None,
         };
         let estimator = match &config.depths {
@@ -339,7 +339,7 @@ impl<'a> Run<'a> {
             Some(images) => {
                 let run =
                     Tracked { pixels: &mut self.pixels, visible: &mut self.visible, detection: &mut self.detection };
-                images.observe(scene, pose, k, &self.obs, run)
+                images.observe(pose, k, &self.obs, run)
             }
             None => {
                 self.pixels.copy_from_slice(&self.obs.pixels);

@@ -8,7 +8,7 @@ use nalgebra::Isometry3;
 
 use crate::error::{Error, Result};
 use crate::sim::config::SimulationConfig;
-use crate::sim::image_loop::pixel_size;
+use crate::sim::image_loop::{pixel_size, scene_discs};
 use crate::sim::scene::Observation;
 use crate::vision::{GreyImage, Renderer};
 
@@ -54,8 +54,9 @@ pub fn render_view(config: &SimulationConfig, shot: Shot, pose: Option<&Isometry
     let size = pixel_size(camera.image, key)?;
     let mut obs = Observation::default();
     config.scene.observe(&pose, &k, camera.image, &mut obs);
-    let renderer = Renderer::new(config.vision.unwrap_or_default())?;
-    let rendered = renderer.render_points(config.scene.points(), Some(&obs.visible), &pose, &k, size, frame)?;
+    let vision = config.vision.unwrap_or_default();
+    let discs = scene_discs(&config.scene, vision.dot_radius)?;
+    let rendered = Renderer::new(vision)?.render(&discs, Some(&obs.visible), &pose, &k, size, frame)?;
     let visible = obs.visible.iter().zip(&rendered.drawn).map(|(&v, &d)| v && d).collect();
     Ok(View { image: rendered.image, pixels: obs.pixels, visible })
 }

@@ -104,7 +104,13 @@ impl Scenario {
                 .map_err(|e| scenario_error("object.basis", e.to_string()))?;
         }
         let bodies = self.object.bodies.iter().map(body_of).collect();
-        Scene::new(points.clone(), bodies).map_err(|e| scenario_error("object.bodies", e.to_string()))
+        let scene = Scene::new(points.clone(), bodies).map_err(|e| scenario_error("object.bodies", e.to_string()))?;
+        match &self.object.normals {
+            Some(normals) => {
+                scene.with_normals(normals.clone()).map_err(|e| scenario_error("object.normals", e.to_string()))
+            }
+            None => Ok(scene),
+        }
     }
 
     /// `[reference_camera]`, `[camera]`, `[estimate]`: K*, K(t) and K_hat.

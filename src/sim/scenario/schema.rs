@@ -35,6 +35,10 @@ pub struct ObjectSpec {
     /// Occluding bodies.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub bodies: Vec<BodySpec>,
+    /// Per point, the normal of its dot in F* for `[vision]` (default: facing the reference
+    /// camera).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub normals: Option<Vec<[f64; 3]>>,
 }
 
 /// One `[[object.bodies]]` entry.
