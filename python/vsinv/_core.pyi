@@ -43,6 +43,9 @@ __all__ = [
     "DotTracker",
     "load_image",
     "save_image",
+    "exp_twist",
+    "pose_from_position_thetau",
+    "thetau_from_pose",
     "__version__",
 ]
 
@@ -340,3 +343,13 @@ def load_image(path: str | os.PathLike[str]) -> _U8Image:
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes a (height, width) uint8 array as a PNG file."""
+
+def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:
+    """The 4x4 rigid motion of holding a camera twist (vx, vy, vz, wx, wy, wz) for dt seconds:
+    the next pose is ``pose @ exp_twist(twist, dt)``."""
+
+def pose_from_position_thetau(position: _ArrayLike, thetau: _ArrayLike) -> _F64Array:
+    """The 4x4 pose with camera centre ``position`` (m, F*) and theta-u rotation (rad, F*)."""
+
+def thetau_from_pose(pose: _ArrayLike) -> tuple[_F64Array, _F64Array]:
+    """(position (3,), thetau (3,)) of a 4x4 pose, theta in [0, pi]."""

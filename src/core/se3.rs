@@ -42,6 +42,11 @@ pub fn pose_from_position_thetau(position: [f64; 3], thetau: [f64; 3]) -> Isomet
     )
 }
 
+/// The theta-u rotation vector (radians) of a pose's rotation, theta in [0, pi].
+pub fn thetau_from_pose(pose: &Isometry3<f64>) -> [f64; 3] {
+    pose.rotation.scaled_axis().into()
+}
+
 /// The 4x4 homogeneous matrix of a pose.
 pub fn pose_to_matrix(pose: &Isometry3<f64>) -> Matrix4<f64> {
     pose.to_homogeneous()

@@ -5,6 +5,7 @@
 mod arrays;
 mod errors;
 mod planning;
+mod se3;
 mod sim;
 mod vision;
 
@@ -558,6 +559,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(vision::detect_dots, m)?)?;
     m.add_function(wrap_pyfunction!(vision::load_image, m)?)?;
     m.add_function(wrap_pyfunction!(vision::save_image, m)?)?;
+    m.add_function(wrap_pyfunction!(se3::exp_twist, m)?)?;
+    m.add_function(wrap_pyfunction!(se3::pose_from_position_thetau, m)?)?;
+    m.add_function(wrap_pyfunction!(se3::thetau_from_pose, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
