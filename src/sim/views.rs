@@ -1,6 +1,6 @@
 //! A scenario's views as images: what the reference camera sees at F*, or the servo camera at
 //! a pose and time, rendered with the scenario's `[vision]` settings (the defaults of
-//! [`RenderConfig`] without that table), with the true projections of the dots' centres.
+//! [`RenderConfig`](crate::vision::render::RenderConfig) without that table), with the true projections of the dots' centres.
 //! The image of the servo camera at `time` carries the sensor noise of the simulator's
 //! image at that iteration, so a view can be compared with a run.
 
