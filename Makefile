@@ -44,6 +44,7 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
 
+# IBVS does not converge on a lens change: its exit code 1 (not converged) is the point of the comparison.
 run: install-run
 	$(PYTHON) -m vsinv run lens-12-6 --out results/lens-12-6
-	$(PYTHON) -m vsinv run ibvs-12-6 --out results/ibvs-12-6
+	$(PYTHON) -m vsinv run ibvs-12-6 --out results/ibvs-12-6 || test $$? -eq 1

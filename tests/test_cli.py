@@ -98,14 +98,14 @@ def test_run_json(capsys):
 
 def test_json_writes_nan_as_null_and_plots_a_lost_run(capsys, tmp_path):
     # Turned 60 degrees away, the camera sees no point: the run ends at once with status
-    # lost_features (exit code 0) and NaN invariant error and tau values.
+    # lost_features (exit code 1: not converged) and NaN invariant error and tau values.
     d = vsinv.load_scenario("lens-12-6").to_dict()
     d["name"] = "lost-at-start"
     d["start"]["rotation"] = [0.0, 60.0, 0.0]
     path = tmp_path / "lost.toml"
     path.write_text(vsinv.Scenario.from_dict(d).to_toml())
     code, out, err = run_cli(capsys, "run", str(path), "--json", "--out", str(tmp_path / "out"), "--no-progress")
-    assert code == 0, err
+    assert code == 1, err
     assert "NaN" not in out
     summary = json.loads(out)
     assert summary["status"] == "lost_features"

@@ -104,6 +104,10 @@ class InvariantController:
         basis: _Basis = (0, 1, 2),
         feedforward: bool = True,
         min_structure_ratio: float = 0.001,
+        rz_task: Literal["angle", "tau21"] = "angle",
+        adaptive_gain: tuple[float, float, float] | None = None,
+        max_linear_speed: float | None = None,
+        max_angular_speed: float | None = None,
     ) -> InvariantController: ...
     def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
     def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None: ...
@@ -126,6 +130,10 @@ class InvariantController:
     def tau_22(self) -> float: ...
     @property
     def t_matrix(self) -> _F64Array: ...
+    @property
+    def last_gain(self) -> float: ...
+    @property
+    def saturation(self) -> float: ...
 
 @final
 class IbvsController:
@@ -138,10 +146,17 @@ class IbvsController:
         gain: float = 1.0,
         interaction: Literal["current", "desired", "mean"] = "current",
         reference_depths: _ArrayLike | None = None,
+        adaptive_gain: tuple[float, float, float] | None = None,
+        max_linear_speed: float | None = None,
+        max_angular_speed: float | None = None,
     ) -> IbvsController: ...
     def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
     @property
     def pixel_error(self) -> float | None: ...
+    @property
+    def last_gain(self) -> float | None: ...
+    @property
+    def saturation(self) -> float | None: ...
 
 @final
 class StabilityReport:

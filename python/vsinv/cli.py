@@ -3,9 +3,12 @@
 ``vsinv render NAME|FILE --out DIR`` and ``vsinv invariance REF.png IMG.png ... --points CSV``
 (the image commands, in :mod:`vsinv.cli_images`).
 
-Exit codes: 0 when a run or sweep ends (whatever the statuses, which are reported), 2 for bad
-input (unknown scenario, invalid scenario file, bad --vary/--random, unwritable output
-directory), 130 on Ctrl-C.
+Exit codes: ``vsinv run`` returns 0 when the run's status is ``converged`` and 1 for every
+other status (``max_iterations``, ``lost_features``, ``diverged``, ``degenerate``, ``rz_trap``,
+``observed``), which it reports; ``sweep``, ``render`` and ``invariance`` return 0 when they
+finish (a sweep's statuses are in its table); every command returns 2 for bad input (unknown
+scenario, invalid scenario file, bad --vary/--random, unwritable output directory) and 130 on
+Ctrl-C.
 """
 
 from __future__ import annotations
@@ -243,7 +246,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(f"wrote {len(written)} files to {out_dir}:", file=listing)
         for path in written:
             print(f"  {path}", file=listing)
-    return 0
+    return 0 if summary.get("status") == "converged" else 1
 
 
 class UsageError(ValueError):

@@ -3,12 +3,14 @@
 
 use nalgebra::{Matrix2x6, Matrix3, Matrix5, Vector2, Vector3, Vector5, Vector6};
 
+use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::{Intrinsics, normalised_interaction};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::core::jacobian::{
     DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction,
-    rz_from_interactions,
 };
+use crate::core::rz_task::{RzTask, linearise};
+use crate::core::saturation::TwistLimits;
 use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
 
 /// A visual-servoing control law: current pixels and depth estimates in, camera twist
@@ -43,11 +45,27 @@ pub struct InvariantControllerConfig {
     pub feedforward: bool,
     /// Threshold on `sigma_5/sigma_1` of the depth-balanced `J_hat` (degenerate structure).
     pub min_structure_ratio: f64,
+    /// The task on the rotation about the optical axis (default: the general case, any start
+    /// angle; [`RzTask::Tau21`] is the paper's eq. 24).
+    pub rz_task: RzTask,
+    /// A gain that depends on the invariant error `x = ||s - s*||`: when set, lambda is
+    /// `lambda(x)` instead of `gain`, and eta is `gain_rz lambda(x) / lambda(0)`.
+    pub adaptive_gain: Option<AdaptiveGain>,
+    /// Largest linear and angular speeds: the twist is scaled as a whole to meet them.
+    pub twist_limits: Option<TwistLimits>,
 }
 
 impl Default for InvariantControllerConfig {
     fn default() -> Self {
-        Self { gain: 1.0, gain_rz: 1.0, feedforward: true, min_structure_ratio: DEFAULT_MIN_STRUCTURE_RATIO }
+        Self {
+            gain: 1.0,
+            gain_rz: 1.0,
+            feedforward: true,
+            min_structure_ratio: DEFAULT_MIN_STRUCTURE_RATIO,
+            rz_task: RzTask::Angle,
+            adaptive_gain: None,
+            twist_limits: None,
+        }
     }
 }
 
@@ -64,11 +82,15 @@ pub struct ControlState {
     pub invariant_error: f64,
     /// `T = Q Q*^-1` (eq. 21).
     pub t: Matrix3<f64>,
-    /// The coefficient `a_hat` of eq. (24).
+    /// The coefficient `a_hat` of `w_z` in the rz task's derivative (eq. 24).
     pub a_hat: f64,
     /// `J_hat^+ ds*/dt` (zero for a still reference), whether or not the law adds it: the
     /// disturbance `b(t)` of eq. (19) is `(A - I)` times it with feed-forward, minus it without.
     pub reference_rate_term: Vector5<f64>,
+    /// The lambda used (`gain`, or the adaptive gain at the invariant error).
+    pub gain: f64,
+    /// The factor the twist limits scaled the law's twist by (1: within the limits).
+    pub saturation: f64,
 }
 
 impl ControlState {
@@ -124,6 +146,12 @@ impl InvariantController {
         check_point_count(n, MIN_POINTS)?;
         check_positive("gain", config.gain)?;
         check_positive("gain_rz", config.gain_rz)?;
+        if let Some(g) = &config.adaptive_gain {
+            g.validate()?;
+        }
+        if let Some(l) = &config.twist_limits {
+            l.validate()?;
+        }
         if !(config.min_structure_ratio.is_finite() && config.min_structure_ratio >= 0.0) {
             return Err(Error::InvalidParameter {
                 name: "min_structure_ratio",
@@ -246,21 +274,28 @@ impl InvariantController {
         let lx_basis = self.basis.map(|i| self.normalised_interaction(pixels, depths, i));
         let normal = self.normal_equations(pixels, depths, visible, &frame, &lx_basis);
         let (eps, rate_term) = self.solve_five_dof(&normal, mean_visible(depths, visible))?;
+        let invariant_error = normal.err2.sqrt();
+        let gain = self.config.adaptive_gain.map_or(self.config.gain, |g| g.value(invariant_error));
         // mu = -lambda eps + J_hat^+ ds*/dt  (eq. 17).
-        let mut mu = -self.config.gain * eps;
+        let mut mu = -gain * eps;
         if self.config.feedforward && self.reference_moves {
             mu += rate_term;
         }
-        let (wz, eps_z, a_hat) = self.rz_velocity(pixels, &lx_basis, &mu)?;
-        let twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
+        let t = self.reference.t_matrix(&frame);
+        let gain_rz = self.config.adaptive_gain.map_or(self.config.gain_rz, |g| self.config.gain_rz * gain / g.at_zero);
+        let (wz, eps_z, a_hat) = self.rz_velocity(&t, &lx_basis, &mu, gain_rz)?;
+        let mut twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
+        let saturation = self.config.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
         self.state = Some(ControlState {
             twist,
             eps,
             eps_z,
-            invariant_error: normal.err2.sqrt(),
-            t: self.reference.t_matrix(&frame),
+            invariant_error,
+            t,
             a_hat,
             reference_rate_term: rate_term,
+            gain,
+            saturation,
         });
         Ok(twist)
     }
@@ -357,27 +392,21 @@ impl InvariantController {
         Ok((chol.solve(&normal.jte), rate_term))
     }
 
-    /// eps_z = det(Q*) tau_21 and w_z = -(eta eps_z + c_hat^T mu) / a_hat (eq. 24); returns
-    /// `(w_z, eps_z, a_hat)`.
+    /// The rz law: `w_z = -(eta e + c_hat^T mu) / a_hat` (eq. 24) for the configured task `e`
+    /// (see [`rz_task`](crate::core::rz_task)); returns `(w_z, eps_z, a_hat)`, with
+    /// `eps_z = det(Q*) tau_21` whichever the task.
     #[inline]
     fn rz_velocity(
         &self,
-        pixels: &[[f64; 2]],
+        t: &Matrix3<f64>,
         lx_basis: &[Matrix2x6<f64>; 3],
         mu: &Vector5<f64>,
+        gain_rz: f64,
     ) -> Result<(f64, f64, f64)> {
-        let [b0, b1, b2] = self.basis;
-        let v = Vector3::new(pixels[b0][1], pixels[b1][1], pixels[b2][1]);
-        let eps_z = self.reference.eps_z(&v);
-        // The v-row of a pixel interaction matrix is K[1,1] times the normalised y-row (K[1,0] = 0).
-        let k11 = self.k[(1, 1)];
-        let (a_x, c_x) = rz_from_interactions(&self.reference, lx_basis);
-        let (a_hat, c_hat) = (a_x * k11, c_x * k11);
-        let scale: f64 = (0..3).map(|j| (self.reference.adj_col0[j] * lx_basis[j][(1, 5)] * k11).abs()).sum();
-        if a_hat.is_nan() || a_hat.abs() <= 1e-9 * scale {
-            return Err(Error::RzSingular { a_hat });
-        }
-        Ok((-(self.config.gain_rz * eps_z + c_hat.dot(mu)) / a_hat, eps_z, a_hat))
+        let r = &self.reference;
+        let task = linearise(self.config.rz_task, t, &r.q_star_inv, r.det_q_star, &self.k, lx_basis)?;
+        let wz = -(gain_rz * task.value + task.c.dot(mu)) / task.a;
+        Ok((wz, r.det_q_star * t[(1, 0)], task.a))
     }
 
     /// The stop rule for different cameras (sec. 5.2): `||s - s*|| < invariant_tol`,

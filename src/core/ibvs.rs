@@ -5,7 +5,9 @@
 
 use nalgebra::{Matrix6, Vector6};
 
+use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::{Intrinsics, pixel_interaction};
+use crate::core::saturation::TwistLimits;
 use crate::error::{Error, Result, check_depths, check_finite_points, check_positive, check_step_inputs};
 
 /// Where the interaction matrix is evaluated (`"current"`, `"desired"` or `"mean"` in
@@ -59,7 +61,10 @@ pub struct IbvsController {
     k_inv: nalgebra::Matrix3<f64>,
     gain: f64,
     interaction: Interaction,
+    adaptive_gain: Option<AdaptiveGain>,
+    twist_limits: Option<TwistLimits>,
     last_error: Option<f64>,
+    last_command: Option<(f64, f64)>,
 }
 
 impl IbvsController {
@@ -94,8 +99,35 @@ impl IbvsController {
             k_inv,
             gain,
             interaction,
+            adaptive_gain: None,
+            twist_limits: None,
             last_error: None,
+            last_command: None,
         })
+    }
+
+    /// A gain that depends on the pixel error `x = ||p - p*||` (pixels, all used points):
+    /// lambda is `lambda(x)` instead of the constant gain; `None` goes back to it.
+    pub fn set_adaptive_gain(&mut self, gain: Option<AdaptiveGain>) -> Result<()> {
+        if let Some(g) = &gain {
+            g.validate()?;
+        }
+        self.adaptive_gain = gain;
+        Ok(())
+    }
+
+    /// Largest linear and angular speeds: the twist is scaled as a whole to meet them.
+    pub fn set_twist_limits(&mut self, limits: Option<TwistLimits>) -> Result<()> {
+        if let Some(l) = &limits {
+            l.validate()?;
+        }
+        self.twist_limits = limits;
+        Ok(())
+    }
+
+    /// The lambda used and the factor the twist limits scaled the twist by, at the last step.
+    pub fn last_command(&self) -> Option<(f64, f64)> {
+        self.last_command
     }
 
     /// Root-mean-square pixel error `sqrt(mean ||p_k - p_k*||^2)` at the last step.
@@ -147,6 +179,10 @@ impl IbvsController {
         }
         let chol = ltl.cholesky().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: 0.0 })?;
         self.last_error = Some((err2 / used as f64).sqrt());
-        Ok(chol.solve(&lte) * -self.gain)
+        let gain = self.adaptive_gain.map_or(self.gain, |g| g.value(err2.sqrt()));
+        let mut twist = chol.solve(&lte) * -gain;
+        let saturation = self.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
+        self.last_command = Some((gain, saturation));
+        Ok(twist)
     }
 }

@@ -7,12 +7,16 @@
 //! | projective invariant transform, sec. 2.3, eq. (21) | [`invariant`] |
 //! | invariant Jacobian, sec. 4.1, eqs. (11)-(13), (23) | [`jacobian`] |
 //! | control laws, eqs. (14), (17), (24) | [`control`] |
+//! | the rz task: eq. (24) and the general case of any start angle | [`rz_task`] |
 //! | classic IBVS baseline | [`ibvs`] |
+//! | a gain that depends on the error (ViSP's adaptive gain) | [`adaptive_gain`] |
+//! | twist saturation keeping the twist's direction | [`saturation`] |
 //! | Props. 1-3, appendix B | [`stability`] |
 //! | plane + parallax (eq. 9), the invariant-space path (eq. 10), sec. 3 | [`planning`] |
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
 //! | rigid motions, exact twist integration | [`se3`] |
 
+pub mod adaptive_gain;
 pub mod camera;
 pub mod control;
 pub mod depth;
@@ -20,5 +24,7 @@ pub mod ibvs;
 pub mod invariant;
 pub mod jacobian;
 pub mod planning;
+pub mod rz_task;
+pub mod saturation;
 pub mod se3;
 pub mod stability;

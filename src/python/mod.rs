@@ -17,9 +17,11 @@ use pyo3::types::PyString;
 use arrays::{F64Array, f64_array, from_matrix, mat, points2, points3, vec1};
 use errors::{invalid_input, to_py};
 
+use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::core::control::{Controller, InvariantController, InvariantControllerConfig};
 use crate::core::ibvs::{IbvsController, Interaction};
+use crate::core::saturation::TwistLimits;
 use crate::core::stability::{StabilityReport, check_upper_triangular};
 
 /// A basis argument: three point indices, or "auto" for the widest triangle of the
@@ -284,9 +286,10 @@ impl PyInvariantController {
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
-        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO),
-        text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis=(0, 1, 2), feedforward=True, min_structure_ratio=0.001)"
+        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO, rz_task = "angle", adaptive_gain = None, max_linear_speed = None, max_angular_speed = None),
+        text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis=(0, 1, 2), feedforward=True, min_structure_ratio=0.001, rz_task='angle', adaptive_gain=None, max_linear_speed=None, max_angular_speed=None)"
     )]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         reference_pixels: &Bound<'_, PyAny>,
         K_hat: &Bound<'_, PyAny>,
@@ -295,11 +298,25 @@ impl PyInvariantController {
         basis: BasisArg,
         feedforward: bool,
         min_structure_ratio: f64,
+        rz_task: &str,
+        adaptive_gain: Option<(f64, f64, f64)>,
+        max_linear_speed: Option<f64>,
+        max_angular_speed: Option<f64>,
     ) -> PyResult<Self> {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let px = points2(&a)?;
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let config = InvariantControllerConfig { gain, gain_rz, feedforward, min_structure_ratio };
+        let rz_task = rz_task.parse().map_err(to_py)?;
+        let (adaptive_gain, twist_limits) = command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
+        let config = InvariantControllerConfig {
+            gain,
+            gain_rz,
+            feedforward,
+            min_structure_ratio,
+            rz_task,
+            adaptive_gain,
+            twist_limits,
+        };
         let inner = InvariantController::new(px, k_hat, basis.resolve(px)?, config).map_err(to_py)?;
         Ok(Self { inner })
     }
@@ -382,6 +399,33 @@ impl PyInvariantController {
     fn t_matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         from_matrix(py, &state_of(&self.inner)?.t)
     }
+    /// The lambda used at the last step (`gain`, or the adaptive gain at the invariant error).
+    #[getter]
+    fn last_gain(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.gain)
+    }
+    /// The factor the speed limits scaled the last twist by (1.0: within the limits).
+    #[getter]
+    fn saturation(&self) -> PyResult<f64> {
+        Ok(state_of(&self.inner)?.saturation)
+    }
+}
+
+/// The adaptive gain `(lambda_0, lambda_inf, lambda'_0)` and the speed limits (m/s, rad/s;
+/// None leaves one free) of a controller.
+fn command_options(
+    adaptive_gain: Option<(f64, f64, f64)>,
+    max_linear_speed: Option<f64>,
+    max_angular_speed: Option<f64>,
+) -> PyResult<(Option<AdaptiveGain>, Option<TwistLimits>)> {
+    let gain = adaptive_gain.map(|(a, b, c)| AdaptiveGain::new(a, b, c)).transpose().map_err(to_py)?;
+    let limits = if max_linear_speed.is_none() && max_angular_speed.is_none() {
+        None
+    } else {
+        let (v, w) = (max_linear_speed.unwrap_or(f64::INFINITY), max_angular_speed.unwrap_or(f64::INFINITY));
+        Some(TwistLimits::new(v, w).map_err(to_py)?)
+    };
+    Ok((gain, limits))
 }
 
 /// Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*).
@@ -395,15 +439,19 @@ impl PyIbvsController {
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
-        signature = (reference_pixels, K_hat, gain = 1.0, interaction = "current", reference_depths = None),
-        text_signature = "(reference_pixels, K_hat, gain=1.0, interaction='current', reference_depths=None)"
+        signature = (reference_pixels, K_hat, gain = 1.0, interaction = "current", reference_depths = None, adaptive_gain = None, max_linear_speed = None, max_angular_speed = None),
+        text_signature = "(reference_pixels, K_hat, gain=1.0, interaction='current', reference_depths=None, adaptive_gain=None, max_linear_speed=None, max_angular_speed=None)"
     )]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         reference_pixels: &Bound<'_, PyAny>,
         K_hat: &Bound<'_, PyAny>,
         gain: f64,
         interaction: &str,
         reference_depths: Option<&Bound<'_, PyAny>>,
+        adaptive_gain: Option<(f64, f64, f64)>,
+        max_linear_speed: Option<f64>,
+        max_angular_speed: Option<f64>,
     ) -> PyResult<Self> {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let k_hat = intrinsics(K_hat, "K_hat")?;
@@ -413,7 +461,10 @@ impl PyIbvsController {
             Some(z) => Some(z.as_slice()?),
             None => None,
         };
-        let inner = IbvsController::new(points2(&a)?, k_hat, gain, kind, z_slice).map_err(to_py)?;
+        let mut inner = IbvsController::new(points2(&a)?, k_hat, gain, kind, z_slice).map_err(to_py)?;
+        let (adaptive_gain, twist_limits) = command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
+        inner.set_adaptive_gain(adaptive_gain).map_err(to_py)?;
+        inner.set_twist_limits(twist_limits).map_err(to_py)?;
         Ok(Self { inner })
     }
 
@@ -431,6 +482,16 @@ impl PyIbvsController {
     #[getter]
     fn pixel_error(&self) -> Option<f64> {
         self.inner.last_pixel_error()
+    }
+    /// The lambda used at the last step (None before the first step).
+    #[getter]
+    fn last_gain(&self) -> Option<f64> {
+        self.inner.last_command().map(|c| c.0)
+    }
+    /// The factor the speed limits scaled the last twist by (None before the first step).
+    #[getter]
+    fn saturation(&self) -> Option<f64> {
+        self.inner.last_command().map(|c| c.1)
     }
 }
 

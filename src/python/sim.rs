@@ -203,6 +203,8 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("start_rotation_error_deg", s.start_error.1.to_degrees())?;
     d.set_item("basis", s.basis.to_vec())?;
     d.set_item("max_line_deviation_mm", s.max_line_deviation * 1e3)?;
+    d.set_item("peak_linear_speed_m_s", s.peak_speeds.0)?;
+    d.set_item("peak_angular_speed_deg_s", s.peak_speeds.1.to_degrees())?;
     let t = s.tracking.as_ref();
     d.set_item("path_duration_s", t.map(|t| t.duration))?;
     d.set_item("plane_parallax_residual", t.map(|t| t.plane_parallax_residual))?;

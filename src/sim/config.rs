@@ -2,9 +2,11 @@
 
 use nalgebra::Isometry3;
 
+use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::core::control::InvariantControllerConfig;
 use crate::core::ibvs::Interaction;
+use crate::core::saturation::TwistLimits;
 use crate::sim::camera_model::CameraModel;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::robot::Robot;
@@ -23,6 +25,10 @@ pub enum Law {
         gain: f64,
         /// Where the interaction matrix is evaluated.
         interaction: Interaction,
+        /// A gain that depends on the pixel error norm, replacing `gain`.
+        adaptive_gain: Option<AdaptiveGain>,
+        /// Largest linear and angular speeds.
+        twist_limits: Option<TwistLimits>,
     },
 }
 

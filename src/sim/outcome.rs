@@ -13,6 +13,12 @@ pub enum Status {
     Diverged,
     /// The structure cannot be servoed (planar object, equal depth estimates, collinear basis).
     Degenerate,
+    /// The invariant law settled at the rz = pi equilibrium (`s = s*`, `tau_21 = 0`, but
+    /// `tau_11 < 0` or `tau_22 < 0`): the camera is rotated by about 180 degrees about its
+    /// optical axis (the paper's eq. 24 alone, from a start beyond 90 degrees).
+    RzTrap,
+    /// No control (`law = "none"`, a stationary camera): every image was taken.
+    Observed,
 }
 
 impl Status {
@@ -24,6 +30,8 @@ impl Status {
             Status::LostFeatures => "lost_features",
             Status::Diverged => "diverged",
             Status::Degenerate => "degenerate",
+            Status::RzTrap => "rz_trap",
+            Status::Observed => "observed",
         }
     }
 }
@@ -68,6 +76,9 @@ pub struct Summary {
     pub basis: [usize; 3],
     /// Largest distance of the camera centre from the segment between start and goal, metres.
     pub max_line_deviation: f64,
+    /// Largest commanded linear (m/s) and angular (rad/s) speeds (the law's twist, after its
+    /// twist limits, before the robot's joint limits).
+    pub peak_speeds: (f64, f64),
     /// Prop. 3 figures along the planned path (None without a path).
     pub tracking: Option<Tracking>,
     /// Images in the loop: median and largest distance of a tracked centroid from the true

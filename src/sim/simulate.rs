@@ -123,8 +123,10 @@ impl AnyController {
                 Self::Invariant(Box::new(InvariantController::new(pixels, config.estimate, reference.basis, c)?)),
                 c.gain,
             ),
-            Law::Ibvs { gain, interaction } => {
-                let ibvs = IbvsController::new(pixels, config.estimate, gain, interaction, Some(reference_depths))?;
+            Law::Ibvs { gain, interaction, adaptive_gain, twist_limits } => {
+                let mut ibvs = IbvsController::new(pixels, config.estimate, gain, interaction, Some(reference_depths))?;
+                ibvs.set_adaptive_gain(adaptive_gain)?;
+                ibvs.set_twist_limits(twist_limits)?;
                 (Self::Ibvs(Box::new(ibvs)), gain)
             }
             Law::Observe => (Self::Observe, 1.0),
@@ -245,6 +247,8 @@ struct Run<'a> {
     joints: [f64; 6],
     window: StopWindow,
     max_line_deviation: f64,
+    /// Largest commanded linear (m/s) and angular (rad/s) speeds so far.
+    peak_speeds: (f64, f64),
     estimator: Option<Box<dyn DepthEstimator>>,
     estimated: Vec<f64>,
     path: Option<PathTracking>,
@@ -298,6 +302,7 @@ impl<'a> Run<'a> {
             joints: config.robot.joints(&config.start),
             window: StopWindow::new(config.stop.window),
             max_line_deviation: 0.0,
+            peak_speeds: (0.0, 0.0),
             estimator,
             estimated: vec![0.0; n],
             path: None,
@@ -401,13 +406,39 @@ impl<'a> Run<'a> {
         if converged {
             return Some((Status::Converged, "stop rule met".into()));
         }
-        if self.iteration >= stop.max_iterations {
+        let at_limit = self.iteration >= stop.max_iterations;
+        if let Some(end) = self.rz_trap(at_limit) {
+            return Some(end);
+        }
+        if at_limit && matches!(self.config.law, Law::Observe) {
+            return Some((Status::Observed, format!("{} images taken (no control)", self.iteration + 1)));
+        }
+        if at_limit {
             return Some((Status::MaxIterations, format!("iteration limit {} reached", stop.max_iterations)));
         }
         if self.iteration.is_multiple_of(64) && !progress(self.iteration, stop.max_iterations) {
             return Some((Status::MaxIterations, "stopped by the caller".into()));
         }
         None
+    }
+
+    /// The rz = pi equilibrium of the invariant law: `s = s*` and `tau_21 = 0` reached with
+    /// `tau_11 < 0` or `tau_22 < 0`, or either sign wrong when the iteration limit is reached.
+    fn rz_trap(&self, at_limit: bool) -> Option<End> {
+        if !matches!(self.config.law, Law::Invariant(_)) {
+            return None;
+        }
+        let (m, stop) = (&self.metrics, &self.config.stop);
+        let [tau11, tau21, tau22] = m.tau;
+        let flipped = tau11 < 0.0 || tau22 < 0.0;
+        let settled = m.invariant_error < stop.invariant_error && tau21.abs() < stop.tau21;
+        (flipped && (settled || at_limit)).then(|| {
+            let why = format!(
+                "settled rotated by about 180 degrees about the optical axis (tau_11 = {tau11:.3}, tau_22 = {tau22:.3}): \
+                 the rz = pi equilibrium of eq. (24); use control.rz_task = \"angle\""
+            );
+            (Status::RzTrap, why)
+        })
     }
 
     fn lost_features(&self) -> Option<End> {
@@ -479,6 +510,8 @@ impl<'a> Run<'a> {
 
     /// Sends the twist to the robot and integrates it over one period.
     fn move_robot(&mut self, twist: &Vector6<f64>) -> std::result::Result<(), End> {
+        let (v, w) = (twist.fixed_rows::<3>(0).norm(), twist.fixed_rows::<3>(3).norm());
+        self.peak_speeds = (self.peak_speeds.0.max(v), self.peak_speeds.1.max(w));
         let robot = &self.config.robot;
         let moved =
             robot.step_pose(&self.pose, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
@@ -516,6 +549,7 @@ impl<'a> Run<'a> {
             start_error: pose_error(&goal, &self.config.start),
             basis: self.reference.basis,
             max_line_deviation: self.max_line_deviation,
+            peak_speeds: self.peak_speeds,
             tracking: self.path.as_ref().map(|p| p.summary(self.gain)),
             detection_error: self.images.as_ref().map(ImageLoop::error_summary),
         };

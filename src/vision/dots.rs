@@ -99,8 +99,9 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
     Ok(dots)
 }
 
-/// The dots of a window with a given threshold (components cut by the window's border that is
-/// not the image's are dropped: they are not whole).
+/// The dots of a window with a given threshold. Components that touch the window's border
+/// (the image's border included) are dropped: they may not be whole, and the centroid of a
+/// cut dot is not its centre.
 pub fn detect_in<C: Pixels>(
     image: &GreyBuffer<C>,
     window: Window,
@@ -118,7 +119,7 @@ pub fn detect_in<C: Pixels>(
         .iter()
         .enumerate()
         .filter(|(_, s)| s.area >= min_area && max_area.is_none_or(|m| s.area <= m))
-        .filter(|(_, s)| !cut_by_window(s, window, image))
+        .filter(|(_, s)| !cut_by_window(s, window))
         .map(|(label, s)| weighted_dot(&patch, &labels, label as u32 + 1, s, window))
         .collect()
 }
@@ -183,12 +184,8 @@ fn component_stats(labels: &image::ImageBuffer<image::Luma<u32>, Vec<u32>>) -> V
     stats
 }
 
-fn cut_by_window<C: Pixels>(s: &Stats, w: Window, image: &GreyBuffer<C>) -> bool {
-    let (iw, ih) = (image.width(), image.height());
-    (s.bbox[0] == 0 && w.u0 > 0)
-        || (s.bbox[1] == 0 && w.v0 > 0)
-        || (s.bbox[2] == w.width() - 1 && w.u1 < iw - 1)
-        || (s.bbox[3] == w.height() - 1 && w.v1 < ih - 1)
+fn cut_by_window(s: &Stats, w: Window) -> bool {
+    s.bbox[0] == 0 || s.bbox[1] == 0 || s.bbox[2] == w.width() - 1 || s.bbox[3] == w.height() - 1
 }
 
 /// The intensity-weighted centroid over the grown bounding box, weights above the median of

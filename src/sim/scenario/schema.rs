@@ -5,7 +5,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::ibvs::Interaction;
+use crate::core::rz_task::RzTask;
 use crate::sim::camera_model::Zoom;
 use crate::sim::config::{Noise, PathPlan, StopRules};
 use crate::vision::RenderConfig;
@@ -162,6 +164,18 @@ pub struct ControlSpec {
     /// IBVS interaction matrix.
     #[serde(default)]
     pub interaction: Interaction,
+    /// The invariant law's task on the rotation about the optical axis.
+    #[serde(default)]
+    pub rz_task: RzTask,
+    /// Largest commanded linear speed, m/s (the twist is scaled as a whole).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_linear_speed: Option<f64>,
+    /// Largest commanded angular speed, deg/s (the twist is scaled as a whole).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_angular_speed_deg: Option<f64>,
+    /// A gain that depends on the error norm (ViSP's adaptive gain); replaces `gain`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub adaptive_gain: Option<AdaptiveGain>,
 }
 
 fn default_law() -> LawName {
@@ -181,6 +195,10 @@ impl Default for ControlSpec {
             depths: default_depths(),
             feedforward: true,
             interaction: Interaction::Current,
+            rz_task: RzTask::Angle,
+            max_linear_speed: None,
+            max_angular_speed_deg: None,
+            adaptive_gain: None,
         }
     }
 }
