@@ -183,6 +183,12 @@ fn arm_bad_urdf_is_an_error() {
         let err = ArmModel::from_urdf_str(text, "a").unwrap_err();
         assert!(matches!(err, Error::Urdf { ref file, .. } if file == "<string>"), "{text:?}: {err}");
     }
+    for (from, to) in
+        [(r#"xyz="1 0 0""#, r#"xyz="1 0""#), (r#"xyz="1 0 0""#, r#"xyz="a b c""#), ("\"revolute\"", "\"hinge\"")]
+    {
+        let text = TWO_LINKS.replacen(from, to, 1);
+        assert!(urdf_message(ArmModel::from_urdf_str(&text, "c")).contains("not valid URDF"), "{to}");
+    }
     assert!(urdf_message(ArmModel::from_urdf_str(TWO_LINKS, "hand")).contains("no link `hand`"));
     assert!(urdf_message(ArmModel::from_urdf_str(TWO_LINKS, "a")).contains("no actuated joint"));
     let floating = TWO_LINKS.replacen("\"revolute\"", "\"floating\"", 1);
