@@ -110,6 +110,15 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A robot description (URDF) that cannot be read or does not describe a serial arm;
+    /// `message` names the link or joint at fault.
+    #[error("URDF {file}: {message}")]
+    Urdf {
+        /// The file path, `builtin:<name>` or `<string>`.
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]

@@ -7,6 +7,7 @@
 //! |---|---|
 //! | feature points, occluding bodies, visibility | [`scene`] |
 //! | free-flying camera, Cartesian robot with joint limits | [`robot`] |
+//! | serial arms from URDF: kinematics, Jacobians, built-in UR5 and Panda | [`arm`] |
 //! | fixed cameras and zooms | [`camera_model`] |
 //! | true, reference and estimated depths (appendix A) | [`depth_source`] |
 //! | what a run needs: law, noise, stop rules | [`config`] |
@@ -18,6 +19,7 @@
 //! | scenario files (TOML, JSON) and the built-in scenarios | [`scenario`] |
 //! | many runs in parallel (rayon) | [`batch`] |
 
+pub mod arm;
 #[cfg(feature = "batch")]
 pub mod batch;
 pub mod camera_model;
