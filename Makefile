@@ -43,6 +43,7 @@ bench: install
 	cargo bench --bench vsinv
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
+	$(PYTHON) benches/vision.py
 
 run: install-run
 	$(PYTHON) -m vsinv run lens-12-6 --out results/lens-12-6
