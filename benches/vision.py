@@ -3,8 +3,8 @@
 How to run (from the repository root, with the package and ``opencv-python-headless``
 installed)::
 
-    python benches/vision.py                 # about 40 s
-    python benches/vision.py --quick         # 2 rounds instead of 5, about 20 s
+    python benches/vision.py                 # under a minute
+    python benches/vision.py --quick         # 2 rounds instead of 5
     python benches/vision.py --json out.json # also write the numbers as JSON
 
 ``make bench`` runs it after the criterion benchmarks. The images are the 832 x 624 views of
