@@ -43,6 +43,7 @@ bench: install
 	cargo bench --bench vsinv
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
+	$(PYTHON) benches/vision.py
 
 # IBVS does not converge on a lens change: its exit code 1 (not converged) is the point of the comparison.
 run: install-run

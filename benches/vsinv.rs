@@ -22,6 +22,21 @@
 //! - `batch/lens-12-6x256/threads`: [`vsinv::sim::batch::run_batch`] of 256 copies of the
 //!   `lens-12-6` configuration on 1 and 2 worker threads (thread-pool creation included,
 //!   as every call to `run_batch` pays it); throughput in runs per second.
+//! - `vision/render`: [`vsinv::vision::Renderer::render`] of one 832 x 624 image of the 12
+//!   dots of the built-in scenario `vision-12-6` (3 mm discs, blur 0.8 px, noise 4 grey
+//!   levels) seen by its 6 mm servo camera from the start pose: the image the simulator
+//!   renders at every iteration (renderer built once, as in a run).
+//! - `vision/detect_full_frame`: [`vsinv::vision::detect_dots`] on that image (automatic
+//!   threshold, connected components and weighted centroids over the whole frame).
+//! - `vision/track`: [`vsinv::vision::DotTracker::track`] of the 12 dots in that image (a
+//!   40 x 40 px window per dot), in steady state: the tracker is started from the true
+//!   projections and has tracked the image once.
+//! - `vision/iteration`: one closed-loop iteration of `vision-12-6` through images (render,
+//!   track, measure, stop rule, control step, integration), by difference as
+//!   `simulation/step`: runs with `stop.max_iterations` = 51 and = 1 (both end as
+//!   `max_iterations`; the scenario converges only at 572), `(T(51) - T(1)) / 50` per
+//!   iteration. The 1-iteration run also pays the reference image and the tracker's start,
+//!   which cancel out.
 //!
 //! The scene is synthetic and deterministic: a non-planar object (a grid about 0.6 m in
 //! front of the reference camera with +-60 mm relief), a reference image taken with a
@@ -32,7 +47,8 @@
 //!
 //! Run with `cargo bench --bench vsinv` (add `-- --quick` for a faster, rougher run; add a
 //! filter such as `-- simulation` to run one group). The slow groups use fewer samples and a
-//! short measurement time so that the whole target takes about a minute and a half.
+//! short measurement time so that the whole target takes about two minutes (`vision` alone
+//! about half a minute).
 
 #![allow(clippy::expect_used, clippy::unwrap_used)]
 
@@ -41,7 +57,9 @@ use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use vsinv::sim::scene::Observation;
 use vsinv::sim::{SimulationConfig, Status, simulate};
+use vsinv::vision::{DetectConfig, Disc, DotTracker, Renderer, TrackerConfig, detect_dots};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, choose_basis};
 
 /// Point counts benchmarked.
@@ -214,6 +232,82 @@ fn batch(c: &mut Criterion) {
     group.finish();
 }
 
+/// The built-in `vision-12-6` scenario as a simulation configuration.
+fn vision_12_6(max_iterations: usize) -> SimulationConfig {
+    let mut c = vsinv::sim::scenario::builtin("vision-12-6").expect("built-in scenario").to_config().expect("config");
+    c.record = false;
+    c.stop.max_iterations = max_iterations;
+    c
+}
+
+fn vision(c: &mut Criterion) {
+    // The scene, cameras and start pose of the scenario (the stop rule does not matter here).
+    let config = vision_12_6(1);
+    let settings = config.vision.expect("vision-12-6 has a [vision] table");
+    let renderer = Renderer::new(settings).expect("renderer");
+    let scene = &config.scene;
+    let discs: vsinv::Result<Vec<Disc>> = match scene.normals() {
+        Some(normals) => {
+            scene.points().iter().zip(normals).map(|(&p, &n)| Disc::new(p, n, settings.dot_radius)).collect()
+        }
+        None => scene.points().iter().map(|&p| Disc::facing_reference(p, settings.dot_radius)).collect(),
+    };
+    let discs = discs.expect("discs");
+    let k = config.camera.at(0.0).expect("servo camera");
+    let bounds = config.camera.image.expect("image size");
+    let size = (bounds.width as u32, bounds.height as u32);
+    assert_eq!(size, (832, 624));
+    let mut obs = Observation::default();
+    scene.observe(&config.start, &k, config.camera.image, &mut obs);
+    assert!(obs.visible.iter().all(|&v| v), "vision-12-6 changed: a dot is not visible at the start");
+    // Frame 1: the simulator's first image.
+    let render = || renderer.render(&discs, Some(&obs.visible), &config.start, &k, size, 1).expect("render");
+    let rendered = render();
+    assert!(rendered.drawn.iter().all(|&d| d));
+    let image = rendered.image;
+
+    let dots = detect_dots(&image, &DetectConfig::default()).expect("detection");
+    assert_eq!(dots.len(), 12, "vision-12-6 changed: {} dots detected", dots.len());
+    let mut tracker = DotTracker::new(&image, &obs.pixels, TrackerConfig::default()).expect("tracker");
+    let first = tracker.track(&image).expect("track");
+    assert!(first.found.iter().all(|&f| f), "a dot was lost");
+
+    let mut group = c.benchmark_group("vision");
+    group.warm_up_time(Duration::from_millis(500)).measurement_time(Duration::from_secs(3)).sample_size(30);
+    group.bench_function("render", |b| b.iter(render));
+    // About 10 ms a call: fewer samples.
+    group.sample_size(10);
+    group.bench_function("detect_full_frame", |b| {
+        b.iter(|| detect_dots(black_box(&image), &DetectConfig::default()).expect("detection"))
+    });
+    group.sample_size(30);
+    group.bench_function("track", |b| b.iter(|| tracker.track(black_box(&image)).expect("track")));
+
+    // Per iteration, by difference of a 51- and a 1-iteration run (set-up cancels out).
+    const LONG: usize = 51;
+    let (long, short) = (vision_12_6(LONG), vision_12_6(1));
+    for (c, n) in [(&long, LONG), (&short, 1)] {
+        let s = simulate(c, &mut |_, _| true).expect("simulation").summary;
+        assert_eq!((s.status, s.iterations), (Status::MaxIterations, n), "vision-12-6 changed: {}", s.message);
+    }
+    group.sample_size(10).measurement_time(Duration::from_secs(8));
+    group.bench_function("iteration", |b| {
+        b.iter_custom(|iters| {
+            let (mut t_long, mut t_short) = (Duration::ZERO, Duration::ZERO);
+            for _ in 0..iters {
+                let start = Instant::now();
+                black_box(simulate(black_box(&long), &mut |_, _| true).expect("run"));
+                t_long += start.elapsed();
+                let start = Instant::now();
+                black_box(simulate(black_box(&short), &mut |_, _| true).expect("run"));
+                t_short += start.elapsed();
+            }
+            t_long.saturating_sub(t_short) / (LONG as u32 - 1)
+        })
+    });
+    group.finish();
+}
+
 fn config() -> Criterion {
     Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(2)).sample_size(50)
 }
@@ -221,6 +315,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = control_step, pose_integration, simulation, batch
+    targets = control_step, pose_integration, simulation, batch, vision
 }
 criterion_main!(benches);

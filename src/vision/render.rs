@@ -225,7 +225,23 @@ impl Renderer {
     fn noise_frame(&self, width: u32, height: u32, seed: u64) -> GreyImage {
         let n = width as usize * height as usize;
         let data = if self.config.noise_sigma > 0.0 {
-            (0..n).map(|i| self.noisy_background[noise_index(seed, i)]).collect()
+            // noise_index(seed, i) for every pixel, one hash per four pixels.
+            let table = &self.noisy_background;
+            let block_bits =
+                |block: usize| splitmix64(&mut (seed ^ (block as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)));
+            let mut data = vec![0u8; n];
+            let mut blocks = data.chunks_exact_mut(4);
+            for (block, pixels) in blocks.by_ref().enumerate() {
+                let bits = block_bits(block);
+                for (k, p) in pixels.iter_mut().enumerate() {
+                    *p = table[((bits >> (16 * k)) & 0xFFFF) as usize];
+                }
+            }
+            let bits = block_bits(n / 4);
+            for (k, p) in blocks.into_remainder().iter_mut().enumerate() {
+                *p = table[((bits >> (16 * k)) & 0xFFFF) as usize];
+            }
+            data
         } else {
             vec![self.config.background; n]
         };
@@ -510,6 +526,16 @@ mod tests {
         let mean = img.pixels().map(|p| f64::from(p[0])).sum::<f64>() / n;
         let var = img.pixels().map(|p| (f64::from(p[0]) - mean).powi(2)).sum::<f64>() / n;
         assert!((mean - 30.0).abs() < 0.1 && (var.sqrt() - 3.0).abs() < 0.15, "{mean} {}", var.sqrt());
+    }
+
+    #[test]
+    fn noise_frame_is_the_noise_index_of_every_pixel() {
+        let r = Renderer::new(RenderConfig { noise_sigma: 3.0, seed: 7, ..Default::default() }).unwrap();
+        // 13 x 7 = 91 pixels: the last block of four is partial.
+        let img = r.noise_frame(13, 7, 0x1234_5678_9ABC);
+        for (i, &p) in img.as_raw().iter().enumerate() {
+            assert_eq!(p, r.noisy_background[noise_index(0x1234_5678_9ABC, i)], "pixel {i}");
+        }
     }
 
     #[test]
