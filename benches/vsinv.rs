@@ -20,8 +20,8 @@
 //! - `simulation/lens-12-6-recorded`: the same run with `record = true` (the per-iteration
 //!   arrays the Python API hands to NumPy).
 //! - `batch/lens-12-6x256/threads`: [`vsinv::sim::batch::run_batch`] of 256 copies of the
-//!   `lens-12-6` configuration on 1 and 2 worker threads (thread-pool creation included,
-//!   as every call to `run_batch` pays it); throughput in runs per second.
+//!   `lens-12-6` configuration on 1 and 2 worker threads (the pool of each thread count is
+//!   started once and reused by later calls); throughput in runs per second.
 //! - `vision/render`: [`vsinv::vision::Renderer::render`] of one 832 x 624 image of the 12
 //!   dots of the built-in scenario `vision-12-6` (3 mm discs, blur 0.8 px, noise 4 grey
 //!   levels) seen by its 6 mm servo camera from the start pose: the image the simulator

@@ -1,6 +1,8 @@
 //! Many simulations at once, in parallel (rayon), without per-iteration recording so that
 //! memory stays flat however many runs there are.
 
+use std::sync::{Arc, Mutex};
+
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
@@ -39,17 +41,30 @@ fn run_one(c: &SimulationConfig) -> Result<Summary> {
     simulate(&c, &mut |_, _| true).map(|o| o.summary)
 }
 
-fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+/// The worker pool for `threads` (None: one thread per core). Pools are kept and reused, one
+/// per thread count: starting threads on every call costs their start-up and, with glibc,
+/// fresh malloc arenas that keep the process's memory growing over the first thousands of
+/// batches.
+fn pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>> {
+    static POOLS: Mutex<Vec<(Option<usize>, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
+    if threads == Some(0) {
+        return Err(Error::InvalidParameter { name: "threads", reason: "must be >= 1".into() });
+    }
+    let mut pools = POOLS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    if let Some((_, p)) = pools.iter().find(|(n, _)| *n == threads) {
+        return Ok(Arc::clone(p));
+    }
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
-        if n == 0 {
-            return Err(Error::InvalidParameter { name: "threads", reason: "must be >= 1".into() });
-        }
         builder = builder.num_threads(n);
     }
-    builder
-        .build()
-        .map_err(|e| Error::InvalidParameter { name: "threads", reason: format!("cannot start the thread pool: {e}") })
+    let built = builder.build().map_err(|e| Error::InvalidParameter {
+        name: "threads",
+        reason: format!("cannot start the thread pool: {e}"),
+    })?;
+    let built = Arc::new(built);
+    pools.push((threads, Arc::clone(&built)));
+    Ok(built)
 }
 
 #[cfg(test)]
