@@ -44,6 +44,7 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
+	$(PYTHON) benches/noise_accuracy.py
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run
