@@ -4,7 +4,7 @@ PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 RUST_EXAMPLES := control_loop simulation batch
 
-.PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak run
+.PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
 install:
 	$(PIP) install -q -e ".[test]"
@@ -45,6 +45,10 @@ bench: install
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
 	$(PYTHON) benches/noise_accuracy.py
+
+# Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py).
+fuzz: install-run
+	$(PYTHON) tests/scenario_fuzz.py
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run

@@ -255,7 +255,7 @@ fn bad_scenarios_name_the_key() {
     let (key, _) = scenario_error(&good.replace("[-0.15, -0.12, 0.60]", "[-0.15, -0.12, -0.60]"));
     assert!(key.starts_with("object.points"), "{key}");
     let (key, _) = scenario_error(&good.replace("fku = 600.0", "fku = -600.0"));
-    assert_eq!(key, "camera");
+    assert_eq!(key, "camera.fku");
     let (key, _) = scenario_error(&good.replace("depths = \"reference\"", "depths = \"guessed\""));
     assert_eq!(key, "control.depths");
     let (key, reason) = scenario_error("name = \"x\"\n");

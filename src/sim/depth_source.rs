@@ -56,13 +56,15 @@ impl DepthEstimatorFactory for TranslationPairDepths {
                 });
             }
         }
-        let first = depths_from_translation(&images[0].pixels, &images[1].pixels)?;
-        Ok(Box::new(ResectionDepths::new(
-            &images[0].pixels,
-            &first.depths,
-            reference_pixels,
-            self.reference_mean_depth,
-        )?))
+        let in_pair = |e: Error| Error::InvalidParameter {
+            name: "depth_estimation",
+            reason: format!("the translation pair gives no depths: {e}"),
+        };
+        let first = depths_from_translation(&images[0].pixels, &images[1].pixels).map_err(in_pair)?;
+        let resection =
+            ResectionDepths::new(&images[0].pixels, &first.depths, reference_pixels, self.reference_mean_depth)
+                .map_err(in_pair)?;
+        Ok(Box::new(resection))
     }
 }
 

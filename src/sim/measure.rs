@@ -46,7 +46,7 @@ pub(crate) struct StopWindow {
 
 impl StopWindow {
     pub(crate) fn new(window: usize) -> Self {
-        Self { window, rows: std::collections::VecDeque::with_capacity(window + 1), mean: Vec::new() }
+        Self { window, rows: std::collections::VecDeque::with_capacity(window.min(1024) + 1), mean: Vec::new() }
     }
 
     /// A row to fill with [`measure`] (the oldest row, recycled, once the window is full).

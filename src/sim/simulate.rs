@@ -69,7 +69,10 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
     if let Some(i) = (0..n).find(|&i| !obs.visible[i]) {
         return Err(Error::InvalidParameter {
             name: "object",
-            reason: format!("point {i} is not visible in the reference image (outside the image or occluded)"),
+            reason: format!(
+                "point {i} is not visible in the reference image: outside the reference_camera's image \
+                 or occluded (check object.points[{i}] and the reference_camera table)"
+            ),
         });
     }
     if let Some(vision) = config.vision {
@@ -515,6 +518,12 @@ impl<'a> Run<'a> {
         let robot = &self.config.robot;
         let moved =
             robot.step_pose(&self.pose, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
+        // Quarantine: a non-finite pose is never taken; the run ends at the last finite one.
+        let finite =
+            moved.pose.translation.vector.iter().chain(moved.pose.rotation.coords.iter()).all(|v| v.is_finite());
+        if !finite {
+            return Err((Status::Diverged, "the integrated pose is not finite".into()));
+        }
         self.pose = moved.pose;
         if let Some(r) = self.recording.as_mut() {
             r.twist.extend_from_slice(moved.twist.as_slice());

@@ -31,15 +31,58 @@ fn check_positive(key: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 { Ok(()) } else { Err(scenario_error(key, format!("must be finite and > 0, got {v}"))) }
 }
 
+/// Lengths (m), angles (deg) and pixel coordinates of a scenario: finite and within +-1e6.
+const MAX_MAGNITUDE: f64 = 1e6;
+/// The largest image side, pixels.
+const MAX_IMAGE_SIDE: f64 = 65536.0;
+/// The longest run, iterations.
+const MAX_ITERATIONS: usize = 10_000_000;
+
+fn check_values(key: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
+        Some(i) => Err(scenario_error(
+            &format!("{key}[{i}]"),
+            format!("must be finite and within +-{MAX_MAGNITUDE:e}, got {}", values[i]),
+        )),
+        None => Ok(()),
+    }
+}
+
 impl CameraSpec {
     fn intrinsics(&self, key: &str) -> Result<Intrinsics> {
+        for (name, v) in [("fku", self.fku), ("fkv", self.fkv)] {
+            check_positive(&format!("{key}.{name}"), v)?;
+            if v > MAX_MAGNITUDE {
+                return Err(scenario_error(&format!("{key}.{name}"), format!("at most 1e6 px, got {v}")));
+            }
+        }
+        for (name, v) in [("u0", self.u0), ("v0", self.v0)] {
+            if !(v.abs() <= MAX_MAGNITUDE) {
+                return Err(scenario_error(
+                    &format!("{key}.{name}"),
+                    format!("must be finite and within +-1e6 px, got {v}"),
+                ));
+            }
+        }
+        if !(self.skew_deg > 0.0 && self.skew_deg < 180.0) {
+            let reason = format!("the angle between the image axes must be in (0, 180) degrees, got {}", self.skew_deg);
+            return Err(scenario_error(&format!("{key}.skew_deg"), reason));
+        }
         Intrinsics::new(self.fku, self.fkv, self.u0, self.v0, self.skew_deg.to_radians())
             .map_err(|e| scenario_error(key, e.to_string()))
     }
 
     fn model(&self, key: &str) -> Result<CameraModel> {
         let image = match (self.width, self.height) {
-            (Some(width), Some(height)) => Some(ImageSize { width, height }),
+            (Some(width), Some(height)) => {
+                for (name, v) in [("width", width), ("height", height)] {
+                    if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
+                        let reason = format!("pixels, from 1 to {MAX_IMAGE_SIDE}, got {v}");
+                        return Err(scenario_error(&format!("{key}.{name}"), reason));
+                    }
+                }
+                Some(ImageSize { width, height })
+            }
             (None, None) => None,
             _ => return Err(scenario_error(key, "give both width and height, or neither")),
         };
@@ -135,9 +178,8 @@ impl Scenario {
 
     /// `[start]`: a finite pose with the whole object in front of the camera.
     fn start_pose(&self) -> Result<Isometry3<f64>> {
-        if let Some(i) = self.start.position.iter().chain(&self.start.rotation).position(|v| !v.is_finite()) {
-            return Err(scenario_error("start", format!("non-finite value at index {i}")));
-        }
+        check_values("start.position", &self.start.position)?;
+        check_values("start.rotation", &self.start.rotation)?;
         let start = pose_of(self.start.position, self.start.rotation);
         let inv = start.inverse();
         if let Some(i) = self.object.points.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
@@ -152,12 +194,20 @@ impl Scenario {
         for (key, v) in [("control.gain", c.gain), ("control.gain_rz", c.gain_rz), ("control.dt", c.dt)] {
             check_positive(key, v)?;
         }
-        if !(self.noise.pixel_sigma.is_finite() && self.noise.pixel_sigma >= 0.0) {
-            return Err(scenario_error("noise.pixel_sigma", "must be finite and >= 0"));
+        if c.dt > 1.0 {
+            return Err(scenario_error("control.dt", format!("a control period of at most 1 s, got {} s", c.dt)));
+        }
+        if !(self.noise.pixel_sigma >= 0.0 && self.noise.pixel_sigma <= 1000.0) {
+            return Err(scenario_error(
+                "noise.pixel_sigma",
+                format!("pixels, from 0 to 1000, got {}", self.noise.pixel_sigma),
+            ));
         }
         let s = &self.stop;
-        if s.max_iterations == 0 || s.window == 0 {
-            return Err(scenario_error("stop", "max_iterations and window must be >= 1"));
+        for (key, v) in [("stop.max_iterations", s.max_iterations), ("stop.window", s.window)] {
+            if v == 0 || v > MAX_ITERATIONS {
+                return Err(scenario_error(key, format!("from 1 to {MAX_ITERATIONS}, got {v}")));
+            }
         }
         for (key, v) in [
             ("stop.pixel_error", s.pixel_error),
@@ -311,9 +361,9 @@ fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
     if d.camera.zoom.is_some() || d.camera.width.is_some() || d.camera.height.is_some() {
         return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
     }
-    if d.position.iter().chain(&d.rotation).chain(&d.translation).any(|v| !v.is_finite()) {
-        return Err(scenario_error("depth_estimation", "non-finite position, rotation or translation"));
-    }
+    check_values("depth_estimation.position", &d.position)?;
+    check_values("depth_estimation.rotation", &d.rotation)?;
+    check_values("depth_estimation.translation", &d.translation)?;
     if !(d.reference_mean_depth.is_finite() && d.reference_mean_depth > 0.0) {
         return Err(scenario_error("depth_estimation.reference_mean_depth", "must be finite and > 0"));
     }
