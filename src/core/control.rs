@@ -117,6 +117,7 @@ impl ControlState {
 /// stabilises the law locally (Prop. 1).
 #[derive(Debug, Clone)]
 pub struct InvariantController {
+    reference_pixels: Vec<[f64; 2]>,
     k_hat: Intrinsics,
     k: Matrix3<f64>,
     k_inv: Matrix3<f64>,
@@ -165,6 +166,7 @@ impl InvariantController {
         let k = k_hat.matrix();
         let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
         Ok(Self {
+            reference_pixels: reference_pixels.to_vec(),
             k_hat,
             k,
             k_inv,
@@ -193,6 +195,10 @@ impl InvariantController {
     pub fn non_basis(&self) -> &[usize] {
         &self.others
     }
+    /// The reference image the controller was built from (`s*` of a still reference).
+    pub fn reference_pixels(&self) -> &[[f64; 2]] {
+        &self.reference_pixels
+    }
     /// The estimated intrinsics used in the Jacobian.
     pub fn k_hat(&self) -> &Intrinsics {
         &self.k_hat
@@ -204,6 +210,11 @@ impl InvariantController {
     /// The current reference `s*(t)`, one invariant point per non-basis point.
     pub fn reference_invariants(&self) -> &[Vector3<f64>] {
         &self.s_star
+    }
+    /// The derivative `ds*/dt` given to [`set_reference`](Self::set_reference), `None` for a
+    /// still reference.
+    pub fn reference_rate(&self) -> Option<&[Vector3<f64>]> {
+        self.reference_moves.then_some(self.s_star_rate.as_slice())
     }
     /// The state measured by the last successful step.
     pub fn state(&self) -> Option<&ControlState> {

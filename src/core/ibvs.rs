@@ -57,6 +57,7 @@ impl crate::core::control::Controller for IbvsController {
 pub struct IbvsController {
     reference: Vec<[f64; 2]>,
     reference_depths: Option<Vec<f64>>,
+    k_hat: Intrinsics,
     k: nalgebra::Matrix3<f64>,
     k_inv: nalgebra::Matrix3<f64>,
     gain: f64,
@@ -95,6 +96,7 @@ impl IbvsController {
         Ok(Self {
             reference: reference_pixels.to_vec(),
             reference_depths: reference_depths.map(<[f64]>::to_vec),
+            k_hat,
             k,
             k_inv,
             gain,
@@ -123,6 +125,35 @@ impl IbvsController {
         }
         self.twist_limits = limits;
         Ok(())
+    }
+
+    /// The reference image.
+    pub fn reference_pixels(&self) -> &[[f64; 2]] {
+        &self.reference
+    }
+    /// The reference depths, if given.
+    pub fn reference_depths(&self) -> Option<&[f64]> {
+        self.reference_depths.as_deref()
+    }
+    /// The estimated intrinsics used in the interaction matrices.
+    pub fn k_hat(&self) -> &Intrinsics {
+        &self.k_hat
+    }
+    /// The constant gain lambda (used when there is no adaptive gain).
+    pub fn gain(&self) -> f64 {
+        self.gain
+    }
+    /// Where the interaction matrix is evaluated.
+    pub fn interaction(&self) -> Interaction {
+        self.interaction
+    }
+    /// The adaptive gain, if set.
+    pub fn adaptive_gain(&self) -> Option<AdaptiveGain> {
+        self.adaptive_gain
+    }
+    /// The speed limits, if set.
+    pub fn twist_limits(&self) -> Option<TwistLimits> {
+        self.twist_limits
     }
 
     /// The lambda used and the factor the twist limits scaled the twist by, at the last step.

@@ -1,7 +1,9 @@
 //! NumPy array arguments: read float64 C-contiguous arrays in place, convert anything else
 //! once, and refuse what cannot be a real array with `InvalidInput`.
 
-use numpy::{PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyReadonlyArray1, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 
@@ -62,6 +64,53 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str, dims: &[Option<usize>
     }
     let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
     Ok(F64Array { array })
+}
+
+/// A read-only 1-d bool array borrowed from Python, C-contiguous.
+pub struct BoolArray<'py> {
+    array: PyReadonlyArray1<'py, bool>,
+}
+
+impl BoolArray<'_> {
+    pub fn as_slice(&self) -> PyResult<&[bool]> {
+        self.array.as_slice().map_err(|e| invalid_input(format!("array is not contiguous: {e}")))
+    }
+}
+
+/// Reads `obj` as a bool array of shape `(n,)`: a C-contiguous bool ndarray is borrowed
+/// without copying, a list of bools or a strided array is converted once; any other dtype
+/// (integers included) or shape raises `InvalidInput`.
+pub fn bool_array<'py>(obj: &Bound<'py, PyAny>, what: &str, n: usize) -> PyResult<BoolArray<'py>> {
+    let py = obj.py();
+    let fast = obj.cast::<PyArray1<bool>>().ok().filter(|a| a.is_c_contiguous()).cloned();
+    let array = match fast {
+        Some(a) => a,
+        None => {
+            static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+            static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+            let raw = numpy_fn(py, &ASARRAY, "asarray")?
+                .call1(py, (obj,))
+                .map_err(|e| invalid_input(format!("{what}: cannot be read as an array ({e})")))?;
+            let raw = raw.bind(py);
+            let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
+            if kind != "b" {
+                let dtype = raw.getattr("dtype")?.str()?.to_string();
+                return Err(invalid_input(format!("{what}: expected a bool array, got dtype {dtype}")));
+            }
+            let converted = numpy_fn(py, &CONTIGUOUS, "ascontiguousarray")?.call1(py, (raw,))?;
+            let converted = converted.bind(py);
+            let shape: Vec<usize> = converted.getattr("shape")?.extract()?;
+            if shape.len() != 1 {
+                return Err(invalid_input(format!("{what}: expected shape ({n},), got {shape:?}")));
+            }
+            converted.cast::<PyArray1<bool>>().map_err(|_| invalid_input(format!("{what}: not a bool array")))?.clone()
+        }
+    };
+    if array.len() != n {
+        return Err(invalid_input(format!("{what}: expected shape ({n},), got ({},)", array.len())));
+    }
+    let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
+    Ok(BoolArray { array })
 }
 
 /// `(n, 2)` pixel array as `[[f64; 2]]` without copying.

@@ -12,15 +12,16 @@ mod vision;
 use nalgebra::Matrix3;
 use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyString, PyType};
 
-use arrays::{F64Array, f64_array, from_matrix, mat, points2, points3, vec1};
+use arrays::{F64Array, bool_array, f64_array, from_matrix, mat, points2, points3, vec1};
 use errors::{invalid_input, to_py};
 
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::core::control::{Controller, InvariantController, InvariantControllerConfig};
 use crate::core::ibvs::{IbvsController, Interaction};
+use crate::core::rz_task::RzTask;
 use crate::core::saturation::TwistLimits;
 use crate::core::stability::{StabilityReport, check_upper_triangular};
 
@@ -79,22 +80,27 @@ impl PyIntrinsics {
     fn from_matrix(k: &Bound<'_, PyAny>) -> PyResult<Self> {
         Ok(Self { inner: Intrinsics::from_matrix(&matrix3(k, "K")?).map_err(to_py)? })
     }
+    /// f ku, the horizontal focal length in pixels.
     #[getter]
     fn fku(&self) -> f64 {
         self.inner.fku()
     }
+    /// f kv, the vertical focal length in pixels.
     #[getter]
     fn fkv(&self) -> f64 {
         self.inner.fkv()
     }
+    /// u0, the principal point's column in pixels.
     #[getter]
     fn u0(&self) -> f64 {
         self.inner.u0()
     }
+    /// v0, the principal point's row in pixels.
     #[getter]
     fn v0(&self) -> f64 {
         self.inner.v0()
     }
+    /// theta, the angle between the image axes in radians (pi/2: no skew).
     #[getter]
     fn skew(&self) -> f64 {
         self.inner.theta()
@@ -105,23 +111,73 @@ impl PyIntrinsics {
         from_matrix(py, &self.inner.matrix())
     }
     fn __repr__(&self) -> String {
-        let i = &self.inner;
-        format!("Intrinsics(fku={}, fkv={}, u0={}, v0={}, skew={})", i.fku(), i.fkv(), i.u0(), i.v0(), i.theta())
+        intrinsics_repr(&self.inner)
     }
+    /// Equal parameters (exactly).
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other.cast::<PyIntrinsics>().is_ok_and(|o| o.get().inner == self.inner)
     }
+    /// Pickling: the five parameters, restored exactly.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> (Bound<'py, PyType>, (f64, f64, f64, f64, f64)) {
+        let i = &slf.get().inner;
+        (slf.get_type(), (i.fku(), i.fkv(), i.u0(), i.v0(), i.theta()))
+    }
 }
 
-fn matrix3(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Matrix3<f64>> {
+/// `Intrinsics(fku=..., ...)` with Python's float notation (round-trips exactly).
+fn intrinsics_repr(i: &Intrinsics) -> String {
+    format!("Intrinsics(fku={:?}, fkv={:?}, u0={:?}, v0={:?}, skew={:?})", i.fku(), i.fkv(), i.u0(), i.v0(), i.theta())
+}
+
+/// A float or None in Python notation.
+fn opt_repr(x: Option<f64>) -> String {
+    x.map_or_else(|| "None".to_string(), |x| format!("{x:?}"))
+}
+
+/// A Python bool.
+fn bool_repr(b: bool) -> &'static str {
+    if b { "True" } else { "False" }
+}
+
+/// The adaptive gain as the constructor's `(lambda_0, lambda_inf, lambda'_0)`.
+fn adaptive_gain_args(g: Option<AdaptiveGain>) -> Option<(f64, f64, f64)> {
+    g.map(|g| (g.at_zero, g.at_infinity, g.slope_at_zero))
+}
+
+/// The speed limits as the constructor's `(max_linear_speed, max_angular_speed)` (None: free).
+fn twist_limit_args(l: Option<TwistLimits>) -> (Option<f64>, Option<f64>) {
+    let finite = |x: f64| x.is_finite().then_some(x);
+    l.map_or((None, None), |l| (finite(l.linear), finite(l.angular)))
+}
+
+fn adaptive_gain_repr(g: Option<AdaptiveGain>) -> String {
+    adaptive_gain_args(g).map_or_else(|| "None".to_string(), |(a, b, c)| format!("({a:?}, {b:?}, {c:?})"))
+}
+
+fn rz_task_name(t: RzTask) -> &'static str {
+    match t {
+        RzTask::Angle => "angle",
+        RzTask::Tau21 => "tau21",
+    }
+}
+
+fn interaction_name(i: Interaction) -> &'static str {
+    match i {
+        Interaction::Current => "current",
+        Interaction::Desired => "desired",
+        Interaction::Mean => "mean",
+    }
+}
+
+fn matrix3(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Matrix3<f64>> {
     let a = f64_array(obj, what, &[Some(3), Some(3)])?;
     let m = Matrix3::from_row_slice(a.as_slice()?);
-    crate::error::check_finite("K", m.as_slice()).map_err(to_py)?;
+    crate::error::check_finite(what, m.as_slice()).map_err(to_py)?;
     Ok(m)
 }
 
 /// An `Intrinsics` or a 3x3 array, validated.
-fn intrinsics(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Intrinsics> {
+fn intrinsics(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Intrinsics> {
     if let Ok(k) = obj.cast::<PyIntrinsics>() {
         return Ok(k.get().inner);
     }
@@ -271,7 +327,34 @@ fn step_controller<'py, C: Controller>(
     Ok(vec1(py, tw.as_slice()))
 }
 
-/// The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24).
+/// `step_controller` with a visibility mask: a bool array of one flag per pixel row.
+fn step_controller_visible<'py, C: Controller>(
+    ctl: &mut C,
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    depths: &Bound<'py, PyAny>,
+    visible: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
+    let px = points2(&a)?;
+    let v = bool_array(visible, "visible", px.len())?;
+    let tw = ctl.step_visible(px, z.as_slice()?, v.as_slice()?).map_err(to_py)?;
+    Ok(vec1(py, tw.as_slice()))
+}
+
+/// The reference pixels as a new (n, 2) array.
+fn pixels_out<'py>(py: Python<'py>, px: &[[f64; 2]]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    mat(py, px.len(), 2, px.as_flattened().to_vec())
+}
+
+/// (n, 3) invariant points as a new array.
+fn invariants_out<'py>(py: Python<'py>, s: &[nalgebra::Vector3<f64>]) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    mat(py, s.len(), 3, s.iter().flat_map(|q| [q.x, q.y, q.z]).collect())
+}
+
+/// The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24). Pickles with its
+/// configuration, K_hat and s*(t); a copy's next twist is the original's, but the state of
+/// the last step (eps, tau_11, ...) is not kept.
 #[pyclass(name = "InvariantController", module = "vsinv._core")]
 struct PyInvariantController {
     inner: InvariantController,
@@ -332,6 +415,86 @@ impl PyInvariantController {
         step_controller(&mut self.inner, py, pixels, depths)
     }
 
+    /// A step with some points hidden: `visible` is a bool array (n,); hidden points'
+    /// pixels and depths are ignored (may be NaN) and drop out of s and J_hat. The three basis
+    /// points and three more must be visible (else DegenerateGeometry).
+    fn step_visible<'py>(
+        &mut self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        depths: &Bound<'py, PyAny>,
+        visible: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        step_controller_visible(&mut self.inner, py, pixels, depths, visible)
+    }
+
+    /// Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom
+    /// read-out during the servo; the next step uses them.
+    #[allow(non_snake_case)]
+    fn set_k_hat(&mut self, K_hat: &Bound<'_, PyAny>) -> PyResult<()> {
+        let k_hat = intrinsics(K_hat, "K_hat")?;
+        self.inner.set_k_hat(k_hat).map_err(to_py)
+    }
+
+    /// The estimated intrinsics K_hat used in the Jacobian.
+    #[getter]
+    fn k_hat(&self) -> PyIntrinsics {
+        PyIntrinsics { inner: *self.inner.k_hat() }
+    }
+
+    fn __repr__(&self) -> String {
+        let (c, [a, b, d]) = (self.inner.config(), self.inner.basis());
+        let (v, w) = twist_limit_args(c.twist_limits);
+        format!(
+            "InvariantController(n_points={}, K_hat={}, gain={:?}, gain_rz={:?}, basis=({a}, {b}, {d}), \
+             feedforward={}, min_structure_ratio={:?}, rz_task='{}', adaptive_gain={}, max_linear_speed={}, \
+             max_angular_speed={})",
+            self.inner.num_points(),
+            intrinsics_repr(self.inner.k_hat()),
+            c.gain,
+            c.gain_rz,
+            bool_repr(c.feedforward),
+            c.min_structure_ratio,
+            rz_task_name(c.rz_task),
+            adaptive_gain_repr(c.adaptive_gain),
+            opt_repr(v),
+            opt_repr(w),
+        )
+    }
+
+    /// Pickling: the constructor's arguments (reference pixels, K_hat, gains, basis,
+    /// feed-forward, min_structure_ratio, rz_task, adaptive gain, speed limits) and the
+    /// reference s*(t) with its rate as set by `set_reference`. The next twist of the copy is
+    /// that of the original; the state of the last step (eps, tau_11, ...) is not kept.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let (ctl, c) = (&this.inner, this.inner.config());
+        let (v, w) = twist_limit_args(c.twist_limits);
+        let [a, b, d] = ctl.basis();
+        let args = (
+            pixels_out(py, ctl.reference_pixels())?,
+            PyIntrinsics { inner: *ctl.k_hat() },
+            c.gain,
+            c.gain_rz,
+            (a, b, d),
+            c.feedforward,
+            c.min_structure_ratio,
+            rz_task_name(c.rz_task),
+            adaptive_gain_args(c.adaptive_gain),
+            v,
+            w,
+        );
+        let rate = ctl.reference_rate().map(|r| invariants_out(py, r)).transpose()?;
+        let state = (invariants_out(py, ctl.reference_invariants())?, rate);
+        (slf.get_type(), args, state).into_pyobject(py).map(Bound::into_any)
+    }
+
+    /// Unpickling: restores the reference s*(t) and its rate, `(s_star, rate or None)`.
+    fn __setstate__(&mut self, state: (Bound<'_, PyAny>, Option<Bound<'_, PyAny>>)) -> PyResult<()> {
+        self.set_reference(&state.0, state.1.as_ref())
+    }
+
     /// Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its
     /// derivative ds*/dt (same shape) for the feed-forward term of eq. (17).
     #[pyo3(signature = (s_star, rate = None))]
@@ -361,8 +524,7 @@ impl PyInvariantController {
     /// The reference s*(t): (n-3, 3) invariant points of the non-basis points.
     #[getter]
     fn reference_invariants<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let s = self.inner.reference_invariants();
-        mat(py, s.len(), 3, s.iter().flat_map(|q| [q.x, q.y, q.z]).collect())
+        invariants_out(py, self.inner.reference_invariants())
     }
     /// Task function eps of eq. (14) at the last step, (5,).
     #[getter]
@@ -428,7 +590,9 @@ fn command_options(
     Ok((gain, limits))
 }
 
-/// Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*).
+/// Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*). Pickles with its configuration;
+/// a copy's next twist is the original's, but the last step's pixel_error, last_gain and
+/// saturation are not kept.
 #[pyclass(name = "IbvsController", module = "vsinv._core")]
 struct PyIbvsController {
     inner: IbvsController,
@@ -476,6 +640,57 @@ impl PyIbvsController {
         depths: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         step_controller(&mut self.inner, py, pixels, depths)
+    }
+
+    /// A step with only the points flagged in `visible`, a bool array (n,) (hidden points'
+    /// pixels and depths are ignored and may be NaN); at least 4 must be visible (else
+    /// DegenerateGeometry).
+    fn step_visible<'py>(
+        &mut self,
+        py: Python<'py>,
+        pixels: &Bound<'py, PyAny>,
+        depths: &Bound<'py, PyAny>,
+        visible: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        step_controller_visible(&mut self.inner, py, pixels, depths, visible)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        let (v, w) = twist_limit_args(c.twist_limits());
+        format!(
+            "IbvsController(n_points={}, K_hat={}, gain={:?}, interaction='{}', reference_depths={}, \
+             adaptive_gain={}, max_linear_speed={}, max_angular_speed={})",
+            c.reference_pixels().len(),
+            intrinsics_repr(c.k_hat()),
+            c.gain(),
+            interaction_name(c.interaction()),
+            if c.reference_depths().is_some() { "given" } else { "None" },
+            adaptive_gain_repr(c.adaptive_gain()),
+            opt_repr(v),
+            opt_repr(w),
+        )
+    }
+
+    /// Pickling: the constructor's arguments (reference pixels, K_hat, gain, interaction,
+    /// reference depths, adaptive gain, speed limits). The next twist of the copy is that of
+    /// the original; the last step's pixel_error, last_gain and saturation are not kept.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyAny>> {
+        let py = slf.py();
+        let this = slf.borrow();
+        let c = &this.inner;
+        let (v, w) = twist_limit_args(c.twist_limits());
+        let args = (
+            pixels_out(py, c.reference_pixels())?,
+            PyIntrinsics { inner: *c.k_hat() },
+            c.gain(),
+            interaction_name(c.interaction()),
+            c.reference_depths().map(|z| vec1(py, z)),
+            adaptive_gain_args(c.adaptive_gain()),
+            v,
+            w,
+        );
+        (slf.get_type(), args).into_pyobject(py).map(Bound::into_any)
     }
 
     /// RMS pixel error at the last step (None before the first step).

@@ -108,38 +108,57 @@ pub fn list_scenarios() -> PyResult<Vec<(String, String)>> {
 /// simulator's buffers (one row per iteration).
 #[pyclass(name = "RunResult", module = "vsinv._core", frozen)]
 pub struct PyRunResult {
+    /// The run's summary (status, iterations, final errors, ...), a dict.
     #[pyo3(get)]
     summary: Py<PyDict>,
+    /// The scenario that was run.
     #[pyo3(get)]
     scenario: Py<PyScenario>,
+    /// Time, s, (N,).
     #[pyo3(get)]
     time: Py<PyAny>,
+    /// Camera pose in F*, (N, 4, 4).
     #[pyo3(get)]
     pose: Py<PyAny>,
+    /// Twist sent to the robot (NaN on the last row when no step followed), (N, 6).
     #[pyo3(get)]
     twist: Py<PyAny>,
+    /// Joint positions, (N, 6).
     #[pyo3(get)]
     joints: Py<PyAny>,
+    /// Measured pixels (NaN where not visible), (N, n, 2).
     #[pyo3(get)]
     pixels: Py<PyAny>,
+    /// Visibility, bool (N, n).
     #[pyo3(get)]
     visible: Py<PyAny>,
+    /// ||s - s*|| (to the reference image), (N,).
     #[pyo3(get)]
     invariant_error: Py<PyAny>,
+    /// ||s - s*(t)|| (to the moving reference of a planned path; NaN outside the invariant
+    /// law), (N,).
     #[pyo3(get)]
     tracking_error: Py<PyAny>,
+    /// Task function eps (NaN for IBVS), (N, 5).
     #[pyo3(get)]
     eps: Py<PyAny>,
+    /// eps_z = det(Q*) tau_21, (N,).
     #[pyo3(get)]
     eps_z: Py<PyAny>,
+    /// Largest pixel error of a visible point, (N,).
     #[pyo3(get)]
     image_error: Py<PyAny>,
+    /// Distance from the reference pose, metres, (N,).
     #[pyo3(get)]
     translation_error: Py<PyAny>,
+    /// Angle from the reference pose, radians, (N,).
     #[pyo3(get)]
     rotation_error: Py<PyAny>,
+    /// Reference pixels (with their noise, if any), (n, 2).
     #[pyo3(get)]
     reference_pixels: Py<PyAny>,
+    /// Per iteration and point, the tracked centroid's distance to the true projection of
+    /// the dot's centre (pixels, NaN where not found), (N, n); None without `[vision]`.
     #[pyo3(get)]
     detection_error: Option<Py<PyAny>>,
 }
