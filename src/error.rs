@@ -119,6 +119,27 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// Lens distortion without an answer at one point: undistortion that does not converge,
+    /// a pixel beyond the image of the fold (the model folds back there), or a rational model
+    /// whose denominator is not positive.
+    #[error("distortion: point {index}: {reason}")]
+    Distortion {
+        /// Index of the point.
+        index: usize,
+        /// What happened.
+        reason: String,
+    },
+    /// A camera calibration file (ROS camera_info YAML, OpenCV FileStorage YAML or XML) that
+    /// cannot be read or is malformed; `field` names the entry at fault.
+    #[error("calibration file {file}: {}{reason}", if field.is_empty() { String::new() } else { format!("{field}: ") })]
+    Calibration {
+        /// The file path.
+        file: String,
+        /// The entry at fault (e.g. `camera_matrix.data`; empty for the whole file).
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]

@@ -13,6 +13,7 @@
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
 //! | images: rendering, dot detection and tracking | `vision` | `vision` (default) | image, imageproc |
+//! | camera calibration files (ROS YAML, OpenCV YAML and XML) | [`calibration`] | `calibration` (default) | yaml-rust2, roxmltree |
 //! | Python bindings (the only module that knows about Python) | `python` (private) | `python` | pyo3, numpy |
 //!
 //! A controller that needs only the control law depends on
@@ -31,6 +32,7 @@
 //! | plane + parallax (eq. 9), the invariant-space path (eq. 10) | [`core::planning`] |
 //! | depths up to scale (eq. 26, appendix A) | [`core::depth`] |
 //! | rigid motions, exact twist integration | [`core::se3`] |
+//! | lens distortion (OpenCV's models; not in the paper) | [`core::distortion`] |
 //!
 //! ## Conventions
 //! - SI units: metres, radians, seconds; pixels for image points.
@@ -65,6 +67,8 @@
 //! # Ok::<(), vsinv::Error>(())
 //! ```
 
+#[cfg(feature = "calibration")]
+pub mod calibration;
 pub mod core;
 pub mod error;
 #[cfg(feature = "sim")]
@@ -79,6 +83,7 @@ pub use nalgebra;
 
 pub use crate::core::camera::{Intrinsics, project_points};
 pub use crate::core::control::{ControlState, Controller, InvariantController, InvariantControllerConfig};
+pub use crate::core::distortion::{Distortion, DistortionModel, distort_points, undistort_points};
 pub use crate::core::ibvs::{IbvsController, Interaction};
 pub use crate::core::invariant::{choose_basis, invariant_points, task_vector};
 pub use crate::core::jacobian::{

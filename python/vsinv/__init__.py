@@ -9,7 +9,9 @@ poses are 4x4 homogeneous matrices of the camera frame in F*, the frame of the r
 """
 
 from ._core import (
+    Calibration,
     DegenerateGeometry,
+    Distortion,
     DotTracker,
     Dots,
     IbvsController,
@@ -28,6 +30,7 @@ from ._core import (
     choose_basis,
     depths_from_translation,
     detect_dots,
+    distort_points,
     estimate_plane_parallax,
     exp_twist,
     interaction_matrix,
@@ -35,6 +38,7 @@ from ._core import (
     invariant_points,
     jacobian_factors,
     list_scenarios,
+    load_calibration,
     load_image,
     load_scenario,
     pose_from_position_thetau,
@@ -48,12 +52,15 @@ from ._core import (
     structure_ratio,
     thetau_from_pose,
     tracking_bound,
+    undistort_points,
 )
 from . import sweep
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
 __all__ = [
+    "Calibration",
     "DegenerateGeometry",
+    "Distortion",
     "DotTracker",
     "Dots",
     "IbvsController",
@@ -72,6 +79,7 @@ __all__ = [
     "choose_basis",
     "depths_from_translation",
     "detect_dots",
+    "distort_points",
     "estimate_plane_parallax",
     "exp_twist",
     "interaction_matrix",
@@ -79,6 +87,7 @@ __all__ = [
     "invariant_points",
     "jacobian_factors",
     "list_scenarios",
+    "load_calibration",
     "load_image",
     "load_scenario",
     "pose_from_position_thetau",
@@ -92,6 +101,7 @@ __all__ = [
     "structure_ratio",
     "thetau_from_pose",
     "tracking_bound",
+    "undistort_points",
     "run_sweep",
     "sweep",
     "Uniform",

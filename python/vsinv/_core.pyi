@@ -43,6 +43,11 @@ __all__ = [
     "DotTracker",
     "load_image",
     "save_image",
+    "Distortion",
+    "Calibration",
+    "distort_points",
+    "undistort_points",
+    "load_calibration",
     "exp_twist",
     "pose_from_position_thetau",
     "thetau_from_pose",
@@ -373,6 +378,37 @@ def load_image(path: str | os.PathLike[str]) -> _U8Image:
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes a (height, width) uint8 array as a PNG file."""
 
+@final
+class Distortion:
+    """Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model."""
+
+    def __new__(
+        cls, coefficients: _ArrayLike, model: Literal["plumb_bob", "rational_polynomial"] | None = None
+    ) -> Distortion: ...
+    @property
+    def model(self) -> Literal["plumb_bob", "rational_polynomial"]: ...
+    @property
+    def coefficients(self) -> _F64Array: ...
+    def __eq__(self, other: object, /) -> bool: ...
+
+_DistortionLike = Union[Distortion, _ArrayLike]
+
+def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array: ...
+def undistort_points(
+    pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
+) -> _F64Array: ...
+@final
+class Calibration:
+    """A camera calibration read from a file: intrinsics, distortion and image size."""
+
+    @property
+    def intrinsics(self) -> Intrinsics: ...
+    @property
+    def distortion(self) -> Distortion: ...
+    @property
+    def image_size(self) -> tuple[int, int]: ...
+
+def load_calibration(path: str | os.PathLike[str]) -> Calibration: ...
 def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:
     """The 4x4 rigid motion of holding a camera twist (vx, vy, vz, wx, wy, wz) for dt seconds:
     the next pose is ``pose @ exp_twist(twist, dt)``."""

@@ -15,11 +15,13 @@
 //! | plane + parallax (eq. 9), the invariant-space path (eq. 10), sec. 3 | [`planning`] |
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
 //! | rigid motions, exact twist integration | [`se3`] |
+//! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
 
 pub mod adaptive_gain;
 pub mod camera;
 pub mod control;
 pub mod depth;
+pub mod distortion;
 pub mod ibvs;
 pub mod invariant;
 pub mod jacobian;

@@ -4,6 +4,7 @@
 
 mod arrays;
 mod errors;
+mod lens;
 mod planning;
 mod se3;
 mod sim;
@@ -838,6 +839,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(se3::exp_twist, m)?)?;
     m.add_function(wrap_pyfunction!(se3::pose_from_position_thetau, m)?)?;
     m.add_function(wrap_pyfunction!(se3::thetau_from_pose, m)?)?;
+    m.add_class::<lens::PyDistortion>()?;
+    m.add_class::<lens::PyCalibration>()?;
+    m.add_function(wrap_pyfunction!(lens::distort_points, m)?)?;
+    m.add_function(wrap_pyfunction!(lens::undistort_points, m)?)?;
+    m.add_function(wrap_pyfunction!(lens::load_calibration, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,0 +1,438 @@
+//! Camera calibration files (feature `calibration`): ROS `camera_info` YAML and OpenCV
+//! `FileStorage` YAML or XML, read into [`Intrinsics`], [`Distortion`] and the image size.
+//!
+//! | format | recognised by | entries read |
+//! |---|---|---|
+//! | ROS camera_info YAML | a `distortion_model` entry | `image_width`, `image_height`, `camera_matrix: {rows, cols, data}`, `distortion_model` (`plumb_bob` or `rational_polynomial`), `distortion_coefficients: {rows, cols, data}` |
+//! | OpenCV FileStorage YAML | otherwise | `image_width`, `image_height`, `camera_matrix: !!opencv-matrix {rows, cols, dt, data}`, `distortion_coefficients` (or `dist_coeffs`), the model from the number of coefficients (4, 5 or 8) |
+//! | OpenCV FileStorage XML | a first character `<` | the same entries under `<opencv_storage>`, matrices as `<rows>`, `<cols>`, `<data>` |
+//!
+//! OpenCV 4 writes the directive `%YAML:1.0`, which is not YAML (the directive is
+//! `%YAML 1.0`) and which YAML parsers refuse: that line is blanked before parsing (OpenCV 5
+//! writes `%YAML 1.2`, accepted as it is). The `!!opencv-matrix` tag is ignored.
+//!
+//! The camera matrix must be `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`: OpenCV's and ROS's
+//! models have no skew, so a file with `K[0,1] != 0` is refused rather than read differently
+//! from the tools that wrote it. Every error is an [`Error::Calibration`] naming the file and
+//! the entry at fault.
+
+use std::path::Path;
+
+use yaml_rust2::{Yaml, YamlLoader};
+
+use crate::core::camera::Intrinsics;
+use crate::core::distortion::{Distortion, DistortionModel};
+use crate::error::{Error, Result};
+
+/// A camera calibration: intrinsics, lens distortion and the image size it was made for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration {
+    /// The camera matrix (without skew).
+    pub intrinsics: Intrinsics,
+    /// The distortion model and coefficients.
+    pub distortion: Distortion,
+    /// `(width, height)` in pixels.
+    pub image_size: (u32, u32),
+}
+
+/// Reads a calibration file of any of the three formats (module docs).
+pub fn load_calibration(path: impl AsRef<Path>) -> Result<Calibration> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Calibration {
+        file: file.clone(),
+        field: String::new(),
+        reason: format!("cannot read: {e}"),
+    })?;
+    parse_calibration(&text, &file)
+}
+
+/// Reads calibration text; `file` names it in errors.
+pub fn parse_calibration(text: &str, file: &str) -> Result<Calibration> {
+    let raw = if text.trim_start().starts_with('<') { from_xml(text, file)? } else { from_yaml(text, file)? };
+    raw.validate(file)
+}
+
+/// A matrix entry as read: its rows, columns and values.
+struct RawMatrix {
+    rows: i64,
+    cols: i64,
+    data: Vec<f64>,
+}
+
+/// The entries common to the formats, before validation.
+struct Raw {
+    width: i64,
+    height: i64,
+    camera_matrix: RawMatrix,
+    /// The name of the distortion entry that was found.
+    dist_key: &'static str,
+    distortion: RawMatrix,
+    model: Option<String>,
+}
+
+fn err(file: &str, field: impl Into<String>, reason: impl Into<String>) -> Error {
+    Error::Calibration { file: file.to_string(), field: field.into(), reason: reason.into() }
+}
+
+impl Raw {
+    fn validate(self, file: &str) -> Result<Calibration> {
+        let size = |key: &str, v: i64| {
+            u32::try_from(v)
+                .ok()
+                .filter(|&v| v > 0)
+                .ok_or_else(|| err(file, key, format!("expected a positive integer, got {v}")))
+        };
+        let image_size = (size("image_width", self.width)?, size("image_height", self.height)?);
+
+        let km = &self.camera_matrix;
+        if km.rows != 3 || km.cols != 3 {
+            return Err(err(file, "camera_matrix", format!("expected a 3x3 matrix, got {}x{}", km.rows, km.cols)));
+        }
+        check_count(file, "camera_matrix", km)?;
+        if let Some(i) = km.data.iter().position(|v| !v.is_finite()) {
+            return Err(err(file, format!("camera_matrix.data[{i}]"), format!("non-finite value {}", km.data[i])));
+        }
+        let k = nalgebra::Matrix3::from_row_slice(&km.data);
+        if k[(0, 1)] != 0.0 {
+            return Err(err(
+                file,
+                "camera_matrix",
+                format!(
+                    "K[0,1] = {} but calibration files describe a camera without skew ([[fx, 0, cx], [0, fy, cy], [0, 0, 1]])",
+                    k[(0, 1)]
+                ),
+            ));
+        }
+        let intrinsics = Intrinsics::from_matrix(&k).map_err(|e| err(file, "camera_matrix", e.to_string()))?;
+
+        let key = self.dist_key;
+        let dm = &self.distortion;
+        check_count(file, key, dm)?;
+        if dm.rows != 1 && dm.cols != 1 {
+            return Err(err(file, key, format!("expected a row or column vector, got {}x{}", dm.rows, dm.cols)));
+        }
+        if let Some(i) = dm.data.iter().position(|v| !v.is_finite()) {
+            return Err(err(file, format!("{key}.data[{i}]"), format!("non-finite value {}", dm.data[i])));
+        }
+        let distortion = match &self.model {
+            Some(name) => {
+                let model = DistortionModel::from_name(name).ok_or_else(|| {
+                    err(
+                        file,
+                        "distortion_model",
+                        format!("unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""),
+                    )
+                })?;
+                Distortion::with_model(model, &dm.data)
+            }
+            None => Distortion::from_coefficients(&dm.data),
+        }
+        .map_err(|e| {
+            let reason = match e {
+                Error::InvalidParameter { reason, .. } => reason,
+                other => other.to_string(),
+            };
+            err(file, key, format!("wrong coefficient count: {reason}"))
+        })?;
+        Ok(Calibration { intrinsics, distortion, image_size })
+    }
+}
+
+fn check_count(file: &str, key: &str, m: &RawMatrix) -> Result<()> {
+    if m.rows < 0 || m.cols < 0 || (m.rows * m.cols) as usize != m.data.len() {
+        return Err(err(
+            file,
+            format!("{key}.data"),
+            format!("rows x cols = {} x {} but data has {} values", m.rows, m.cols, m.data.len()),
+        ));
+    }
+    Ok(())
+}
+
+/// Blanks OpenCV 4's `%YAML:1.0` directive line (keeping the line numbers).
+fn strip_opencv_directive(text: &str) -> std::borrow::Cow<'_, str> {
+    let start = text.len() - text.trim_start_matches('\u{feff}').len();
+    let body = &text[start..];
+    if body.starts_with("%YAML:") {
+        let end = body.find('\n').unwrap_or(body.len());
+        std::borrow::Cow::Owned(format!("#{}", &body[1..end]) + &body[end..])
+    } else {
+        std::borrow::Cow::Borrowed(body)
+    }
+}
+
+fn yaml_kind(v: &Yaml) -> String {
+    match v {
+        Yaml::Real(s) => format!("{s:?}"),
+        Yaml::Integer(i) => i.to_string(),
+        Yaml::String(s) => format!("the string {s:?}"),
+        Yaml::Boolean(b) => format!("the boolean {b}"),
+        Yaml::Array(_) => "a list".into(),
+        Yaml::Hash(_) => "a mapping".into(),
+        Yaml::Null => "null".into(),
+        _ => "an unreadable value".into(),
+    }
+}
+
+fn from_yaml(text: &str, file: &str) -> Result<Raw> {
+    let docs = YamlLoader::load_from_str(&strip_opencv_directive(text))
+        .map_err(|e| err(file, "", format!("not valid YAML: {e}")))?;
+    let Some(doc) = docs.first() else {
+        return Err(err(file, "", "empty document"));
+    };
+    if doc.as_hash().is_none() {
+        return Err(err(file, "", format!("expected a mapping at the top level, got {}", yaml_kind(doc))));
+    }
+    let get = |key: &str| -> Result<&Yaml> {
+        match &doc[key] {
+            Yaml::BadValue => Err(err(file, key, "missing")),
+            v => Ok(v),
+        }
+    };
+    let int = |field: &str, v: &Yaml| -> Result<i64> {
+        v.as_i64().ok_or_else(|| err(file, field, format!("expected an integer, got {}", yaml_kind(v))))
+    };
+    let matrix = |key: &str| -> Result<RawMatrix> {
+        let m = get(key)?;
+        if m.as_hash().is_none() {
+            return Err(err(file, key, format!("expected a matrix {{rows, cols, data}}, got {}", yaml_kind(m))));
+        }
+        let sub = |name: &str| match &m[name] {
+            Yaml::BadValue => Err(err(file, format!("{key}.{name}"), "missing")),
+            v => Ok(v),
+        };
+        let rows = int(&format!("{key}.rows"), sub("rows")?)?;
+        let cols = int(&format!("{key}.cols"), sub("cols")?)?;
+        let data = sub("data")?;
+        let Some(items) = data.as_vec() else {
+            return Err(err(
+                file,
+                format!("{key}.data"),
+                format!("expected a list of numbers, got {}", yaml_kind(data)),
+            ));
+        };
+        let data = items
+            .iter()
+            .enumerate()
+            .map(|(i, v)| match v {
+                Yaml::Integer(n) => Ok(*n as f64),
+                Yaml::Real(_) => v.as_f64().ok_or_else(|| err(file, format!("{key}.data[{i}]"), "not a number")),
+                other => Err(err(file, format!("{key}.data[{i}]"), format!("non-numeric value {}", yaml_kind(other)))),
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        Ok(RawMatrix { rows, cols, data })
+    };
+    let width = int("image_width", get("image_width")?)?;
+    let height = int("image_height", get("image_height")?)?;
+    let camera_matrix = matrix("camera_matrix")?;
+    let model = match &doc["distortion_model"] {
+        Yaml::BadValue => None,
+        Yaml::String(s) => Some(s.clone()),
+        other => return Err(err(file, "distortion_model", format!("expected a name, got {}", yaml_kind(other)))),
+    };
+    let dist_key = if model.is_none()
+        && matches!(doc["distortion_coefficients"], Yaml::BadValue)
+        && !matches!(doc["dist_coeffs"], Yaml::BadValue)
+    {
+        "dist_coeffs"
+    } else {
+        "distortion_coefficients"
+    };
+    let distortion = matrix(dist_key)?;
+    Ok(Raw { width, height, camera_matrix, dist_key, distortion, model })
+}
+
+type XmlNode<'a, 'input> = roxmltree::Node<'a, 'input>;
+
+fn xml_child<'a, 'input>(
+    file: &str,
+    node: XmlNode<'a, 'input>,
+    name: &str,
+    field: &str,
+) -> Result<XmlNode<'a, 'input>> {
+    node.children().find(|c| c.is_element() && c.tag_name().name() == name).ok_or_else(|| err(file, field, "missing"))
+}
+
+fn xml_has(node: XmlNode<'_, '_>, name: &str) -> bool {
+    node.children().any(|c| c.is_element() && c.tag_name().name() == name)
+}
+
+fn xml_text<'a>(node: XmlNode<'a, '_>) -> &'a str {
+    node.text().unwrap_or("").trim()
+}
+
+/// The integer in the element `name` of `node`, `field` naming it in errors.
+fn xml_int(file: &str, node: XmlNode<'_, '_>, name: &str, field: &str) -> Result<i64> {
+    let t = xml_text(xml_child(file, node, name, field)?);
+    t.parse::<i64>().map_err(|_| err(file, field, format!("expected an integer, got {t:?}")))
+}
+
+fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix> {
+    let m = xml_child(file, root, key, key)?;
+    let rows = xml_int(file, m, "rows", &format!("{key}.rows"))?;
+    let cols = xml_int(file, m, "cols", &format!("{key}.cols"))?;
+    let data = xml_child(file, m, "data", &format!("{key}.data"))?
+        .text()
+        .unwrap_or("")
+        .split_whitespace()
+        .enumerate()
+        .map(|(i, s)| {
+            parse_opencv_float(s)
+                .ok_or_else(|| err(file, format!("{key}.data[{i}]"), format!("non-numeric value {s:?}")))
+        })
+        .collect::<Result<Vec<f64>>>()?;
+    Ok(RawMatrix { rows, cols, data })
+}
+
+fn from_xml(text: &str, file: &str) -> Result<Raw> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| err(file, "", format!("not valid XML: {e}")))?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "opencv_storage" {
+        return Err(err(
+            file,
+            "",
+            format!("expected the root element <opencv_storage>, got <{}>", root.tag_name().name()),
+        ));
+    }
+    let width = xml_int(file, root, "image_width", "image_width")?;
+    let height = xml_int(file, root, "image_height", "image_height")?;
+    let camera_matrix = xml_matrix(file, root, "camera_matrix")?;
+    let model = if xml_has(root, "distortion_model") {
+        Some(xml_text(xml_child(file, root, "distortion_model", "distortion_model")?).to_string())
+    } else {
+        None
+    };
+    let dist_key = if !xml_has(root, "distortion_coefficients") && xml_has(root, "dist_coeffs") {
+        "dist_coeffs"
+    } else {
+        "distortion_coefficients"
+    };
+    let distortion = xml_matrix(file, root, dist_key)?;
+    Ok(Raw { width, height, camera_matrix, dist_key, distortion, model })
+}
+
+/// A float as OpenCV writes it: Rust's syntax (which accepts `1.` and `-0.`), plus `.Nan`
+/// and `.Inf` (returned as non-finite values, refused later with the field named).
+fn parse_opencv_float(s: &str) -> Option<f64> {
+    match s {
+        ".Nan" | ".nan" | ".NaN" => Some(f64::NAN),
+        ".Inf" | ".inf" | "+.Inf" => Some(f64::INFINITY),
+        "-.Inf" | "-.inf" => Some(f64::NEG_INFINITY),
+        _ => s.parse().ok(),
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    const ROS: &str = "image_width: 640
+image_height: 480
+camera_name: narrow_stereo
+camera_matrix:
+  rows: 3
+  cols: 3
+  data: [800.5, 0, 320.25, 0, 801.5, 240.75, 0, 0, 1]
+distortion_model: plumb_bob
+distortion_coefficients:
+  rows: 1
+  cols: 5
+  data: [-0.3, 0.1, 0.001, -0.002, 0]
+";
+
+    const OPENCV4: &str = "%YAML:1.0
+---
+image_width: 640
+image_height: 480
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 800., 0., 320., 0., 810.5, 240., 0., 0., 1. ]
+dist_coeffs: !!opencv-matrix
+   rows: 1
+   cols: 8
+   dt: d
+   data: [ -0.29999999999999999, 0.1, 0.001, -0.002, 0., 0.1, 0.0, 0.0 ]
+";
+
+    const XML: &str = r#"<?xml version="1.0"?>
+<opencv_storage>
+<image_width>640</image_width>
+<image_height>480</image_height>
+<camera_matrix type_id="opencv-matrix">
+  <rows>3</rows>
+  <cols>3</cols>
+  <dt>d</dt>
+  <data>
+    800. 0. 320. 0. 810.5 240. 0. 0. 1.</data></camera_matrix>
+<distortion_coefficients type_id="opencv-matrix">
+  <rows>1</rows>
+  <cols>4</cols>
+  <dt>d</dt>
+  <data>
+    -0.3 0.1 0.001 -0.002</data></distortion_coefficients>
+</opencv_storage>
+"#;
+
+    fn field_of(e: Error) -> (String, String) {
+        match e {
+            Error::Calibration { field, reason, .. } => (field, reason),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn reads_the_three_formats() {
+        let c = parse_calibration(ROS, "ros.yaml").unwrap();
+        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.intrinsics.fku(), 800.5);
+        assert_eq!(c.intrinsics.v0(), 240.75);
+        assert_eq!(c.distortion.model(), DistortionModel::PlumbBob);
+        assert_eq!(c.distortion.coefficients(), &[-0.3, 0.1, 0.001, -0.002, 0.0]);
+
+        let c = parse_calibration(OPENCV4, "cv.yaml").unwrap();
+        assert_eq!(c.intrinsics.fkv(), 810.5);
+        assert_eq!(c.distortion.model(), DistortionModel::RationalPolynomial);
+        assert_eq!(c.distortion.coefficients()[5], 0.1);
+
+        let c = parse_calibration(XML, "cv.xml").unwrap();
+        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.intrinsics.u0(), 320.0);
+        assert_eq!(c.distortion.coefficients(), &[-0.3, 0.1, 0.001, -0.002, 0.0]);
+    }
+
+    #[test]
+    fn malformed_files_name_the_field() {
+        let cases: [(String, &str, &str); 9] = [
+            (ROS.replace("image_width: 640\n", ""), "image_width", "missing"),
+            (ROS.replace("image_height: 480", "image_height: tall"), "image_height", "integer"),
+            (ROS.replace("cols: 3", "cols: 2"), "camera_matrix", "3x3"),
+            (ROS.replace("800.5, 0, 320.25", "800.5, 0, abc"), "camera_matrix.data[2]", "non-numeric"),
+            (ROS.replace("800.5, 0, 320.25", "800.5, 3, 320.25"), "camera_matrix", "skew"),
+            (ROS.replace("plumb_bob", "equidistant"), "distortion_model", "unknown"),
+            (
+                ROS.replace("cols: 5", "cols: 6").replace("0.002, 0]", "0.002, 0, 0]"),
+                "distortion_coefficients",
+                "count",
+            ),
+            (ROS.replace("0.002, 0]", "0.002]"), "distortion_coefficients.data", "data has 4"),
+            (ROS.replace("0, 0, 1]", "0, 0, 2]"), "camera_matrix", "last row"),
+        ];
+        for (text, field, reason) in cases {
+            let (f, r) = field_of(parse_calibration(&text, "bad.yaml").unwrap_err());
+            assert_eq!(f, field, "{r}");
+            assert!(r.contains(reason), "{field}: {r}");
+        }
+        let (f, _) = field_of(parse_calibration(&XML.replace("<rows>3</rows>", ""), "bad.xml").unwrap_err());
+        assert_eq!(f, "camera_matrix.rows");
+        let (f, _) = field_of(parse_calibration(&XML.replace("810.5", "x"), "bad.xml").unwrap_err());
+        assert_eq!(f, "camera_matrix.data[4]");
+        let (f, _) = field_of(parse_calibration("<foo/>", "bad.xml").unwrap_err());
+        assert_eq!(f, "");
+        let e = load_calibration("/nonexistent/cal.yaml").unwrap_err();
+        assert!(e.to_string().contains("/nonexistent/cal.yaml"), "{e}");
+    }
+}

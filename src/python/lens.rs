@@ -1,0 +1,165 @@
+//! Lenses in Python: `Distortion`, `distort_points`, `undistort_points`, `Calibration` and
+//! `load_calibration`. The loops run in Rust, with the GIL released for large arrays.
+
+use numpy::PyArray2;
+use pyo3::prelude::*;
+
+use super::arrays::{f64_array, mat, points2, vec1};
+use super::errors::{invalid_input, to_py};
+use super::{PyIntrinsics, intrinsics, pixels_arg};
+use crate::calibration::Calibration;
+use crate::core::distortion::{
+    DEFAULT_UNDISTORT_MAX_ITER, DEFAULT_UNDISTORT_TOL, Distortion, DistortionModel, distort_points as distort,
+    undistort_points as undistort,
+};
+
+/// Arrays with at least this many points are processed with the GIL released.
+const DETACH_MIN_POINTS: usize = 512;
+
+/// Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model,
+/// "plumb_bob" (4 or 5 coefficients) or "rational_polynomial" (8).
+#[pyclass(name = "Distortion", module = "vsinv._core", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyDistortion {
+    inner: Distortion,
+}
+
+#[pymethods]
+impl PyDistortion {
+    #[new]
+    #[pyo3(signature = (coefficients, model = None))]
+    fn new(coefficients: &Bound<'_, PyAny>, model: Option<&str>) -> PyResult<Self> {
+        let c = f64_array(coefficients, "coefficients", &[None])?;
+        let inner = match model {
+            None => Distortion::from_coefficients(c.as_slice()?),
+            Some(name) => {
+                let m = DistortionModel::from_name(name).ok_or_else(|| {
+                    invalid_input(format!(
+                        "model: unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""
+                    ))
+                })?;
+                Distortion::with_model(m, c.as_slice()?)
+            }
+        }
+        .map_err(to_py)?;
+        Ok(Self { inner })
+    }
+    /// "plumb_bob" or "rational_polynomial".
+    #[getter]
+    fn model(&self) -> &'static str {
+        self.inner.model().name()
+    }
+    /// The coefficients in OpenCV's order, a new (5,) or (8,) array.
+    #[getter]
+    fn coefficients<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
+        vec1(py, self.inner.coefficients())
+    }
+    fn __repr__(&self) -> String {
+        format!("Distortion({:?}, model={:?})", self.inner.coefficients(), self.inner.model().name())
+    }
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other.cast::<PyDistortion>().is_ok_and(|o| o.get().inner == self.inner)
+    }
+}
+
+/// A `Distortion` or an array of 4, 5 or 8 coefficients.
+fn distortion_arg(obj: &Bound<'_, PyAny>) -> PyResult<Distortion> {
+    if let Ok(d) = obj.cast::<PyDistortion>() {
+        return Ok(d.get().inner);
+    }
+    let c = f64_array(obj, "coefficients", &[None])
+        .or_else(|_| f64_array(obj, "coefficients", &[Some(1), None]))
+        .or_else(|_| f64_array(obj, "coefficients", &[None, Some(1)]))
+        .map_err(|_| invalid_input("coefficients: expected a Distortion or 4, 5 or 8 coefficients".into()))?;
+    Distortion::from_coefficients(c.as_slice()?).map_err(to_py)
+}
+
+/// Runs `f` on the pixels, with the GIL released when there are many.
+fn run_points<'py>(
+    py: Python<'py>,
+    px: &[[f64; 2]],
+    f: impl FnOnce(&[[f64; 2]]) -> crate::Result<Vec<[f64; 2]>> + Send,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let out = if px.len() >= DETACH_MIN_POINTS { py.detach(|| f(px)) } else { f(px) }.map_err(to_py)?;
+    mat(py, out.len(), 2, out.into_flattened())
+}
+
+/// Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew.
+#[pyfunction]
+#[allow(non_snake_case)]
+pub fn distort_points<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    distortion: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = pixels_arg(pixels, "pixels")?;
+    let k = intrinsics(K, "K")?;
+    let d = distortion_arg(distortion)?;
+    run_points(py, points2(&a)?, |px| distort(px, &k, &d))
+}
+
+/// Undistorts pixels (n, 2) by Newton's method: the inverse of `distort_points`, to `tol`
+/// pixels within `max_iter` iterations.
+#[pyfunction]
+#[pyo3(signature = (pixels, K, distortion, tol = DEFAULT_UNDISTORT_TOL, max_iter = DEFAULT_UNDISTORT_MAX_ITER), text_signature = "(pixels, K, distortion, tol=1e-10, max_iter=50)")]
+#[allow(non_snake_case)]
+pub fn undistort_points<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    distortion: &Bound<'py, PyAny>,
+    tol: f64,
+    max_iter: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = pixels_arg(pixels, "pixels")?;
+    let k = intrinsics(K, "K")?;
+    let d = distortion_arg(distortion)?;
+    run_points(py, points2(&a)?, |px| undistort(px, &k, &d, tol, max_iter))
+}
+
+/// A camera calibration read from a file: intrinsics, distortion and image size.
+#[pyclass(name = "Calibration", module = "vsinv._core", frozen)]
+pub struct PyCalibration {
+    inner: Calibration,
+}
+
+#[pymethods]
+impl PyCalibration {
+    /// The camera matrix as `Intrinsics` (no skew).
+    #[getter]
+    fn intrinsics(&self) -> PyIntrinsics {
+        PyIntrinsics { inner: self.inner.intrinsics }
+    }
+    /// The lens distortion.
+    #[getter]
+    fn distortion(&self) -> PyDistortion {
+        PyDistortion { inner: self.inner.distortion }
+    }
+    /// (width, height) in pixels.
+    #[getter]
+    fn image_size(&self) -> (u32, u32) {
+        self.inner.image_size
+    }
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        let k = &c.intrinsics;
+        format!(
+            "Calibration(intrinsics=Intrinsics(fku={}, fkv={}, u0={}, v0={}), distortion={:?} {:?}, image_size={:?})",
+            k.fku(),
+            k.fkv(),
+            k.u0(),
+            k.v0(),
+            c.distortion.model().name(),
+            c.distortion.coefficients(),
+            c.image_size
+        )
+    }
+}
+
+/// Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML.
+#[pyfunction]
+pub fn load_calibration(py: Python<'_>, path: std::path::PathBuf) -> PyResult<PyCalibration> {
+    let inner = py.detach(|| crate::calibration::load_calibration(&path)).map_err(to_py)?;
+    Ok(PyCalibration { inner })
+}
