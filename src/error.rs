@@ -17,6 +17,16 @@ pub enum Error {
         /// Flat index of the first offending value.
         index: usize,
     },
+    /// A point coordinate is NaN or infinite.
+    #[error("{what}: non-finite value at row {row}, column {column}")]
+    NonFinitePoint {
+        /// Which input.
+        what: &'static str,
+        /// The point (row of the `(n, 2)` array).
+        row: usize,
+        /// The coordinate (0: u, 1: v).
+        column: usize,
+    },
     /// An array does not have the expected size.
     #[error("{what}: expected {expected}, got {got}")]
     Shape {
@@ -74,7 +84,7 @@ pub enum Error {
     /// The invariant Jacobian has lost rank: planar object, equal depth estimates,
     /// or points too close to a plane (paper-corrections: planar object).
     #[error(
-        "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof"
+        "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof; with a constant-depth guess, pass the reference depths zeta* or estimated depths (appendix A: depths_from_translation, ResectionDepths; scenario control.depths = \"reference\" or \"estimated\") instead"
     )]
     DegenerateStructure {
         /// sigma_5 / sigma_1 of `J_hat diag(Z, Z, Z, 1, 1)`.
@@ -176,9 +186,12 @@ pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<()> {
     }
 }
 
-/// Checks that pixels are finite (flattened index in the error).
+/// Checks that pixels are finite (row and column in the error).
 pub(crate) fn check_finite_points(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
-    check_finite(what, points.as_flattened())
+    match points.as_flattened().iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::NonFinitePoint { what, row: i / 2, column: i % 2 }),
+        None => Ok(()),
+    }
 }
 
 /// Checks that every depth is finite and strictly positive.

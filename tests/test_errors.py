@@ -169,8 +169,9 @@ def test_bad_parameters(ref):
         ctl.set_reference(np.zeros((9, 3)))
     with pytest.raises(vsinv.InvalidInput, match="s_star"):
         ctl.set_reference(np.zeros((8, 3)))
-    with pytest.raises(RuntimeError, match="no control step"):
+    with pytest.raises(vsinv.NotReady, match="no control step"):
         _ = ctl.eps
+    assert issubclass(vsinv.NotReady, vsinv.VsinvError) and issubclass(vsinv.NotReady, RuntimeError)
     with pytest.raises(vsinv.InvalidInput):
         vsinv.check_stability(np.ones((3, 3)), lens(1.0))
     with pytest.raises(vsinv.InvalidInput):
@@ -192,3 +193,22 @@ def test_no_panic_ever_reaches_python(ref):
             assert np.isfinite(tw).all()
         except vsinv.VsinvError:
             pass
+
+
+def test_nan_in_a_point_array_is_reported_by_row_and_column(scene):
+    cur = scene["cur"].copy()
+    cur[5, 1] = np.nan
+    ctl = vsinv.InvariantController(scene["ref"], scene["k"])
+    with pytest.raises(vsinv.InvalidInput, match=r"pixels: non-finite value at row 5, column 1"):
+        ctl.step(cur, scene["z_star"])
+    ref = scene["ref"].copy()
+    ref[4, 0] = np.inf
+    with pytest.raises(vsinv.InvalidInput, match=r"reference_pixels: non-finite value at row 4, column 0"):
+        vsinv.IbvsController(ref, scene["k"])
+
+
+def test_equal_depths_are_refused_with_what_to_do_instead(scene):
+    ctl = vsinv.InvariantController(scene["ref"], scene["k"])
+    with pytest.raises(vsinv.DegenerateGeometry, match="reference depths") as info:
+        ctl.step(scene["cur"], np.full(len(scene["cur"]), 0.6))
+    assert "estimated" in str(info.value)

@@ -87,7 +87,7 @@ fn bad_inputs_are_refused() {
     let cfg = TrackerConfig::default();
     assert!(DotTracker::new(&img, &[], cfg).is_err());
     let err = DotTracker::new(&img, &[[50.0, 50.0], [f64::NAN, 3.0]], cfg).unwrap_err();
-    assert!(err.to_string().contains("index 2"), "{err}");
+    assert!(err.to_string().contains("row 1, column 0"), "{err}");
     let err = DotTracker::new(&img, &[[50.0, 50.0], [150.0, 120.0]], cfg).unwrap_err();
     assert!(err.to_string().contains("point 1"), "{err}");
     let err = DotTracker::new(&img, &[[50.0, 50.0], [52.0, 51.0]], cfg).unwrap_err();

@@ -11,6 +11,7 @@ poses are 4x4 homogeneous matrices of the camera frame in F*, the frame of the r
 from ._core import (
     Calibration,
     DegenerateGeometry,
+    NotReady,
     Distortion,
     DotTracker,
     Dots,
@@ -60,6 +61,7 @@ from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 __all__ = [
     "Calibration",
     "DegenerateGeometry",
+    "NotReady",
     "Distortion",
     "DotTracker",
     "Dots",

@@ -11,6 +11,7 @@ __all__ = [
     "VsinvError",
     "InvalidInput",
     "DegenerateGeometry",
+    "NotReady",
     "Intrinsics",
     "InvariantController",
     "IbvsController",
@@ -61,6 +62,7 @@ _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 class VsinvError(Exception): ...
 class InvalidInput(VsinvError, ValueError): ...
 class DegenerateGeometry(VsinvError, ValueError): ...
+class NotReady(VsinvError, RuntimeError): ...
 
 @final
 class Intrinsics:

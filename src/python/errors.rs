@@ -1,6 +1,6 @@
 //! The package's exception hierarchy, built when the module loads:
 //! `VsinvError(Exception)`, `InvalidInput(VsinvError, ValueError)` and
-//! `DegenerateGeometry(VsinvError, ValueError)`.
+//! `DegenerateGeometry(VsinvError, ValueError)` and `NotReady(VsinvError, RuntimeError)`.
 
 use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -10,6 +10,7 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 static VSINV_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static INVALID_INPUT: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static DEGENERATE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static NOT_READY: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
 fn new_class<'py>(py: Python<'py>, name: &str, bases: Bound<'py, PyTuple>, doc: &str) -> PyResult<Bound<'py, PyType>> {
     let dict = PyDict::new(py);
@@ -38,7 +39,13 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
                    a planar object or equal depth estimates, points at or behind the camera.";
         Ok::<_, PyErr>(new_class(py, "DegenerateGeometry", bases, doc)?.unbind())
     })?;
+    let not_ready = NOT_READY.get_or_try_init(py, || {
+        let bases = PyTuple::new(py, [base.clone(), py.get_type::<PyRuntimeError>()])?;
+        let doc = "A state read before it exists, e.g. a controller's eps before its first step.";
+        Ok::<_, PyErr>(new_class(py, "NotReady", bases, doc)?.unbind())
+    })?;
     m.add("VsinvError", base)?;
+    m.add("NotReady", not_ready.bind(py))?;
     m.add("InvalidInput", invalid.bind(py))?;
     m.add("DegenerateGeometry", degenerate.bind(py))?;
     Ok(())
@@ -49,6 +56,11 @@ fn raise(cell: &PyOnceLock<Py<PyType>>, msg: String) -> PyErr {
         Some(ty) => PyErr::from_type(ty.bind(py).clone(), msg),
         None => PyRuntimeError::new_err(msg),
     })
+}
+
+/// `NotReady(msg)`.
+pub fn not_ready(msg: &str) -> PyErr {
+    raise(&NOT_READY, msg.to_string())
 }
 
 /// `InvalidInput(msg)`.

@@ -362,7 +362,7 @@ struct PyInvariantController {
 }
 
 fn state_of(c: &InvariantController) -> PyResult<&crate::core::control::ControlState> {
-    c.state().ok_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("no control step has run yet"))
+    c.state().ok_or_else(|| errors::not_ready("no control step has run yet: call step() first"))
 }
 
 #[pymethods]

@@ -207,7 +207,11 @@ impl PyResectionDepths {
         }
         for (i, p) in px.iter().enumerate() {
             if visible[i] && !(p[0].is_finite() && p[1].is_finite()) {
-                return Err(to_py(crate::Error::NonFinite { what: "pixels", index: 2 * i }));
+                return Err(to_py(crate::Error::NonFinitePoint {
+                    what: "pixels",
+                    row: i,
+                    column: usize::from(p[0].is_finite()),
+                }));
             }
         }
         let mut out = vec![0.0; self.n];

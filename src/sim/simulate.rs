@@ -158,7 +158,7 @@ impl AnyController {
 fn status_of(err: &Error) -> Status {
     match err {
         Error::TooFewPoints { .. } | Error::PointBehindCamera { .. } => Status::LostFeatures,
-        Error::RzSingular { .. } | Error::NonFinite { .. } => Status::Diverged,
+        Error::RzSingular { .. } | Error::NonFinite { .. } | Error::NonFinitePoint { .. } => Status::Diverged,
         _ => Status::Degenerate,
     }
 }

@@ -186,7 +186,11 @@ fn initial_dot<C: Pixels>(
     config: &TrackerConfig,
 ) -> Result<TrackedDot> {
     if !(click[0].is_finite() && click[1].is_finite()) {
-        return Err(Error::NonFinite { what: "initial_pixels", index: 2 * i + usize::from(click[0].is_finite()) });
+        return Err(Error::NonFinitePoint {
+            what: "initial_pixels",
+            row: i,
+            column: usize::from(click[0].is_finite()),
+        });
     }
     let not_found = |reason: &str| Error::InvalidImage {
         what: "initial_pixels".into(),
