@@ -77,8 +77,8 @@ fn noisy_lens_change_ends_within_2mm() {
 }
 
 fn with_start(mut s: Scenario, position: [f64; 3], rotation: [f64; 3]) -> Scenario {
-    s.start.position = position;
-    s.start.rotation = rotation;
+    s.start.as_mut().unwrap().position = position;
+    s.start.as_mut().unwrap().rotation = rotation;
     s
 }
 

@@ -217,7 +217,7 @@ _ScenarioLike = Union[Scenario, dict[str, Any], str, os.PathLike[str]]
 class RunResult:
     """A finished run: `.summary` and the recorded arrays (time, pose, twist, joints, pixels,
     visible, invariant_error, eps, eps_z, image_error, translation_error, rotation_error,
-    reference_pixels)."""
+    reference_pixels, and an arm's joint_velocities)."""
 
     @property
     def summary(self) -> dict[str, Any]: ...
@@ -257,6 +257,14 @@ class RunResult:
     def detection_error(self) -> _F64Array | None:
         """Per iteration and point, the tracked centroid's distance to the true projection
         of the dot's centre (pixels, NaN where not found); None without `[vision]`."""
+    @property
+    def joint_velocities(self) -> _F64Array | None:
+        """An arm's joint velocities after saturation (rad/s or m/s, NaN on the last row);
+        None for the other robots."""
+    @property
+    def joint_limits(self) -> dict[str, Any] | None:
+        """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`
+        (per second); None for the other robots."""
 
 def load_scenario(source: _ScenarioLike) -> Scenario: ...
 def list_scenarios() -> list[tuple[str, str]]: ...

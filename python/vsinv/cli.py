@@ -5,10 +5,10 @@
 
 Exit codes: ``vsinv run`` returns 0 when the run's status is ``converged`` and 1 for every
 other status (``max_iterations``, ``lost_features``, ``diverged``, ``degenerate``, ``rz_trap``,
-``observed``), which it reports; ``sweep``, ``render`` and ``invariance`` return 0 when they
-finish (a sweep's statuses are in its table); every command returns 2 for bad input (unknown
-scenario, invalid scenario file, bad --vary/--random, unwritable output directory) and 130 on
-Ctrl-C.
+``observed``, ``joint_limit``, ``singular``), which it reports; ``sweep``, ``render`` and
+``invariance`` return 0 when they finish (a sweep's statuses are in its table); every command
+returns 2 for bad input (unknown scenario, invalid scenario file, bad --vary/--random,
+unwritable output directory) and 130 on Ctrl-C.
 """
 
 from __future__ import annotations
@@ -108,6 +108,8 @@ def format_summary(summary: dict[str, Any]) -> str:
                 f"psi {_fmt(s.get('tracking_psi'), '.4g')}, phi {_fmt(s.get('tracking_phi'), '.4g')})",
             ),
         ]
+    if s.get("min_manipulability") is not None:
+        rows.append(("arm", f"smallest manipulability {_fmt(s.get('min_manipulability'), '.4g')}"))
     rows.append(("message", str(s.get("message", ""))))
     width = max(len(k) for k, _ in rows)
     lines = [f"scenario {s.get('name', '?')}"]

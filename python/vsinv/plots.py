@@ -26,7 +26,7 @@ if TYPE_CHECKING:
 
     from ._core import RunResult
 
-__all__ = ["FIGURES", "save_figures", "save_npz", "summary_json"]
+__all__ = ["ARM_FIGURES", "FIGURES", "save_figures", "save_npz", "summary_json"]
 
 _PathLike = Union[str, "os.PathLike[str]"]
 
@@ -39,6 +39,9 @@ FIGURES = (
     "pose_errors.png",
     "path3d.png",
 )
+
+#: File names also written for an arm (``[robot] kind = "urdf"``), in order.
+ARM_FIGURES = ("joints.png", "joint_velocities.png")
 
 DPI = 120
 
@@ -416,9 +419,59 @@ def plot_path3d(result: RunResult) -> Figure:
     return fig
 
 
+def _plot_normalised_joints(result: RunResult, values: npt.NDArray[np.float64], what: str, ylabel: str) -> Figure:
+    """One line per joint against the band of its limits, both normalised to [-1, 1]."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(result.time, dtype=float)
+    limits = result.joint_limits or {}
+    names = list(limits.get("names", []))
+    fig, ax = plt.subplots(figsize=(8, 4.8), constrained_layout=True)
+    ax.axhspan(1.0, 1.2, color="tab:red", alpha=0.12, linewidth=0)
+    ax.axhspan(-1.2, -1.0, color="tab:red", alpha=0.12, linewidth=0)
+    for y in (-1.0, 1.0):
+        ax.axhline(y, color="tab:red", linewidth=1.0, linestyle="--")
+    ax.axhline(0.0, color="0.5", linewidth=0.8)
+    for j in range(values.shape[1]):
+        ax.plot(t, values[:, j], label=names[j] if j < len(names) else f"joint {j}")
+    ax.set_ylim(-1.2, 1.2)
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel("time (s)")
+    ax.legend(loc="lower left", ncol=4, fontsize=8)
+    peak = float(np.nanmax(np.abs(values))) if not _all_nan(values) else float("nan")
+    ax.text(0.99, 0.97, f"largest |value| {peak:.2f} (limits at ±1)", ha="right", va="top", transform=ax.transAxes,
+            fontsize=9)
+    _finish_time_axis(ax, t)
+    _title(fig, result, what)
+    return fig
+
+
+def plot_joints(result: RunResult) -> Figure:
+    """An arm's joint positions, ``(q - mid) / half`` of each joint's range: the limits at ±1."""
+    limits = result.joint_limits or {}
+    q = np.asarray(result.joints, dtype=float)
+    lower = np.asarray(limits.get("lower", []), dtype=float)
+    upper = np.asarray(limits.get("upper", []), dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normalised = (q - (upper + lower) / 2.0) / ((upper - lower) / 2.0)
+    return _plot_normalised_joints(result, normalised, "joint positions within their limits",
+                                   "position, normalised to the range")
+
+
+def plot_joint_velocities(result: RunResult) -> Figure:
+    """An arm's joint velocities over their speed limits: the limits at ±1."""
+    limits = result.joint_limits or {}
+    dq = np.asarray(result.joint_velocities, dtype=float)
+    velocity = np.asarray(limits.get("velocity", []), dtype=float)
+    return _plot_normalised_joints(result, dq / velocity, "joint velocities within their limits",
+                                   "velocity / speed limit")
+
+
 def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
-    """Write the six figures of a recorded run to ``out_dir`` (created if needed);
-    returns the paths written, in the order of :data:`FIGURES`."""
+    """Write the six figures of a recorded run to ``out_dir`` (created if needed), and
+    :data:`ARM_FIGURES` for an arm; returns the paths written, in the order of
+    :data:`FIGURES` then :data:`ARM_FIGURES`."""
     if len(result.time) == 0:
         raise ValueError("the run was not recorded (run_scenario(..., record=False)): nothing to plot")
     out = Path(out_dir)
@@ -431,4 +484,8 @@ def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
         plot_pose_errors,
         plot_path3d,
     )
-    return [_save(make(result), out, name) for make, name in zip(makers, FIGURES)]
+    paths = [_save(make(result), out, name) for make, name in zip(makers, FIGURES)]
+    if result.joint_limits is not None and result.joint_velocities is not None:
+        arm = (plot_joints, plot_joint_velocities)
+        paths.extend(_save(make(result), out, name) for make, name in zip(arm, ARM_FIGURES))
+    return paths

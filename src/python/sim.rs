@@ -6,6 +6,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use super::errors::{invalid_input, to_py};
+use crate::sim::arm::ArmRobot;
+use crate::sim::robot::Robot;
 use crate::sim::scenario::{BUILTIN, Scenario, builtin};
 use crate::sim::{Outcome, simulate};
 
@@ -85,8 +87,7 @@ pub fn scenario_arg(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
     }
     let path = std::path::Path::new(&text);
     if path.is_file() {
-        let body = std::fs::read_to_string(path).map_err(|e| invalid_input(format!("{text}: {e}")))?;
-        return Scenario::from_toml(&body).map_err(|e| invalid_input(format!("{text}: {e}")));
+        return Scenario::from_toml_file(path).map_err(|e| invalid_input(format!("{text}: {e}")));
     }
     let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
     Err(invalid_input(format!("{text:?} is neither a scenario file nor a built-in scenario ({})", names.join(", "))))
@@ -161,6 +162,13 @@ pub struct PyRunResult {
     /// the dot's centre (pixels, NaN where not found), (N, n); None without `[vision]`.
     #[pyo3(get)]
     detection_error: Option<Py<PyAny>>,
+    /// Per iteration, the commanded joint velocities of an arm (rad/s or m/s), (N, n_joints);
+    /// None for other robots.
+    #[pyo3(get)]
+    joint_velocities: Option<Py<PyAny>>,
+    /// An arm's joint names and position and velocity limits (a dict); None for other robots.
+    #[pyo3(get)]
+    joint_limits: Option<Py<PyDict>>,
 }
 
 #[pymethods]
@@ -185,6 +193,9 @@ impl PyRunResult {
         d.set_item("reference_pixels", self.reference_pixels.bind(py))?;
         if let Some(e) = &self.detection_error {
             d.set_item("detection_error", e.bind(py))?;
+        }
+        if let Some(v) = &self.joint_velocities {
+            d.set_item("joint_velocities", v.bind(py))?;
         }
         Ok(d)
     }
@@ -234,6 +245,7 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("observed_max_eps", t.map(|t| t.max_eps))?;
     d.set_item("detection_error_median_px", s.detection_error.map(|e| e.0))?;
     d.set_item("detection_error_max_px", s.detection_error.map(|e| e.1))?;
+    d.set_item("min_manipulability", s.min_manipulability)?;
     Ok(d)
 }
 
@@ -276,6 +288,15 @@ pub fn run_scenario(
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
     let (rows, n) = (r.len(), scenario.object.points.len());
+    let n_joints = if let Robot::Arm(arm) = &config.robot { arm.dof() } else { 6 };
+    let joint_limits = match &config.robot {
+        Robot::Arm(arm) => Some(arm_limits(py, arm)?.unbind()),
+        _ => None,
+    };
+    let joint_velocities = match joint_limits {
+        Some(_) => Some(array(py, r.joint_velocities, &[rows, n_joints])?),
+        None => None,
+    };
     let reference = std::mem::take(&mut outcome.reference_pixels);
     Ok(PyRunResult {
         summary: summary.unbind(),
@@ -283,7 +304,7 @@ pub fn run_scenario(
         time: array(py, r.time, &[rows])?,
         pose: array(py, r.pose, &[rows, 4, 4])?,
         twist: array(py, r.twist, &[rows, 6])?,
-        joints: array(py, r.joints, &[rows, 6])?,
+        joints: array(py, r.joints, &[rows, n_joints])?,
         pixels: array(py, r.pixels, &[rows, n, 2])?,
         visible: array(py, r.visible, &[rows, n])?,
         invariant_error: array(py, r.invariant_error, &[rows])?,
@@ -298,7 +319,19 @@ pub fn run_scenario(
             Some(_) => Some(array(py, r.detection_error, &[rows, n])?),
             None => None,
         },
+        joint_velocities,
+        joint_limits,
     })
+}
+
+/// An arm's joint names and limits (radians or metres, per second for `velocity`).
+fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("names", arm.model.joint_names())?;
+    d.set_item("lower", arm.limits.lower.clone())?;
+    d.set_item("upper", arm.limits.upper.clone())?;
+    d.set_item("velocity", arm.limits.velocity.clone())?;
+    Ok(d)
 }
 
 /// Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths)

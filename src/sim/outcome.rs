@@ -19,6 +19,10 @@ pub enum Status {
     RzTrap,
     /// No control (`law = "none"`, a stationary camera): every image was taken.
     Observed,
+    /// An arm joint would have left its position limits (clamped there).
+    JointLimit,
+    /// The arm's manipulability fell below `[robot] min_manipulability`.
+    Singular,
 }
 
 impl Status {
@@ -32,6 +36,8 @@ impl Status {
             Status::Degenerate => "degenerate",
             Status::RzTrap => "rz_trap",
             Status::Observed => "observed",
+            Status::JointLimit => "joint_limit",
+            Status::Singular => "singular",
         }
     }
 }
@@ -84,6 +90,8 @@ pub struct Summary {
     /// Images in the loop: median and largest distance of a tracked centroid from the true
     /// projection of its dot's centre, pixels (None without `[vision]`).
     pub detection_error: Option<(f64, f64)>,
+    /// Smallest manipulability of the arm along the run (None for other robots).
+    pub min_manipulability: Option<f64>,
 }
 
 /// Prop. 3 along the path: the bound `psi / phi` on `||eps(t)||` and what was observed.
@@ -116,8 +124,14 @@ pub struct Recording {
     pub pose: Vec<f64>,
     /// Twist sent to the robot (NaN on the last row when no step followed): (N, 6).
     pub twist: Vec<f64>,
-    /// Joint positions: (N, 6).
+    /// Number of joints: 6 for the free-flying camera (x, y, z, theta-u) and the Cartesian
+    /// robot, the arm's degrees of freedom otherwise.
+    pub n_joints: usize,
+    /// Joint positions: (N, n_joints).
     pub joints: Vec<f64>,
+    /// Arm joint velocities after saturation (NaN on the last row; empty for other robots):
+    /// (N, n_joints).
+    pub joint_velocities: Vec<f64>,
     /// Measured pixels (NaN where not visible): (N, n, 2).
     pub pixels: Vec<f64>,
     /// Visibility: (N, n).

@@ -1,6 +1,6 @@
-//! Robots carrying the camera on their end-effector: a free-flying camera and a six-axis
+//! Robots carrying the camera on their end-effector: a free-flying camera, a six-axis
 //! Cartesian robot like the paper's AFMA (three prismatic axes and a three-axis wrist) with
-//! joint position and velocity limits.
+//! joint position and velocity limits, and a serial arm from URDF ([`ArmRobot`]).
 //!
 //! The robot base frame is F*. The camera twist is mapped to joint velocities through the
 //! robot Jacobian, saturated, and integrated. With no limit active the new pose is exactly
@@ -8,8 +8,11 @@
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
+use std::sync::Arc;
+
 use crate::core::se3::exp_twist;
 use crate::error::{Error, Result, check_finite};
+use crate::sim::arm::ArmRobot;
 
 /// Joint limits of the Cartesian robot: `q = (x, y, z, a, b, c)` with the camera centre at
 /// `(x, y, z)` (metres, in F*) and the orientation `R = Rx(a) Ry(b) Rz(c)` (radians).
@@ -57,12 +60,15 @@ impl JointLimits {
 }
 
 /// The robot that carries the camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Robot {
     /// A camera that follows any twist exactly.
     FreeFlying,
     /// A Cartesian robot with a three-axis wrist and joint limits.
     Cartesian(JointLimits),
+    /// A serial arm whose joint positions are its state: it moves through
+    /// [`ArmRobot::step`], not [`Robot::step`].
+    Arm(Arc<ArmRobot>),
 }
 
 /// What one robot step did.
@@ -140,9 +146,10 @@ pub fn cartesian_twist(q: &[f64; 6], dq: &[f64; 6]) -> Vector6<f64> {
 }
 
 impl Robot {
-    /// Joint positions at a pose.
+    /// Joint positions at a pose (NaN for an arm, whose joints the pose does not determine).
     pub fn joints(&self, pose: &Isometry3<f64>) -> [f64; 6] {
         match self {
+            Robot::Arm(_) => [f64::NAN; 6],
             Robot::FreeFlying => {
                 let t = pose.translation.vector;
                 let r = pose.rotation.scaled_axis();
@@ -152,8 +159,12 @@ impl Robot {
         }
     }
 
-    /// Checks that a pose is reachable (inside the joint limits).
+    /// Checks that a pose is reachable (inside the joint limits); for an arm, checks it and
+    /// that the pose is the camera pose at its start joints.
     pub fn check_reachable(&self, pose: &Isometry3<f64>) -> Result<()> {
+        if let Robot::Arm(arm) = self {
+            return check_arm_start(arm, pose);
+        }
         if let Robot::Cartesian(limits) = self {
             let q = cartesian_joints(pose);
             if let Some(i) = (0..6).find(|&i| q[i] < limits.min[i] || q[i] > limits.max[i]) {
@@ -169,7 +180,8 @@ impl Robot {
         Ok(())
     }
 
-    /// Moves the camera from `pose` under `twist` (camera frame) for `dt` seconds.
+    /// Moves the camera from `pose` under `twist` (camera frame) for `dt` seconds (an arm
+    /// is an error: use [`ArmRobot::step`]).
     pub fn step(&self, pose: &Isometry3<f64>, twist: &Vector6<f64>, dt: f64) -> Result<RobotStep> {
         check_finite("twist", twist.as_slice())?;
         match self {
@@ -177,7 +189,7 @@ impl Robot {
                 let pose = pose * exp_twist(&(twist * dt).into());
                 Ok(RobotStep { joints: self.joints(&pose), pose, twist: *twist, limited: false })
             }
-            Robot::Cartesian(_) => self.step_pose(pose, twist, dt),
+            Robot::Cartesian(_) | Robot::Arm(_) => self.step_pose(pose, twist, dt),
         }
     }
 
@@ -221,8 +233,23 @@ impl Robot {
                 }
                 Ok(RobotStep { pose, joints, twist: executed, limited })
             }
+            Robot::Arm(_) => Err(Error::InvalidParameter {
+                name: "robot",
+                reason: "an arm moves from its joint positions: use ArmRobot::step".into(),
+            }),
         }
     }
+}
+
+/// An arm's start: valid, and `pose` is its camera pose at the start joints.
+fn check_arm_start(arm: &ArmRobot, pose: &Isometry3<f64>) -> Result<()> {
+    arm.validate()?;
+    let (dt, dr) = crate::core::se3::pose_error(&arm.camera_pose(&arm.start)?, pose);
+    if dt > 1e-9 || dr > 1e-9 {
+        let reason = format!("the start pose is {dt:.3e} m, {dr:.3e} rad from the camera pose at the arm's joints");
+        return Err(Error::InvalidParameter { name: "start", reason });
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -16,11 +16,13 @@ use crate::core::planning::{InvariantPath, estimate_plane_parallax};
 use crate::core::se3::pose_error;
 use crate::core::stability::{a_matrix, stability_verdicts};
 use crate::error::{Error, Result, check_positive};
+use crate::sim::arm::{ArmEvent, ArmRobot, ArmStep};
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthEstimator, DepthSource};
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::measure::{Metrics, ReferenceImage, StopWindow, measure, stop_rule_met};
 use crate::sim::outcome::{Outcome, Recording, Status, StopRule, Summary, Tracking};
+use crate::sim::robot::Robot;
 use crate::sim::scene::Observation;
 
 /// Runs a simulation. `progress(done, max)` is called every few iterations; returning false
@@ -247,7 +249,12 @@ struct Run<'a> {
     images: Option<ImageLoop>,
     detection: Vec<f64>,
     pose: Isometry3<f64>,
-    joints: [f64; 6],
+    /// Joint positions: the state of an arm, derived from the pose for the other robots.
+    joints: Vec<f64>,
+    /// Smallest manipulability of an arm so far.
+    min_manipulability: Option<f64>,
+    /// Set when an arm step ends the run (joint limit, singularity).
+    arm_end: Option<End>,
     window: StopWindow,
     max_line_deviation: f64,
     /// Largest commanded linear (m/s) and angular (rad/s) speeds so far.
@@ -282,6 +289,7 @@ impl<'a> Run<'a> {
             Some(v) => Some(ImageLoop::new(v, &config.scene, pixel_size(config.camera.image, "camera")?)?),
             None => None,
         };
+        let (joints, min_manipulability) = start_joints(&config.robot, &config.start)?;
         let estimator = match &config.depths {
             DepthSource::Estimated(factory) => Some(factory.start(&config.scene, &reference.pixels)?),
             _ => None,
@@ -302,14 +310,16 @@ impl<'a> Run<'a> {
             images,
             detection: vec![f64::NAN; n],
             pose: config.start,
-            joints: config.robot.joints(&config.start),
+            recording: config.record.then(|| Recording { n_points: n, n_joints: joints.len(), ..Default::default() }),
+            joints,
+            min_manipulability,
+            arm_end: None,
             window: StopWindow::new(config.stop.window),
             max_line_deviation: 0.0,
             peak_speeds: (0.0, 0.0),
             estimator,
             estimated: vec![0.0; n],
             path: None,
-            recording: config.record.then(|| Recording { n_points: n, ..Default::default() }),
             metrics: Metrics { invariant_error: f64::NAN, tau: [f64::NAN; 3], eps_z: f64::NAN, image_error: f64::NAN },
             iteration: 0,
         })
@@ -323,6 +333,9 @@ impl<'a> Run<'a> {
             return Ok(Some((Status::LostFeatures, format!("dot tracking failed: {e}"))));
         }
         let converged = self.measure_and_record(t);
+        if let Some(end) = self.arm_end.take() {
+            return Ok(Some(end));
+        }
         if let Some(end) = self.stop_check(converged, progress) {
             return Ok(Some(end));
         }
@@ -515,7 +528,11 @@ impl<'a> Run<'a> {
     fn move_robot(&mut self, twist: &Vector6<f64>) -> std::result::Result<(), End> {
         let (v, w) = (twist.fixed_rows::<3>(0).norm(), twist.fixed_rows::<3>(3).norm());
         self.peak_speeds = (self.peak_speeds.0.max(v), self.peak_speeds.1.max(w));
-        let robot = &self.config.robot;
+        let config = self.config;
+        if let Robot::Arm(arm) = &config.robot {
+            return self.move_arm(arm, twist);
+        }
+        let robot = &config.robot;
         let moved =
             robot.step_pose(&self.pose, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
         // Quarantine: a non-finite pose is never taken; the run ends at the last finite one.
@@ -527,8 +544,31 @@ impl<'a> Run<'a> {
         self.pose = moved.pose;
         if let Some(r) = self.recording.as_mut() {
             r.twist.extend_from_slice(moved.twist.as_slice());
-            self.joints = if moved.joints[0].is_nan() { robot.joints(&self.pose) } else { moved.joints };
+            let joints = if moved.joints[0].is_nan() { robot.joints(&self.pose) } else { moved.joints };
+            self.joints.copy_from_slice(&joints);
         }
+        Ok(())
+    }
+
+    /// Moves an arm from its joint positions; a joint limit or a singularity ends the run
+    /// once the image where the arm stopped is recorded.
+    fn move_arm(&mut self, arm: &ArmRobot, twist: &Vector6<f64>) -> std::result::Result<(), End> {
+        let step: ArmStep =
+            arm.step(&self.joints, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
+        self.pose = step.pose;
+        self.joints.copy_from_slice(&step.joints);
+        self.min_manipulability = self.min_manipulability.map(|w| w.min(step.manipulability));
+        if let Some(r) = self.recording.as_mut() {
+            r.twist.extend_from_slice(step.twist.as_slice());
+            r.joint_velocities.extend_from_slice(&step.velocities);
+        }
+        self.arm_end = step.event.map(|event| {
+            let status = match event {
+                ArmEvent::JointLimit { .. } => Status::JointLimit,
+                ArmEvent::Singular { .. } => Status::Singular,
+            };
+            (status, event.message())
+        });
         Ok(())
     }
 
@@ -539,6 +579,9 @@ impl<'a> Run<'a> {
             r.twist.resize(rows * 6, f64::NAN);
             r.eps.resize(rows * 5, f64::NAN);
             r.tracking_error.resize(rows, f64::NAN);
+            if self.min_manipulability.is_some() {
+                r.joint_velocities.resize(rows * r.n_joints, f64::NAN);
+            }
         }
         let goal = Isometry3::identity();
         let (final_t, final_r) = pose_error(&goal, &self.pose);
@@ -561,9 +604,18 @@ impl<'a> Run<'a> {
             peak_speeds: self.peak_speeds,
             tracking: self.path.as_ref().map(|p| p.summary(self.gain)),
             detection_error: self.images.as_ref().map(ImageLoop::error_summary),
+            min_manipulability: self.min_manipulability,
         };
         Outcome { summary, recording: self.recording, reference_pixels: self.reference.pixels }
     }
+}
+
+/// The joint positions at the start and, for an arm, its manipulability there.
+fn start_joints(robot: &Robot, start: &Isometry3<f64>) -> Result<(Vec<f64>, Option<f64>)> {
+    Ok(match robot {
+        Robot::Arm(arm) => (arm.start.clone(), Some(arm.model.manipulability(&arm.start)?)),
+        other => (other.joints(start).to_vec(), None),
+    })
 }
 
 /// Distance from `p` to the segment `[a, b]`.

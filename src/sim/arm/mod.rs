@@ -24,8 +24,10 @@
 
 mod kinematics;
 mod model;
+pub mod servo;
 
 pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
+pub use servo::{ArmEvent, ArmRobot, ArmStep};
 
 use crate::error::{Error, Result};
 

@@ -20,6 +20,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("path-500-feedforward", include_str!("../../../scenarios/path-500-feedforward.toml")),
     ("noise-12-6", include_str!("../../../scenarios/noise-12-6.toml")),
     ("cartesian-12-6", include_str!("../../../scenarios/cartesian-12-6.toml")),
+    ("arm-ur5-12-6", include_str!("../../../scenarios/arm-ur5-12-6.toml")),
+    ("arm-panda-12-6", include_str!("../../../scenarios/arm-panda-12-6.toml")),
     ("occlusion", include_str!("../../../scenarios/occlusion.toml")),
     ("planar", include_str!("../../../scenarios/planar.toml")),
     ("vision-12-12", include_str!("../../../scenarios/vision-12-12.toml")),

@@ -19,8 +19,10 @@ use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
 use crate::sim::robot::{JointLimits, Robot};
 use crate::sim::scene::{Body, ImageSize, MIN_DEPTH, Scene};
 
+mod arm;
+
 /// A pose from a position (metres) and a theta-u rotation in degrees.
-fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f64> {
+pub(super) fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f64> {
     Isometry3::from_parts(
         Translation3::new(position[0], position[1], position[2]),
         UnitQuaternion::from_scaled_axis(Vector3::from(rotation_deg.map(f64::to_radians))),
@@ -38,7 +40,7 @@ const MAX_IMAGE_SIDE: f64 = 65536.0;
 /// The longest run, iterations.
 const MAX_ITERATIONS: usize = 10_000_000;
 
-fn check_values(key: &str, values: &[f64]) -> Result<()> {
+pub(super) fn check_values(key: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
         Some(i) => Err(scenario_error(
             &format!("{key}[{i}]"),
@@ -103,7 +105,8 @@ impl Scenario {
     pub fn to_config(&self) -> Result<SimulationConfig> {
         let scene = self.scene()?;
         let (reference_camera, camera, estimate) = self.cameras()?;
-        let start = self.start_pose()?;
+        let robot = self.robot()?;
+        let start = self.start_pose(&robot)?;
         let c = &self.control;
         self.check_numbers()?;
         Ok(SimulationConfig {
@@ -113,7 +116,7 @@ impl Scenario {
             camera,
             estimate,
             start,
-            robot: self.robot(&start)?,
+            robot,
             law: law_of(c)?,
             depths: self.depth_source()?,
             dt: c.dt,
@@ -176,15 +179,39 @@ impl Scenario {
         Ok((reference_camera, camera, estimate))
     }
 
-    /// `[start]`: a finite pose with the whole object in front of the camera.
-    fn start_pose(&self) -> Result<Isometry3<f64>> {
-        check_values("start.position", &self.start.position)?;
-        check_values("start.rotation", &self.start.rotation)?;
-        let start = pose_of(self.start.position, self.start.rotation);
+    /// `[start]` (or an arm's camera pose at `robot.joints`): a finite pose with the whole
+    /// object in front of the camera, reachable by the robot.
+    fn start_pose(&self, robot: &Robot) -> Result<Isometry3<f64>> {
+        let given = match &self.start {
+            Some(s) => {
+                check_values("start.position", &s.position)?;
+                check_values("start.rotation", &s.rotation)?;
+                Some(pose_of(s.position, s.rotation))
+            }
+            None => None,
+        };
+        let start = match (robot, given) {
+            (Robot::Arm(arm), given) => arm_start(arm, given)?,
+            (_, Some(start)) => start,
+            (_, None) => {
+                return Err(scenario_error("start", "missing (only an arm's start follows from robot.joints)"));
+            }
+        };
         let inv = start.inverse();
         if let Some(i) = self.object.points.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
-            return Err(scenario_error("start", format!("object point {i} is behind the camera at the start pose")));
+            let from = if matches!(robot, Robot::Arm(_)) {
+                " (robot.base * FK(robot.joints) * robot.camera_mount)"
+            } else {
+                ""
+            };
+            return Err(scenario_error(
+                "start",
+                format!("object point {i} is behind the camera at the start pose{from}"),
+            ));
         }
+        // The start must be reachable; the goal need not be (the run then ends at the
+        // limits, which is worth simulating).
+        robot.check_reachable(&start).map_err(|e| scenario_error("start", e.to_string()))?;
         Ok(start)
     }
 
@@ -266,33 +293,72 @@ impl Scenario {
         Ok(Some(v))
     }
 
-    /// `[robot]`: joint values are metres for x, y, z and degrees for the wrist.
-    fn robot(&self, start: &Isometry3<f64>) -> Result<Robot> {
+    /// `[robot]`: joint values are metres for x, y, z and degrees for the wrist of the
+    /// Cartesian robot; degrees (revolute) or metres (prismatic) for an arm.
+    fn robot(&self) -> Result<Robot> {
         let r = &self.robot;
-        match r.kind {
-            RobotKind::Free => {
+        let arm_key = [
+            ("robot.urdf", r.urdf.is_some()),
+            ("robot.end_effector", r.end_effector.is_some()),
+            ("robot.camera_mount", r.camera_mount.is_some()),
+            ("robot.base", r.base.is_some()),
+            ("robot.joints", r.joints.is_some()),
+            ("robot.min_manipulability", r.min_manipulability.is_some()),
+            ("robot.damping", r.damping.is_some()),
+        ]
+        .into_iter()
+        .find_map(|(key, given)| given.then_some(key));
+        match (r.kind, arm_key) {
+            (RobotKind::Urdf, _) => arm::robot(r, self.directory.as_deref()),
+            (_, Some(key)) => Err(scenario_error(key, "applies to kind = \"urdf\" only")),
+            (RobotKind::Free, None) => {
                 if r.joint_min.is_some() || r.joint_max.is_some() || r.joint_velocity.is_some() {
-                    return Err(scenario_error("robot", "joint limits apply to kind = \"cartesian\" only"));
+                    return Err(scenario_error("robot", "joint limits apply to kind = \"cartesian\" or \"urdf\" only"));
                 }
                 Ok(Robot::FreeFlying)
             }
-            RobotKind::Cartesian => {
-                let d = JointLimits::default();
-                let conv = |v: [f64; 6]| [v[0], v[1], v[2], v[3].to_radians(), v[4].to_radians(), v[5].to_radians()];
-                let limits = JointLimits {
-                    min: r.joint_min.map_or(d.min, conv),
-                    max: r.joint_max.map_or(d.max, conv),
-                    velocity: r.joint_velocity.map_or(d.velocity, conv),
-                };
-                limits.validate().map_err(|e| scenario_error("robot", e.to_string()))?;
-                let robot = Robot::Cartesian(limits);
-                // The start must be reachable; the goal need not be (the run then ends at the
-                // limits, which is worth simulating).
-                robot.check_reachable(start).map_err(|e| scenario_error("start", e.to_string()))?;
-                Ok(robot)
-            }
+            (RobotKind::Cartesian, None) => cartesian(r),
         }
     }
+}
+
+/// The Cartesian robot's limits: x, y, z in metres, the wrist in degrees.
+fn cartesian(r: &super::schema::RobotSpec) -> Result<Robot> {
+    let d = JointLimits::default();
+    let six = |key: &str, v: &Option<Vec<f64>>, default: [f64; 6]| -> Result<[f64; 6]> {
+        let Some(v) = v else { return Ok(default) };
+        let v: [f64; 6] = v
+            .as_slice()
+            .try_into()
+            .map_err(|_| scenario_error(key, format!("the Cartesian robot has 6 joints, {} values given", v.len())))?;
+        Ok([v[0], v[1], v[2], v[3].to_radians(), v[4].to_radians(), v[5].to_radians()])
+    };
+    let limits = JointLimits {
+        min: six("robot.joint_min", &r.joint_min, d.min)?,
+        max: six("robot.joint_max", &r.joint_max, d.max)?,
+        velocity: six("robot.joint_velocity", &r.joint_velocity, d.velocity)?,
+    };
+    limits.validate().map_err(|e| scenario_error("robot", e.to_string()))?;
+    Ok(Robot::Cartesian(limits))
+}
+
+/// An arm's start pose: the camera pose at its start joints, which a given `[start]` must
+/// match.
+fn arm_start(arm: &crate::sim::arm::ArmRobot, given: Option<Isometry3<f64>>) -> Result<Isometry3<f64>> {
+    let start = arm.camera_pose(&arm.start).map_err(|e| scenario_error("robot.joints", e.to_string()))?;
+    if let Some(given) = given {
+        let (dt, dr) = crate::core::se3::pose_error(&start, &given);
+        if dt > 1e-6 || dr > 1e-6 {
+            let reason = format!(
+                "the arm's camera at robot.joints is {:.3} mm and {:.4} degrees away from [start]; \
+                 leave [start] out (it follows from robot.joints) or make it agree",
+                dt * 1e3,
+                dr.to_degrees()
+            );
+            return Err(scenario_error("start", reason));
+        }
+    }
+    Ok(start)
 }
 
 fn body_of(b: &BodySpec) -> Body {

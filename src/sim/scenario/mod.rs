@@ -23,12 +23,27 @@ pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
 impl Scenario {
     /// Parses TOML text; errors name the key (and line) at fault.
     pub fn from_toml(text: &str) -> Result<Self> {
+        let scenario = Self::parse_toml(text)?;
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// Reads a TOML file; relative `robot.urdf` paths start at the file's directory.
+    pub fn from_toml_file(path: impl AsRef<std::path::Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| scenario_error("", format!("{}: {e}", path.display())))?;
+        let mut scenario = Self::parse_toml(&text)?;
+        scenario.directory = path.parent().map(std::path::Path::to_path_buf);
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    fn parse_toml(text: &str) -> Result<Self> {
         let de = toml::Deserializer::parse(text).map_err(|e| scenario_error("", e.to_string().trim().to_string()))?;
         let scenario: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
             scenario_error(&key, e.into_inner().message().trim().to_string())
         })?;
-        scenario.validate()?;
         Ok(scenario)
     }
 

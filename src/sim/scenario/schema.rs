@@ -115,6 +115,17 @@ pub struct StartSpec {
     pub rotation: [f64; 3],
 }
 
+/// A pose: a position in metres and a theta-u rotation in degrees.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseSpec {
+    /// Position, metres.
+    pub position: [f64; 3],
+    /// Theta-u rotation, degrees.
+    #[serde(default)]
+    pub rotation: [f64; 3],
+}
+
 /// Control law name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -211,24 +222,48 @@ pub enum RobotKind {
     Free,
     /// Cartesian robot with limits.
     Cartesian,
+    /// A serial arm from URDF carrying the camera on its end-effector.
+    Urdf,
 }
 
-/// `[robot]`: joint values are `(x, y, z)` in metres then the wrist `(a, b, c)` in degrees.
+/// `[robot]`: Cartesian joint values are `(x, y, z)` in metres then the wrist `(a, b, c)` in
+/// degrees; arm joint values are degrees (revolute) or metres (prismatic).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RobotSpec {
     /// Which robot.
     #[serde(default = "default_robot")]
     pub kind: RobotKind,
-    /// Lower joint limits (m, m, m, deg, deg, deg).
+    /// Lower joint limits (Cartesian: m, m, m, deg, deg, deg; arm: overrides the URDF's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub joint_min: Option<[f64; 6]>,
+    pub joint_min: Option<Vec<f64>>,
     /// Upper joint limits.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub joint_max: Option<[f64; 6]>,
-    /// Joint speed limits (m/s, m/s, m/s, deg/s, deg/s, deg/s).
+    pub joint_max: Option<Vec<f64>>,
+    /// Joint speed limits (m/s or deg/s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub joint_velocity: Option<[f64; 6]>,
+    pub joint_velocity: Option<Vec<f64>>,
+    /// Arm: a built-in model (`ur5`, `panda`) or a URDF file (relative to the scenario file).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub urdf: Option<String>,
+    /// Arm: the link carrying the camera (default: the built-in model's end-effector).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_effector: Option<String>,
+    /// Arm: pose of the camera in the end-effector frame (default: identity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_mount: Option<PoseSpec>,
+    /// Arm: pose of the arm's base link in F* (default: identity).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base: Option<PoseSpec>,
+    /// Arm: joint positions at the start (degrees, metres); the start pose follows from them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joints: Option<Vec<f64>>,
+    /// Arm: a run ends `singular` below this manipulability (default 1e-4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_manipulability: Option<f64>,
+    /// Arm: the largest damping factor of the least squares (default 0.02).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
 }
 
 fn default_robot() -> RobotKind {
@@ -237,7 +272,19 @@ fn default_robot() -> RobotKind {
 
 impl Default for RobotSpec {
     fn default() -> Self {
-        Self { kind: RobotKind::Free, joint_min: None, joint_max: None, joint_velocity: None }
+        Self {
+            kind: RobotKind::Free,
+            joint_min: None,
+            joint_max: None,
+            joint_velocity: None,
+            urdf: None,
+            end_effector: None,
+            camera_mount: None,
+            base: None,
+            joints: None,
+            min_manipulability: None,
+            damping: None,
+        }
     }
 }
 
@@ -279,8 +326,10 @@ pub struct Scenario {
     /// K_hat (default: the servo camera at t = 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimate: Option<CameraSpec>,
-    /// Start pose.
-    pub start: StartSpec,
+    /// Start pose (with an arm, optional: it follows from `robot.joints`, and is checked
+    /// against them if given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<StartSpec>,
     /// The control law.
     #[serde(default)]
     pub control: ControlSpec,
@@ -302,4 +351,7 @@ pub struct Scenario {
     /// The translation pair for `control.depths = "estimated"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_estimation: Option<DepthEstimationSpec>,
+    /// The directory of the scenario file, if any: relative `robot.urdf` paths start there.
+    #[serde(skip)]
+    pub directory: Option<std::path::PathBuf>,
 }

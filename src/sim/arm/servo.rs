@@ -1,0 +1,286 @@
+//! Eye-in-hand control of an arm: a camera fixed on the end-effector through `mount`, the
+//! arm's base placed in F*. Each step maps the camera twist to the end-effector twist
+//! (constant twist transform of the mount), then to joint velocities by damped least squares
+//! with a joint-centring task in the null space of redundant arms, saturates them by the
+//! joint speed limits (one common scale) and integrates `q += dq dt`.
+
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix3, Matrix6, Matrix6xX, Vector6};
+
+use super::{ArmLimits, ArmModel};
+use crate::error::{Error, Result, check_finite};
+
+/// Default largest damping factor of the least squares (see [`ArmRobot::damping`]).
+pub const DEFAULT_DAMPING: f64 = 0.02;
+/// Default manipulability below which a run ends `singular`.
+pub const DEFAULT_MIN_MANIPULABILITY: f64 = 1e-4;
+/// Gain of the joint-centring task on redundant arms, rad/s per unit of the cost gradient.
+const CENTRING_GAIN: f64 = 0.5;
+
+/// An arm carrying the camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmRobot {
+    /// The kinematic chain, base link to end-effector link.
+    pub model: ArmModel,
+    /// Pose of the arm's base link in F*.
+    pub base: Isometry3<f64>,
+    /// Pose of the camera in the end-effector frame.
+    pub mount: Isometry3<f64>,
+    /// Joint positions at the start (rad, m).
+    pub start: Vec<f64>,
+    /// Position and speed limits (the model's unless overridden).
+    pub limits: ArmLimits,
+    /// Largest damping factor `d`: with `sigma` the smallest singular value of the Jacobian,
+    /// the damping is `mu^2 = d^2 - sigma^2` when `sigma < d`, else none (exact solution).
+    pub damping: f64,
+    /// A run ends `singular` when the manipulability falls below this.
+    pub min_manipulability: f64,
+}
+
+/// Why an arm step ends the run.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ArmEvent {
+    /// A joint would have left its limits: it was clamped there.
+    JointLimit {
+        /// The joint's name.
+        joint: String,
+        /// Where integration would have taken it.
+        value: f64,
+        /// The limit it stopped at.
+        bound: f64,
+    },
+    /// The manipulability fell below the threshold.
+    Singular {
+        /// The manipulability reached.
+        manipulability: f64,
+    },
+}
+
+impl ArmEvent {
+    /// The reason, in words.
+    pub fn message(&self) -> String {
+        match self {
+            ArmEvent::JointLimit { joint, value, bound } => {
+                format!("joint {joint} would reach {value:.4}, beyond its limit {bound:.4}: stopped there")
+            }
+            ArmEvent::Singular { manipulability } => {
+                format!("manipulability {manipulability:.3e} below robot.min_manipulability: near a singularity")
+            }
+        }
+    }
+}
+
+/// What one arm step did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmStep {
+    /// New joint positions.
+    pub joints: Vec<f64>,
+    /// Joint velocities applied (after saturation).
+    pub velocities: Vec<f64>,
+    /// New camera pose in F*.
+    pub pose: Isometry3<f64>,
+    /// The camera twist the joint velocities produce (camera frame).
+    pub twist: Vector6<f64>,
+    /// Manipulability at the new joint positions.
+    pub manipulability: f64,
+    /// Whether the speed limits scaled the motion down.
+    pub limited: bool,
+    /// Set when the run must end here.
+    pub event: Option<ArmEvent>,
+}
+
+/// `[t]x`, the cross-product matrix.
+fn skew(t: &nalgebra::Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -t.z, t.y, t.z, 0.0, -t.x, -t.y, t.x, 0.0)
+}
+
+/// The twist transform (adjoint) of a pose `(R, t)`: a twist in the pose's frame to the
+/// same motion's twist in the parent frame, `(R v + t x R w, R w)`.
+pub fn twist_transform(pose: &Isometry3<f64>) -> Matrix6<f64> {
+    let r = pose.rotation.to_rotation_matrix().into_inner();
+    let mut m = Matrix6::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(skew(&pose.translation.vector) * r));
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
+    m
+}
+
+impl ArmRobot {
+    /// An arm with the model's limits and the default damping and singularity threshold.
+    pub fn new(model: ArmModel, base: Isometry3<f64>, mount: Isometry3<f64>, start: Vec<f64>) -> Self {
+        let limits = model.limits();
+        Self {
+            model,
+            base,
+            mount,
+            start,
+            limits,
+            damping: DEFAULT_DAMPING,
+            min_manipulability: DEFAULT_MIN_MANIPULABILITY,
+        }
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.model.dof()
+    }
+
+    /// Checks the limits, the damping, the threshold and the start joints.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &'static str, reason: String| Err(Error::InvalidParameter { name, reason });
+        let (n, l) = (self.dof(), &self.limits);
+        if l.lower.len() != n || l.upper.len() != n || l.velocity.len() != n {
+            return bad("robot limits", format!("one value per joint: {n}"));
+        }
+        if let Some(i) = (0..n).find(|&i| !(l.lower[i] < l.upper[i]) || !(l.velocity[i] > 0.0)) {
+            return bad("robot limits", format!("joint {}: needs lower < upper and velocity > 0", self.name(i)));
+        }
+        if !(self.damping.is_finite() && self.damping > 0.0) {
+            return bad("robot.damping", format!("must be finite and > 0, got {}", self.damping));
+        }
+        if !(self.min_manipulability.is_finite() && self.min_manipulability >= 0.0) {
+            return bad(
+                "robot.min_manipulability",
+                format!("must be finite and >= 0, got {}", self.min_manipulability),
+            );
+        }
+        check_finite("robot.base", self.base.to_homogeneous().as_slice())?;
+        check_finite("robot.camera_mount", self.mount.to_homogeneous().as_slice())?;
+        self.check_start()
+    }
+
+    /// The start joints: one per joint, inside the limits, not singular.
+    fn check_start(&self) -> Result<()> {
+        let q = &self.start;
+        self.model.fk(q)?;
+        if let Some(i) = (0..self.dof()).find(|&i| !(self.limits.lower[i] <= q[i] && q[i] <= self.limits.upper[i])) {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            let reason = format!("{} = {} is outside its limits [{lo}, {hi}]", self.name(i), q[i]);
+            return Err(Error::InvalidParameter { name: "robot.joints", reason });
+        }
+        let w = self.model.manipulability(q)?;
+        if w < self.min_manipulability {
+            let reason = format!("manipulability {w:.3e} at the start is below robot.min_manipulability");
+            return Err(Error::InvalidParameter { name: "robot.joints", reason });
+        }
+        Ok(())
+    }
+
+    fn name(&self, i: usize) -> &str {
+        self.model.joints()[i].name()
+    }
+
+    /// Camera pose in F* at joint positions `q`: `base * fk(q) * mount`.
+    pub fn camera_pose(&self, q: &[f64]) -> Result<Isometry3<f64>> {
+        Ok(self.base * self.model.fk(q)? * self.mount)
+    }
+
+    /// The camera twist (camera frame) to the end-effector twist (end-effector frame).
+    pub fn mount_twist_transform(&self) -> Matrix6<f64> {
+        twist_transform(&self.mount)
+    }
+
+    /// Joint velocities for a camera twist at `q`, before saturation: damped least squares
+    /// on the end-effector twist, plus the joint-centring task in the null space when the
+    /// arm is redundant.
+    pub fn joint_velocities(&self, q: &[f64], camera_twist: &Vector6<f64>) -> Result<DVector<f64>> {
+        let jac = self.model.jacobian_end_effector(q)?;
+        self.resolve(&jac, q, &(self.mount_twist_transform() * camera_twist))
+    }
+
+    /// `dq = J^T (J J^T + mu^2 I)^-1 v + (I - J^T (J J^T + mu^2 I)^-1 J) z` (six joints or
+    /// more); `(J^T J + mu^2 I)^-1 J^T v` below six.
+    fn resolve(&self, jac: &Matrix6xX<f64>, q: &[f64], v: &Vector6<f64>) -> Result<DVector<f64>> {
+        let n = jac.ncols();
+        let j = DMatrix::from_column_slice(6, n, jac.as_slice());
+        let v = DVector::from_column_slice(v.as_slice());
+        if n < 6 {
+            return Ok(damped_cholesky(j.transpose() * &j, self.damping)?.solve(&(j.transpose() * v)));
+        }
+        let chol = damped_cholesky(&j * j.transpose(), self.damping)?;
+        let mut dq = j.transpose() * chol.solve(&v);
+        if n > 6 {
+            let z = self.centring(q);
+            let back = j.transpose() * chol.solve(&(&j * &z));
+            dq += z - back;
+        }
+        Ok(dq)
+    }
+
+    /// Minus the gradient of the joint-limit cost `1/2 sum ((q_i - mid_i) / half_i)^2`
+    /// (joints without limits contribute nothing).
+    fn centring(&self, q: &[f64]) -> DVector<f64> {
+        let l = &self.limits;
+        DVector::from_fn(q.len(), |i, _| {
+            let (mid, half) = ((l.upper[i] + l.lower[i]) / 2.0, (l.upper[i] - l.lower[i]) / 2.0);
+            if half.is_finite() { -CENTRING_GAIN * (q[i] - mid) / (half * half) } else { 0.0 }
+        })
+    }
+
+    /// Scales `dq` as a whole so that every joint is within its speed limit; returns whether
+    /// it had to.
+    pub fn saturate(&self, dq: &mut DVector<f64>) -> bool {
+        let scale = dq.iter().zip(&self.limits.velocity).map(|(v, max)| max / v.abs()).fold(1.0_f64, f64::min);
+        if scale < 1.0 {
+            *dq *= scale;
+        }
+        scale < 1.0
+    }
+
+    /// Moves the arm from `q` under a camera twist (camera frame) for `dt` seconds.
+    pub fn step(&self, q: &[f64], camera_twist: &Vector6<f64>, dt: f64) -> Result<ArmStep> {
+        check_finite("twist", camera_twist.as_slice())?;
+        let jac = self.model.jacobian_end_effector(q)?;
+        let mut dq = self.resolve(&jac, q, &(self.mount_twist_transform() * camera_twist))?;
+        let limited = self.saturate(&mut dq);
+        let mut joints: Vec<f64> = q.iter().zip(dq.iter()).map(|(q, v)| q + v * dt).collect();
+        let clamped = self.clamp(&mut joints);
+        let manipulability = self.model.manipulability(&joints)?;
+        let singular = (manipulability < self.min_manipulability).then_some(ArmEvent::Singular { manipulability });
+        let twist = self.camera_twist(&jac, &dq);
+        Ok(ArmStep {
+            pose: self.camera_pose(&joints)?,
+            joints,
+            velocities: dq.as_slice().to_vec(),
+            twist,
+            manipulability,
+            limited,
+            event: clamped.or(singular),
+        })
+    }
+
+    /// The camera twist (camera frame) that `dq` produces where the Jacobian is `jac`.
+    fn camera_twist(&self, jac: &Matrix6xX<f64>, dq: &DVector<f64>) -> Vector6<f64> {
+        let inverse = twist_transform(&self.mount.inverse());
+        inverse * (jac * dq)
+    }
+
+    /// Clamps joints to their limits; the first joint that was outside, if any.
+    fn clamp(&self, q: &mut [f64]) -> Option<ArmEvent> {
+        let mut event = None;
+        for (i, qi) in q.iter_mut().enumerate() {
+            let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
+            if *qi < lo || *qi > hi {
+                let bound = if *qi < lo { lo } else { hi };
+                event.get_or_insert(ArmEvent::JointLimit { joint: self.name(i).to_string(), value: *qi, bound });
+                *qi = bound;
+            }
+        }
+        event
+    }
+}
+
+/// Cholesky factor of `G + mu^2 I` with `mu^2 = d^2 - sigma_min^2` when the smallest
+/// eigenvalue `sigma_min^2` of the Gram matrix `G` is below `d^2` (the factorised matrix's
+/// smallest eigenvalue is then `d^2`), else of `G` itself.
+fn damped_cholesky(mut gram: DMatrix<f64>, d: f64) -> Result<Cholesky<f64, Dyn>> {
+    check_finite("arm Jacobian", gram.as_slice())?;
+    let sigma2 = gram.clone().symmetric_eigenvalues().min().max(0.0);
+    let mu2 = (d * d - sigma2).max(0.0);
+    for i in 0..gram.nrows() {
+        gram[(i, i)] += mu2;
+    }
+    gram.cholesky().ok_or(Error::InvalidParameter {
+        name: "robot.damping",
+        reason: "the damped least squares matrix is not positive definite".into(),
+    })
+}

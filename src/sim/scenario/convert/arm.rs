@@ -1,0 +1,133 @@
+//! `[robot] kind = "urdf"`: the model, the mount, the base, the start joints and the limits,
+//! each checked with an error naming its key.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::{check_values, pose_of};
+use crate::error::{Error, Result};
+use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
+use crate::sim::robot::Robot;
+use crate::sim::scenario::scenario_error;
+use crate::sim::scenario::schema::{PoseSpec, RobotSpec};
+
+/// The arm of `[robot]`; `directory` is the scenario file's, for relative URDF paths.
+pub(super) fn robot(r: &RobotSpec, directory: Option<&Path>) -> Result<Robot> {
+    let model = model(r, directory)?;
+    let units = Units::of(&model);
+    let n = model.dof();
+    let joints =
+        r.joints.as_ref().ok_or_else(|| scenario_error("robot.joints", "missing: the start joint positions"))?;
+    let start = units.convert("robot.joints", joints, n, &model)?;
+    let mut arm =
+        ArmRobot::new(model, pose("robot.base", &r.base)?, pose("robot.camera_mount", &r.camera_mount)?, start);
+    override_limits(&mut arm, r, &units)?;
+    if let Some(d) = r.damping {
+        arm.damping = d;
+    }
+    if let Some(w) = r.min_manipulability {
+        arm.min_manipulability = w;
+    }
+    arm.validate().map_err(|e| match e {
+        Error::InvalidParameter { name, reason } if name.starts_with("robot.") => scenario_error(name, reason),
+        other => scenario_error("robot", other.to_string()),
+    })?;
+    Ok(Robot::Arm(Arc::new(arm)))
+}
+
+/// `robot.urdf` (a built-in name or a file) up to `robot.end_effector`.
+fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
+    let urdf = r.urdf.as_deref().ok_or_else(|| {
+        scenario_error("robot.urdf", format!("missing: a built-in arm ({}) or a URDF file", BUILTIN_ARMS.join(", ")))
+    })?;
+    let loaded = match (BUILTIN_ARMS.contains(&urdf), r.end_effector.as_deref()) {
+        (true, None) => ArmModel::builtin(urdf),
+        (true, Some(link)) => ArmModel::builtin_with_end_effector(urdf, link),
+        (false, None) => {
+            return Err(scenario_error("robot.end_effector", "needed with a URDF file: the link carrying the camera"));
+        }
+        (false, Some(link)) => {
+            let path = resolve(urdf, directory);
+            if !path.is_file() {
+                let reason = format!(
+                    "`{urdf}` is neither a built-in arm ({}) nor a file ({} not found)",
+                    BUILTIN_ARMS.join(", "),
+                    path.display()
+                );
+                return Err(scenario_error("robot.urdf", reason));
+            }
+            ArmModel::from_urdf_file(&path, link)
+        }
+    };
+    loaded.map_err(|e| {
+        let message = e.to_string();
+        let link_error = message.contains("no link `") || message.contains("is not on the chain");
+        scenario_error(if link_error { "robot.end_effector" } else { "robot.urdf" }, message)
+    })
+}
+
+/// A relative path starts at the scenario file's directory if known, else the working one.
+fn resolve(urdf: &str, directory: Option<&Path>) -> PathBuf {
+    let path = Path::new(urdf);
+    match directory {
+        Some(dir) if path.is_relative() => dir.join(path),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// A `{ position, rotation }` table, identity when absent.
+fn pose(key: &str, spec: &Option<PoseSpec>) -> Result<nalgebra::Isometry3<f64>> {
+    let Some(p) = spec else { return Ok(nalgebra::Isometry3::identity()) };
+    check_values(&format!("{key}.position"), &p.position)?;
+    check_values(&format!("{key}.rotation"), &p.rotation)?;
+    Ok(pose_of(p.position, p.rotation))
+}
+
+/// Scenario units per joint: degrees for revolute and continuous joints, metres for
+/// prismatic ones.
+struct Units {
+    degrees: Vec<bool>,
+}
+
+impl Units {
+    fn of(model: &ArmModel) -> Self {
+        Self { degrees: model.joints().iter().map(|j| j.kind() != JointKind::Prismatic).collect() }
+    }
+
+    /// Values of `key` in the crate's units (radians, metres), one per joint.
+    fn convert(&self, key: &str, values: &[f64], n: usize, model: &ArmModel) -> Result<Vec<f64>> {
+        if values.len() != n {
+            let names = model.joint_names().join(", ");
+            let reason = format!("{} values given, the arm {} has {n} joints ({names})", values.len(), model.name());
+            return Err(scenario_error(key, reason));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(scenario_error(key, format!("non-finite value for {}", model.joint_names()[i])));
+        }
+        Ok(values.iter().zip(&self.degrees).map(|(v, &deg)| if deg { v.to_radians() } else { *v }).collect())
+    }
+}
+
+/// `robot.joint_min`, `joint_max`, `joint_velocity` replace the URDF's limits.
+fn override_limits(arm: &mut ArmRobot, r: &RobotSpec, units: &Units) -> Result<()> {
+    let n = arm.dof();
+    let model = &arm.model;
+    let limits = &mut arm.limits;
+    for (key, given, target) in [
+        ("robot.joint_min", &r.joint_min, &mut limits.lower),
+        ("robot.joint_max", &r.joint_max, &mut limits.upper),
+        ("robot.joint_velocity", &r.joint_velocity, &mut limits.velocity),
+    ] {
+        if let Some(values) = given {
+            *target = units.convert(key, values, n, model)?;
+        }
+    }
+    let l = &arm.limits;
+    if let Some(i) = (0..n).find(|&i| !(l.lower[i] < l.upper[i])) {
+        return Err(scenario_error("robot.joint_max", format!("{}: must be above joint_min", model.joint_names()[i])));
+    }
+    if let Some(i) = (0..n).find(|&i| !(l.velocity[i] > 0.0)) {
+        return Err(scenario_error("robot.joint_velocity", format!("{}: must be > 0", model.joint_names()[i])));
+    }
+    Ok(())
+}
