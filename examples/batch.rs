@@ -19,8 +19,8 @@ fn main() -> vsinv::Result<()> {
             name: "example",
             reason: "lens-12-6 has an [estimate] table".into(),
         })?;
-        estimate.fku = 600.0 * (1.0 + e);
-        estimate.fkv = 600.0 * (1.0 + e);
+        estimate.fku = Some(600.0 * (1.0 + e));
+        estimate.fkv = Some(600.0 * (1.0 + e));
         configs.push(s.to_config()?);
     }
     let results = run_batch(&configs, Some(2))?;

@@ -190,6 +190,44 @@ impl Distortion {
     }
 }
 
+impl Distortion {
+    /// `d(m)` where `m` lies on the principal point's side of the model's fold: the rational
+    /// model's denominator and the Jacobian determinant positive at `m` and at 32 points of
+    /// the segment from the origin to `m` (past a fold the determinant can turn positive
+    /// again). `None` beyond the fold, where a lens does not image the point where the
+    /// model says.
+    #[inline]
+    pub fn distort_valid(&self, m: [f64; 2]) -> Option<[f64; 2]> {
+        if self.is_identity() {
+            return Some(m);
+        }
+        let regular = |s: f64| {
+            let p = [s * m[0], s * m[1]];
+            let (_, _, den) = self.radial(p[0] * p[0] + p[1] * p[1]);
+            den > 0.0 && self.jacobian(p).determinant() > 0.0
+        };
+        (1..=32).all(|i| regular(f64::from(i) / 32.0)).then(|| self.distort(m))
+    }
+}
+
+/// The distorted pixel `K d(m)` of normalised coordinates `m` (`None` beyond the fold, see
+/// [`Distortion::distort_valid`]).
+#[inline]
+pub fn distort_normalised(m: [f64; 2], intrinsics: &Intrinsics, distortion: &Distortion) -> Option<[f64; 2]> {
+    distortion.distort_valid(m).map(|md| to_pixel(&intrinsics.matrix(), md))
+}
+
+/// One pixel of [`undistort_points`] with the default tolerance and iteration cap.
+pub fn undistort_point(pixel: [f64; 2], intrinsics: &Intrinsics, distortion: &Distortion) -> Result<[f64; 2]> {
+    if distortion.is_identity() {
+        return Ok(pixel);
+    }
+    let k = intrinsics.matrix();
+    let k2 = k.fixed_view::<2, 2>(0, 0).into_owned();
+    undistort_one(&k, &k2, intrinsics, distortion, pixel, DEFAULT_UNDISTORT_TOL, DEFAULT_UNDISTORT_MAX_ITER)
+        .map_err(|reason| Error::Distortion { index: 0, reason })
+}
+
 /// `K m` for normalised coordinates `m`.
 #[inline]
 fn to_pixel(k: &nalgebra::Matrix3<f64>, m: [f64; 2]) -> [f64; 2] {

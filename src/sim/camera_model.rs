@@ -1,9 +1,10 @@
 //! The cameras of a run: fixed intrinsics, or a zoom (a piecewise-linear schedule of the
-//! intrinsics in time, sec. 5.1), with an optional image size.
+//! intrinsics in time, sec. 5.1), with an optional image size and lens distortion.
 
 use nalgebra::Matrix3;
 
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::Distortion;
 use crate::error::{Error, Result, check_finite};
 use crate::sim::scene::ImageSize;
 
@@ -26,7 +27,8 @@ pub struct Zoom {
     pub v0: Option<Vec<f64>>,
 }
 
-/// A camera: intrinsics, an optional zoom schedule and an optional image size.
+/// A camera: intrinsics, an optional zoom schedule, an optional image size and the lens's
+/// distortion (the image point of a normalised point `m` is `K d(m)`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraModel {
     /// The intrinsics (before the first zoom knot and when there is no zoom).
@@ -35,6 +37,9 @@ pub struct CameraModel {
     pub zoom: Option<Zoom>,
     /// Optional image bounds; points outside are not visible.
     pub image: Option<ImageSize>,
+    /// Lens distortion (none by default); not with a zoom, whose distortion would change with
+    /// the focal length.
+    pub distortion: Distortion,
 }
 
 fn interpolate(times: &[f64], values: &[f64], t: f64) -> f64 {
@@ -51,7 +56,13 @@ fn interpolate(times: &[f64], values: &[f64], t: f64) -> f64 {
 impl CameraModel {
     /// A fixed camera.
     pub fn fixed(intrinsics: Intrinsics, image: Option<ImageSize>) -> Self {
-        Self { intrinsics, zoom: None, image }
+        Self { intrinsics, zoom: None, image, distortion: Distortion::none() }
+    }
+
+    /// The same camera with lens distortion.
+    pub fn with_distortion(mut self, distortion: Distortion) -> Self {
+        self.distortion = distortion;
+        self
     }
 
     /// Checks the zoom schedule and the image size.
@@ -63,6 +74,9 @@ impl CameraModel {
         }
         let Some(z) = &self.zoom else { return Ok(()) };
         let bad = |reason: String| Err(Error::InvalidParameter { name: "camera.zoom", reason });
+        if !self.distortion.is_identity() {
+            return bad("a zoom lens's distortion changes with the focal length: give distortion or zoom, not both".into());
+        }
         let m = z.times.len();
         if m == 0 {
             return bad("times must not be empty".into());

@@ -4,6 +4,7 @@ use nalgebra::Isometry3;
 
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::Distortion;
 use crate::core::control::InvariantControllerConfig;
 use crate::core::ibvs::Interaction;
 use crate::core::saturation::TwistLimits;
@@ -97,6 +98,9 @@ pub struct SimulationConfig {
     pub camera: CameraModel,
     /// The intrinsics the control law uses (K_hat).
     pub estimate: Intrinsics,
+    /// The lens distortion believed to be the servo camera's: its image points are undistorted
+    /// with it and K_hat before the control law (none: they are fed as they are).
+    pub estimate_distortion: Distortion,
     /// Start pose of the camera in F*.
     pub start: Isometry3<f64>,
     /// The robot carrying the camera.

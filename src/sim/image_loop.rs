@@ -7,10 +7,11 @@
 use nalgebra::Isometry3;
 
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::Distortion;
 use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
-use crate::vision::render::{Disc, RenderConfig, Renderer};
+use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// The image size of a camera, which vision needs.
@@ -65,18 +66,14 @@ impl ImageLoop {
         config: RenderConfig,
         scene: &Scene,
         k_star: &Intrinsics,
+        distortion: &Distortion,
         size: (u32, u32),
         obs: &mut Observation,
     ) -> Result<GreyImage> {
         let renderer = Renderer::new(config)?;
-        let rendered = renderer.render(
-            &scene_discs(scene, config.dot_radius)?,
-            Some(&obs.visible),
-            &Isometry3::identity(),
-            k_star,
-            size,
-            0,
-        )?;
+        let view = CameraView { pose: &Isometry3::identity(), intrinsics: k_star, distortion, size };
+        let rendered =
+            renderer.render_through(&scene_discs(scene, config.dot_radius)?, Some(&obs.visible), &view, 0)?;
         let tracker =
             DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default()).map_err(|e| reference_error(&e))?;
         obs.pixels.copy_from_slice(tracker.positions());
@@ -88,14 +85,15 @@ impl ImageLoop {
     /// visibility and each point's detection error (NaN if not found).
     pub(crate) fn observe(
         &mut self,
-
         pose: &Isometry3<f64>,
         k: &Intrinsics,
+        distortion: &Distortion,
         obs: &Observation,
         run: Tracked<'_>,
     ) -> Result<()> {
         self.frame += 1;
-        let rendered = self.renderer.render(&self.discs, Some(&obs.visible), pose, k, self.size, self.frame)?;
+        let view = CameraView { pose, intrinsics: k, distortion, size: self.size };
+        let rendered = self.renderer.render_through(&self.discs, Some(&obs.visible), &view, self.frame)?;
         let tracker = match self.tracker.as_mut() {
             Some(t) => t,
             None => self.tracker.insert(DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default())?),

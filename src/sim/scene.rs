@@ -5,6 +5,7 @@ use nalgebra::{Isometry3, Point3};
 use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, QueryFilter, Ray, RigidBodyBuilder, Vector};
 
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::{Distortion, distort_normalised};
 use crate::error::{Error, Result, check_finite};
 
 /// A rigid body that can hide feature points (a plate or box carrying the dots, a ball, a
@@ -177,9 +178,23 @@ impl Scene {
         world.cast_ray(&ray, dist - 1e-6, true, QueryFilter::default()).is_some()
     }
 
-    /// Projects every point for a camera at `pose` (camera frame in F*) with intrinsics `k`,
-    /// and tells which points are visible, into `out` (reused to avoid allocations).
+    /// Projects every point for a camera at `pose` (camera frame in F*) with intrinsics `k`
+    /// and no distortion, and tells which points are visible, into `out` (reused to avoid
+    /// allocations).
     pub fn observe(&self, pose: &Isometry3<f64>, k: &Intrinsics, image: Option<ImageSize>, out: &mut Observation) {
+        self.observe_through(pose, k, &Distortion::none(), image, out);
+    }
+
+    /// [`Scene::observe`] through a lens: pixels `K d(m)`; a point beyond the distortion
+    /// model's fold is not visible.
+    pub fn observe_through(
+        &self,
+        pose: &Isometry3<f64>,
+        k: &Intrinsics,
+        distortion: &Distortion,
+        image: Option<ImageSize>,
+        out: &mut Observation,
+    ) {
         let n = self.points.len();
         out.pixels.resize(n, [0.0; 2]);
         out.depths.resize(n, 0.0);
@@ -187,6 +202,7 @@ impl Scene {
         // X_c = R^T (X - c): one rotation matrix for all points.
         let rt = pose.rotation.to_rotation_matrix().transpose();
         let km = k.matrix();
+        let lens = !distortion.is_identity();
         let center = Point3::from(pose.translation.vector);
         for (i, p) in self.points.iter().enumerate() {
             let world_point = Point3::new(p[0], p[1], p[2]);
@@ -197,7 +213,18 @@ impl Scene {
                 out.visible[i] = false;
                 continue;
             }
-            let px = crate::core::camera::project_with(&km, &c);
+            let px = if lens {
+                match distort_normalised([c.x / c.z, c.y / c.z], k, distortion) {
+                    Some(px) => px,
+                    None => {
+                        out.pixels[i] = [f64::NAN; 2];
+                        out.visible[i] = false;
+                        continue;
+                    }
+                }
+            } else {
+                crate::core::camera::project_with(&km, &c)
+            };
             out.pixels[i] = px;
             let inside = image.is_none_or(|s| px[0] >= 0.0 && px[0] < s.width && px[1] >= 0.0 && px[1] < s.height);
             out.visible[i] = inside && !self.occluded(&center, &world_point);
@@ -209,6 +236,25 @@ impl Scene {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn through_a_lens_pixels_are_the_distorted_pinhole_pixels() {
+        let points = vec![[0.0, 0.0, 1.0], [0.3, -0.2, 1.0], [0.25, 0.2, 0.8], [2.0, 0.0, 1.0]];
+        let scene = Scene::new(points, vec![]).unwrap();
+        let k = Intrinsics::pinhole(800.0, 790.0, 320.0, 240.0).unwrap();
+        // k1 = -0.4 folds at r = 0.913: the last point (r = 2) is beyond the fold.
+        let d = Distortion::from_coefficients(&[-0.4, 0.0, 0.001, -0.002]).unwrap();
+        let (mut pinhole, mut lens) = (Observation::default(), Observation::default());
+        let pose = Isometry3::translation(0.02, -0.01, 0.0);
+        scene.observe(&pose, &k, None, &mut pinhole);
+        scene.observe_through(&pose, &k, &d, None, &mut lens);
+        let expected = crate::core::distortion::distort_points(&pinhole.pixels[..3], &k, &d).unwrap();
+        for (p, q) in lens.pixels[..3].iter().zip(&expected) {
+            assert!((p[0] - q[0]).abs() < 1e-9 && (p[1] - q[1]).abs() < 1e-9, "{p:?} vs {q:?}");
+        }
+        assert_eq!(lens.visible, vec![true, true, true, false]);
+        assert!(lens.pixels[3][0].is_nan() && pinhole.visible[3]);
+    }
 
     #[test]
     fn plate_hides_points_behind_it_but_not_its_own_dots() {

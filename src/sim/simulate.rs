@@ -9,6 +9,7 @@ use rand_distr::{Distribution, Normal};
 
 use crate::core::camera::Intrinsics;
 use crate::core::control::InvariantController;
+use crate::core::distortion::undistort_point;
 use crate::core::ibvs::{IBVS_MIN_POINTS, IbvsController};
 use crate::core::invariant::{BasisFrame, choose_basis, validate_basis};
 use crate::core::jacobian::MIN_POINTS;
@@ -17,6 +18,7 @@ use crate::core::se3::pose_error;
 use crate::core::stability::{a_matrix, stability_verdicts};
 use crate::error::{Error, Result, check_positive};
 use crate::sim::arm::{ArmEvent, ArmRobot, ArmStep};
+use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthEstimator, DepthSource};
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
@@ -61,9 +63,10 @@ fn validate(config: &SimulationConfig) -> Result<()> {
 /// The reference image, taken at F* with K*: every point must be in view. Returns the
 /// observation (pixels still noise-free) and the reference depths zeta*.
 fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f64>)> {
-    let k_star = config.reference_camera.at(0.0)?;
+    let camera = &config.reference_camera;
+    let k_star = camera.at(0.0)?;
     let mut obs = Observation::default();
-    config.scene.observe(&Isometry3::identity(), &k_star, config.reference_camera.image, &mut obs);
+    config.scene.observe_through(&Isometry3::identity(), &k_star, &camera.distortion, camera.image, &mut obs);
     let n = obs.depths.len();
     if let Some(i) = (0..n).find(|&i| obs.depths[i] <= 0.0) {
         return Err(Error::PointBehindCamera { index: i, depth: obs.depths[i] });
@@ -79,10 +82,21 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
     }
     if let Some(vision) = config.vision {
         let size = pixel_size(config.reference_camera.image, "reference_camera")?;
-        ImageLoop::reference(vision, &config.scene, &k_star, size, &mut obs)?;
+        ImageLoop::reference(vision, &config.scene, &k_star, &camera.distortion, size, &mut obs)?;
     }
     let depths = obs.depths.clone();
     Ok((obs, depths))
+}
+
+/// The reference image's points through its own calibration: pinhole pixels of K*.
+fn undistort_reference(pixels: &mut [[f64; 2]], camera: &CameraModel) -> Result<()> {
+    for (i, p) in pixels.iter_mut().enumerate() {
+        *p = undistort_point(*p, &camera.intrinsics, &camera.distortion).map_err(|e| Error::InvalidParameter {
+            name: "reference_camera.distortion",
+            reason: format!("point {i} of the reference image cannot be undistorted: {e}"),
+        })?;
+    }
+    Ok(())
 }
 
 /// Gaussian pixel noise on the visible points.
@@ -274,6 +288,7 @@ impl<'a> Run<'a> {
         if config.noise.on_reference {
             noise.add(&mut pixels, &obs.visible);
         }
+        undistort_reference(&mut pixels, &config.reference_camera)?;
         let n = pixels.len();
         let basis = match config.basis {
             Some(b) => validate_basis(b, n)?,
@@ -353,19 +368,35 @@ impl<'a> Run<'a> {
     /// Observes the scene with K(t): the exact projections with pixel noise, or the dots
     /// tracked in the rendered image.
     fn observe(&mut self, k: &Intrinsics) -> Result<()> {
-        let (scene, pose) = (&self.config.scene, &self.pose);
-        scene.observe(pose, k, self.config.camera.image, &mut self.obs);
+        let (scene, pose, camera) = (&self.config.scene, &self.pose, &self.config.camera);
+        scene.observe_through(pose, k, &camera.distortion, camera.image, &mut self.obs);
         self.visible.copy_from_slice(&self.obs.visible);
         match self.images.as_mut() {
             Some(images) => {
                 let run =
                     Tracked { pixels: &mut self.pixels, visible: &mut self.visible, detection: &mut self.detection };
-                images.observe(pose, k, &self.obs, run)
+                images.observe(pose, k, &camera.distortion, &self.obs, run)?;
             }
             None => {
                 self.pixels.copy_from_slice(&self.obs.pixels);
                 self.noise.add(&mut self.pixels, &self.visible);
-                Ok(())
+            }
+        }
+        self.undistort();
+        Ok(())
+    }
+
+    /// The image points through the controller's calibration (K_hat and its distortion); a
+    /// point that cannot be undistorted is not used.
+    fn undistort(&mut self) {
+        let (k_hat, d_hat) = (&self.config.estimate, &self.config.estimate_distortion);
+        if d_hat.is_identity() {
+            return;
+        }
+        for (p, v) in self.pixels.iter_mut().zip(self.visible.iter_mut()).filter(|(_, v)| **v) {
+            match undistort_point(*p, k_hat, d_hat) {
+                Ok(q) => *p = q,
+                Err(_) => *v = false,
             }
         }
     }

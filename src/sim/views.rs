@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::sim::config::SimulationConfig;
 use crate::sim::image_loop::{pixel_size, scene_discs};
 use crate::sim::scene::Observation;
-use crate::vision::{GreyImage, Renderer};
+use crate::vision::{CameraView, GreyImage, Renderer};
 
 /// Which camera takes the picture.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -29,7 +29,7 @@ pub enum Shot {
 pub struct View {
     /// The 8-bit image, `(height, width)`.
     pub image: GreyImage,
-    /// True projections of the dots' centres (NaN behind the camera).
+    /// True projections of the dots' centres through the lens (NaN behind the camera).
     pub pixels: Vec<[f64; 2]>,
     /// Per point: in front of the camera, inside the image, not occluded and drawn.
     pub visible: Vec<bool>,
@@ -53,10 +53,11 @@ pub fn render_view(config: &SimulationConfig, shot: Shot, pose: Option<&Isometry
     let k = camera.at(time)?;
     let size = pixel_size(camera.image, key)?;
     let mut obs = Observation::default();
-    config.scene.observe(&pose, &k, camera.image, &mut obs);
+    config.scene.observe_through(&pose, &k, &camera.distortion, camera.image, &mut obs);
     let vision = config.vision.unwrap_or_default();
     let discs = scene_discs(&config.scene, vision.dot_radius)?;
-    let rendered = Renderer::new(vision)?.render(&discs, Some(&obs.visible), &pose, &k, size, frame)?;
+    let view = CameraView { pose: &pose, intrinsics: &k, distortion: &camera.distortion, size };
+    let rendered = Renderer::new(vision)?.render_through(&discs, Some(&obs.visible), &view, frame)?;
     let visible = obs.visible.iter().zip(&rendered.drawn).map(|(&v, &d)| v && d).collect();
     Ok(View { image: rendered.image, pixels: obs.pixels, visible })
 }

@@ -17,5 +17,5 @@ pub mod tracker;
 
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_png, save_png};
-pub use self::render::{Disc, RenderConfig, Rendered, Renderer};
+pub use self::render::{CameraView, Disc, RenderConfig, Rendered, Renderer};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

@@ -8,9 +8,10 @@
 
 use std::sync::OnceLock;
 
-use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
+use nalgebra::{Isometry3, Matrix2, Matrix3, Point3, Vector2, Vector3};
 
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::{Distortion, distort_normalised, undistort_point};
 use crate::error::{Error, Result};
 use crate::vision::image::GreyImage;
 
@@ -178,6 +179,21 @@ impl Renderer {
         size: (u32, u32),
         frame: u64,
     ) -> Result<Rendered> {
+        let view = CameraView { pose, intrinsics: k, distortion: &Distortion::none(), size };
+        self.render_through(discs, visible, &view, frame)
+    }
+
+    /// [`Renderer::render`] through a distorting lens: pixel `p` shows what the ideal pinhole
+    /// image shows at `K d^-1(K^-1 p)`; a disc reaching beyond the model's fold is not drawn.
+    pub fn render_through(
+        &self,
+        discs: &[Disc],
+        visible: Option<&[bool]>,
+        view: &CameraView<'_>,
+        frame: u64,
+    ) -> Result<Rendered> {
+        let (pose, k, size) = (view.pose, view.intrinsics, view.size);
+        let warp = Warp::new(k, view.distortion);
         let (width, height) = size;
         if width == 0 || height == 0 || u64::from(width) * u64::from(height) > 1 << 28 {
             return Err(Error::InvalidParameter { name: "image size", reason: format!("{width} x {height}") });
@@ -198,8 +214,8 @@ impl Renderer {
             if visible.is_some_and(|v| !v[i]) {
                 continue;
             }
-            if let Some(ellipse) = ImageEllipse::of(disc, pose, k) {
-                drawn[i] = self.draw(&mut image, &ellipse, seed);
+            if let Some(ellipse) = ImageEllipse::of(disc, pose, k, &warp) {
+                drawn[i] = self.draw(&mut image, &ellipse, &warp, seed);
             }
         }
         Ok(Rendered { image, drawn })
@@ -250,7 +266,7 @@ impl Renderer {
 
     /// Draws one ellipse (coverage, blur, noise, quantisation) over the noisy background;
     /// false when it falls entirely outside the image.
-    fn draw(&self, image: &mut GreyImage, ellipse: &ImageEllipse, seed: u64) -> bool {
+    fn draw(&self, image: &mut GreyImage, ellipse: &ImageEllipse, warp: &Warp, seed: u64) -> bool {
         let margin = (self.kernel.len() / 2) as i64 + 1;
         let (w, h) = (i64::from(image.width()), i64::from(image.height()));
         let [u0, v0, u1, v1] = ellipse.bbox;
@@ -260,7 +276,7 @@ impl Renderer {
             return false;
         }
         let patch = Patch { u0, v0, w: (u1 - u0 + 1) as usize, h: (v1 - v0 + 1) as usize };
-        let mut coverage = ellipse.coverage(&patch);
+        let mut coverage = ellipse.coverage(&patch, warp);
         blur(&mut coverage, &patch, &self.kernel);
         let (bg, fg) = (f64::from(self.config.background), f64::from(self.config.foreground));
         let table = gaussian_table();
@@ -303,7 +319,7 @@ struct ImageEllipse {
 impl ImageEllipse {
     /// The ellipse of a disc seen from `pose`; None when the disc is not entirely in front of
     /// the camera or is seen (nearly) edge-on.
-    fn of(disc: &Disc, pose: &Isometry3<f64>, k: &Intrinsics) -> Option<Self> {
+    fn of(disc: &Disc, pose: &Isometry3<f64>, k: &Intrinsics, warp: &Warp) -> Option<Self> {
         let rt = pose.rotation.inverse();
         let center = rt * (Point3::from(disc.center) - pose.translation.vector).coords;
         let normal = rt * disc.normal;
@@ -326,7 +342,20 @@ impl ImageEllipse {
         let dual = h * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -1.0 / (r * r))) * h.transpose();
         let (u_min, u_max) = tangent_range(dual[(0, 0)], dual[(0, 2)], dual[(2, 2)])?;
         let (v_min, v_max) = tangent_range(dual[(1, 1)], dual[(1, 2)], dual[(2, 2)])?;
-        Some(Self { conic, bbox: [u_min, v_min, u_max, v_max] })
+        let bbox = match warp {
+            Warp::Pinhole => [u_min, v_min, u_max, v_max],
+            Warp::Lens { .. } => warp.bbox_of_circle(&h, r)?,
+        };
+        Some(Self { conic, bbox })
+    }
+
+    #[inline]
+    fn gradient(&self, u: f64, v: f64) -> Vector2<f64> {
+        let c = &self.conic;
+        Vector2::new(
+            2.0 * (c[(0, 0)] * u + c[(0, 1)] * v + c[(0, 2)]),
+            2.0 * (c[(0, 1)] * u + c[(1, 1)] * v + c[(1, 2)]),
+        )
     }
 
     #[inline]
@@ -341,42 +370,108 @@ impl ImageEllipse {
 
     /// The area fraction of each pixel of the patch inside the ellipse (pixel `(u, v)`
     /// covers `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]`), row-major.
-    fn coverage(&self, patch: &Patch) -> Vec<f32> {
+    fn coverage(&self, patch: &Patch, warp: &Warp) -> Vec<f32> {
         let mut out = vec![0.0f32; patch.w * patch.h];
-        let c = &self.conic;
         for j in 0..patch.h {
             let v = (patch.v0 + j as i64) as f64;
             for i in 0..patch.w {
                 let u = (patch.u0 + i as i64) as f64;
-                let f = self.value(u, v);
-                // First-order distance to the boundary, in pixels.
-                let gu = 2.0 * (c[(0, 0)] * u + c[(0, 1)] * v + c[(0, 2)]);
-                let gv = 2.0 * (c[(0, 1)] * u + c[(1, 1)] * v + c[(1, 2)]);
-                let distance = f / (gu * gu + gv * gv).sqrt().max(1e-300);
-                out[j * patch.w + i] = if distance < -1.5 {
-                    1.0
-                } else if distance > 1.5 {
-                    0.0
-                } else {
-                    self.supersampled(u, v)
-                };
+                out[j * patch.w + i] = warp.local(u, v).map_or(0.0, |local| self.pixel_coverage(&local));
             }
         }
         out
     }
 
-    fn supersampled(&self, u: f64, v: f64) -> f32 {
+    /// Exact inside and outside (first-order distance to the boundary beyond 1.5 pixels),
+    /// supersampled near the boundary.
+    fn pixel_coverage(&self, local: &Local) -> f32 {
+        let [u, v] = local.ideal;
+        let gradient = local.jacobian.transpose() * self.gradient(u, v);
+        let distance = self.value(u, v) / gradient.norm().max(1e-300);
+        if distance < -1.5 {
+            1.0
+        } else if distance > 1.5 {
+            0.0
+        } else {
+            self.supersampled(local)
+        }
+    }
+
+    fn supersampled(&self, local: &Local) -> f32 {
         let step = 1.0 / SUBSAMPLES as f64;
+        let (j, [u, v]) = (&local.jacobian, local.ideal);
         let mut inside = 0usize;
         for a in 0..SUBSAMPLES {
-            let vv = v - 0.5 + (a as f64 + 0.5) * step;
+            let dv = (a as f64 + 0.5) * step - 0.5;
             for b in 0..SUBSAMPLES {
-                let uu = u - 0.5 + (b as f64 + 0.5) * step;
+                let du = (b as f64 + 0.5) * step - 0.5;
+                let (uu, vv) = (u + j[(0, 0)] * du + j[(0, 1)] * dv, v + j[(1, 0)] * du + j[(1, 1)] * dv);
                 inside += usize::from(self.value(uu, vv) <= 0.0);
             }
         }
         inside as f32 / (SUBSAMPLES * SUBSAMPLES) as f32
     }
+}
+
+/// A pixel of the rendered image in the ideal pinhole image: where its centre falls and the
+/// local Jacobian `d ideal / d pixel` (the identity without distortion).
+struct Local {
+    ideal: [f64; 2],
+    jacobian: Matrix2<f64>,
+}
+
+/// From the rendered (distorted) image to the ideal pinhole image the conics live in.
+enum Warp {
+    Pinhole,
+    Lens { k: Intrinsics, distortion: Distortion },
+}
+
+impl Warp {
+    fn new(k: &Intrinsics, distortion: &Distortion) -> Self {
+        if distortion.is_identity() { Warp::Pinhole } else { Warp::Lens { k: *k, distortion: *distortion } }
+    }
+
+    /// The ideal position of pixel `(u, v)` and the local Jacobian `K J_d(m)^-1 K^-1`
+    /// (2 x 2 parts); None for a pixel beyond the image of the fold.
+    #[inline]
+    fn local(&self, u: f64, v: f64) -> Option<Local> {
+        let Warp::Lens { k, distortion } = self else {
+            return Some(Local { ideal: [u, v], jacobian: Matrix2::identity() });
+        };
+        let ideal = undistort_point([u, v], k, distortion).ok()?;
+        let m = k.normalise(ideal);
+        let k2 = k.matrix().fixed_view::<2, 2>(0, 0).into_owned();
+        let jacobian = k2 * distortion.jacobian(m).try_inverse()? * k2.try_inverse()?;
+        Some(Local { ideal, jacobian })
+    }
+
+    /// The bounding box of a disc's distorted image, from 72 points of its rim (`h` maps the
+    /// disc's plane to ideal pixels, `r` its radius) and one pixel of margin; None if part
+    /// of the rim lies beyond the fold.
+    fn bbox_of_circle(&self, h: &Matrix3<f64>, r: f64) -> Option<[f64; 4]> {
+        let Warp::Lens { k, distortion } = self else { return None };
+        let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for i in 0..72 {
+            let t = f64::from(i) * std::f64::consts::TAU / 72.0;
+            let x = h * Vector3::new(r * t.cos(), r * t.sin(), 1.0);
+            let p = distort_normalised(k.normalise([x.x / x.z, x.y / x.z]), k, distortion)?;
+            bbox = [bbox[0].min(p[0]), bbox[1].min(p[1]), bbox[2].max(p[0]), bbox[3].max(p[1])];
+        }
+        Some([bbox[0] - 1.0, bbox[1] - 1.0, bbox[2] + 1.0, bbox[3] + 1.0])
+    }
+}
+
+/// Where a camera looks from and through what.
+#[derive(Debug, Clone, Copy)]
+pub struct CameraView<'a> {
+    /// The camera frame in F*.
+    pub pose: &'a Isometry3<f64>,
+    /// Its intrinsics.
+    pub intrinsics: &'a Intrinsics,
+    /// Its lens distortion.
+    pub distortion: &'a Distortion,
+    /// `(width, height)`, pixels.
+    pub size: (u32, u32),
 }
 
 /// The roots of `a - 2 b x + c x^2 = 0` (a tangent line `x = const` of a dual conic), sorted.
@@ -448,7 +543,7 @@ mod tests {
     #[test]
     fn conic_passes_through_the_projected_circle() {
         let disc = Disc::new([0.05, 0.02, 0.6], [0.2, -0.1, -1.0], 0.01).unwrap();
-        let ell = ImageEllipse::of(&disc, &pose(), &camera()).unwrap();
+        let ell = ImageEllipse::of(&disc, &pose(), &camera(), &Warp::Pinhole).unwrap();
         let e1 = disc.normal.cross(&Vector3::x()).normalize();
         let e2 = disc.normal.cross(&e1);
         let inv = pose().inverse();
@@ -466,6 +561,53 @@ mod tests {
         // The centre's projection is inside.
         let (c, _) = camera().project(&(inv * Point3::from(disc.center)));
         assert!(ell.value(c[0], c[1]) < 0.0);
+    }
+
+    /// Area and centroid of a polygon (shoelace).
+    fn polygon_area_centroid(p: &[[f64; 2]]) -> (f64, [f64; 2]) {
+        let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
+        for i in 0..p.len() {
+            let (q, r) = (p[i], p[(i + 1) % p.len()]);
+            let cross = q[0] * r[1] - r[0] * q[1];
+            a += cross;
+            cx += (q[0] + r[0]) * cross;
+            cy += (q[1] + r[1]) * cross;
+        }
+        (a / 2.0, [cx / (3.0 * a), cy / (3.0 * a)])
+    }
+
+    #[test]
+    fn through_a_lens_a_disc_covers_its_distorted_rim() {
+        let config =
+            RenderConfig { blur_sigma: 0.0, noise_sigma: 0.0, background: 20, foreground: 220, ..Default::default() };
+        let renderer = Renderer::new(config).unwrap();
+        let k = Intrinsics::pinhole(600.0, 600.0, 416.0, 312.0).unwrap();
+        let d = Distortion::from_coefficients(&[-0.30, 0.10, 0.0005, -0.0008, -0.02]).unwrap();
+        // Near a corner, where barrel distortion squeezes the disc by about 20 %.
+        let disc = Disc::new([0.28, 0.2, 0.5], [0.0, 0.0, -1.0], 0.01).unwrap();
+        let view = CameraView { pose: &Isometry3::identity(), intrinsics: &k, distortion: &d, size: (832, 624) };
+        let out = renderer.render_through(&[disc], None, &view, 0).unwrap();
+        assert_eq!(out.drawn, vec![true]);
+        let (mut sum, mut su, mut sv) = (0.0, 0.0, 0.0);
+        for (u, v, p) in out.image.enumerate_pixels() {
+            let w = (f64::from(p[0]) - 20.0) / 200.0;
+            sum += w;
+            su += w * f64::from(u);
+            sv += w * f64::from(v);
+        }
+        // The rim, projected and distorted by the core's distort_points.
+        let rim: Vec<[f64; 2]> = (0..720)
+            .map(|i| {
+                let t = f64::from(i) * std::f64::consts::TAU / 720.0;
+                let (x, y) = (0.28 + 0.01 * t.cos(), 0.2 + 0.01 * t.sin());
+                [416.0 + 600.0 * x / 0.5, 312.0 + 600.0 * y / 0.5]
+            })
+            .collect();
+        let (area, centroid) = polygon_area_centroid(&crate::core::distortion::distort_points(&rim, &k, &d).unwrap());
+        let pinhole_area = std::f64::consts::PI * 12.0 * 12.0;
+        assert!(area < 0.85 * pinhole_area, "{area} vs {pinhole_area}");
+        assert!((sum / area - 1.0).abs() < 0.005, "{sum} vs {area}");
+        assert!((su / sum - centroid[0]).abs() < 0.02 && (sv / sum - centroid[1]).abs() < 0.02);
     }
 
     #[test]

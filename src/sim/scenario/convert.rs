@@ -8,6 +8,7 @@ use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, Dept
 use super::{Scenario, scenario_error};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
+use crate::core::distortion::Distortion;
 use crate::core::control::InvariantControllerConfig;
 use crate::core::ibvs::IBVS_MIN_POINTS;
 use crate::core::jacobian::MIN_POINTS;
@@ -17,9 +18,10 @@ use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
 use crate::sim::robot::{JointLimits, Robot};
-use crate::sim::scene::{Body, ImageSize, MIN_DEPTH, Scene};
+use crate::sim::scene::{Body, MIN_DEPTH, Scene};
 
 mod arm;
+mod camera;
 
 /// A pose from a position (metres) and a theta-u rotation in degrees.
 pub(super) fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f64> {
@@ -50,47 +52,12 @@ pub(super) fn check_values(key: &str, values: &[f64]) -> Result<()> {
     }
 }
 
-impl CameraSpec {
-    fn intrinsics(&self, key: &str) -> Result<Intrinsics> {
-        for (name, v) in [("fku", self.fku), ("fkv", self.fkv)] {
-            check_positive(&format!("{key}.{name}"), v)?;
-            if v > MAX_MAGNITUDE {
-                return Err(scenario_error(&format!("{key}.{name}"), format!("at most 1e6 px, got {v}")));
-            }
-        }
-        for (name, v) in [("u0", self.u0), ("v0", self.v0)] {
-            if !(v.abs() <= MAX_MAGNITUDE) {
-                return Err(scenario_error(
-                    &format!("{key}.{name}"),
-                    format!("must be finite and within +-1e6 px, got {v}"),
-                ));
-            }
-        }
-        if !(self.skew_deg > 0.0 && self.skew_deg < 180.0) {
-            let reason = format!("the angle between the image axes must be in (0, 180) degrees, got {}", self.skew_deg);
-            return Err(scenario_error(&format!("{key}.skew_deg"), reason));
-        }
-        Intrinsics::new(self.fku, self.fkv, self.u0, self.v0, self.skew_deg.to_radians())
-            .map_err(|e| scenario_error(key, e.to_string()))
-    }
-
-    fn model(&self, key: &str) -> Result<CameraModel> {
-        let image = match (self.width, self.height) {
-            (Some(width), Some(height)) => {
-                for (name, v) in [("width", width), ("height", height)] {
-                    if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
-                        let reason = format!("pixels, from 1 to {MAX_IMAGE_SIDE}, got {v}");
-                        return Err(scenario_error(&format!("{key}.{name}"), reason));
-                    }
-                }
-                Some(ImageSize { width, height })
-            }
-            (None, None) => None,
-            _ => return Err(scenario_error(key, "give both width and height, or neither")),
-        };
-        let model = CameraModel { intrinsics: self.intrinsics(key)?, zoom: self.zoom.clone(), image };
-        model.validate().map_err(|e| scenario_error(key, e.to_string()))?;
-        Ok(model)
+/// A relative path starts at the scenario file's directory if known, else the working one.
+fn resolve_path(file: &str, directory: Option<&std::path::Path>) -> std::path::PathBuf {
+    let path = std::path::Path::new(file);
+    match directory {
+        Some(dir) if path.is_relative() => dir.join(path),
+        _ => path.to_path_buf(),
     }
 }
 
@@ -104,7 +71,7 @@ impl Scenario {
     /// The simulation this scenario describes.
     pub fn to_config(&self) -> Result<SimulationConfig> {
         let scene = self.scene()?;
-        let (reference_camera, camera, estimate) = self.cameras()?;
+        let (reference_camera, camera, estimate, estimate_distortion) = self.cameras()?;
         let robot = self.robot()?;
         let start = self.start_pose(&robot)?;
         let c = &self.control;
@@ -115,6 +82,7 @@ impl Scenario {
             reference_camera,
             camera,
             estimate,
+            estimate_distortion,
             start,
             robot,
             law: law_of(c)?,
@@ -161,22 +129,28 @@ impl Scenario {
         }
     }
 
-    /// `[reference_camera]`, `[camera]`, `[estimate]`: K*, K(t) and K_hat.
-    fn cameras(&self) -> Result<(CameraModel, CameraModel, Intrinsics)> {
+    /// `[reference_camera]`, `[camera]`, `[estimate]`: K*, K(t), K_hat and the distortion
+    /// the controller removes (the servo camera's unless `[estimate]` gives its own).
+    fn cameras(&self) -> Result<(CameraModel, CameraModel, Intrinsics, Distortion)> {
         if self.reference_camera.zoom.is_some() {
             return Err(scenario_error("reference_camera.zoom", "the reference image is taken with one camera"));
         }
-        let reference_camera = self.reference_camera.model("reference_camera")?;
+        let dir = self.directory.as_deref();
+        let reference_camera = self.reference_camera.model("reference_camera", dir)?;
         let camera = match &self.camera {
-            Some(c) => c.model("camera")?,
+            Some(c) => c.model("camera", dir)?,
             None => reference_camera.clone(),
         };
-        let estimate = match &self.estimate {
+        let (estimate, distortion) = match &self.estimate {
             Some(e) if e.zoom.is_some() => return Err(scenario_error("estimate.zoom", "K_hat is one fixed estimate")),
-            Some(e) => e.intrinsics("estimate")?,
-            None => camera.at(0.0).map_err(|e| scenario_error("camera", e.to_string()))?,
+            Some(e) => {
+                let lens = e.lens("estimate", dir)?;
+                let own = e.distortion.is_some() || e.calibration.is_some();
+                (lens.intrinsics, if own { lens.distortion } else { camera.distortion })
+            }
+            None => (camera.at(0.0).map_err(|e| scenario_error("camera", e.to_string()))?, camera.distortion),
         };
-        Ok((reference_camera, camera, estimate))
+        Ok((reference_camera, camera, estimate, distortion))
     }
 
     /// `[start]` (or an arm's camera pose at `robot.joints`): a finite pose with the whole
@@ -424,7 +398,9 @@ fn twist_limits_of(c: &ControlSpec) -> Result<Option<TwistLimits>> {
 
 /// `[depth_estimation]`: the pure-translation image pair of appendix A.
 fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
-    if d.camera.zoom.is_some() || d.camera.width.is_some() || d.camera.height.is_some() {
+    let c = &d.camera;
+    let extra = [c.zoom.is_some(), c.width.is_some(), c.height.is_some(), c.distortion.is_some(), c.calibration.is_some()];
+    if extra.into_iter().any(|given| given) {
         return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
     }
     check_values("depth_estimation.position", &d.position)?;

@@ -78,18 +78,28 @@ pub enum BodySpec {
     },
 }
 
-/// `[reference_camera]`, `[camera]`, `[estimate]`.
+/// `[reference_camera]`, `[camera]`, `[estimate]`: the intrinsics as numbers, or a
+/// calibration file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSpec {
+    /// A calibration file (ROS camera_info YAML, OpenCV YAML or XML), relative to the scenario
+    /// file: its camera matrix, image size and distortion replace fku, fkv, u0, v0, width,
+    /// height and distortion.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<String>,
     /// f ku, pixels.
-    pub fku: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fku: Option<f64>,
     /// f kv, pixels.
-    pub fkv: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fkv: Option<f64>,
     /// Principal point u0, pixels.
-    pub u0: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u0: Option<f64>,
     /// Principal point v0, pixels.
-    pub v0: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v0: Option<f64>,
     /// Angle between the image axes, degrees.
     #[serde(default = "default_skew")]
     pub skew_deg: f64,
@@ -99,6 +109,10 @@ pub struct CameraSpec {
     /// Image height, pixels.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height: Option<f64>,
+    /// Lens distortion coefficients in OpenCV's order: 4 or 5 (plumb_bob) or 8
+    /// (rational_polynomial).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion: Option<Vec<f64>>,
     /// Zoom schedule (servo camera only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub zoom: Option<Zoom>,

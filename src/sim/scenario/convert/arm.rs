@@ -1,10 +1,10 @@
 //! `[robot] kind = "urdf"`: the model, the mount, the base, the start joints and the limits,
 //! each checked with an error naming its key.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
-use super::{check_values, pose_of};
+use super::{check_values, pose_of, resolve_path};
 use crate::error::{Error, Result};
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
 use crate::sim::robot::Robot;
@@ -47,7 +47,7 @@ fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
             return Err(scenario_error("robot.end_effector", "needed with a URDF file: the link carrying the camera"));
         }
         (false, Some(link)) => {
-            let path = resolve(urdf, directory);
+            let path = resolve_path(urdf, directory);
             if !path.is_file() {
                 let reason = format!(
                     "`{urdf}` is neither a built-in arm ({}) nor a file ({} not found)",
@@ -64,15 +64,6 @@ fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
         let link_error = message.contains("no link `") || message.contains("is not on the chain");
         scenario_error(if link_error { "robot.end_effector" } else { "robot.urdf" }, message)
     })
-}
-
-/// A relative path starts at the scenario file's directory if known, else the working one.
-fn resolve(urdf: &str, directory: Option<&Path>) -> PathBuf {
-    let path = Path::new(urdf);
-    match directory {
-        Some(dir) if path.is_relative() => dir.join(path),
-        _ => path.to_path_buf(),
-    }
 }
 
 /// A `{ position, rotation }` table, identity when absent.

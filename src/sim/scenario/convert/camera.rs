@@ -1,0 +1,129 @@
+//! `[reference_camera]`, `[camera]`, `[estimate]` and `depth_estimation.camera`: intrinsics,
+//! image size and lens distortion, given as numbers or read from a calibration file, each
+//! checked with an error naming its key.
+
+use std::path::Path;
+
+use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, resolve_path};
+use crate::calibration::load_calibration;
+use crate::core::camera::Intrinsics;
+use crate::core::distortion::Distortion;
+use crate::error::Result;
+use crate::sim::camera_model::CameraModel;
+use crate::sim::scenario::scenario_error;
+use crate::sim::scenario::schema::CameraSpec;
+use crate::sim::scene::ImageSize;
+
+/// A camera table read: its intrinsics, image size and distortion.
+pub(super) struct Lens {
+    pub(super) intrinsics: Intrinsics,
+    pub(super) image: Option<ImageSize>,
+    pub(super) distortion: Distortion,
+}
+
+impl CameraSpec {
+    /// The table as numbers, or its calibration file (which then replaces fku, fkv, u0, v0,
+    /// width, height and distortion; a file has no skew).
+    pub(super) fn lens(&self, key: &str, directory: Option<&Path>) -> Result<Lens> {
+        match &self.calibration {
+            Some(file) => self.from_file(key, file, directory),
+            None => Ok(Lens {
+                intrinsics: self.intrinsics(key)?,
+                image: self.image_size(key)?,
+                distortion: self.distortion_of(key)?,
+            }),
+        }
+    }
+
+    fn from_file(&self, key: &str, file: &str, directory: Option<&Path>) -> Result<Lens> {
+        let given = [
+            ("fku", self.fku.is_some()),
+            ("fkv", self.fkv.is_some()),
+            ("u0", self.u0.is_some()),
+            ("v0", self.v0.is_some()),
+            ("width", self.width.is_some()),
+            ("height", self.height.is_some()),
+            ("distortion", self.distortion.is_some()),
+        ];
+        if let Some((name, _)) = given.iter().find(|(_, g)| *g) {
+            let reason = format!("given with {key}.calibration, which sets it: give one or the other");
+            return Err(scenario_error(&format!("{key}.{name}"), reason));
+        }
+        if self.skew_deg != 90.0 {
+            let reason = "calibration files have no skew: skew_deg must be 90 (the default) with calibration";
+            return Err(scenario_error(&format!("{key}.skew_deg"), reason));
+        }
+        let calibration = load_calibration(resolve_path(file, directory))
+            .map_err(|e| scenario_error(&format!("{key}.calibration"), e.to_string()))?;
+        let (width, height) = calibration.image_size;
+        Ok(Lens {
+            intrinsics: calibration.intrinsics,
+            image: Some(ImageSize { width: f64::from(width), height: f64::from(height) }),
+            distortion: calibration.distortion,
+        })
+    }
+
+    /// fku, fkv, u0, v0 and skew_deg.
+    pub(super) fn intrinsics(&self, key: &str) -> Result<Intrinsics> {
+        let required = |name: &str, v: Option<f64>| {
+            v.ok_or_else(|| scenario_error(&format!("{key}.{name}"), "missing (or give calibration = \"file\")"))
+        };
+        let (fku, fkv) = (required("fku", self.fku)?, required("fkv", self.fkv)?);
+        let (u0, v0) = (required("u0", self.u0)?, required("v0", self.v0)?);
+        for (name, v) in [("fku", fku), ("fkv", fkv)] {
+            check_positive(&format!("{key}.{name}"), v)?;
+            if v > MAX_MAGNITUDE {
+                return Err(scenario_error(&format!("{key}.{name}"), format!("at most 1e6 px, got {v}")));
+            }
+        }
+        for (name, v) in [("u0", u0), ("v0", v0)] {
+            if !(v.abs() <= MAX_MAGNITUDE) {
+                let reason = format!("must be finite and within +-1e6 px, got {v}");
+                return Err(scenario_error(&format!("{key}.{name}"), reason));
+            }
+        }
+        if !(self.skew_deg > 0.0 && self.skew_deg < 180.0) {
+            let reason = format!("the angle between the image axes must be in (0, 180) degrees, got {}", self.skew_deg);
+            return Err(scenario_error(&format!("{key}.skew_deg"), reason));
+        }
+        Intrinsics::new(fku, fkv, u0, v0, self.skew_deg.to_radians()).map_err(|e| scenario_error(key, e.to_string()))
+    }
+
+    fn image_size(&self, key: &str) -> Result<Option<ImageSize>> {
+        match (self.width, self.height) {
+            (Some(width), Some(height)) => {
+                for (name, v) in [("width", width), ("height", height)] {
+                    if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
+                        let reason = format!("pixels, from 1 to {MAX_IMAGE_SIDE}, got {v}");
+                        return Err(scenario_error(&format!("{key}.{name}"), reason));
+                    }
+                }
+                Ok(Some(ImageSize { width, height }))
+            }
+            (None, None) => Ok(None),
+            _ => Err(scenario_error(key, "give both width and height, or neither")),
+        }
+    }
+
+    fn distortion_of(&self, key: &str) -> Result<Distortion> {
+        let Some(c) = &self.distortion else { return Ok(Distortion::none()) };
+        let key = format!("{key}.distortion");
+        if let Some(i) = c.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
+            return Err(scenario_error(&format!("{key}[{i}]"), format!("must be finite and within +-1e6, got {}", c[i])));
+        }
+        Distortion::from_coefficients(c).map_err(|e| scenario_error(&key, e.to_string()))
+    }
+
+    /// The camera of a run: the table's lens with its zoom schedule.
+    pub(super) fn model(&self, key: &str, directory: Option<&Path>) -> Result<CameraModel> {
+        let lens = self.lens(key, directory)?;
+        let model = CameraModel {
+            intrinsics: lens.intrinsics,
+            zoom: self.zoom.clone(),
+            image: lens.image,
+            distortion: lens.distortion,
+        };
+        model.validate().map_err(|e| scenario_error(key, e.to_string()))?;
+        Ok(model)
+    }
+}
