@@ -53,11 +53,7 @@ fn distortion_through_images_converges() {
     // K_hat is the calibration: undistorting with a wrong K (vision-12-6's estimate) leaves the
     // points off the pinhole model, and the run stops about 1 degree away.
     let text = without_table(&builtin("vision-12-6").unwrap().to_toml().unwrap(), "[estimate]");
-    let text = text.replacen(
-        "[camera]\n",
-        "[camera]\ndistortion = [-0.30, 0.10, 0.0005, -0.0008, -0.02]\n",
-        1,
-    );
+    let text = text.replacen("[camera]\n", "[camera]\ndistortion = [-0.30, 0.10, 0.0005, -0.0008, -0.02]\n", 1);
     let scenario = Scenario::from_toml(&text).unwrap();
     assert!(!scenario.to_config().unwrap().camera.distortion.is_identity());
     let s = run(&scenario);
@@ -134,13 +130,10 @@ fn calibration_errors_name_the_key() {
     assert_eq!(key, "camera.skew_deg");
     let (key, reason) = key_of("[camera]\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\n");
     assert_eq!(key, "camera.fku", "{reason}");
-    let (key, _) = key_of(
-        "[camera]\nfku = 600.0\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.1, 0.0, 0.0]\n",
-    );
+    let (key, _) = key_of("[camera]\nfku = 600.0\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.1, 0.0, 0.0]\n");
     assert_eq!(key, "camera.distortion");
-    let (key, _) = key_of(
-        "[camera]\nfku = 600.0\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.1, nan, 0.0, 0.0]\n",
-    );
+    let (key, _) =
+        key_of("[camera]\nfku = 600.0\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.1, nan, 0.0, 0.0]\n");
     assert_eq!(key, "camera.distortion[1]");
     let (key, reason) = key_of(
         "[camera]\nfku = 600.0\nfkv = 600.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.1, 0.0, 0.0, 0.0]\nzoom = { times = [0.0, 1.0], fku = [600.0, 500.0], fkv = [600.0, 500.0] }\n",

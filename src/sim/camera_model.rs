@@ -75,7 +75,9 @@ impl CameraModel {
         let Some(z) = &self.zoom else { return Ok(()) };
         let bad = |reason: String| Err(Error::InvalidParameter { name: "camera.zoom", reason });
         if !self.distortion.is_identity() {
-            return bad("a zoom lens's distortion changes with the focal length: give distortion or zoom, not both".into());
+            return bad(
+                "a zoom lens's distortion changes with the focal length: give distortion or zoom, not both".into()
+            );
         }
         let m = z.times.len();
         if m == 0 {

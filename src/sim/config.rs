@@ -4,8 +4,8 @@ use nalgebra::Isometry3;
 
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
-use crate::core::distortion::Distortion;
 use crate::core::control::InvariantControllerConfig;
+use crate::core::distortion::Distortion;
 use crate::core::ibvs::Interaction;
 use crate::core::saturation::TwistLimits;
 use crate::sim::camera_model::CameraModel;

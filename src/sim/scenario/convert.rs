@@ -8,8 +8,8 @@ use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, Dept
 use super::{Scenario, scenario_error};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
-use crate::core::distortion::Distortion;
 use crate::core::control::InvariantControllerConfig;
+use crate::core::distortion::Distortion;
 use crate::core::ibvs::IBVS_MIN_POINTS;
 use crate::core::jacobian::MIN_POINTS;
 use crate::core::saturation::TwistLimits;
@@ -399,7 +399,8 @@ fn twist_limits_of(c: &ControlSpec) -> Result<Option<TwistLimits>> {
 /// `[depth_estimation]`: the pure-translation image pair of appendix A.
 fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
     let c = &d.camera;
-    let extra = [c.zoom.is_some(), c.width.is_some(), c.height.is_some(), c.distortion.is_some(), c.calibration.is_some()];
+    let extra =
+        [c.zoom.is_some(), c.width.is_some(), c.height.is_some(), c.distortion.is_some(), c.calibration.is_some()];
     if extra.into_iter().any(|given| given) {
         return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
     }

@@ -109,7 +109,10 @@ impl CameraSpec {
         let Some(c) = &self.distortion else { return Ok(Distortion::none()) };
         let key = format!("{key}.distortion");
         if let Some(i) = c.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
-            return Err(scenario_error(&format!("{key}[{i}]"), format!("must be finite and within +-1e6, got {}", c[i])));
+            return Err(scenario_error(
+                &format!("{key}[{i}]"),
+                format!("must be finite and within +-1e6, got {}", c[i]),
+            ));
         }
         Distortion::from_coefficients(c).map_err(|e| scenario_error(&key, e.to_string()))
     }

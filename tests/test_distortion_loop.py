@@ -1,0 +1,79 @@
+"""Lens distortion in the simulator, checked against OpenCV: projections through the servo
+lens (cv2.projectPoints), rendered images (cv2.remap of the pinhole rendering through
+cv2.undistortPoints' map), and the run with the distortion known or not."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+import vsinv
+
+BARREL = [-0.30, 0.10, 0.0005, -0.0008, -0.02]
+
+
+def _barrel_dict(**vision: float) -> dict:
+    d = vsinv.load_scenario("lens-12-6-barrel").to_dict()
+    d["vision"] = {"noise_sigma": 0.0, "blur_sigma": 0.0, "dot_radius": 0.006, **vision}
+    return d
+
+
+def _start_pose(d: dict) -> np.ndarray:
+    return vsinv.pose_from_position_thetau(d["start"]["position"], np.radians(d["start"]["rotation"]))
+
+
+def _camera_matrix(camera: dict) -> np.ndarray:
+    return np.array([[camera["fku"], 0.0, camera["u0"]], [0.0, camera["fkv"], camera["v0"]], [0.0, 0.0, 1.0]])
+
+
+def test_projections_through_the_lens_match_opencv() -> None:
+    d = _barrel_dict()
+    pose = _start_pose(d)
+    _, pixels, visible = vsinv.render_view(d, pose)
+    assert visible.all()
+    # X_c = R^T (X - c): OpenCV's rvec, tvec of F* in the camera frame.
+    r, c = pose[:3, :3], pose[:3, 3]
+    rvec, _ = cv2.Rodrigues(r.T)
+    points = np.asarray(d["object"]["points"], dtype=np.float64)
+    expected, _ = cv2.projectPoints(points, rvec, -r.T @ c, _camera_matrix(d["camera"]), np.array(BARREL))
+    np.testing.assert_allclose(pixels, expected.reshape(-1, 2), atol=1e-9)
+
+
+def test_rendering_through_the_lens_matches_opencv_remap() -> None:
+    d = _barrel_dict()
+    pose = _start_pose(d)
+    distorted, pixels, _ = vsinv.render_view(d, pose)
+    pinhole_dict = _barrel_dict()
+    del pinhole_dict["camera"]["distortion"]
+    pinhole, _, _ = vsinv.render_view(pinhole_dict, pose)
+    # Each pixel of the distorted image shows the pinhole image at its undistorted position.
+    h, w = distorted.shape
+    k = _camera_matrix(d["camera"])
+    grid = np.stack(np.meshgrid(np.arange(w), np.arange(h)), axis=-1).reshape(-1, 1, 2).astype(np.float64)
+    ideal = cv2.undistortPoints(grid, k, np.array(BARREL), P=k).reshape(h, w, 2).astype(np.float32)
+    remapped = cv2.remap(pinhole, ideal[..., 0], ideal[..., 1], cv2.INTER_LINEAR, borderValue=30)
+    ours = vsinv.detect_dots(distorted).centroids
+    theirs = vsinv.detect_dots(remapped).centroids
+    assert len(ours) == len(theirs) == len(pixels)
+    # Both lists are sorted by row then column of the centroids: match by nearest.
+    gap = np.linalg.norm(ours[:, None, :] - theirs[None, :, :], axis=-1).min(axis=1)
+    assert gap.max() < 0.05, gap
+    # The dots sit where the lens projects their centres (the centroid of a squeezed disc is
+    # a little off its projected centre).
+    off = np.linalg.norm(ours[:, None, :] - pixels[None, :, :], axis=-1).min(axis=1)
+    assert off.max() < 0.1, off
+    # The dots cover the same area (sampling the pinhole image at the undistorted positions
+    # integrates its coverage over the distorted pixels).
+    ink = [float(np.sum(img.astype(np.float64) - 30.0)) for img in (distorted, remapped)]
+    assert abs(ink[0] / ink[1] - 1.0) < 0.01, ink
+
+
+def test_known_distortion_converges_and_unknown_does_not() -> None:
+    known = vsinv.run_scenario("lens-12-6-barrel", record=False).summary
+    assert known["status"] == "converged"
+    assert known["final_translation_error_mm"] < 1.0 and known["final_rotation_error_deg"] < 0.1
+    d = vsinv.load_scenario("lens-12-6-barrel").to_dict()
+    d["estimate"] = {**{k: d["camera"][k] for k in ("fku", "fkv", "u0", "v0")}, "distortion": [0.0] * 5}
+    unknown = vsinv.run_scenario(d, record=False).summary
+    assert unknown["status"] != "converged"
+    assert unknown["final_translation_error_mm"] > 5.0
