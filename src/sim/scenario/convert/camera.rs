@@ -26,7 +26,7 @@ impl CameraSpec {
     /// width, height and distortion; a file has no skew).
     pub(super) fn lens(&self, key: &str, directory: Option<&Path>) -> Result<Lens> {
         match &self.calibration {
-            Some(file) => self.from_file(key, file, directory),
+            Some(file) => self.read_calibration(key, file, directory),
             None => Ok(Lens {
                 intrinsics: self.intrinsics(key)?,
                 image: self.image_size(key)?,
@@ -35,7 +35,7 @@ impl CameraSpec {
         }
     }
 
-    fn from_file(&self, key: &str, file: &str, directory: Option<&Path>) -> Result<Lens> {
+    fn read_calibration(&self, key: &str, file: &str, directory: Option<&Path>) -> Result<Lens> {
         let given = [
             ("fku", self.fku.is_some()),
             ("fkv", self.fkv.is_some()),
