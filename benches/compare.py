@@ -130,7 +130,7 @@ class NumpyLoop:
         c = d["control"]
         self.gain, self.gain_rz, self.dt = c["gain"], c["gain_rz"], c["dt"]
         self.start = np.eye(4)
-        self.start[:3, :3] = exp_rotation(np.radians(d["start"]["rotation"]))
+        self.start[:3, :3] = exp_rotation(np.radians(d["start"]["rotation_deg"]))
         self.start[:3, 3] = d["start"]["position"]
         s = d["stop"]
         self.max_iterations, self.invariant_tol, self.tau21_tol = s["max_iterations"], s["invariant_error"], s["tau21"]

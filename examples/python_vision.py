@@ -31,7 +31,7 @@ def main() -> int:
     controller = vsinv.InvariantController(p_star, k_hat, gain=1.0, gain_rz=1.0, basis="auto")
 
     # Servoing with the other lens: click the dots in the first image, then track.
-    pose = vsinv.pose_from_position_thetau(d["start"]["position"], np.radians(d["start"]["rotation"]))
+    pose = vsinv.pose_from_position_thetau(d["start"]["position"], np.radians(d["start"]["rotation_deg"]))
     first = vsinv.render(SCENARIO, pose=pose)
     tracker = vsinv.DotTracker(first, vsinv.render_view(SCENARIO, pose=pose)[1] + 2.0)
     for i in range(700):

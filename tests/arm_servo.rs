@@ -160,7 +160,7 @@ fn near_wrist_singularity(wrist_deg: f64) -> Scenario {
     let base = start * (arm.model.fk(&q_rad).unwrap() * arm.mount).inverse();
     let t = base.translation.vector;
     let r = base.rotation.scaled_axis().map(f64::to_degrees);
-    s.robot.base = Some(vsinv::sim::scenario::PoseSpec { position: [t.x, t.y, t.z], rotation: [r.x, r.y, r.z] });
+    s.robot.base = Some(vsinv::sim::scenario::PoseSpec { position: [t.x, t.y, t.z], rotation_deg: [r.x, r.y, r.z] });
     s.robot.joints = Some(q);
     s
 }
@@ -202,7 +202,8 @@ fn bad_arm_keys_name_the_key() {
         (
             "start",
             Box::new(|s| {
-                s.start = Some(vsinv::sim::scenario::StartSpec { position: [0.2, -0.15, -0.15], rotation: [0.0; 3] })
+                s.start =
+                    Some(vsinv::sim::scenario::StartSpec { position: [0.2, -0.15, -0.15], rotation_deg: [0.0; 3] })
             }),
         ),
     ];

@@ -10,10 +10,10 @@ use vsinv::sim::{Law, Status, Summary, simulate};
 
 fn rolled_start(rz0_deg: f64, task: RzTask) -> Summary {
     let mut s = builtin("lens-12-6").unwrap();
-    let [rx, ry, _] = s.start.as_ref().unwrap().rotation.map(f64::to_radians);
+    let [rx, ry, _] = s.start.as_ref().unwrap().rotation_deg.map(f64::to_radians);
     let attitude = UnitQuaternion::from_scaled_axis(Vector3::new(rx, ry, 0.0))
         * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), rz0_deg.to_radians());
-    s.start.as_mut().unwrap().rotation = attitude.scaled_axis().map(f64::to_degrees).into();
+    s.start.as_mut().unwrap().rotation_deg = attitude.scaled_axis().map(f64::to_degrees).into();
     let mut config = s.to_config().unwrap();
     config.record = false;
     if let Law::Invariant(c) = &mut config.law {

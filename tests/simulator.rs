@@ -78,7 +78,7 @@ fn noisy_lens_change_ends_within_2mm() {
 
 fn with_start(mut s: Scenario, position: [f64; 3], rotation: [f64; 3]) -> Scenario {
     s.start.as_mut().unwrap().position = position;
-    s.start.as_mut().unwrap().rotation = rotation;
+    s.start.as_mut().unwrap().rotation_deg = rotation;
     s
 }
 
@@ -115,7 +115,7 @@ fn occluded_basis_point_is_lost_features() {
     s.object.bodies.push(vsinv::sim::scenario::BodySpec::Cuboid {
         half_extents: [0.004, 0.004, 0.001],
         position,
-        rotation: [0.0; 3],
+        rotation_deg: [0.0; 3],
     });
     let o = run(&s);
     assert_eq!(o.summary.status, Status::LostFeatures, "{}", report(&o));
@@ -352,4 +352,21 @@ fn path_planning_scenarios() {
     no_path.path = None;
     let o = run(&no_path);
     assert!(o.summary.max_line_deviation > 2.0 * deviation[0], "{}", o.summary.max_line_deviation);
+}
+
+#[test]
+fn rotation_deg_is_the_key_and_the_older_rotation_is_read_as_degrees() {
+    let text = builtin("lens-12-6").unwrap().to_toml().unwrap();
+    assert!(text.contains("rotation_deg = [") && !text.contains("\nrotation = ["));
+    let old = text.replace("rotation_deg = [", "rotation = [");
+    let (a, b) = (Scenario::from_toml(&text).unwrap(), Scenario::from_toml(&old).unwrap());
+    assert_eq!(a.start, b.start);
+    assert_eq!(a.to_config().unwrap().start, b.to_config().unwrap().start);
+    let both = text.replace("rotation_deg = [", "rotation = [0.0, 0.0, 0.0]\nrotation_deg = [");
+    match Scenario::from_toml(&both) {
+        Err(vsinv::Error::Scenario { key, reason }) => {
+            assert!(key.starts_with("start") && reason.contains("duplicate"), "{key}: {reason}")
+        }
+        other => panic!("{other:?}"),
+    }
 }

@@ -101,7 +101,7 @@ def test_json_writes_nan_as_null_and_plots_a_lost_run(capsys, tmp_path):
     # lost_features (exit code 1: not converged) and NaN invariant error and tau values.
     d = vsinv.load_scenario("lens-12-6").to_dict()
     d["name"] = "lost-at-start"
-    d["start"]["rotation"] = [0.0, 60.0, 0.0]
+    d["start"]["rotation_deg"] = [0.0, 60.0, 0.0]
     path = tmp_path / "lost.toml"
     path.write_text(vsinv.Scenario.from_dict(d).to_toml())
     code, out, err = run_cli(capsys, "run", str(path), "--json", "--out", str(tmp_path / "out"), "--no-progress")

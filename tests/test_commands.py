@@ -54,14 +54,14 @@ def test_bad_command_options_are_invalid_input(scene, kwargs, name):
 
 def rolled(name: str, roll_deg: float, task: str) -> dict:
     d = vsinv.load_scenario(name).to_dict()
-    rx, ry, _ = np.radians(d["start"]["rotation"])
+    rx, ry, _ = np.radians(d["start"]["rotation_deg"])
     r = vsinv.pose_from_position_thetau([0, 0, 0], [rx, ry, 0.0])[:3, :3]
     c, s = math.cos(math.radians(roll_deg)), math.sin(math.radians(roll_deg))
     rz = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     m = np.eye(4)
     m[:3, :3] = r @ rz
     _, thetau = vsinv.thetau_from_pose(m)
-    d["start"]["rotation"] = [float(a) for a in np.degrees(thetau)]
+    d["start"]["rotation_deg"] = [float(a) for a in np.degrees(thetau)]
     d["control"]["rz_task"] = task
     return d
 

@@ -19,7 +19,7 @@ def _barrel_dict(**vision: float) -> dict:
 
 
 def _start_pose(d: dict) -> np.ndarray:
-    return vsinv.pose_from_position_thetau(d["start"]["position"], np.radians(d["start"]["rotation"]))
+    return vsinv.pose_from_position_thetau(d["start"]["position"], np.radians(d["start"]["rotation_deg"]))
 
 
 def _camera_matrix(camera: dict) -> np.ndarray:

@@ -141,7 +141,7 @@ def test_lens_ratio_changes_the_servo_lens_and_k_hat_follows():
 
 
 def roll_rotation(scenario: dict) -> np.ndarray:
-    return rotation(np.radians(scenario["start"]["rotation"]))
+    return rotation(np.radians(scenario["start"]["rotation_deg"]))
 
 
 def rz(deg: float) -> np.ndarray:
@@ -155,7 +155,7 @@ def test_roll_composes_about_the_optical_axis(roll):
     r0 = roll_rotation(d)
     (s,) = build_scenarios(d, {"roll_deg": [roll]})
     np.testing.assert_allclose(roll_rotation(s), r0 @ rz(roll), atol=1e-9)
-    assert np.linalg.norm(s["start"]["rotation"]) <= 180.0 + 1e-9
+    assert np.linalg.norm(s["start"]["rotation_deg"]) <= 180.0 + 1e-9
     assert s["start"]["position"] == d["start"]["position"]
 
 
@@ -163,11 +163,11 @@ def test_roll_there_and_back():
     d = lens_12_6()
     (there,) = build_scenarios(d, {"roll_deg": [90.0]})
     (back,) = build_scenarios(there, {"roll_deg": [-90.0]})
-    np.testing.assert_allclose(back["start"]["rotation"], d["start"]["rotation"], atol=1e-9)
+    np.testing.assert_allclose(back["start"]["rotation_deg"], d["start"]["rotation_deg"], atol=1e-9)
     # 180 degrees from a rotation of 180 degrees about z: the identity.
-    d["start"]["rotation"] = [0.0, 0.0, 180.0]
+    d["start"]["rotation_deg"] = [0.0, 0.0, 180.0]
     (ident,) = build_scenarios(d, {"roll_deg": [180.0]})
-    np.testing.assert_allclose(ident["start"]["rotation"], [0.0, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(ident["start"]["rotation_deg"], [0.0, 0.0, 0.0], atol=1e-9)
     (near,) = build_scenarios(d, {"roll_deg": [-1e-7]})  # just below pi: stays accurate
     np.testing.assert_allclose(roll_rotation(near), rz(180.0 - 1e-7), atol=1e-12)
 

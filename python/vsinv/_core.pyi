@@ -266,7 +266,10 @@ class RunResult:
         """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`
         (per second); None for the other robots."""
 
-def load_scenario(source: _ScenarioLike) -> Scenario: ...
+def load_scenario(source: _ScenarioLike) -> Scenario:
+    """A built-in name, a TOML file, a dict or a Scenario. Scenario angles are degrees and their
+    keys say so (``rotation_deg``, ``skew_deg``, ``max_angular_speed_deg``; the older
+    ``rotation`` is read as degrees); the Python API itself is SI (radians)."""
 def list_scenarios() -> list[tuple[str, str]]: ...
 def run_batch(scenarios: Iterable[_ScenarioLike], threads: int | None = None) -> dict[str, npt.NDArray[Any]]: ...
 def run_scenario(

@@ -137,7 +137,9 @@ def _build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser(
         "run",
         help="run a scenario and print its summary",
-        description="Run a built-in scenario or a scenario TOML file and print its summary.",
+        description="Run a built-in scenario or a scenario TOML file and print its summary. Scenario angles "
+        "are degrees, in keys that say so (rotation_deg, skew_deg, max_angular_speed_deg; the older key "
+        "rotation is read as degrees).",
     )
     run.add_argument("scenario", metavar="NAME|FILE", help="a built-in scenario name (see `vsinv list`) or a TOML file")
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object (NaN as null)")

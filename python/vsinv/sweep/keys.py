@@ -225,7 +225,9 @@ def _apply_roll(d: dict[str, Any], deg: float) -> None:
     # R' = R Rz(roll) as quaternions: q' = q (cos(a/2), 0, 0, sin(a/2)); back to theta-u
     # with the angle in [0, pi] (w >= 0).
     start = dict(d["start"])
-    w, x, y, z = _quaternion_from_thetau_deg(start.get("rotation", [0.0, 0.0, 0.0]))
+    # rotation_deg (older files: rotation, read as degrees too)
+    thetau_deg = start.pop("rotation", None) or start.get("rotation_deg", [0.0, 0.0, 0.0])
+    w, x, y, z = _quaternion_from_thetau_deg(thetau_deg)
     h = 0.5 * math.radians(deg)
     c, s = math.cos(h), math.sin(h)
     w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s
@@ -233,10 +235,10 @@ def _apply_roll(d: dict[str, Any], deg: float) -> None:
         w, x, y, z = -w, -x, -y, -z
     n = math.sqrt(x * x + y * y + z * z)
     if n < 1e-15:
-        start["rotation"] = [0.0, 0.0, 0.0]
+        start["rotation_deg"] = [0.0, 0.0, 0.0]
     else:
         scale = math.degrees(2.0 * math.atan2(n, w)) / n
-        start["rotation"] = [x * scale, y * scale, z * scale]
+        start["rotation_deg"] = [x * scale, y * scale, z * scale]
     d["start"] = start
 
 

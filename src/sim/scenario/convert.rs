@@ -159,8 +159,8 @@ impl Scenario {
         let given = match &self.start {
             Some(s) => {
                 check_values("start.position", &s.position)?;
-                check_values("start.rotation", &s.rotation)?;
-                Some(pose_of(s.position, s.rotation))
+                check_values("start.rotation_deg", &s.rotation_deg)?;
+                Some(pose_of(s.position, s.rotation_deg))
             }
             None => None,
         };
@@ -337,12 +337,12 @@ fn arm_start(arm: &crate::sim::arm::ArmRobot, given: Option<Isometry3<f64>>) -> 
 
 fn body_of(b: &BodySpec) -> Body {
     match *b {
-        BodySpec::Cuboid { half_extents, position, rotation } => {
-            Body::Cuboid { half_extents, pose: pose_of(position, rotation) }
+        BodySpec::Cuboid { half_extents, position, rotation_deg } => {
+            Body::Cuboid { half_extents, pose: pose_of(position, rotation_deg) }
         }
         BodySpec::Ball { radius, position } => Body::Ball { radius, center: position },
-        BodySpec::Cylinder { half_height, radius, position, rotation } => {
-            Body::Cylinder { half_height, radius, pose: pose_of(position, rotation) }
+        BodySpec::Cylinder { half_height, radius, position, rotation_deg } => {
+            Body::Cylinder { half_height, radius, pose: pose_of(position, rotation_deg) }
         }
     }
 }
@@ -405,7 +405,7 @@ fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
         return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
     }
     check_values("depth_estimation.position", &d.position)?;
-    check_values("depth_estimation.rotation", &d.rotation)?;
+    check_values("depth_estimation.rotation_deg", &d.rotation_deg)?;
     check_values("depth_estimation.translation", &d.translation)?;
     if !(d.reference_mean_depth.is_finite() && d.reference_mean_depth > 0.0) {
         return Err(scenario_error("depth_estimation.reference_mean_depth", "must be finite and > 0"));
@@ -415,7 +415,7 @@ fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
     }
     Ok(TranslationPairDepths {
         camera: d.camera.intrinsics("depth_estimation.camera")?,
-        first_pose: pose_of(d.position, d.rotation),
+        first_pose: pose_of(d.position, d.rotation_deg),
         translation: Vector3::from(d.translation),
         reference_mean_depth: d.reference_mean_depth,
     })

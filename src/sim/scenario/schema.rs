@@ -53,9 +53,9 @@ pub enum BodySpec {
         half_extents: [f64; 3],
         /// Centre in F*, metres.
         position: [f64; 3],
-        /// Theta-u rotation, degrees.
-        #[serde(default)]
-        rotation: [f64; 3],
+        /// Theta-u rotation, degrees (`rotation` is read too).
+        #[serde(default, alias = "rotation")]
+        rotation_deg: [f64; 3],
     },
     /// A ball.
     Ball {
@@ -72,9 +72,9 @@ pub enum BodySpec {
         radius: f64,
         /// Centre in F*, metres.
         position: [f64; 3],
-        /// Theta-u rotation, degrees.
-        #[serde(default)]
-        rotation: [f64; 3],
+        /// Theta-u rotation, degrees (`rotation` is read too).
+        #[serde(default, alias = "rotation")]
+        rotation_deg: [f64; 3],
     },
 }
 
@@ -124,9 +124,9 @@ pub struct CameraSpec {
 pub struct StartSpec {
     /// Camera centre in F*, metres.
     pub position: [f64; 3],
-    /// Theta-u of the camera frame in F*, degrees.
-    #[serde(default)]
-    pub rotation: [f64; 3],
+    /// Theta-u of the camera frame in F*, degrees (`rotation` is read too).
+    #[serde(default, alias = "rotation")]
+    pub rotation_deg: [f64; 3],
 }
 
 /// A pose: a position in metres and a theta-u rotation in degrees.
@@ -135,9 +135,9 @@ pub struct StartSpec {
 pub struct PoseSpec {
     /// Position, metres.
     pub position: [f64; 3],
-    /// Theta-u rotation, degrees.
-    #[serde(default)]
-    pub rotation: [f64; 3],
+    /// Theta-u rotation, degrees (`rotation` is read too).
+    #[serde(default, alias = "rotation")]
+    pub rotation_deg: [f64; 3],
 }
 
 /// Control law name.
@@ -310,9 +310,9 @@ pub struct DepthEstimationSpec {
     pub camera: CameraSpec,
     /// Camera centre of the first image in F*, metres.
     pub position: [f64; 3],
-    /// Theta-u of that camera in F*, degrees.
-    #[serde(default)]
-    pub rotation: [f64; 3],
+    /// Theta-u of that camera in F*, degrees (`rotation` is read too).
+    #[serde(default, alias = "rotation")]
+    pub rotation_deg: [f64; 3],
     /// Pure translation of the camera centre to the second image, metres, in F*.
     pub translation: [f64; 3],
     /// The mean depth the estimates give the reference image: a rough guess of the distance

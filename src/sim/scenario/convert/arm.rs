@@ -66,12 +66,12 @@ fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
     })
 }
 
-/// A `{ position, rotation }` table, identity when absent.
+/// A `{ position, rotation_deg }` table, identity when absent.
 fn pose(key: &str, spec: &Option<PoseSpec>) -> Result<nalgebra::Isometry3<f64>> {
     let Some(p) = spec else { return Ok(nalgebra::Isometry3::identity()) };
     check_values(&format!("{key}.position"), &p.position)?;
-    check_values(&format!("{key}.rotation"), &p.rotation)?;
-    Ok(pose_of(p.position, p.rotation))
+    check_values(&format!("{key}.rotation_deg"), &p.rotation_deg)?;
+    Ok(pose_of(p.position, p.rotation_deg))
 }
 
 /// Scenario units per joint: degrees for revolute and continuous joints, metres for
