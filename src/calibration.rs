@@ -140,7 +140,11 @@ impl Raw {
 }
 
 fn check_count(file: &str, key: &str, m: &RawMatrix) -> Result<()> {
-    if m.rows < 0 || m.cols < 0 || (m.rows * m.cols) as usize != m.data.len() {
+    // checked: rows x cols of i64::MAX overflows.
+    if m.rows < 0
+        || m.cols < 0
+        || m.rows.checked_mul(m.cols).and_then(|c| usize::try_from(c).ok()) != Some(m.data.len())
+    {
         return Err(err(
             file,
             format!("{key}.data"),

@@ -22,9 +22,9 @@ pub enum Error {
     NonFinitePoint {
         /// Which input.
         what: &'static str,
-        /// The point (row of the `(n, 2)` array).
+        /// The point (row of the `(n, 2)` or `(n, 3)` array).
         row: usize,
-        /// The coordinate (0: u, 1: v).
+        /// The coordinate (0: u, 1: v; or 0: x, 1: y, 2: z).
         column: usize,
     },
     /// An array does not have the expected size.
@@ -188,10 +188,28 @@ pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<()> {
 
 /// Checks that pixels are finite (row and column in the error).
 pub(crate) fn check_finite_points(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
-    match points.as_flattened().iter().position(|v| !v.is_finite()) {
-        Some(i) => Err(Error::NonFinitePoint { what, row: i / 2, column: i % 2 }),
+    check_finite_rows(what, points)
+}
+
+/// Checks that the rows of an `(n, N)` array are finite (row and column in the error).
+pub(crate) fn check_finite_rows<const N: usize>(what: &'static str, rows: &[[f64; N]]) -> Result<()> {
+    match rows.as_flattened().iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::NonFinitePoint { what, row: i / N, column: i % N }),
         None => Ok(()),
     }
+}
+
+/// Fails when a result computed from finite inputs is not finite: inputs at the edge of the
+/// f64 range (a pixel of 1e300, a depth of 1e-300) overflow, and the error names them
+/// instead of returning inf or NaN.
+pub(crate) fn check_overflow(inputs: &'static str, result: &str, values: &[f64]) -> Result<()> {
+    if values.iter().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: inputs,
+        reason: format!("out of range: the {result} overflow (non-finite) for these values"),
+    })
 }
 
 /// Checks that every depth is finite and strictly positive.
@@ -237,7 +255,7 @@ pub(crate) fn check_step_inputs(pixels: &[[f64; 2]], depths: &[f64], visible: Op
         }
         let (p, z) = (pixels[index], depths[index]);
         if !(p[0].is_finite() && p[1].is_finite()) {
-            return Err(Error::NonFinite { what: "pixels", index: 2 * index });
+            return Err(Error::NonFinitePoint { what: "pixels", row: index, column: usize::from(p[0].is_finite()) });
         }
         if !z.is_finite() {
             return Err(Error::NonFinite { what: "depths", index });

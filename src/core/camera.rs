@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix2, Matrix2x6, Matrix3, Point3, Vector3};
 
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, check_finite, check_finite_rows};
 
 /// Intrinsic parameters of eq. (4): `f ku`, `f kv` (pixels), principal point `(u0, v0)`
 /// (pixels) and the angle `theta` between the image axes (radians, `pi/2` for square pixels).
@@ -35,7 +35,14 @@ impl Intrinsics {
         if !(theta > 0.0 && theta < std::f64::consts::PI) {
             return Err(Error::InvalidIntrinsics { reason: format!("skew angle must be in (0, pi), got {theta}") });
         }
-        Ok(Self { fku, fkv, u0, v0, theta })
+        let k = Self { fku, fkv, u0, v0, theta };
+        // Extreme values (fkv / sin(theta) or 1 / fku beyond the f64 range) give no usable K.
+        if !(k.matrix().iter().chain(k.f_matrix().iter()).all(|v| v.is_finite())) {
+            return Err(Error::InvalidIntrinsics {
+                reason: format!("K or F(K) overflows (non-finite) for fku = {fku}, fkv = {fkv}, theta = {theta}"),
+            });
+        }
+        Ok(k)
     }
 
     /// Square pixels (`theta = pi/2`).
@@ -145,7 +152,7 @@ pub fn f_of_matrix(k: &Matrix3<f64>) -> Matrix2<f64> {
 
 /// Projects points given in the camera frame; fails for a point at or behind the camera.
 pub fn project_points(points: &[[f64; 3]], intrinsics: &Intrinsics) -> Result<(Vec<[f64; 2]>, Vec<f64>)> {
-    check_finite("points", points.as_flattened())?;
+    check_finite_rows("points", points)?;
     let mut pixels = Vec::with_capacity(points.len());
     let mut depths = Vec::with_capacity(points.len());
     for (index, p) in points.iter().enumerate() {
@@ -153,6 +160,12 @@ pub fn project_points(points: &[[f64; 3]], intrinsics: &Intrinsics) -> Result<(V
             return Err(Error::PointBehindCamera { index, depth: p[2] });
         }
         let (pix, z) = intrinsics.project(&Point3::new(p[0], p[1], p[2]));
+        if !(pix[0].is_finite() && pix[1].is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "points",
+                reason: format!("point {index} (row {index}) projects out of range (non-finite pixel)"),
+            });
+        }
         pixels.push(pix);
         depths.push(z);
     }

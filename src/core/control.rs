@@ -11,7 +11,9 @@ use crate::core::jacobian::{
 };
 use crate::core::rz_task::{RzTask, linearise};
 use crate::core::saturation::TwistLimits;
-use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
+use crate::error::{
+    Error, Result, check_finite_points, check_finite_rows, check_overflow, check_positive, check_step_inputs,
+};
 
 /// A visual-servoing control law: current pixels and depth estimates in, camera twist
 /// `(vx, vy, vz, wx, wy, wz)` (camera frame) out. Implemented by [`InvariantController`] and
@@ -243,7 +245,7 @@ impl InvariantController {
         if s_star.len() != m {
             return Err(shape("s_star", s_star.len()));
         }
-        check_finite("s_star", s_star.as_flattened())?;
+        check_finite_rows("s_star", s_star)?;
         if let Some(bad) = s_star.iter().position(|q| (q[0] + q[1] + q[2] - 1.0).abs() > 1e-6) {
             return Err(Error::InvalidParameter {
                 name: "s_star",
@@ -254,7 +256,7 @@ impl InvariantController {
             if r.len() != m {
                 return Err(shape("s_star_rate", r.len()));
             }
-            check_finite("s_star_rate", r.as_flattened())?;
+            check_finite_rows("s_star_rate", r)?;
         }
         for (j, q) in s_star.iter().enumerate() {
             self.s_star[j] = Vector3::from(*q);
@@ -297,6 +299,8 @@ impl InvariantController {
         let (wz, eps_z, a_hat) = self.rz_velocity(&t, &lx_basis, &mu, gain_rz)?;
         let mut twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
         let saturation = self.config.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
+        let values = [twist.as_slice(), eps.as_slice(), t.as_slice(), &[eps_z, invariant_error, a_hat, gain]].concat();
+        check_overflow("pixels, depths", "twist and task functions", &values)?;
         self.state = Some(ControlState {
             twist,
             eps,
@@ -378,6 +382,8 @@ impl InvariantController {
     #[inline]
     fn solve_five_dof(&mut self, normal: &NormalEquations, mean_depth: f64) -> Result<(Vector5<f64>, Vector5<f64>)> {
         let jtj = &normal.jtj;
+        // Eigenvalues of a non-finite matrix may not terminate: refuse an overflow first.
+        check_overflow("pixels, depths", "normal equations", &[jtj.as_slice(), normal.jte.as_slice()].concat())?;
         let threshold = self.config.min_structure_ratio;
         let degenerate = |jtj: &Matrix5<f64>| {
             let ratio = balanced_ratio(jtj, mean_depth);

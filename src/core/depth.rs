@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, Matrix3, Matrix3x4, Vector3, Vector4};
 
-use crate::error::{Error, Result, check_finite_points};
+use crate::error::{Error, Result, check_finite_points, check_finite_rows, check_overflow};
 
 /// Below this ratio of singular values a resection or an epipole counts as degenerate.
 const DEGENERATE: f64 = 1e-10;
@@ -78,6 +78,7 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
             lines.row_mut(k).copy_from(&(l / norm).transpose());
         }
     }
+    check_overflow("first image, second image", "normalised epipolar lines", lines.as_slice())?;
     let svd = lines.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(EPIPOLE, 0.0))?;
     let mut order = [0usize, 1, 2];
@@ -126,6 +127,9 @@ pub fn resect(points: &[Vector3<f64>], pixels: &[[f64; 2]]) -> Result<Matrix3x4<
     if n < 6 || pixels.len() != n {
         return Err(Error::TooFewPoints { needed: 6, got: n.min(pixels.len()), why: "a DLT resection" });
     }
+    check_finite_points("pixels", pixels)?;
+    let rows: Vec<[f64; 3]> = points.iter().map(|p| (*p).into()).collect();
+    check_finite_rows("points", &rows)?;
     let t2 = normalise_2d(pixels);
     let c = points.iter().sum::<Vector3<f64>>() / n as f64;
     let mean = points.iter().map(|p| (p - c).norm()).sum::<f64>() / n as f64;
@@ -144,6 +148,9 @@ pub fn resect(points: &[Vector3<f64>], pixels: &[[f64; 2]]) -> Result<Matrix3x4<
             a[(2 * k + 1, 8 + j)] = -p.x * x[j];
         }
     }
+    // Values at the edge of the f64 range overflow the normalisation (the SVD of a non-finite
+    // matrix may not terminate).
+    check_overflow("points, pixels", "normalised DLT system", a.as_slice())?;
     let svd = a.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(RESECTION, 0.0))?;
     let mut order: Vec<usize> = (0..12).collect();
@@ -210,6 +217,19 @@ impl ResectionDepths {
     /// Depths of every point (hidden ones extrapolated from the resected camera) up to one
     /// positive scale, from the visible points' pixels.
     pub fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()> {
+        let n = self.reconstruction.len();
+        for (what, len) in [("pixels", pixels.len()), ("visible", visible.len()), ("depths", depths.len())] {
+            if len != n {
+                return Err(Error::Shape {
+                    what,
+                    expected: format!("{n} values (one per point)"),
+                    got: format!("{len}"),
+                });
+            }
+        }
+        if let Some(row) = (0..n).find(|&k| visible[k] && !(pixels[k][0].is_finite() && pixels[k][1].is_finite())) {
+            return Err(Error::NonFinitePoint { what: "pixels", row, column: usize::from(pixels[row][0].is_finite()) });
+        }
         self.scratch_points.clear();
         self.scratch_pixels.clear();
         for k in 0..self.reconstruction.len() {

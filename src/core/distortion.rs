@@ -256,7 +256,11 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
                     reason: format!("the rational model's denominator is {den:.3e} <= 0 at this point"),
                 });
             }
-            Ok(to_pixel(&k, distortion.distort(m)))
+            let p = to_pixel(&k, distortion.distort(m));
+            if !(p[0].is_finite() && p[1].is_finite()) {
+                return Err(Error::Distortion { index, reason: "the distorted pixel overflows (non-finite)".into() });
+            }
+            Ok(p)
         })
         .collect()
 }

@@ -8,7 +8,9 @@ use nalgebra::{Matrix6, Vector6};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::{Intrinsics, pixel_interaction};
 use crate::core::saturation::TwistLimits;
-use crate::error::{Error, Result, check_depths, check_finite_points, check_positive, check_step_inputs};
+use crate::error::{
+    Error, Result, check_depths, check_finite_points, check_overflow, check_positive, check_step_inputs,
+};
 
 /// Where the interaction matrix is evaluated (`"current"`, `"desired"` or `"mean"` in
 /// scenario files and Python).
@@ -209,10 +211,11 @@ impl IbvsController {
             lte += l.tr_mul(&e);
         }
         let chol = ltl.cholesky().ok_or(Error::DegenerateStructure { ratio: 0.0, threshold: 0.0 })?;
-        self.last_error = Some((err2 / used as f64).sqrt());
         let gain = self.adaptive_gain.map_or(self.gain, |g| g.value(err2.sqrt()));
         let mut twist = chol.solve(&lte) * -gain;
         let saturation = self.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
+        check_overflow("pixels, depths", "twist and pixel error", &[twist.as_slice(), &[err2, gain]].concat())?;
+        self.last_error = Some((err2 / used as f64).sqrt());
         self.last_command = Some((gain, saturation));
         Ok(twist)
     }

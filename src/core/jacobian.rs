@@ -9,7 +9,7 @@ use nalgebra::{DMatrix, Matrix2x6, Matrix3, Matrix5, Vector3, Vector5};
 
 use crate::core::camera::{Intrinsics, f_of_matrix, pixel_interaction};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
-use crate::error::{Error, Result, check_depths, check_finite_points};
+use crate::error::{Error, Result, check_depths, check_finite_points, check_overflow};
 
 /// Minimum number of points for the five-dof law: each non-basis point gives two
 /// independent rows, so rank J = 5 needs `n >= 6` (paper-corrections, "How many points").
@@ -78,6 +78,7 @@ pub fn invariant_interaction(
         let block = q_inv_2 * combined_interaction(&l_k, &l_basis, &q_k);
         j.fixed_view_mut::<3, 6>(3 * row, 0).copy_from(&block);
     }
+    check_overflow("pixels, depths", "Jacobian entries", j.as_slice())?;
     Ok(j)
 }
 
@@ -130,6 +131,7 @@ pub fn jacobian_factors(
         phi.fixed_view_mut::<3, 3>(3 * row, 0).copy_from(&(frame.q_inv * inner_phi));
         psi.fixed_view_mut::<3, 2>(3 * row, 0).copy_from(&(frame.q_inv * inner_psi));
     }
+    check_overflow("pixels, depths", "Jacobian factors", &[phi.as_slice(), psi.as_slice()].concat())?;
     Ok((phi, psi))
 }
 
@@ -165,7 +167,9 @@ pub fn rz_coefficients(
     let k = intrinsics.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
     let l_basis = basis.map(|i| pixel_interaction(&k, &k_inv, pixels[i], depths[i]));
-    Ok(rz_from_interactions(&reference, &l_basis))
+    let (a, c) = rz_from_interactions(&reference, &l_basis);
+    check_overflow("pixels, depths", "rz coefficients", &[&[a], c.as_slice()].concat())?;
+    Ok((a, c))
 }
 
 /// `a`, `c` from the basis points' interaction matrices: `eps_z = sum_j adj(Q*)[j,0] v_j`,

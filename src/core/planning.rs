@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, check_finite_rows};
 
 /// Off-diagonal entries of F in the order (01, 02, 10, 12, 20, 21).
 const OFF: [(usize, usize); 6] = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)];
@@ -80,6 +80,9 @@ fn real_cubic_roots(a: f64, b: f64, c: f64, d: f64) -> Vec<f64> {
     }
     // Companion matrix eigenvalues: robust and good enough for three roots.
     let m = nalgebra::Matrix3::new(-b / a, -c / a, -d / a, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+    if !m.iter().all(|v| v.is_finite()) {
+        return vec![];
+    }
     let roots: Vec<f64> =
         m.complex_eigenvalues().iter().filter(|z| z.im.abs() <= 1e-9 * (1.0 + z.re.abs())).map(|z| z.re).collect();
     // One Newton step each, to polish.
@@ -171,8 +174,9 @@ fn check_plane_parallax_inputs(q: &[Vector3<f64>], q_star: &[Vector3<f64>]) -> R
             why: "plane + parallax needs four non-basis points (seven in all)",
         });
     }
-    for v in q.iter().chain(q_star) {
-        check_finite("invariant points", v.as_slice())?;
+    for (what, points) in [("q", q), ("q_star", q_star)] {
+        let rows: Vec<[f64; 3]> = points.iter().map(|v| (*v).into()).collect();
+        check_finite_rows(what, &rows)?;
     }
     Ok(())
 }
@@ -198,6 +202,8 @@ fn scaled_null_space(q: &[Vector3<f64>], q_star: &[Vector3<f64>], null_dim: usiz
             a[(k, c)] = u[i] * w[j];
         }
     }
+    // The SVD of a non-finite matrix may not terminate: refuse overflowed coordinates.
+    crate::error::check_overflow("q, q_star", "scaled epipolar system", a.as_slice())?;
     let svd = a.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(0.0))?;
     // Sort the singular values decreasingly (nalgebra does not promise an order).
@@ -267,6 +273,11 @@ impl InvariantPath {
                 got: format!("{}", q_star.len()),
             });
         }
+        // The rates divide by the duration: a tiny one overflows them.
+        let rates = (Vector3::repeat(1.0) - estimate.gamma) / duration;
+        let beta_rates = estimate.mu_e.iter().flat_map(|v| (v / duration).into_iter().copied().collect::<Vec<_>>());
+        let values: Vec<f64> = rates.iter().copied().chain(beta_rates).collect();
+        crate::error::check_overflow("path duration", "path rates", &values)?;
         Ok(Self { q_star: q_star.to_vec(), beta0_e: estimate.mu_e.clone(), delta0: estimate.gamma, duration })
     }
 

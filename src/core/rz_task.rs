@@ -104,7 +104,7 @@ pub fn linearise(
         }
     };
     let a = row[5];
-    if a.is_nan() || a.abs() <= 1e-9 * scale {
+    if !(value.is_finite() && row.iter().all(|v| v.is_finite())) || a.abs() <= 1e-9 * scale {
         return Err(Error::RzSingular { a_hat: a });
     }
     Ok(RzLinearised { value, a, c: Vector5::new(row[0], row[1], row[2], row[3], row[4]) })

@@ -7,7 +7,7 @@
 use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
 
 use crate::core::camera::f_of_matrix;
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, check_finite, check_overflow};
 
 /// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
 /// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
@@ -41,6 +41,7 @@ pub fn a_matrix(k: &Matrix3<f64>, k_hat: &Matrix3<f64>, kappa: f64) -> Result<Ma
     let mut a = Matrix5::zeros();
     a.fixed_view_mut::<3, 3>(0, 0).copy_from(&top);
     a.fixed_view_mut::<2, 2>(3, 3).copy_from(&bottom);
+    check_overflow("K, K_hat, kappa", "entries of A", a.as_slice())?;
     Ok(a)
 }
 
@@ -76,7 +77,12 @@ pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
     if gain <= 0.0 || max_b < 0.0 {
         return Err(Error::InvalidParameter { name: "tracking_bound", reason: "needs gain > 0 and max_b >= 0".into() });
     }
-    Ok(if sigma > 0.0 { 2.0 * max_b / (gain * sigma) } else { f64::INFINITY })
+    if !(sigma > 0.0) {
+        return Ok(f64::INFINITY);
+    }
+    let bound = 2.0 * max_b / (gain * sigma);
+    check_overflow("tracking_bound inputs", "bound", &[bound])?;
+    Ok(bound)
 }
 
 /// Props. 1 and 2 verdicts and sigma only (no eigenvalues of A): what a simulation summary

@@ -43,11 +43,13 @@ impl Disc {
             return Err(Error::InvalidParameter { name: "dot_radius", reason: format!("must be > 0, got {radius}") });
         }
         let normal = Vector3::from(normal);
-        let len = normal.norm();
-        if !(len > 1e-12) {
+        let largest = normal.amax();
+        if !(largest > 1e-12) {
             return Err(Error::InvalidParameter { name: "normal", reason: "must not be zero".into() });
         }
-        Ok(Self { center: Vector3::from(center), normal: normal / len, radius })
+        // Scaled first: the norm of a normal of 1e300 overflows.
+        let normal = normal / largest;
+        Ok(Self { center: Vector3::from(center), normal: normal / normal.norm(), radius })
     }
 }
 
