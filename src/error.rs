@@ -17,14 +17,14 @@ pub enum Error {
         /// Flat index of the first offending value.
         index: usize,
     },
-    /// A point coordinate is NaN or infinite.
+    /// An entry of a 2-d array (points, a matrix) is NaN or infinite.
     #[error("{what}: non-finite value at row {row}, column {column}")]
     NonFinitePoint {
         /// Which input.
         what: &'static str,
-        /// The point (row of the `(n, 2)` array).
+        /// The row (the point of an `(n, 2)` or `(n, 3)` array).
         row: usize,
-        /// The coordinate (0: u, 1: v).
+        /// The column (the coordinate of a point).
         column: usize,
     },
     /// An array does not have the expected size.
@@ -186,6 +186,31 @@ pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<()> {
     }
 }
 
+/// Checks that a row-major `(n, cols)` array is finite (row and column in the error).
+pub(crate) fn check_finite_rows(what: &'static str, row_major: &[f64], cols: usize) -> Result<()> {
+    match row_major.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(Error::NonFinitePoint { what, row: i / cols.max(1), column: i % cols.max(1) }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a nalgebra matrix (column-major storage) is finite, with the row and column
+/// of the first offending entry as the user writes them.
+pub(crate) fn check_finite_matrix<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
+    what: &'static str,
+    m: &nalgebra::Matrix<f64, R, C, S>,
+) -> Result<()> {
+    let (rows, cols) = m.shape();
+    for row in 0..rows {
+        for column in 0..cols {
+            if !m[(row, column)].is_finite() {
+                return Err(Error::NonFinitePoint { what, row, column });
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Checks that pixels are finite (row and column in the error).
 pub(crate) fn check_finite_points(what: &'static str, points: &[[f64; 2]]) -> Result<()> {
     match points.as_flattened().iter().position(|v| !v.is_finite()) {
@@ -237,7 +262,7 @@ pub(crate) fn check_step_inputs(pixels: &[[f64; 2]], depths: &[f64], visible: Op
         }
         let (p, z) = (pixels[index], depths[index]);
         if !(p[0].is_finite() && p[1].is_finite()) {
-            return Err(Error::NonFinite { what: "pixels", index: 2 * index });
+            return Err(Error::NonFinitePoint { what: "pixels", row: index, column: usize::from(p[0].is_finite()) });
         }
         if !z.is_finite() {
             return Err(Error::NonFinite { what: "depths", index });

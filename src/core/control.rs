@@ -11,7 +11,7 @@ use crate::core::jacobian::{
 };
 use crate::core::rz_task::{RzTask, linearise};
 use crate::core::saturation::TwistLimits;
-use crate::error::{Error, Result, check_finite, check_finite_points, check_positive, check_step_inputs};
+use crate::error::{Error, Result, check_finite_points, check_finite_rows, check_positive, check_step_inputs};
 
 /// A visual-servoing control law: current pixels and depth estimates in, camera twist
 /// `(vx, vy, vz, wx, wy, wz)` (camera frame) out. Implemented by [`InvariantController`] and
@@ -243,7 +243,7 @@ impl InvariantController {
         if s_star.len() != m {
             return Err(shape("s_star", s_star.len()));
         }
-        check_finite("s_star", s_star.as_flattened())?;
+        check_finite_rows("s_star", s_star.as_flattened(), 3)?;
         if let Some(bad) = s_star.iter().position(|q| (q[0] + q[1] + q[2] - 1.0).abs() > 1e-6) {
             return Err(Error::InvalidParameter {
                 name: "s_star",
@@ -252,9 +252,9 @@ impl InvariantController {
         }
         if let Some(r) = rate {
             if r.len() != m {
-                return Err(shape("s_star_rate", r.len()));
+                return Err(shape("rate", r.len()));
             }
-            check_finite("s_star_rate", r.as_flattened())?;
+            check_finite_rows("rate", r.as_flattened(), 3)?;
         }
         for (j, q) in s_star.iter().enumerate() {
             self.s_star[j] = Vector3::from(*q);
