@@ -46,9 +46,12 @@ bench: install
 	$(PYTHON) benches/vision.py
 	$(PYTHON) benches/noise_accuracy.py
 
-# Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py).
-fuzz: install-run
+# Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
+# and the property tests on new random examples (CI runs a fixed sequence).
+fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
+	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness.py tests/test_api.py tests/test_se3.py
+	cargo test --release --test robustness --test invariance
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run

@@ -17,7 +17,7 @@ pub enum Error {
         /// Flat index of the first offending value.
         index: usize,
     },
-    /// A point coordinate is NaN or infinite.
+    /// An entry of a 2-d array (points, a matrix) is NaN or infinite.
     #[error("{what}: non-finite value at row {row}, column {column}")]
     NonFinitePoint {
         /// Which input.
@@ -184,6 +184,23 @@ pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<()> {
         Some(index) => Err(Error::NonFinite { what, index }),
         None => Ok(()),
     }
+}
+
+/// Checks that a nalgebra matrix (column-major storage) is finite, with the row and column
+/// of the first offending entry as the user writes them.
+pub(crate) fn check_finite_matrix<R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStorage<f64, R, C>>(
+    what: &'static str,
+    m: &nalgebra::Matrix<f64, R, C, S>,
+) -> Result<()> {
+    let (rows, cols) = m.shape();
+    for row in 0..rows {
+        for column in 0..cols {
+            if !m[(row, column)].is_finite() {
+                return Err(Error::NonFinitePoint { what, row, column });
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Checks that pixels are finite (row and column in the error).

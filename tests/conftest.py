@@ -1,9 +1,18 @@
 """Scene helpers for the Python tests: a non-planar object, poses and a pinhole view."""
 
+import os
+
 import numpy as np
 import pytest
+from hypothesis import settings
 
 import vsinv
+
+# CI runs the property tests on a fixed sequence of examples (a red CI must mean a bug, not a
+# draw); `make fuzz` explores new ones with VSINV_HYPOTHESIS=explore.
+settings.register_profile("ci", derandomize=True)
+settings.register_profile("explore", derandomize=False, max_examples=500)
+settings.load_profile(os.environ.get("VSINV_HYPOTHESIS", "ci"))
 
 
 def object_points() -> np.ndarray:
@@ -54,3 +63,20 @@ def scene():
     ref, z_star = view(obj, np.eye(4), k_star)
     cur, z = view(obj, pose((0.05, -0.03, -0.08), (0.1, -0.2, 0.3)), k)
     return {"object": obj, "k_star": k_star, "k": k, "ref": ref, "z_star": z_star, "cur": cur, "z": z}
+
+
+def pytest_terminal_summary(terminalreporter):
+    """With VSINV_CENSUS=path, the robustness census (calls tried, returned, raised by class,
+    per API) of this session, as written by tests/test_robustness.py."""
+    import json
+    import os
+    import sys
+
+    path = os.environ.get("VSINV_CENSUS")
+    module = sys.modules.get("test_robustness")
+    if not path or module is None or not module.CENSUS:
+        return
+    terminalreporter.section("vsinv robustness census (this session)")
+    terminalreporter.write_line(module.census_table({k: dict(v) for k, v in module.CENSUS.items()}))
+    terminalreporter.write_line(f"(merged into {path}; print it with: python tests/test_robustness.py {path})")
+    del json

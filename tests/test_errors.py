@@ -212,3 +212,176 @@ def test_equal_depths_are_refused_with_what_to_do_instead(scene):
     with pytest.raises(vsinv.DegenerateGeometry, match="reference depths") as info:
         ctl.step(scene["cur"], np.full(len(scene["cur"]), 0.6))
     assert "estimated" in str(info.value)
+
+
+# Regressions found by tests/test_robustness.py ------------------------------------------------
+
+
+def test_non_finite_entries_of_2d_arrays_are_reported_by_row_and_column(scene):
+    k = scene["k"].matrix.copy()
+    k[0, 2] = np.nan  # was "K: non-finite value at index 6" (column-major storage)
+    with pytest.raises(vsinv.InvalidInput, match=r"K: non-finite value at row 0, column 2"):
+        vsinv.Intrinsics.from_matrix(k)
+    with pytest.raises(vsinv.InvalidInput, match=r"K_hat: non-finite value at row 0, column 2"):
+        vsinv.InvariantController(scene["ref"], k)
+    with pytest.raises(vsinv.InvalidInput, match=r"K: non-finite value in matrix 1, row 0, column 2"):
+        vsinv.check_stability(np.stack([scene["k"].matrix, k]), scene["k"])
+    pts = object_points()
+    pts[3, 2] = np.inf  # was "index 11"
+    with pytest.raises(vsinv.InvalidInput, match=r"points: non-finite value at row 3, column 2"):
+        vsinv.project(pts, scene["k"])
+    pose = np.eye(4)
+    pose[1, 3] = np.nan  # was "index 13"
+    with pytest.raises(vsinv.InvalidInput, match=r"pose: non-finite value at row 1, column 3"):
+        vsinv.thetau_from_pose(pose)
+    ctl = vsinv.InvariantController(scene["ref"], scene["k_star"])
+    s = ctl.reference_invariants.copy()
+    s[2, 1] = np.nan
+    with pytest.raises(vsinv.InvalidInput, match=r"s_star: non-finite value at row 2, column 1"):
+        ctl.set_reference(s)
+    with pytest.raises(vsinv.InvalidInput, match=r"rate: non-finite value at row 2, column 1"):
+        ctl.set_reference(ctl.reference_invariants, s)  # was "s_star_rate: ... index 7"
+    cur = scene["cur"].copy()
+    cur[4, 1] = np.nan  # was "pixels: non-finite value at index 8"
+    with pytest.raises(vsinv.InvalidInput, match=r"pixels: non-finite value at row 4, column 1"):
+        ctl.step_visible(cur, scene["z"], np.ones(len(cur), bool))
+
+
+@pytest.mark.parametrize("i, name", list(enumerate(["fku", "fkv", "u0", "v0", "skew"])))
+def test_non_finite_intrinsics_name_the_parameter(i, name):
+    args = [600.0, 600.0, 384.0, 288.0, np.pi / 2]
+    args[i] = np.nan
+    with pytest.raises(vsinv.InvalidInput, match=name):
+        vsinv.Intrinsics(*args)
+
+
+def test_tracking_bound_names_its_arguments():
+    for args, name in [((np.nan, 1.0, 1.0), "gain"), ((1.0, np.nan, 1.0), "sigma"), ((1.0, 1.0, np.inf), "max_b"),
+                       ((0.0, 1.0, 1.0), "gain"), ((1.0, 1.0, -1.0), "max_b")]:
+        with pytest.raises(vsinv.InvalidInput, match=name):
+            vsinv.tracking_bound(*args)
+    with pytest.raises(vsinv.InvalidInput, match="kappa"):
+        vsinv.check_stability(lens(600.0), lens(600.0), kappa=np.nan)
+
+
+def test_out_of_range_integers_raise_invalid_input_naming_the_argument(scene):
+    image = np.zeros((20, 20), np.uint8)
+    image[5:9, 5:9] = 200
+    for kwargs, name in [({"threshold": 300}, "threshold"), ({"threshold": -1}, "threshold"),
+                         ({"min_area": -1}, "min_area"), ({"max_area": -1}, "max_area"), ({"max_area": 2**70}, "max_area")]:
+        with pytest.raises(vsinv.InvalidInput, match=name):  # was OverflowError
+            vsinv.detect_dots(image, **kwargs)
+    with pytest.raises(vsinv.InvalidInput, match="min_area"):
+        vsinv.DotTracker(image, [[7.0, 7.0]], min_area=-4)
+    with pytest.raises(vsinv.InvalidInput, match="max_iter"):
+        vsinv.undistort_points(scene["cur"], scene["k"], [0.1, 0.0, 0.0, 0.0], max_iter=-1)
+    for threads in (-1, 2**31, 2**70):  # 2**31 used to start that many threads
+        with pytest.raises(vsinv.InvalidInput, match="threads"):
+            vsinv.run_batch([], threads=threads)
+    with pytest.raises(TypeError, match="progress"):
+        vsinv.run_scenario("lens-12-12", progress="abc")
+
+
+@pytest.mark.parametrize("bad", [(1.0, 2.0), (1.0, 2.0, 3.0, 4.0)])
+def test_adaptive_gain_of_the_wrong_length(scene, bad):
+    for cls in (vsinv.InvariantController, vsinv.IbvsController):
+        with pytest.raises(vsinv.InvalidInput, match="adaptive_gain"):  # was ValueError
+            cls(scene["ref"], scene["k"], adaptive_gain=bad)
+
+
+def test_overflowing_results_raise_instead_of_returning_nan(scene):
+    with pytest.raises(vsinv.InvalidInput, match="twist"):
+        vsinv.exp_twist(np.ones(6), 1e300)
+    with pytest.raises(vsinv.InvalidInput, match="thetau"):
+        vsinv.pose_from_position_thetau([0.0, 0.0, 0.0], [1e300, 0.0, 0.0])
+    huge = scene["cur"] * 1e300
+    with pytest.raises(vsinv.VsinvError, match="pixels"):
+        vsinv.interaction_matrix(huge, scene["z"], scene["k"])
+    with pytest.raises(vsinv.VsinvError, match="pixels"):
+        vsinv.rz_coefficients(huge, scene["z"], scene["ref"], scene["k"])
+
+
+def test_length_mismatches_name_the_arguments(scene):
+    with pytest.raises(vsinv.InvalidInput, match="reference_depths"):
+        vsinv.IbvsController(scene["ref"], scene["k"], reference_depths=scene["z_star"][:5])
+    with pytest.raises(vsinv.InvalidInput, match="first_depths.*first_pixels"):
+        vsinv.ResectionDepths(scene["cur"][:0], scene["z"], scene["ref"])
+    with pytest.raises(vsinv.InvalidInput, match="second_pixels.*first_pixels"):
+        vsinv.depths_from_translation(scene["cur"][:0], scene["cur"])
+
+
+def test_resection_visibility_is_a_bool_array_like_step_visible(scene):
+    est = vsinv.ResectionDepths(scene["cur"], scene["z"], scene["ref"])
+    n = len(scene["cur"])
+    a = est.estimate(scene["cur"], np.ones(n, bool))
+    np.testing.assert_allclose(a, est.estimate(scene["cur"], [True] * n))
+    for bad in ("abc", np.ones(n, int), np.ones(n - 1, bool)):
+        with pytest.raises(vsinv.InvalidInput, match="visible"):  # "abc" was a TypeError
+            est.estimate(scene["cur"], bad)
+
+
+def test_bytes_paths_and_geometry_failures_of_depths_from_translation(scene):
+    with pytest.raises(vsinv.InvalidInput, match="neither a scenario file"):
+        vsinv.load_scenario(b"/nonexistent.toml")  # was TypeError
+    assert vsinv.load_scenario(b"lens-12-12").name == "lens-12-12"
+    flipped = scene["cur"].copy()
+    with pytest.raises(vsinv.VsinvError, match="first_pixels|second_pixels") as info:
+        vsinv.depths_from_translation(scene["ref"], flipped[::-1])
+    assert "depth_estimation" not in str(info.value)
+
+
+def test_sweep_helpers_refuse_bad_input_with_invalid_input():
+    from vsinv.sweep import Choice, LogUniform, Uniform, noise_seeds, rotation_from_thetau, thetau_from_rotation
+
+    for seed, points in [(-1, [0]), (0, [-1]), (0, [np.nan]), (0, [[1], [2, 3]]), (0, ["a"])]:
+        with pytest.raises(vsinv.InvalidInput):
+            noise_seeds(seed, points, np.zeros(len(points), int) if points and not isinstance(points[0], list) else [0])
+    assert noise_seeds(np.int64(7), [0, 1], [0, 0]).tolist() == noise_seeds(7, [0, 1], [0, 0]).tolist()  # was OverflowError
+    for bad in ([np.nan, 0.0, 0.0], "abc", [1e300, 1e300, 0.0], [1.0, 2.0]):
+        with pytest.raises(vsinv.InvalidInput, match="thetau"):  # NaN matrices or ValueError before
+            rotation_from_thetau(bad)
+    with pytest.raises(vsinv.InvalidInput, match="rot"):
+        thetau_from_rotation(np.full((3, 3), np.nan))
+    s = Uniform(-1e308, 1e308).sample(np.random.default_rng(0), 100)  # was OverflowError
+    assert np.isfinite(s).all() and (np.abs(s) <= 1e308).all()
+    s = LogUniform(1e300, 1e300).sample(np.random.default_rng(0), 10)  # rounded past hi before
+    assert (s == 1e300).all()
+    with pytest.raises(vsinv.InvalidInput, match="Choice"):
+        Choice(None)
+
+
+def test_summary_by_an_unknown_column_raises_invalid_input():
+    from vsinv.sweep import SweepResult
+
+    res = SweepResult(columns={"repeat": np.array([0]), "status": np.array(["converged"])})
+    with pytest.raises(vsinv.InvalidInput, match="nope"):  # was KeyError
+        res.summary_by("nope")
+
+
+def test_a_huge_search_radius_does_not_rescan_the_image_for_ever():
+    import time
+
+    image = np.zeros((120, 160), np.uint8)
+    image[40:46, 60:66] = 220
+    tracker = vsinv.DotTracker(image, [[62.0, 42.0]], max_search_radius=1e300)
+    t0 = time.perf_counter()
+    pixels, found = tracker.track(np.zeros_like(image))  # the dot is gone: search the whole image once
+    assert time.perf_counter() - t0 < 1.0  # took ~1000 full-image scans before
+    assert not found[0]
+
+
+def test_more_regressions(scene):
+    out = vsinv.run_batch([])
+    assert out["status"].dtype.kind == "U" and out["message"].dtype.kind == "U"  # float64 when empty before
+    base = vsinv.load_scenario("lens-12-12").to_dict()
+    with pytest.raises(vsinv.InvalidInput, match="repeats"):  # was NumPy's ValueError
+        vsinv.run_sweep(base, {"control.gain": [1.0]}, repeats=2**70, progress=False)
+    base["object"]["points"][7][1] = 2.0**70
+    once = vsinv.Scenario.from_dict(base).to_dict()
+    assert vsinv.Scenario.from_dict(once).to_dict() == once  # JSON floats lost an ulp before
+    with pytest.raises(vsinv.InvalidInput, match="reference_depths: non-finite value at index 3"):
+        vsinv.IbvsController(scene["ref"], scene["k"], reference_depths=np.where(np.arange(12) == 3, np.nan, 1.0))
+    bad = scene["cur"].copy()
+    bad[0, 0] = np.nan
+    with pytest.raises(vsinv.InvalidInput, match="first_pixels: non-finite value at row 0, column 0"):
+        vsinv.depths_from_translation(bad, scene["cur"])  # said "first image" before

@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix2, Matrix2x6, Matrix3, Point3, Vector3};
 
-use crate::error::{Error, Result, check_finite, check_finite_rows};
+use crate::error::{Error, Result, check_finite_matrix, check_finite_rows};
 
 /// Intrinsic parameters of eq. (4): `f ku`, `f kv` (pixels), principal point `(u0, v0)`
 /// (pixels) and the angle `theta` between the image axes (radians, `pi/2` for square pixels).
@@ -25,8 +25,11 @@ pub struct Intrinsics {
 impl Intrinsics {
     /// Validated intrinsics: all finite, `fku > 0`, `fkv > 0`, `0 < theta < pi`.
     pub fn new(fku: f64, fkv: f64, u0: f64, v0: f64, theta: f64) -> Result<Self> {
-        check_finite("intrinsics", &[fku, fkv, u0, v0, theta])
-            .map_err(|_| Error::InvalidIntrinsics { reason: "non-finite value".into() })?;
+        for (name, value) in [("fku", fku), ("fkv", fkv), ("u0", u0), ("v0", v0), ("skew", theta)] {
+            if !value.is_finite() {
+                return Err(Error::InvalidIntrinsics { reason: format!("{name} must be finite, got {value}") });
+            }
+        }
         if fku <= 0.0 || fkv <= 0.0 {
             return Err(Error::InvalidIntrinsics {
                 reason: format!("focal terms must be > 0, got fku = {fku}, fkv = {fkv}"),
@@ -52,8 +55,7 @@ impl Intrinsics {
 
     /// Reads eq. (4) back from a 3x3 matrix; the inverse of [`Intrinsics::matrix`].
     pub fn from_matrix(k: &Matrix3<f64>) -> Result<Self> {
-        check_finite("K", k.as_slice())
-            .map_err(|_| Error::InvalidIntrinsics { reason: "non-finite entry in K".into() })?;
+        check_finite_matrix("K", k)?;
         if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
             return Err(Error::InvalidIntrinsics {
                 reason: format!(

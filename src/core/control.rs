@@ -254,9 +254,9 @@ impl InvariantController {
         }
         if let Some(r) = rate {
             if r.len() != m {
-                return Err(shape("s_star_rate", r.len()));
+                return Err(shape("rate", r.len()));
             }
-            check_finite_rows("s_star_rate", r)?;
+            check_finite_rows("rate", r)?;
         }
         for (j, q) in s_star.iter().enumerate() {
             self.s_star[j] = Vector3::from(*q);

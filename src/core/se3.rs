@@ -7,7 +7,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, check_finite_matrix};
 
 fn skew(w: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -w.z, w.y, w.z, 0.0, -w.x, -w.y, w.x, 0.0)
@@ -55,7 +55,7 @@ pub fn pose_to_matrix(pose: &Isometry3<f64>) -> Matrix4<f64> {
 /// A pose from a 4x4 homogeneous matrix; the rotation block must be orthonormal (1e-6) with
 /// determinant +1 and the last row (0, 0, 0, 1).
 pub fn pose_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
-    check_finite("pose", m.as_slice())?;
+    check_finite_matrix("pose", m)?;
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
     let orth = (r.transpose() * r - Matrix3::identity()).abs().max();
     let last = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)]];

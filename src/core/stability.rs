@@ -7,12 +7,12 @@
 use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
 
 use crate::core::camera::f_of_matrix;
-use crate::error::{Error, Result, check_finite, check_overflow};
+use crate::error::{Error, Result, check_finite, check_finite_matrix, check_overflow};
 
 /// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
 /// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
 pub fn check_upper_triangular(what: &'static str, k: &Matrix3<f64>) -> Result<()> {
-    check_finite(what, k.as_slice())?;
+    check_finite_matrix(what, k)?;
     if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
         return Err(Error::InvalidIntrinsics {
             reason: format!("{what} must be upper triangular with last row (0, 0, 1)"),
@@ -73,9 +73,14 @@ impl StabilityReport {
 
 /// Prop. 3 bound `psi / phi = 2 max_b / (lambda sigma)` (eq. 20); infinite if `sigma <= 0`.
 pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
-    check_finite("tracking_bound inputs", &[gain, sigma, max_b])?;
-    if gain <= 0.0 || max_b < 0.0 {
-        return Err(Error::InvalidParameter { name: "tracking_bound", reason: "needs gain > 0 and max_b >= 0".into() });
+    check_finite("gain", &[gain])?;
+    check_finite("sigma", &[sigma])?;
+    check_finite("max_b", &[max_b])?;
+    if gain <= 0.0 {
+        return Err(Error::InvalidParameter { name: "gain", reason: format!("must be > 0, got {gain}") });
+    }
+    if max_b < 0.0 {
+        return Err(Error::InvalidParameter { name: "max_b", reason: format!("must be >= 0, got {max_b}") });
     }
     if !(sigma > 0.0) {
         return Ok(f64::INFINITY);
@@ -94,7 +99,8 @@ pub fn stability_verdicts(
     kappa: f64,
     gain: f64,
 ) -> Result<(bool, bool, f64)> {
-    check_finite("gain", &[gain, kappa])?;
+    check_finite("gain", &[gain])?;
+    check_finite("kappa", &[kappa])?;
     let mut sigma = f64::INFINITY;
     for k in k_schedule {
         let a = a_matrix(k, k_hat, kappa)?;

@@ -113,6 +113,16 @@ pub fn bool_array<'py>(obj: &Bound<'py, PyAny>, what: &str, n: usize) -> PyResul
     Ok(BoolArray { array })
 }
 
+/// Refuses an output with NaN or infinity: finite inputs whose result overflows float64
+/// (pixels or depths near 1e300) raise `InvalidInput` naming the inputs, never return NaN.
+pub fn finite_out(inputs: &str, values: &[f64]) -> PyResult<()> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(invalid_input(format!("{inputs}: the result is not finite (values too large or too small for float64)")))
+    }
+}
+
 /// `(n, 2)` pixel array as `[[f64; 2]]` without copying.
 pub fn points2<'a>(a: &'a F64Array<'_>) -> PyResult<&'a [[f64; 2]]> {
     let (chunks, _) = a.as_slice()?.as_chunks::<2>();

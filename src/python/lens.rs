@@ -81,6 +81,7 @@ fn run_points<'py>(
     f: impl FnOnce(&[[f64; 2]]) -> crate::Result<Vec<[f64; 2]>> + Send,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let out = if px.len() >= DETACH_MIN_POINTS { py.detach(|| f(px)) } else { f(px) }.map_err(to_py)?;
+    super::arrays::finite_out("pixels, K, distortion", out.as_flattened())?;
     mat(py, out.len(), 2, out.into_flattened())
 }
 
@@ -110,7 +111,7 @@ pub fn undistort_points<'py>(
     K: &Bound<'py, PyAny>,
     distortion: &Bound<'py, PyAny>,
     tol: f64,
-    max_iter: usize,
+    #[pyo3(from_py_with = super::args::max_iter)] max_iter: usize,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let a = pixels_arg(pixels, "pixels")?;
     let k = intrinsics(K, "K")?;

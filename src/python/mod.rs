@@ -2,6 +2,7 @@
 //! wrappers that read NumPy arrays in place, call the core and map errors to the package's
 //! exception hierarchy; no panic crosses into Python.
 
+mod args;
 mod arrays;
 mod errors;
 mod lens;
@@ -15,7 +16,7 @@ use numpy::{Complex64, PyArray1, PyArray2, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyString, PyType};
 
-use arrays::{F64Array, bool_array, f64_array, from_matrix, mat, points2, points3, vec1};
+use arrays::{F64Array, bool_array, f64_array, finite_out, from_matrix, mat, points2, points3, vec1};
 use errors::{invalid_input, to_py};
 
 use crate::core::adaptive_gain::AdaptiveGain;
@@ -173,7 +174,7 @@ fn interaction_name(i: Interaction) -> &'static str {
 fn matrix3(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Matrix3<f64>> {
     let a = f64_array(obj, what, &[Some(3), Some(3)])?;
     let m = Matrix3::from_row_slice(a.as_slice()?);
-    crate::error::check_finite(what, m.as_slice()).map_err(to_py)?;
+    crate::error::check_finite_matrix(what, &m).map_err(to_py)?;
     Ok(m)
 }
 
@@ -204,6 +205,7 @@ fn project<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, K: &Bound<'py, PyAn
     let pts = f64_array(points, "points", &[None, Some(3)])?;
     let k = intrinsics(K, "K")?;
     let (px, z) = crate::core::camera::project_points(points3(&pts)?, &k).map_err(to_py)?;
+    finite_out("points, K", px.as_flattened())?;
     Ok((mat(py, px.len(), 2, px.into_flattened())?, PyArray1::from_vec(py, z)))
 }
 
@@ -218,6 +220,7 @@ fn invariant_points<'py>(
     let a = pixels_arg(pixels, "pixels")?;
     let px = points2(&a)?;
     let q = crate::core::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
+    finite_out("pixels", q.as_flattened())?;
     mat(py, q.len(), 3, q.into_flattened())
 }
 
@@ -236,6 +239,7 @@ fn invariant_jacobian<'py>(
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
     let j = crate::core::jacobian::invariant_jacobian(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    finite_out("pixels, depths, K", j.as_slice())?;
     from_matrix(py, &j)
 }
 
@@ -252,6 +256,7 @@ fn interaction_matrix<'py>(
     let (px, z) = (points2(&a)?, z.as_slice()?);
     let k = intrinsics(K, "K")?;
     let ls = crate::core::camera::pixel_interactions(px, z, &k).map_err(to_py)?;
+    finite_out("pixels, depths, K", &ls.iter().flat_map(|l| l.iter().copied()).collect::<Vec<f64>>())?;
     let flat: Vec<f64> = ls.iter().flat_map(|l| (0..2).flat_map(move |r| (0..6).map(move |c| l[(r, c)]))).collect();
     PyArray1::from_vec(py, flat).reshape([ls.len(), 2, 6])
 }
@@ -268,6 +273,8 @@ fn jacobian_factors<'py>(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let (phi, psi) = crate::core::jacobian::jacobian_factors(px, z.as_slice()?, basis.resolve(px)?).map_err(to_py)?;
+    finite_out("pixels, depths", phi.as_slice())?;
+    finite_out("pixels, depths", psi.as_slice())?;
     Ok((from_matrix(py, &phi)?, from_matrix(py, &psi)?))
 }
 
@@ -289,6 +296,8 @@ fn rz_coefficients<'py>(
     let k = intrinsics(K, "K")?;
     let (coef_a, c) =
         crate::core::jacobian::rz_coefficients(px, z.as_slice()?, rpx, &k, basis.resolve(rpx)?).map_err(to_py)?;
+    finite_out("pixels, depths, reference_pixels, K", &[coef_a])?;
+    finite_out("pixels, depths, reference_pixels, K", c.as_slice())?;
     Ok((coef_a, vec1(py, c.as_slice())))
 }
 
@@ -305,7 +314,9 @@ fn structure_ratio(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
-    crate::core::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)
+    let r = crate::core::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    finite_out("pixels, depths, K", &[r])?;
+    Ok(r)
 }
 
 /// Three points well spread in the image (the widest triangle), sorted.
@@ -325,6 +336,7 @@ fn step_controller<'py, C: Controller>(
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let tw = ctl.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
+    finite_out("pixels, depths", tw.as_slice())?;
     Ok(vec1(py, tw.as_slice()))
 }
 
@@ -340,6 +352,7 @@ fn step_controller_visible<'py, C: Controller>(
     let px = points2(&a)?;
     let v = bool_array(visible, "visible", px.len())?;
     let tw = ctl.step_visible(px, z.as_slice()?, v.as_slice()?).map_err(to_py)?;
+    finite_out("pixels, depths", tw.as_slice())?;
     Ok(vec1(py, tw.as_slice()))
 }
 
@@ -383,7 +396,7 @@ impl PyInvariantController {
         feedforward: bool,
         min_structure_ratio: f64,
         rz_task: &str,
-        adaptive_gain: Option<(f64, f64, f64)>,
+        #[pyo3(from_py_with = args::adaptive_gain)] adaptive_gain: Option<(f64, f64, f64)>,
         max_linear_speed: Option<f64>,
         max_angular_speed: Option<f64>,
     ) -> PyResult<Self> {
@@ -614,7 +627,7 @@ impl PyIbvsController {
         gain: f64,
         interaction: &str,
         reference_depths: Option<&Bound<'_, PyAny>>,
-        adaptive_gain: Option<(f64, f64, f64)>,
+        #[pyo3(from_py_with = args::adaptive_gain)] adaptive_gain: Option<(f64, f64, f64)>,
         max_linear_speed: Option<f64>,
         max_angular_speed: Option<f64>,
     ) -> PyResult<Self> {
@@ -622,6 +635,18 @@ impl PyIbvsController {
         let k_hat = intrinsics(K_hat, "K_hat")?;
         let kind: Interaction = interaction.parse().map_err(to_py)?;
         let z = reference_depths.map(|z| f64_array(z, "reference_depths", &[None])).transpose()?;
+        if let Some(z) = &z {
+            crate::error::check_finite("reference_depths", z.as_slice()?).map_err(to_py)?;
+        }
+        if let Some(z) = &z
+            && z.shape()[0] != a.shape()[0]
+        {
+            return Err(invalid_input(format!(
+                "reference_depths: expected {} values (one per reference pixel), got {}",
+                a.shape()[0],
+                z.shape()[0]
+            )));
+        }
         let z_slice = match &z {
             Some(z) => Some(z.as_slice()?),
             None => None,
@@ -763,13 +788,27 @@ fn k_schedule(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<Matrix3<f64>>, bool)> {
     if let Ok(list) = obj.cast::<pyo3::types::PyList>()
         && list.iter().any(|x| x.cast::<PyIntrinsics>().is_ok())
     {
-        let ks = list.iter().map(|x| intrinsics(&x, "K").map(|k| k.matrix())).collect::<PyResult<_>>()?;
+        let ks = list
+            .iter()
+            .enumerate()
+            .map(|(m, x)| {
+                intrinsics(&x, "K")
+                    .map(|k| k.matrix())
+                    .map_err(|e| invalid_input(format!("K: matrix {m}: {}", e.value(x.py()))))
+            })
+            .collect::<PyResult<_>>()?;
         return Ok((ks, false));
     }
     let a = f64_array(obj, "K", &[None, Some(3), Some(3)]).or_else(|_| f64_array(obj, "K", &[Some(3), Some(3)]));
     let a =
         a.map_err(|_| invalid_input("K: expected an Intrinsics, a (3, 3) array or an (m, 3, 3) schedule".into()))?;
     let single = a.shape().len() == 2;
+    for (m, k) in a.as_slice()?.chunks_exact(9).enumerate() {
+        if let Some(i) = k.iter().position(|x| !x.is_finite()) {
+            let at = if single { "at ".to_string() } else { format!("in matrix {m}, ") };
+            return Err(invalid_input(format!("K: non-finite value {at}row {}, column {}", i / 3, i % 3)));
+        }
+    }
     let ks = a.as_slice()?.chunks_exact(9).map(Matrix3::from_row_slice).collect();
     Ok((ks, single))
 }

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, mat, points2, vec1};
+use super::arrays::{bool_array, f64_array, mat, points2, vec1};
 use super::errors::{invalid_input, to_py};
 use super::{BasisArg, pixels_arg};
 use crate::core::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
@@ -152,7 +152,22 @@ pub fn depths_from_translation<'py>(
     second_pixels: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
     let (a, b) = (pixels_arg(first_pixels, "first_pixels")?, pixels_arg(second_pixels, "second_pixels")?);
-    let d = core_depths_from_translation(points2(&a)?, points2(&b)?).map_err(to_py)?;
+    crate::error::check_finite_points("first_pixels", points2(&a)?).map_err(to_py)?;
+    crate::error::check_finite_points("second_pixels", points2(&b)?).map_err(to_py)?;
+    if a.shape()[0] != b.shape()[0] {
+        return Err(invalid_input(format!(
+            "second_pixels has {} points, first_pixels {}: one per point of the first image",
+            b.shape()[0],
+            a.shape()[0]
+        )));
+    }
+    let d = core_depths_from_translation(points2(&a)?, points2(&b)?).map_err(|e| match e {
+        crate::Error::InvalidParameter { name: "depth_estimation", reason } => {
+            invalid_input(format!("first_pixels, second_pixels: {reason}"))
+        }
+        e => to_py(e),
+    })?;
+    super::arrays::finite_out("first_pixels, second_pixels", &d.depths)?;
     Ok((PyArray1::from_vec(py, d.depths), vec1(py, d.epipole.as_slice()), d.residual))
 }
 
@@ -180,6 +195,13 @@ impl PyResectionDepths {
         let (first, reference) = (points2(&a)?, points2(&r)?);
         crate::error::check_finite_points("first_pixels", first).map_err(to_py)?;
         crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
+        if z.shape()[0] != first.len() {
+            return Err(invalid_input(format!(
+                "first_depths: expected {} values (one per row of first_pixels), got {}",
+                first.len(),
+                z.shape()[0]
+            )));
+        }
         crate::error::check_depths(z.as_slice()?, first.len()).map_err(to_py)?;
         let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth).map_err(to_py)?;
         Ok(Self { inner, n: first.len() })
@@ -192,19 +214,19 @@ impl PyResectionDepths {
         &mut self,
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
-        visible: Option<Vec<bool>>,
+        visible: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let a = pixels_arg(pixels, "pixels")?;
         let px = points2(&a)?;
-        let visible = visible.unwrap_or_else(|| vec![true; self.n]);
-        if px.len() != self.n || visible.len() != self.n {
-            return Err(invalid_input(format!(
-                "expected {} pixels and visibility flags, got {} and {}",
-                self.n,
-                px.len(),
-                visible.len()
-            )));
+        if px.len() != self.n {
+            return Err(invalid_input(format!("pixels: expected {} points, got {}", self.n, px.len())));
         }
+        let flags = visible.map(|v| bool_array(v, "visible", self.n)).transpose()?;
+        let all = vec![true; self.n];
+        let visible = match &flags {
+            Some(f) => f.as_slice()?,
+            None => all.as_slice(),
+        };
         for (i, p) in px.iter().enumerate() {
             if visible[i] && !(p[0].is_finite() && p[1].is_finite()) {
                 return Err(to_py(crate::Error::NonFinitePoint {
@@ -215,7 +237,8 @@ impl PyResectionDepths {
             }
         }
         let mut out = vec![0.0; self.n];
-        self.inner.estimate(px, &visible, &mut out).map_err(to_py)?;
+        self.inner.estimate(px, visible, &mut out).map_err(to_py)?;
+        super::arrays::finite_out("pixels", &out)?;
         Ok(PyArray1::from_vec(py, out))
     }
 }

@@ -6,14 +6,13 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{f64_array, from_matrix, vec1};
-use super::errors::to_py;
+use super::errors::{invalid_input, to_py};
 use crate::core::se3;
 use crate::error::check_finite;
 
 fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<[f64; N]> {
     let a = f64_array(obj, what, &[Some(N)])?;
-    let v: [f64; N] =
-        a.as_slice()?.try_into().map_err(|_| super::errors::invalid_input(format!("{what}: expected {N} values")))?;
+    let v: [f64; N] = a.as_slice()?.try_into().map_err(|_| invalid_input(format!("{what}: expected {N} values")))?;
     check_finite(what, &v).map_err(to_py)?;
     Ok(v)
 }
@@ -25,7 +24,11 @@ fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResul
 pub fn exp_twist<'py>(py: Python<'py>, twist: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let t: [f64; 6] = vector(twist, "twist")?;
     check_finite("dt", &[dt]).map_err(to_py)?;
-    from_matrix(py, &se3::exp_twist(&t.map(|x| x * dt)).to_homogeneous())
+    let m = se3::exp_twist(&t.map(|x| x * dt)).to_homogeneous();
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err(invalid_input(format!("twist, dt: the motion twist * dt overflows (twist {t:?}, dt {dt})")));
+    }
+    from_matrix(py, &m)
 }
 
 /// The 4x4 pose with camera centre `position` (metres, F*) and theta-u rotation `thetau`
@@ -36,8 +39,12 @@ pub fn pose_from_position_thetau<'py>(
     position: &Bound<'py, PyAny>,
     thetau: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let pose = se3::pose_from_position_thetau(vector(position, "position")?, vector(thetau, "thetau")?);
-    from_matrix(py, &pose.to_homogeneous())
+    let (position, thetau) = (vector(position, "position")?, vector(thetau, "thetau")?);
+    let m = se3::pose_from_position_thetau(position, thetau).to_homogeneous();
+    if !m.iter().all(|x| x.is_finite()) {
+        return Err(invalid_input(format!("thetau: rotation angle too large to represent, got {thetau:?}")));
+    }
+    from_matrix(py, &m)
 }
 
 /// `(position (3,), thetau (3,))` of a 4x4 pose: the camera centre and the theta-u rotation

@@ -77,10 +77,9 @@ pub fn scenario_arg(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
     let text: String = if obj.cast::<PyString>().is_ok() {
         obj.extract()?
     } else {
-        py.import("os")?
-            .call_method1("fspath", (obj,))
-            .map_err(|_| invalid_input("scenario: expected a Scenario, a dict, a built-in name or a file path".into()))?
-            .extract()?
+        py.import("os")?.call_method1("fsdecode", (obj,)).and_then(|p| p.extract()).map_err(|_| {
+            invalid_input("scenario: expected a Scenario, a dict, a built-in name or a file path".into())
+        })?
     };
     if BUILTIN.iter().any(|(n, _)| *n == text) {
         return builtin(&text).map_err(to_py);
@@ -259,6 +258,14 @@ pub fn run_scenario(
     record: bool,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<PyRunResult> {
+    if let Some(cb) = &progress
+        && !cb.bind(py).is_callable()
+    {
+        let kind = cb.bind(py).get_type().name()?.to_string();
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "progress: expected a callable progress(done, total) or None, got {kind}"
+        )));
+    }
     let scenario = scenario_arg(scenario)?;
     let mut config = scenario.to_config().map_err(to_py)?;
     config.record = record;
@@ -346,7 +353,7 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 pub fn run_batch<'py>(
     py: Python<'py>,
     scenarios: &Bound<'py, PyAny>,
-    threads: Option<usize>,
+    #[pyo3(from_py_with = super::args::threads)] threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     // Dictionaries become JSON here (the GIL is needed); parsing, validation and the runs
     // happen in parallel with the GIL released.
@@ -413,7 +420,12 @@ pub fn run_batch<'py>(
     }
     let np = py.import("numpy")?;
     let d = PyDict::new(py);
-    d.set_item("status", np.call_method1("array", (status,))?)?;
+    let str_array = |v: Vec<String>| -> PyResult<Bound<'py, PyAny>> {
+        let kwargs = PyDict::new(py);
+        kwargs.set_item("dtype", "str")?;
+        np.call_method("array", (v,), Some(&kwargs))
+    };
+    d.set_item("status", str_array(status)?)?;
     d.set_item("iterations", PyArray1::from_vec(py, iterations))?;
     let names = [
         "final_translation_error_mm",
@@ -428,6 +440,6 @@ pub fn run_batch<'py>(
     }
     d.set_item("prop1", PyArray1::from_vec(py, prop1))?;
     d.set_item("prop2", PyArray1::from_vec(py, prop2))?;
-    d.set_item("message", np.call_method1("array", (message,))?)?;
+    d.set_item("message", str_array(message)?)?;
     Ok(d)
 }

@@ -159,9 +159,9 @@ fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
 pub fn detect_dots(
     py: Python<'_>,
     image: &Bound<'_, PyAny>,
-    threshold: Option<u8>,
-    min_area: usize,
-    max_area: Option<usize>,
+    #[pyo3(from_py_with = super::args::threshold)] threshold: Option<u8>,
+    #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
+    #[pyo3(from_py_with = super::args::max_area)] max_area: Option<usize>,
 ) -> PyResult<PyDots> {
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
@@ -189,7 +189,7 @@ impl PyDotTracker {
         initial_pixels: &Bound<'_, PyAny>,
         search_radius: f64,
         max_search_radius: f64,
-        min_area: usize,
+        #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
     ) -> PyResult<Self> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;

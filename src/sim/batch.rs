@@ -41,6 +41,9 @@ fn run_one(c: &SimulationConfig) -> Result<Summary> {
     simulate(&c, &mut |_, _| true).map(|o| o.summary)
 }
 
+/// The most worker threads a batch may ask for (each is an OS thread with its own stack).
+pub const MAX_THREADS: usize = 1024;
+
 /// The worker pool for `threads` (None: one thread per core). Pools are kept and reused, one
 /// per thread count: starting threads on every call costs their start-up and, with glibc,
 /// fresh malloc arenas that keep the process's memory growing over the first thousands of
@@ -49,6 +52,14 @@ fn pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>> {
     static POOLS: Mutex<Vec<(Option<usize>, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
     if threads == Some(0) {
         return Err(Error::InvalidParameter { name: "threads", reason: "must be >= 1".into() });
+    }
+    if let Some(n) = threads
+        && n > MAX_THREADS
+    {
+        return Err(Error::InvalidParameter {
+            name: "threads",
+            reason: format!("must be at most {MAX_THREADS}, got {n}"),
+        });
     }
     let mut pools = POOLS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
     if let Some((_, p)) = pools.iter().find(|(n, _)| *n == threads) {

@@ -143,7 +143,11 @@ impl DotTracker {
                 .into_iter()
                 .filter(|c| c.area <= dot.area * ratio && c.area * ratio >= dot.area)
                 .min_by(|a, b| distance(a.centroid, dot.predicted).total_cmp(&distance(b.centroid, dot.predicted)));
-            if best.is_some() || radius >= self.config.max_search_radius {
+            // A window that already covers the image cannot grow: stop (a huge max_search_radius
+            // would otherwise rescan the whole image about log2(radius) times).
+            let whole =
+                window.u0 == 0 && window.v0 == 0 && window.u1 + 1 >= image.width() && window.v1 + 1 >= image.height();
+            if best.is_some() || radius >= self.config.max_search_radius || whole {
                 return best;
             }
             radius = (2.0 * radius).min(self.config.max_search_radius);

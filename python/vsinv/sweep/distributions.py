@@ -44,7 +44,11 @@ class Uniform(Distribution):
             raise InvalidInput(f"Uniform: hi ({self.hi}) < lo ({self.lo})")
 
     def sample(self, rng: np.random.Generator, n: int) -> Column:
-        return rng.uniform(float(self.lo), float(self.hi), size=n)
+        lo, hi = float(self.lo), float(self.hi)
+        if math.isinf(hi - lo):  # the width overflows: lo (1 - u) + hi u has no term beyond lo or hi
+            u = rng.random(size=n)
+            return lo * (1.0 - u) + hi * u
+        return rng.uniform(lo, hi, size=n)
 
     def bounds(self) -> list[Any]:
         return [float(self.lo), float(self.hi)]
@@ -63,7 +67,8 @@ class LogUniform(Distribution):
             raise InvalidInput(f"LogUniform: needs 0 < lo <= hi, got lo={self.lo}, hi={self.hi}")
 
     def sample(self, rng: np.random.Generator, n: int) -> Column:
-        return np.exp(rng.uniform(math.log(self.lo), math.log(self.hi), size=n))
+        lo, hi = float(self.lo), float(self.hi)
+        return np.clip(np.exp(rng.uniform(math.log(lo), math.log(hi), size=n)), lo, hi)  # exp(log(x)) may round past x
 
     def bounds(self) -> list[Any]:
         return [float(self.lo), float(self.hi)]
@@ -76,6 +81,8 @@ class Choice(Distribution):
     values: tuple[Any, ...]
 
     def __init__(self, values: Iterable[Any]) -> None:
+        if isinstance(values, (str, bytes)) or not isinstance(values, (Iterable, np.ndarray)):
+            raise InvalidInput(f"Choice: values must be a sequence, got {type(values).__name__}")
         vals = tuple(_native(v) for v in values)
         if not vals:
             raise InvalidInput("Choice: needs at least one value")

@@ -112,6 +112,8 @@ def run_sweep(
     - ``progress``: a tqdm bar over runs (None: when stderr is a terminal).
     """
     t0 = time.perf_counter()
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 1024):
+        raise InvalidInput(f"threads: expected None or an integer from 1 to 1024, got {threads!r}")
     plan = _plan(base, vary, repeats, draws, seed)
     n = len(plan)
     workers = _executor_workers(executor, threads)

@@ -128,9 +128,30 @@ def _skew(w: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
+def _real_array(value: npt.ArrayLike, name: str, shape: tuple[int, ...]) -> npt.NDArray[np.float64]:
+    """``value`` as a finite float array of ``shape`` (InvalidInput naming ``name`` otherwise)."""
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInput(f"{name}: cannot be read as an array ({exc})") from exc
+    if a.dtype.kind not in "biuf":
+        raise InvalidInput(f"{name}: expected real numbers, got dtype {a.dtype}")
+    if a.size != math.prod(shape):
+        raise InvalidInput(f"{name}: expected shape {shape}, got {a.shape}")
+    a = a.astype(np.float64).reshape(shape)
+    bad = np.argwhere(~np.isfinite(a))
+    if len(bad):
+        at = bad[0]
+        where = f"index {at[0]}" if len(shape) == 1 else f"row {at[0]}, column {at[1]}"
+        raise InvalidInput(f"{name}: non-finite value at {where}")
+    return a
+
+
 def rotation_from_thetau(thetau: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """Rodrigues' formula: the rotation matrix of a theta-u vector (radians)."""
-    r = np.asarray(thetau, dtype=float).reshape(3)
+    r = _real_array(thetau, "thetau", (3,))
+    if np.abs(r).max() > 1e150 or not math.isfinite(float(np.linalg.norm(r))):
+        raise InvalidInput(f"thetau: rotation angle too large, got {r.tolist()}")
     th = float(np.linalg.norm(r))
     if th < 1e-12:
         return np.eye(3) + _skew(r)
@@ -141,7 +162,9 @@ def rotation_from_thetau(thetau: npt.ArrayLike) -> npt.NDArray[np.float64]:
 def thetau_from_rotation(rot: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The theta-u vector (radians, angle in [0, pi]) of a rotation matrix; accurate near
     0 and near pi (where the axis comes from the symmetric part)."""
-    r = np.asarray(rot, dtype=float).reshape(3, 3)
+    r = _real_array(rot, "rot", (3, 3))
+    if np.abs(r).max() > 1e6:
+        raise InvalidInput(f"rot: not a rotation matrix (entries up to {np.abs(r).max():.3g})")
     v = 0.5 * np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
     s = float(np.linalg.norm(v))
     c = 0.5 * (float(np.trace(r)) - 1.0)

@@ -3,6 +3,7 @@ with their noise seeds, checked before anything runs."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Optional, Union
@@ -16,6 +17,28 @@ from .distributions import Distribution
 from .keys import _apply, _split
 
 
+#: The most runs one sweep plans (its columns are allocated up front).
+MAX_RUNS = 2**31
+
+
+def _indices(values: npt.ArrayLike, name: str) -> npt.NDArray[np.uint64]:
+    """Non-negative integers (as uint64), InvalidInput naming ``name`` otherwise."""
+    try:
+        a = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInput(f"{name}: cannot be read as an array ({exc})") from exc
+    if a.dtype.kind not in "biuf":
+        raise InvalidInput(f"{name}: expected non-negative integers, got dtype {a.dtype}")
+    if a.dtype.kind == "f":
+        bad = ~(np.isfinite(a) & (a == np.floor(a)) & (a >= 0) & (a < 2.0**64))
+    else:
+        bad = a < 0
+    if bad.any():
+        at = tuple(int(i) for i in np.argwhere(bad)[0])
+        raise InvalidInput(f"{name}: expected non-negative integers, got {a[at]!r} at {at}")
+    return a.astype(np.uint64)
+
+
 def _mix64(x: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint64]:
     """splitmix64's finaliser (vectorised; wraps modulo 2^64)."""
     with np.errstate(over="ignore"):
@@ -27,9 +50,12 @@ def _mix64(x: npt.NDArray[np.uint64]) -> npt.NDArray[np.uint64]:
 
 def noise_seeds(seed: int, points: npt.ArrayLike, repeats: npt.ArrayLike) -> npt.NDArray[np.int64]:
     """The noise seed of each run: a 63-bit hash of ``(seed, point index, repetition)``."""
-    p = np.asarray(points, dtype=np.uint64)
-    k = np.asarray(repeats, dtype=np.uint64)
-    s = _mix64(np.full(p.shape, np.uint64(seed % 2**64), dtype=np.uint64))
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidInput(f"seed: expected a non-negative integer, got {seed!r}")
+    p, k = _indices(points, "points"), _indices(repeats, "repeats")
+    if p.shape != k.shape:
+        raise InvalidInput(f"points and repeats: shapes differ, {p.shape} and {k.shape}")
+    s = _mix64(np.full(p.shape, np.uint64(int(seed) % 2**64), dtype=np.uint64))
     z = _mix64(_mix64(s ^ p) ^ k)
     return (z >> np.uint64(1)).astype(np.int64)
 
@@ -119,10 +145,15 @@ def _plan(
                 raise InvalidInput(f"vary key {key!r} = {v!r}: {msg}") from exc
 
     sizes = [len(c) for c in grid.values()]
-    n_grid = int(np.prod(sizes)) if sizes else 1
+    n_grid = math.prod(sizes)
     n_draws = draws if draws is not None else 1
     n_points = n_grid * n_draws
     n = n_points * repeats
+    if n > MAX_RUNS:
+        raise InvalidInput(
+            f"repeats, draws, vary: {n} runs ({n_grid} grid points x {n_draws} draws x {repeats} repeats); "
+            f"at most {MAX_RUNS} in one sweep"
+        )
     rows = np.arange(n, dtype=np.int64)
     points = rows // repeats
     rep = rows % repeats

@@ -14,6 +14,7 @@ from typing import Any, Optional, Union
 
 import numpy as np
 
+from .._core import InvalidInput
 from .columns import Column, _binned, _column, _exportable, _hashable
 
 _PathLike = Union[str, "os.PathLike[str]"]
@@ -112,7 +113,7 @@ class SweepResult:
         key_list = [keys] if isinstance(keys, str) else list(keys)
         for k in key_list:
             if k not in self.columns:
-                raise KeyError(f"summary_by: no column {k!r} (columns: {', '.join(self.columns)})")
+                raise InvalidInput(f"summary_by: keys: no column {k!r} (columns: {', '.join(self.columns)})")
         labels = [_binned(self.columns[k], bins) for k in key_list]
         groups: dict[tuple[Any, ...], list[int]] = {}
         for i, key in enumerate(zip(*labels) if labels else itertools.repeat((), len(self))):
