@@ -37,7 +37,7 @@ import vsinv
 
 STATUSES = {"converged", "max_iterations", "lost_features", "diverged", "degenerate", "rz_trap", "observed"}
 TIMEOUT_S = 30
-QUICK = ["lens-12-6", "cartesian-12-6", "occlusion", "zoom-servo", "path-500", "vision-12-6"]
+QUICK = ["lens-12-6", "lens-12-6-barrel", "cartesian-12-6", "occlusion", "zoom-servo", "path-500", "vision-12-6"]
 # Runs through images are slow: a few iterations are enough to exercise every key.
 SHORT_RUNS = {"vision-12-6": 15, "vision-12-12": 15, "vision-25-12": 15, "path-3000": 400}
 

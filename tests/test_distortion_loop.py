@@ -77,3 +77,47 @@ def test_known_distortion_converges_and_unknown_does_not() -> None:
     unknown = vsinv.run_scenario(d, record=False).summary
     assert unknown["status"] != "converged"
     assert unknown["final_translation_error_mm"] > 5.0
+
+
+BARREL_ROS_YAML = """image_width: 832
+image_height: 624
+camera_matrix: {rows: 3, cols: 3, data: [600.0, 0.0, 416.0, 0.0, 600.0, 312.0, 0.0, 0.0, 1.0]}
+distortion_model: plumb_bob
+distortion_coefficients: {rows: 1, cols: 5, data: [-0.30, 0.10, 0.0005, -0.0008, -0.02]}
+"""
+
+
+def _with_calibration(tmp_path, value: object) -> dict:
+    d = vsinv.load_scenario("lens-12-6-barrel").to_dict()
+    d["camera"] = {"calibration": value}
+    return d
+
+
+def test_a_calibration_file_in_a_camera_table_reads_like_its_numbers(tmp_path) -> None:
+    (tmp_path / "servo.yaml").write_text(BARREL_ROS_YAML)
+    d = _with_calibration(tmp_path, str(tmp_path / "servo.yaml"))
+    from_file = vsinv.run_scenario(d, record=False).summary
+    numbers = vsinv.run_scenario("lens-12-6-barrel", record=False).summary
+    assert from_file["iterations"] == numbers["iterations"]
+    assert from_file["final_translation_error_mm"] == numbers["final_translation_error_mm"]
+
+
+def test_bad_calibration_entries_name_the_key(tmp_path) -> None:
+    (tmp_path / "skewed.yaml").write_text(BARREL_ROS_YAML.replace("[600.0, 0.0, 416.0", "[600.0, 3.0, 416.0"))
+    (tmp_path / "broken.yaml").write_text("camera_matrix: [1, 2\n")
+    for value in [str(tmp_path / "missing.yaml"), str(tmp_path), str(tmp_path / "skewed.yaml"),
+                  str(tmp_path / "broken.yaml"), 3, float("nan"), [1.0]]:
+        try:
+            vsinv.load_scenario(_with_calibration(tmp_path, value))
+        except vsinv.InvalidInput as e:
+            assert "camera.calibration" in str(e), (value, str(e))
+        else:
+            raise AssertionError(f"calibration = {value!r} was accepted")
+    d = _with_calibration(tmp_path, str(tmp_path / "missing.yaml"))
+    d["camera"]["fku"] = 600.0
+    try:
+        vsinv.load_scenario(d)
+    except vsinv.InvalidInput as e:
+        assert "camera.fku" in str(e) and "calibration" in str(e)
+    else:
+        raise AssertionError("fku with calibration was accepted")

@@ -1611,9 +1611,7 @@ def test_run_sweep(tmp_path_factory: Any, data: Any) -> None:
             kw["threads"] = None
         elif extra == "chunk_size" and bad in (None, 2**70):
             kw["chunk_size"] = bad  # None: the default; a chunk larger than the sweep is fine
-        elif extra == "threads" and bad is True:
-            kw["threads"] = True  # an int: one thread
-        else:
+        else:  # threads=True too: a bool is not a thread count
             kw[extra] = bad
             expect, names = INVALID, (extra,)
             if extra == "draws" and not random and bad is not None:

@@ -128,14 +128,21 @@ def _skew(w: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
-def _real_array(value: npt.ArrayLike, name: str, shape: tuple[int, ...]) -> npt.NDArray[np.float64]:
-    """``value`` as a finite float array of ``shape`` (InvalidInput naming ``name`` otherwise)."""
+def _numeric_array(value: npt.ArrayLike, name: str, expected: str) -> npt.NDArray[Any]:
+    """``value`` as a NumPy array of booleans, integers or reals (InvalidInput naming ``name``
+    and what was ``expected`` otherwise)."""
     try:
         a = np.asarray(value)
     except (TypeError, ValueError) as exc:
         raise InvalidInput(f"{name}: cannot be read as an array ({exc})") from exc
     if a.dtype.kind not in "biuf":
-        raise InvalidInput(f"{name}: expected real numbers, got dtype {a.dtype}")
+        raise InvalidInput(f"{name}: expected {expected}, got dtype {a.dtype}")
+    return a
+
+
+def _real_array(value: npt.ArrayLike, name: str, shape: tuple[int, ...]) -> npt.NDArray[np.float64]:
+    """``value`` as a finite float array of ``shape`` (InvalidInput naming ``name`` otherwise)."""
+    a = _numeric_array(value, name, "real numbers")
     if a.size != math.prod(shape):
         raise InvalidInput(f"{name}: expected shape {shape}, got {a.shape}")
     a = a.astype(np.float64).reshape(shape)

@@ -14,7 +14,7 @@ import numpy.typing as npt
 from .._core import InvalidInput, VsinvError, load_scenario
 from .columns import Column, _column, _item, _native
 from .distributions import Distribution
-from .keys import _apply, _split
+from .keys import _apply, _numeric_array, _split
 
 
 #: The most runs one sweep plans (its columns are allocated up front).
@@ -23,12 +23,7 @@ MAX_RUNS = 2**31
 
 def _indices(values: npt.ArrayLike, name: str) -> npt.NDArray[np.uint64]:
     """Non-negative integers (as uint64), InvalidInput naming ``name`` otherwise."""
-    try:
-        a = np.asarray(values)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInput(f"{name}: cannot be read as an array ({exc})") from exc
-    if a.dtype.kind not in "biuf":
-        raise InvalidInput(f"{name}: expected non-negative integers, got dtype {a.dtype}")
+    a = _numeric_array(values, name, "non-negative integers")
     if a.dtype.kind == "f":
         bad = ~(np.isfinite(a) & (a == np.floor(a)) & (a >= 0) & (a < 2.0**64))
     else:
