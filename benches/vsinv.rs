@@ -180,6 +180,21 @@ fn run_checked(config: &SimulationConfig, status: Status, iterations: usize) {
 /// Iterations of the full `lens-12-6` run (the README's table).
 const LENS_12_6_ITERATIONS: usize = 213;
 
+/// One iteration's time: a `long`-iteration run minus a 1-iteration run (the set-up cancels
+/// out), divided by `long - 1`; `iters` of each.
+fn per_iteration(iters: u64, long: &SimulationConfig, short: &SimulationConfig, iterations: usize) -> Duration {
+    let (mut t_long, mut t_short) = (Duration::ZERO, Duration::ZERO);
+    for _ in 0..iters {
+        let start = Instant::now();
+        black_box(simulate(black_box(long), &mut |_, _| true).expect("run"));
+        t_long += start.elapsed();
+        let start = Instant::now();
+        black_box(simulate(black_box(short), &mut |_, _| true).expect("run"));
+        t_short += start.elapsed();
+    }
+    t_long.saturating_sub(t_short) / (iterations as u32 - 1)
+}
+
 fn simulation(c: &mut Criterion) {
     let mut group = c.benchmark_group("simulation");
     group.warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(4)).sample_size(30);
@@ -189,20 +204,7 @@ fn simulation(c: &mut Criterion) {
     let (long, short) = (lens_12_6(false, Some(LONG)), lens_12_6(false, Some(1)));
     run_checked(&long, Status::MaxIterations, LONG);
     run_checked(&short, Status::MaxIterations, 1);
-    group.bench_function("step", |b| {
-        b.iter_custom(|iters| {
-            let (mut t_long, mut t_short) = (Duration::ZERO, Duration::ZERO);
-            for _ in 0..iters {
-                let start = Instant::now();
-                black_box(simulate(black_box(&long), &mut |_, _| true).expect("run"));
-                t_long += start.elapsed();
-                let start = Instant::now();
-                black_box(simulate(black_box(&short), &mut |_, _| true).expect("run"));
-                t_short += start.elapsed();
-            }
-            t_long.saturating_sub(t_short) / (LONG as u32 - 1)
-        })
-    });
+    group.bench_function("step", |b| b.iter_custom(|iters| per_iteration(iters, &long, &short, LONG)));
 
     // Full sec. 5.2 runs, with and without recording.
     group.throughput(Throughput::Elements(LENS_12_6_ITERATIONS as u64));
@@ -291,20 +293,7 @@ fn vision(c: &mut Criterion) {
         assert_eq!((s.status, s.iterations), (Status::MaxIterations, n), "vision-12-6 changed: {}", s.message);
     }
     group.sample_size(10).measurement_time(Duration::from_secs(8));
-    group.bench_function("iteration", |b| {
-        b.iter_custom(|iters| {
-            let (mut t_long, mut t_short) = (Duration::ZERO, Duration::ZERO);
-            for _ in 0..iters {
-                let start = Instant::now();
-                black_box(simulate(black_box(&long), &mut |_, _| true).expect("run"));
-                t_long += start.elapsed();
-                let start = Instant::now();
-                black_box(simulate(black_box(&short), &mut |_, _| true).expect("run"));
-                t_short += start.elapsed();
-            }
-            t_long.saturating_sub(t_short) / (LONG as u32 - 1)
-        })
-    });
+    group.bench_function("iteration", |b| b.iter_custom(|iters| per_iteration(iters, &long, &short, LONG)));
     group.finish();
 }
 

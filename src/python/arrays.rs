@@ -27,6 +27,30 @@ fn numpy_fn<'py>(py: Python<'py>, cell: &'static PyOnceLock<Py<PyAny>>, name: &s
     cell.get_or_try_init(py, || Ok(py.import("numpy")?.getattr(name)?.unbind()))
 }
 
+/// `numpy.ascontiguousarray(numpy.asarray(obj), dtype)`, refusing a dtype whose kind is not
+/// one of `kinds` (`InvalidInput` saying it expected `expected`).
+fn contiguous_copy(
+    obj: &Bound<'_, PyAny>,
+    what: &str,
+    kinds: &str,
+    expected: &str,
+    dtype: Option<&str>,
+) -> PyResult<Py<PyAny>> {
+    static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+    static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+    let py = obj.py();
+    let raw = numpy_fn(py, &ASARRAY, "asarray")?
+        .call1(py, (obj,))
+        .map_err(|e| invalid_input(format!("{what}: cannot be read as an array ({e})")))?;
+    let raw = raw.bind(py);
+    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
+    if kind.is_empty() || !kinds.contains(kind.as_str()) {
+        let dtype = raw.getattr("dtype")?.str()?.to_string();
+        return Err(invalid_input(format!("{what}: expected {expected}, got dtype {dtype}")));
+    }
+    numpy_fn(py, &CONTIGUOUS, "ascontiguousarray")?.call1(py, (raw, dtype))
+}
+
 /// Reads `obj` as a float64 array of `ndim` dimensions (`None` in `dims` accepts any size).
 /// A float64 C-contiguous ndarray is borrowed without copying; integers, booleans, other
 /// float types, lists and non-contiguous arrays are converted once; anything else (complex,
@@ -37,18 +61,7 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str, dims: &[Option<usize>
     let array = match fast {
         Some(a) => a,
         None => {
-            static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-            static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-            let raw = numpy_fn(py, &ASARRAY, "asarray")?
-                .call1(py, (obj,))
-                .map_err(|e| invalid_input(format!("{what}: cannot be read as an array ({e})")))?;
-            let raw = raw.bind(py);
-            let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-            if !"biuf".contains(kind.as_str()) || kind.is_empty() {
-                let dtype = raw.getattr("dtype")?.str()?.to_string();
-                return Err(invalid_input(format!("{what}: expected a real numeric array, got dtype {dtype}")));
-            }
-            let converted = numpy_fn(py, &CONTIGUOUS, "ascontiguousarray")?.call1(py, (raw, "float64"))?;
+            let converted = contiguous_copy(obj, what, "biuf", "a real numeric array", Some("float64"))?;
             converted
                 .bind(py)
                 .cast::<PyArrayDyn<f64>>()
@@ -86,18 +99,7 @@ pub fn bool_array<'py>(obj: &Bound<'py, PyAny>, what: &str, n: usize) -> PyResul
     let array = match fast {
         Some(a) => a,
         None => {
-            static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-            static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-            let raw = numpy_fn(py, &ASARRAY, "asarray")?
-                .call1(py, (obj,))
-                .map_err(|e| invalid_input(format!("{what}: cannot be read as an array ({e})")))?;
-            let raw = raw.bind(py);
-            let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-            if kind != "b" {
-                let dtype = raw.getattr("dtype")?.str()?.to_string();
-                return Err(invalid_input(format!("{what}: expected a bool array, got dtype {dtype}")));
-            }
-            let converted = numpy_fn(py, &CONTIGUOUS, "ascontiguousarray")?.call1(py, (raw,))?;
+            let converted = contiguous_copy(obj, what, "b", "a bool array", None)?;
             let converted = converted.bind(py);
             let shape: Vec<usize> = converted.getattr("shape")?.extract()?;
             if shape.len() != 1 {
