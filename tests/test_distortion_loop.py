@@ -121,3 +121,18 @@ def test_bad_calibration_entries_name_the_key(tmp_path) -> None:
         assert "camera.fku" in str(e) and "calibration" in str(e)
     else:
         raise AssertionError("fku with calibration was accepted")
+
+
+def test_sweeps_of_the_lens_need_numbers_not_a_calibration_file(tmp_path) -> None:
+    (tmp_path / "servo.yaml").write_text(BARREL_ROS_YAML)
+    d = _with_calibration(tmp_path, str(tmp_path / "servo.yaml"))
+    for key in ("focal_error", "principal_point_error"):
+        try:
+            vsinv.run_sweep(d, {key: [0.1]}, progress=False)
+        except vsinv.InvalidInput as e:
+            assert "calibration" in str(e) and "camera" in str(e), str(e)
+        else:
+            raise AssertionError(f"{key} on a calibration file was accepted")
+    # Keys that do not touch the intrinsics work as usual.
+    res = vsinv.run_sweep(d, {"control.gain": [1.0]}, progress=False)
+    assert len(res) == 1

@@ -53,9 +53,21 @@ def _split(key: str) -> list[Union[str, int]]:
     return [int(p) if p.isdigit() else p for p in parts]
 
 
+def _numbers_of(table: dict[str, Any], key: str) -> dict[str, Any]:
+    """A camera table with its intrinsics as numbers: the derived keys scale them, which a
+    calibration file does not allow."""
+    if "fku" not in table or "fkv" not in table:
+        raise InvalidInput(
+            f"{key}: the lens and K_hat keys (lens_ratio, focal_error, principal_point_error) need fku, fkv, "
+            "u0 and v0 as numbers, not calibration = \"file\""
+        )
+    return table
+
+
 def _camera_at_start(d: Mapping[str, Any]) -> dict[str, Any]:
     """The servo camera at t = 0 (a zoom schedule interpolated at t = 0) as an estimate dict."""
-    cam = dict(d.get("camera") or d["reference_camera"])
+    key = "camera" if d.get("camera") else "reference_camera"
+    cam = _numbers_of(dict(d[key]), key)
     zoom = cam.get("zoom")
     if isinstance(zoom, Mapping) and zoom.get("times"):
         times = [float(t) for t in zoom["times"]]
@@ -200,7 +212,7 @@ def _rz(deg: float) -> npt.NDArray[np.float64]:
 
 
 def _apply_lens_ratio(d: dict[str, Any], ratio: float) -> None:
-    ref = d["reference_camera"]
+    ref = _numbers_of(d["reference_camera"], "reference_camera")
     had_camera = d.get("camera") is not None
     cam = dict(d["camera"]) if had_camera else dict(ref)
     before = _camera_at_start(d)
@@ -219,7 +231,7 @@ def _apply_lens_ratio(d: dict[str, Any], ratio: float) -> None:
     d["camera"] = cam
     est = d.get("estimate")
     if est is not None:
-        est = dict(est)
+        est = _numbers_of(dict(est), "estimate")
         est["fku"] = float(est["fku"]) * su
         est["fkv"] = float(est["fkv"]) * sv
         d["estimate"] = est
@@ -227,14 +239,14 @@ def _apply_lens_ratio(d: dict[str, Any], ratio: float) -> None:
 
 def _apply_focal_error(d: dict[str, Any], e: float) -> None:
     cam0 = _camera_at_start(d)
-    est = dict(d["estimate"]) if d.get("estimate") is not None else dict(cam0)
+    est = _numbers_of(dict(d["estimate"]), "estimate") if d.get("estimate") is not None else dict(cam0)
     est["fku"] = float(cam0["fku"]) * (1.0 + e)
     est["fkv"] = float(cam0["fkv"]) * (1.0 + e)
     d["estimate"] = est
 
 
 def _apply_principal_point_error(d: dict[str, Any], px: float) -> None:
-    est = dict(d["estimate"]) if d.get("estimate") is not None else _camera_at_start(d)
+    est = _numbers_of(dict(d["estimate"]), "estimate") if d.get("estimate") is not None else _camera_at_start(d)
     est["u0"] = float(est["u0"]) + px
     est["v0"] = float(est["v0"]) + px
     d["estimate"] = est
