@@ -51,7 +51,7 @@ bench: install
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
 	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness.py tests/test_api.py tests/test_se3.py
-	cargo test --release --test robustness --test invariance
+	VSINV_PROPTEST_RANDOM=1 cargo test --release --test robustness --test invariance
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run

@@ -219,8 +219,8 @@ pub(crate) fn check_finite_rows<const N: usize>(what: &'static str, rows: &[[f64
 /// Fails when a result computed from finite inputs is not finite: inputs at the edge of the
 /// f64 range (a pixel of 1e300, a depth of 1e-300) overflow, and the error names them
 /// instead of returning inf or NaN.
-pub(crate) fn check_overflow(inputs: &'static str, result: &str, values: &[f64]) -> Result<()> {
-    if values.iter().all(|v| v.is_finite()) {
+pub(crate) fn check_overflow(inputs: &'static str, result: &str, parts: &[&[f64]]) -> Result<()> {
+    if parts.iter().all(|values| values.iter().all(|v| v.is_finite())) {
         return Ok(());
     }
     Err(Error::InvalidParameter {

@@ -22,8 +22,12 @@ pub struct Intrinsics {
     theta: f64,
 }
 
+/// The largest principal point coordinate, pixels: beyond it, normalising a pixel overflows.
+pub const MAX_PRINCIPAL_POINT: f64 = 1e12;
+
 impl Intrinsics {
-    /// Validated intrinsics: all finite, `fku > 0`, `fkv > 0`, `0 < theta < pi`.
+    /// Validated intrinsics: all finite, `fku > 0`, `fkv > 0`, `0 < theta < pi`, the principal
+    /// point within [`MAX_PRINCIPAL_POINT`].
     pub fn new(fku: f64, fkv: f64, u0: f64, v0: f64, theta: f64) -> Result<Self> {
         for (name, value) in [("fku", fku), ("fkv", fkv), ("u0", u0), ("v0", v0), ("skew", theta)] {
             if !value.is_finite() {
@@ -37,6 +41,15 @@ impl Intrinsics {
         }
         if !(theta > 0.0 && theta < std::f64::consts::PI) {
             return Err(Error::InvalidIntrinsics { reason: format!("skew angle must be in (0, pi), got {theta}") });
+        }
+        for (name, value) in [("u0", u0), ("v0", v0)] {
+            if value.abs() > MAX_PRINCIPAL_POINT {
+                return Err(Error::InvalidIntrinsics {
+                    reason: format!(
+                        "{name} (principal point) must be within +-{MAX_PRINCIPAL_POINT:e} px, got {value:e}"
+                    ),
+                });
+            }
         }
         let k = Self { fku, fkv, u0, v0, theta };
         // Extreme values (fkv / sin(theta) or 1 / fku beyond the f64 range) give no usable K.

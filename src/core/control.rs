@@ -299,7 +299,7 @@ impl InvariantController {
         let (wz, eps_z, a_hat) = self.rz_velocity(&t, &lx_basis, &mu, gain_rz)?;
         let mut twist = Vector6::new(mu[0], mu[1], mu[2], mu[3], mu[4], wz);
         let saturation = self.config.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
-        let values = [twist.as_slice(), eps.as_slice(), t.as_slice(), &[eps_z, invariant_error, a_hat, gain]].concat();
+        let values = [twist.as_slice(), eps.as_slice(), t.as_slice(), &[eps_z, invariant_error, a_hat, gain]];
         check_overflow("pixels, depths", "twist and task functions", &values)?;
         self.state = Some(ControlState {
             twist,
@@ -383,7 +383,7 @@ impl InvariantController {
     fn solve_five_dof(&mut self, normal: &NormalEquations, mean_depth: f64) -> Result<(Vector5<f64>, Vector5<f64>)> {
         let jtj = &normal.jtj;
         // Eigenvalues of a non-finite matrix may not terminate: refuse an overflow first.
-        check_overflow("pixels, depths", "normal equations", &[jtj.as_slice(), normal.jte.as_slice()].concat())?;
+        check_overflow("pixels, depths", "normal equations", &[jtj.as_slice(), normal.jte.as_slice()])?;
         let threshold = self.config.min_structure_ratio;
         let degenerate = |jtj: &Matrix5<f64>| {
             let ratio = balanced_ratio(jtj, mean_depth);

@@ -78,7 +78,7 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
             lines.row_mut(k).copy_from(&(l / norm).transpose());
         }
     }
-    check_overflow("first image, second image", "normalised epipolar lines", lines.as_slice())?;
+    check_overflow("first image, second image", "normalised epipolar lines", &[lines.as_slice()])?;
     let svd = lines.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(EPIPOLE, 0.0))?;
     let mut order = [0usize, 1, 2];
@@ -150,7 +150,7 @@ pub fn resect(points: &[Vector3<f64>], pixels: &[[f64; 2]]) -> Result<Matrix3x4<
     }
     // Values at the edge of the f64 range overflow the normalisation (the SVD of a non-finite
     // matrix may not terminate).
-    check_overflow("points, pixels", "normalised DLT system", a.as_slice())?;
+    check_overflow("points, pixels", "normalised DLT system", &[a.as_slice()])?;
     let svd = a.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(RESECTION, 0.0))?;
     let mut order: Vec<usize> = (0..12).collect();
@@ -248,6 +248,7 @@ impl ResectionDepths {
         // P is known up to sign: the visible points are in front of the camera.
         let sign = (0..depths.len()).filter(|&k| visible[k]).map(|k| depths[k]).sum::<f64>().signum();
         depths.iter_mut().for_each(|d| *d *= sign);
+        crate::error::check_overflow("reference_mean_depth, pixels", "depths", &[depths])?;
         if let Some(index) = (0..depths.len()).find(|&k| visible[k] && !(depths[k] > 0.0)) {
             return Err(Error::PointBehindCamera { index, depth: depths[index] });
         }

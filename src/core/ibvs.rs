@@ -214,7 +214,7 @@ impl IbvsController {
         let gain = self.adaptive_gain.map_or(self.gain, |g| g.value(err2.sqrt()));
         let mut twist = chol.solve(&lte) * -gain;
         let saturation = self.twist_limits.map_or(1.0, |l| l.apply(&mut twist));
-        check_overflow("pixels, depths", "twist and pixel error", &[twist.as_slice(), &[err2, gain]].concat())?;
+        check_overflow("pixels, depths", "twist and pixel error", &[twist.as_slice(), &[err2, gain]])?;
         self.last_error = Some((err2 / used as f64).sqrt());
         self.last_command = Some((gain, saturation));
         Ok(twist)

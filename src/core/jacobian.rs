@@ -78,7 +78,7 @@ pub fn invariant_interaction(
         let block = q_inv_2 * combined_interaction(&l_k, &l_basis, &q_k);
         j.fixed_view_mut::<3, 6>(3 * row, 0).copy_from(&block);
     }
-    check_overflow("pixels, depths", "Jacobian entries", j.as_slice())?;
+    check_overflow("pixels, depths", "Jacobian entries", &[j.as_slice()])?;
     Ok(j)
 }
 
@@ -131,7 +131,7 @@ pub fn jacobian_factors(
         phi.fixed_view_mut::<3, 3>(3 * row, 0).copy_from(&(frame.q_inv * inner_phi));
         psi.fixed_view_mut::<3, 2>(3 * row, 0).copy_from(&(frame.q_inv * inner_psi));
     }
-    check_overflow("pixels, depths", "Jacobian factors", &[phi.as_slice(), psi.as_slice()].concat())?;
+    check_overflow("pixels, depths", "Jacobian factors", &[phi.as_slice(), psi.as_slice()])?;
     Ok((phi, psi))
 }
 
@@ -168,7 +168,7 @@ pub fn rz_coefficients(
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
     let l_basis = basis.map(|i| pixel_interaction(&k, &k_inv, pixels[i], depths[i]));
     let (a, c) = rz_from_interactions(&reference, &l_basis);
-    check_overflow("pixels, depths", "rz coefficients", &[&[a], c.as_slice()].concat())?;
+    check_overflow("pixels, depths", "rz coefficients", &[&[a], c.as_slice()])?;
     Ok((a, c))
 }
 

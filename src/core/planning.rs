@@ -203,7 +203,7 @@ fn scaled_null_space(q: &[Vector3<f64>], q_star: &[Vector3<f64>], null_dim: usiz
         }
     }
     // The SVD of a non-finite matrix may not terminate: refuse overflowed coordinates.
-    crate::error::check_overflow("q, q_star", "scaled epipolar system", a.as_slice())?;
+    crate::error::check_overflow("q, q_star", "scaled epipolar system", &[a.as_slice()])?;
     let svd = a.svd(false, true);
     let v_t = svd.v_t.as_ref().ok_or(degenerate(0.0))?;
     // Sort the singular values decreasingly (nalgebra does not promise an order).
@@ -258,13 +258,18 @@ pub struct InvariantPath {
     duration: f64,
 }
 
+/// The shortest path, seconds: the rates divide by the duration, and a shorter one only
+/// overflows them (a control period is milliseconds).
+pub const MIN_PATH_DURATION: f64 = 1e-6;
+
 impl InvariantPath {
     /// The path for the reference invariant points `q_star`, the plane + parallax estimate
     /// and a duration `T` (the paper samples it N times at the control period: T = N dt).
     /// `beta_k(0) e*/||e*|| = mu_k* e*` (correction 7), `Delta(0) = Gamma / gamma_3`.
     pub fn new(q_star: &[Vector3<f64>], estimate: &PlaneParallax, duration: f64) -> Result<Self> {
-        if !(duration.is_finite() && duration > 0.0) {
-            return Err(Error::InvalidParameter { name: "path duration", reason: "must be finite and > 0".into() });
+        if !(duration.is_finite() && duration >= MIN_PATH_DURATION) {
+            let reason = format!("must be finite and at least {MIN_PATH_DURATION:e} s, got {duration}");
+            return Err(Error::InvalidParameter { name: "path duration", reason });
         }
         if q_star.len() != estimate.mu_e.len() {
             return Err(Error::Shape {
@@ -275,9 +280,8 @@ impl InvariantPath {
         }
         // The rates divide by the duration: a tiny one overflows them.
         let rates = (Vector3::repeat(1.0) - estimate.gamma) / duration;
-        let beta_rates = estimate.mu_e.iter().flat_map(|v| (v / duration).into_iter().copied().collect::<Vec<_>>());
-        let values: Vec<f64> = rates.iter().copied().chain(beta_rates).collect();
-        crate::error::check_overflow("path duration", "path rates", &values)?;
+        let beta_rates: Vec<f64> = estimate.mu_e.iter().flat_map(|v| <[f64; 3]>::from(v / duration)).collect();
+        crate::error::check_overflow("path duration", "path rates", &[rates.as_slice(), &beta_rates])?;
         Ok(Self { q_star: q_star.to_vec(), beta0_e: estimate.mu_e.clone(), delta0: estimate.gamma, duration })
     }
 

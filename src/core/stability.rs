@@ -41,7 +41,7 @@ pub fn a_matrix(k: &Matrix3<f64>, k_hat: &Matrix3<f64>, kappa: f64) -> Result<Ma
     let mut a = Matrix5::zeros();
     a.fixed_view_mut::<3, 3>(0, 0).copy_from(&top);
     a.fixed_view_mut::<2, 2>(3, 3).copy_from(&bottom);
-    check_overflow("K, K_hat, kappa", "entries of A", a.as_slice())?;
+    check_overflow("K, K_hat, kappa", "entries of A", &[a.as_slice()])?;
     Ok(a)
 }
 
@@ -86,7 +86,7 @@ pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
         return Ok(f64::INFINITY);
     }
     let bound = 2.0 * max_b / (gain * sigma);
-    check_overflow("tracking_bound inputs", "bound", &[bound])?;
+    check_overflow("tracking_bound inputs", "bound", &[&[bound]])?;
     Ok(bound)
 }
 
@@ -138,5 +138,8 @@ pub fn check_stability(
         let sym = a + a.transpose();
         sigma = sigma.min(sym.symmetric_eigenvalues().min());
     }
+    // Finite but extreme inputs (kappa near f64::MAX) overflow the eigen-decompositions.
+    let parts: Vec<f64> = eigenvalues.iter().flatten().flat_map(|z| [z.re, z.im]).chain([sigma]).collect();
+    check_overflow("kappa, K, K_hat", "eigenvalues of A", &[&parts])?;
     Ok(StabilityReport { prop1: base && prop1_hat, prop2: base && sigma > 0.0, eigenvalues, sigma, gain })
 }
