@@ -219,10 +219,18 @@ pub(crate) fn check_finite_rows<const N: usize>(what: &'static str, rows: &[[f64
 /// Fails when a result computed from finite inputs is not finite: inputs at the edge of the
 /// f64 range (a pixel of 1e300, a depth of 1e-300) overflow, and the error names them
 /// instead of returning inf or NaN.
+#[inline]
 pub(crate) fn check_overflow(inputs: &'static str, result: &str, parts: &[&[f64]]) -> Result<()> {
-    if parts.iter().all(|values| values.iter().all(|v| v.is_finite())) {
+    // Branch-free per value (it runs on every control step): OR of the non-finite flags.
+    let overflow = parts.iter().fold(false, |bad, values| values.iter().fold(bad, |bad, v| bad | !v.is_finite()));
+    if !overflow {
         return Ok(());
     }
+    overflow_error(inputs, result)
+}
+
+#[cold]
+fn overflow_error(inputs: &'static str, result: &str) -> Result<()> {
     Err(Error::InvalidParameter {
         name: inputs,
         reason: format!("out of range: the {result} overflow (non-finite) for these values"),
