@@ -52,6 +52,11 @@ pub(super) fn check_values(key: &str, values: &[f64]) -> Result<()> {
     }
 }
 
+/// The first of `(key, given)` pairs that is given.
+fn first_given<const N: usize>(keys: [(&str, bool); N]) -> Option<&str> {
+    keys.into_iter().find_map(|(key, given)| given.then_some(key))
+}
+
 /// A relative path starts at the scenario file's directory if known, else the working one.
 fn resolve_path(file: &str, directory: Option<&std::path::Path>) -> std::path::PathBuf {
     let path = std::path::Path::new(file);
@@ -279,10 +284,8 @@ impl Scenario {
             ("robot.joints", r.joints.is_some()),
             ("robot.min_manipulability", r.min_manipulability.is_some()),
             ("robot.damping", r.damping.is_some()),
-        ]
-        .into_iter()
-        .find_map(|(key, given)| given.then_some(key));
-        match (r.kind, arm_key) {
+        ];
+        match (r.kind, first_given(arm_key)) {
             (RobotKind::Urdf, _) => arm::robot(r, self.directory.as_deref()),
             (_, Some(key)) => Err(scenario_error(key, "applies to kind = \"urdf\" only")),
             (RobotKind::Free, None) => {

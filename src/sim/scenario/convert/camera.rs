@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, resolve_path};
+use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, first_given, resolve_path};
 use crate::calibration::load_calibration;
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
@@ -45,7 +45,7 @@ impl CameraSpec {
             ("height", self.height.is_some()),
             ("distortion", self.distortion.is_some()),
         ];
-        if let Some((name, _)) = given.iter().find(|(_, g)| *g) {
+        if let Some(name) = first_given(given) {
             let reason = format!("given with {key}.calibration, which sets it: give one or the other");
             return Err(scenario_error(&format!("{key}.{name}"), reason));
         }
