@@ -51,6 +51,42 @@ def test_render_then_invariance_reproduces_fig_3(capsys, tmp_path: Path) -> None
     assert (tmp_path / "inv" / "invariance.png").read_bytes()[:4] == b"\x89PNG"
 
 
+def test_invariance_reports_missing_measurements_and_fails(capsys, tmp_path: Path) -> None:
+    # The 6 mm start image of vision-12-6 tracked from the 12 mm reference positions: no dot is
+    # found, so nothing was measured; the command says so and fails instead of printing 0.00.
+    run_cli(capsys, "render", "vision-12-6", "--out", tmp_path)
+    code, out, err = run_cli(
+        capsys, "invariance", tmp_path / "reference.png", tmp_path / "start.png", "--points", tmp_path / "reference.csv"
+    )
+    assert code == 1, out
+    assert "no measurement: 12 of 12 dots not found in any image" in out
+    assert "max image error" not in out and "0.00" not in out.splitlines()[-1]
+    assert "not every dot was found" in err
+
+
+def test_invariance_summary_counts_partial_measurements() -> None:
+    from vsinv.cli_images import complete, measurement_summary
+    from vsinv.images import InvarianceResult
+
+    found = np.array([[True, True, True, True], [True, False, True, True]])
+    image_error = np.where(found, [[0.1, 0.2, 0.3, 0.4], [1.5, 9.0, 0.5, 0.25]], np.nan)
+    invariant_error = np.full((2, 4), np.nan)
+    invariant_error[0] = [0.0, 0.0, 0.0, 2e-4]
+    result = InvarianceResult(
+        names=["a", "b"], reference_pixels=np.zeros((4, 2)), basis=(0, 1, 2), pixels=np.zeros((2, 4, 2)), found=found,
+        image_error=image_error, invariant_error=invariant_error,
+    )
+    text = measurement_summary(result)
+    assert text.startswith("max image error 1.50 px over 7 of 8 dot images")
+    assert "max invariant error 2.00e-04 over 4 of 8" in text and text.endswith("1 of 8 dots not found")
+    assert not complete(result)
+    full = InvarianceResult(
+        names=["a"], reference_pixels=np.zeros((4, 2)), basis=(0, 1, 2), pixels=np.zeros((1, 4, 2)), found=found[:1],
+        image_error=image_error[:1], invariant_error=invariant_error[:1],
+    )
+    assert complete(full)
+
+
 def test_render_writes_true_dot_positions(capsys, tmp_path: Path) -> None:
     code, _, _ = run_cli(capsys, "render", "vision-12-6", "--out", tmp_path)
     assert code == 0

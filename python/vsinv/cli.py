@@ -5,8 +5,9 @@
 
 Exit codes: ``vsinv run`` returns 0 when the run's status is ``converged`` and 1 for every
 other status (``max_iterations``, ``lost_features``, ``diverged``, ``degenerate``, ``rz_trap``,
-``observed``, ``joint_limit``, ``singular``), which it reports; ``sweep``, ``render`` and
-``invariance`` return 0 when they finish (a sweep's statuses are in its table); every command
+``observed``, ``joint_limit``, ``singular``, ``settled``), which it reports; ``sweep`` and ``render``
+return 0 when they finish (a sweep's statuses are in its table); ``invariance`` returns 0 when
+every dot was found in every image and 1 when a measurement is missing; every command
 returns 2 for bad input (unknown scenario, invalid scenario file, bad --vary/--random,
 unwritable output directory) and 130 on Ctrl-C.
 """

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 from typing import Any, Optional, Sequence
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
 
-__all__ = ["add_image_commands", "cmd_invariance", "cmd_render"]
+__all__ = ["add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
 
 
 def add_image_commands(sub: Any) -> None:
@@ -78,12 +79,30 @@ def format_invariance(result: InvarianceResult) -> str:
             for k in range(len(result.names))
         ]
         lines.append(str(i).ljust(6) + "".join(f"{c:>20}" for c in cells))
-    img, q = result.image_error, result.invariant_error
-    lines.append(
-        f"max image error {np.nanmax(img, initial=0.0):.2f} px, max invariant error {np.nanmax(q, initial=0.0):.2e}; "
-        f"{int((~result.found).sum())} of {result.found.size} dots not found"
-    )
+    lines.append(measurement_summary(result))
     return "\n".join(lines)
+
+
+def measurement_summary(result: InvarianceResult) -> str:
+    """The largest errors over the measurements that were made, and what was not measured: a
+    dot that was not found has no image error, and an image whose basis dots were not all found
+    has no invariant error at all."""
+    img, q = result.image_error, result.invariant_error
+    made_img, made_q = np.isfinite(img), np.isfinite(q)
+    lost = int((~result.found).sum())
+    if not made_img.any():
+        return f"no measurement: {lost} of {result.found.size} dots not found in any image"
+    parts = [f"max image error {img[made_img].max():.2f} px over {int(made_img.sum())} of {img.size} dot images"]
+    if made_q.any():
+        parts.append(f"max invariant error {q[made_q].max():.2e} over {int(made_q.sum())} of {q.size}")
+    else:
+        parts.append("invariant error not measured (a basis dot was lost in every image)")
+    return "; ".join(parts) + f"; {lost} of {result.found.size} dots not found"
+
+
+def complete(result: InvarianceResult) -> bool:
+    """Whether every dot was found in every image (so that every error was measured)."""
+    return bool(result.found.all()) and bool(np.isfinite(result.invariant_error).all())
 
 
 def cmd_invariance(args: argparse.Namespace) -> int:
@@ -101,4 +120,7 @@ def cmd_invariance(args: argparse.Namespace) -> int:
         print(f"wrote {len(paths)} files to {args.out}:")
         for path in paths:
             print(f"  {path}")
+    if not complete(result):
+        print("vsinv invariance: not every dot was found in every image; the missing measurements are marked lost", file=sys.stderr)
+        return 1
     return 0
