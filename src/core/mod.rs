@@ -16,6 +16,8 @@
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
 //! | rigid motions, exact twist integration | [`se3`] |
 //! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
+//! | pixel noise measured from an image stream, not in the paper | [`noise_meter`] |
+//! | pose uncertainty left by pixel noise (first-order propagation), not in the paper | [`uncertainty`] |
 
 pub mod adaptive_gain;
 pub mod camera;
@@ -25,8 +27,10 @@ pub mod distortion;
 pub mod ibvs;
 pub mod invariant;
 pub mod jacobian;
+pub mod noise_meter;
 pub mod planning;
 pub mod rz_task;
 pub mod saturation;
 pub mod se3;
 pub mod stability;
+pub mod uncertainty;
