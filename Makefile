@@ -44,7 +44,7 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
-	$(PYTHON) benches/noise_accuracy.py
+	$(PYTHON) benches/noise_honesty.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
 # and the property tests on new random examples (CI runs a fixed sequence).

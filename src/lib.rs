@@ -89,5 +89,9 @@ pub use crate::core::invariant::{choose_basis, invariant_points, task_vector};
 pub use crate::core::jacobian::{
     invariant_interaction, invariant_jacobian, jacobian_factors, rz_coefficients, structure_ratio,
 };
+pub use crate::core::noise_meter::PixelNoiseMeter;
 pub use crate::core::stability::{StabilityReport, a_matrix, check_stability, tracking_bound};
+pub use crate::core::uncertainty::{
+    ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty, pixel_pose_uncertainty,
+};
 pub use error::{Error, Result};

@@ -35,7 +35,7 @@ from typing import Any, Iterator
 
 import vsinv
 
-STATUSES = {"converged", "max_iterations", "lost_features", "diverged", "degenerate", "rz_trap", "observed"}
+STATUSES = {"converged", "max_iterations", "lost_features", "diverged", "degenerate", "rz_trap", "observed", "joint_limit", "singular", "settled"}
 TIMEOUT_S = 30
 QUICK = ["lens-12-6", "lens-12-6-barrel", "cartesian-12-6", "occlusion", "zoom-servo", "path-500", "vision-12-6"]
 # Runs through images are slow: a few iterations are enough to exercise every key.

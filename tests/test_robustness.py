@@ -1346,7 +1346,7 @@ def test_run_scenario(data: Any) -> None:
         return
     s = call(getattr, r, "summary", _api="RunResult.summary", _finite=False)
     assert s["status"] in ("converged", "max_iterations", "lost_features", "diverged", "degenerate", "rz_trap", "joint_limit",
-                           "singular", "observed", "error"), s["status"]
+                           "singular", "settled", "observed", "error"), s["status"]
     assert 0 <= s["iterations"] <= 4
     assert isinstance(call(getattr, r, "scenario", _api="RunResult.scenario"), vsinv.Scenario)
     arrs = call(getattr, r, "arrays", _api="RunResult.arrays", _finite=False)
@@ -1710,6 +1710,76 @@ def test_sweep_helpers(data: Any) -> None:
                             api="sweep.thetau_from_rotation", ref=ref, rtol=1e-12)
         if returned(out):
             assert out.shape == (3,) and np.linalg.norm(out) <= math.pi + 1e-9
+
+
+# ---------------------------------------------------------------------------------------------
+# pose uncertainty and the noise meter
+
+
+@covers("InvariantController.pose_uncertainty", "IbvsController.pose_uncertainty", "PoseUncertainty",
+        "PoseUncertainty.covariance", "PoseUncertainty.offset", "PoseUncertainty.translation_sigma",
+        "PoseUncertainty.rotation_sigma", "PoseUncertainty.translation_bound", "PoseUncertainty.rotation_bound")
+@fuzz_settings(150)
+@given(st.data())
+def test_pose_uncertainty(data: Any) -> None:
+    cls = data.draw(st.sampled_from([vsinv.InvariantController, vsinv.IbvsController]))
+    ctl = controller(cls)
+    args, strategies = step_args(True, RAISE if cls is vsinv.InvariantController else ANY)
+    args.update(pixel_sigma=0.5, reference_sigma=0.25, averaged_images=4)
+    strategies.update(
+        pixel_sigma=floats(0.5, overrides={"zero": ANY, "negative": INVALID, "neghuge": INVALID, "neginf": INVALID,
+                                           "huge": INVALID, "inf": INVALID}),
+        reference_sigma=floats(0.25, overrides={"none": ANY, "zero": ANY, "negative": INVALID, "neghuge": INVALID,
+                                                "neginf": INVALID, "huge": INVALID, "inf": INVALID}),
+        averaged_images=ints(4, overrides={"zero": INVALID}),
+    )
+    ref = ctl.pose_uncertainty(**args)
+    digest = lambda u: u.covariance if isinstance(u, vsinv.PoseUncertainty) else u  # noqa: E731
+    fuzz(data, ctl.pose_uncertainty, args, strategies, ref=ref, rtol=1e-12, digest=digest,
+         api=f"{cls.__name__}.pose_uncertainty", names={"pixels": ("pixels", "points", "visible")}, finite=False)
+    # the properties of the result, against NumPy
+    cov = call(getattr, ref, "covariance", _api="PoseUncertainty.covariance")
+    assert cov.shape == (6, 6) and np.allclose(cov, cov.T, rtol=1e-9, atol=0) and np.all(np.linalg.eigvalsh(cov) > -1e-18)
+    offset = call(getattr, ref, "offset", _api="PoseUncertainty.offset")
+    t_sigma = call(getattr, ref, "translation_sigma", _api="PoseUncertainty.translation_sigma")
+    r_sigma = call(getattr, ref, "rotation_sigma", _api="PoseUncertainty.rotation_sigma")
+    assert t_sigma == pytest.approx(np.sqrt(np.trace(cov[:3, :3])), rel=1e-12)
+    assert r_sigma == pytest.approx(np.sqrt(np.trace(cov[3:, 3:])), rel=1e-12)
+    sigmas = data.draw(floats(3.0, overrides={"zero": INVALID, "negative": INVALID, "neghuge": INVALID, "neginf": INVALID,
+                                              "huge": ANY, "inf": INVALID, "none": TYPE}), label="sigmas")
+    for name, sigma, part in (("translation_bound", t_sigma, offset[:3]), ("rotation_bound", r_sigma, offset[3:])):
+        out = call(getattr(ref, name), sigmas.value, _api=f"PoseUncertainty.{name}", _expect=sigmas.expect,
+                   _names=("sigmas",), _finite=False)
+        if sigmas.expect == SAME:
+            assert out == pytest.approx(3.0 * sigma + np.linalg.norm(part), rel=1e-12)
+
+
+@covers("PixelNoiseMeter", "PixelNoiseMeter.push", "PixelNoiseMeter.sigma", "PixelNoiseMeter.clear")
+@fuzz_settings(100)
+@given(st.data())
+def test_pixel_noise_meter(data: Any) -> None:
+    capacity = data.draw(ints(8, overrides={"zero": INVALID}), label="capacity")
+    meter = call(vsinv.PixelNoiseMeter, capacity.value, _api="PixelNoiseMeter", _expect=capacity.expect,
+                 _names=("capacity",))
+    if not isinstance(meter, vsinv.PixelNoiseMeter):
+        return
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1), label="seed"))
+    frames = [CUR_PX + rng.normal(0, 0.3, CUR_PX.shape) for _ in range(3)]
+    ones = np.ones(N, bool)
+    args, strategies = {"pixels": frames[0], "visible": ones}, step_args(True, ANY)[1]
+    visible = st.sampled_from([V(ones, SAME, "all"), V(None, SAME, "none"), V(np.zeros(N, bool), RETURN, "none visible"),
+                               V(np.ones(N, int), INVALID, "int"), V(np.ones(N - 1, bool), INVALID, "short"),
+                               V("abc", INVALID, "str")])
+    fuzz(data, meter.push, args, {"pixels": strategies["pixels"], "visible": visible},
+         api="PixelNoiseMeter.push", names={"pixels": ("pixels", "points", "visible")}, finite=False)
+    meter.clear()
+    call(meter.clear, _api="PixelNoiseMeter.clear", _expect=RETURN)
+    for f in frames:
+        meter.push(f)
+    # against NumPy: the second difference of the three frames
+    d = frames[0] - 2 * frames[1] + frames[2]
+    sigma = call(getattr, meter, "sigma", _api="PixelNoiseMeter.sigma")
+    assert sigma == pytest.approx(np.sqrt(np.mean(d**2) / 6), rel=1e-12)
 
 
 # ---------------------------------------------------------------------------------------------

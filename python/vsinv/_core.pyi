@@ -16,6 +16,8 @@ __all__ = [
     "InvariantController",
     "IbvsController",
     "StabilityReport",
+    "PoseUncertainty",
+    "PixelNoiseMeter",
     "project",
     "invariant_points",
     "invariant_jacobian",
@@ -124,6 +126,16 @@ class InvariantController:
         """Replaces the estimated intrinsics (e.g. a zoom read-out); the next step uses them."""
     def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None: ...
     def converged(self, invariant_tol: float = 1e-4, tau21_tol: float = 1e-4) -> bool: ...
+    def pose_uncertainty(
+        self,
+        pixels: _ArrayLike,
+        depths: _ArrayLike,
+        pixel_sigma: float,
+        reference_sigma: float | None = None,
+        averaged_images: int = 1,
+        visible: npt.ArrayLike | None = None,
+    ) -> PoseUncertainty:
+        """The pose uncertainty that pixel noise leaves at `pixels` under the invariant stop rule (s, tau_21)."""
     def __reduce__(self) -> tuple[type[InvariantController], tuple[Any, ...], tuple[_F64Array, _F64Array | None]]:
         """Pickling keeps the configuration and s*(t), not the state of the last step."""
     def __setstate__(self, state: tuple[_ArrayLike, _ArrayLike | None]) -> None: ...
@@ -170,6 +182,16 @@ class IbvsController:
     def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
     def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
         """A step with only the points flagged in `visible`, a bool array (n,)."""
+    def pose_uncertainty(
+        self,
+        pixels: _ArrayLike,
+        depths: _ArrayLike,
+        pixel_sigma: float,
+        reference_sigma: float | None = None,
+        averaged_images: int = 1,
+        visible: npt.ArrayLike | None = None,
+    ) -> PoseUncertainty:
+        """The pose uncertainty that pixel noise leaves at `pixels` under the pixel stop rule (reference taken with the servo camera)."""
     def __reduce__(self) -> tuple[type[IbvsController], tuple[Any, ...]]:
         """Pickling keeps the configuration, not the state of the last step."""
     @property
@@ -178,6 +200,42 @@ class IbvsController:
     def last_gain(self) -> float | None: ...
     @property
     def saturation(self) -> float | None: ...
+
+@final
+class PoseUncertainty:
+    """The camera displacement from the goal that the images still allow (first-order propagation of pixel
+    noise through the law's Jacobian), current camera frame: metres (depth estimates' scale) and radians."""
+
+    @property
+    def covariance(self) -> _F64Array:
+        """Covariance of (tx, ty, tz, rx, ry, rz), (6, 6)."""
+    @property
+    def offset(self) -> _F64Array:
+        """J^+ (m - m*): the displacement the measured error itself implies, (6,)."""
+    @property
+    def translation_sigma(self) -> float:
+        """RMS translation the noise leaves, metres."""
+    @property
+    def rotation_sigma(self) -> float:
+        """RMS rotation the noise leaves, radians."""
+    def translation_bound(self, sigmas: float = 3.0) -> float:
+        """sigmas * translation_sigma + |offset_t|, metres."""
+    def rotation_bound(self, sigmas: float = 3.0) -> float:
+        """sigmas * rotation_sigma + |offset_r|, radians."""
+
+@final
+class PixelNoiseMeter:
+    """The pixel noise of an image stream, measured from its second differences over consecutive images."""
+
+    def __new__(cls, capacity: int = 32) -> PixelNoiseMeter: ...
+    def push(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> None:
+        """Adds an image's pixels (n, 2); another number of points starts the measurement again."""
+    @property
+    def sigma(self) -> float | None:
+        """Standard deviation of a pixel coordinate, pixels; None until a point was seen in three images."""
+    def clear(self) -> None:
+        """Forgets the images."""
+    def __len__(self) -> int: ...
 
 @final
 class StabilityReport:

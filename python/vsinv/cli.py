@@ -104,18 +104,38 @@ def format_summary(summary: dict[str, Any]) -> str:
             ),
             (
                 "Prop. 3",
-                f"max ||eps|| {_fmt(s.get('observed_max_eps'), '.4g')} <= psi/phi "
+                f"max ||eps|| {_fmt(s.get('observed_max_eps'), '.4g')} {_compare(s.get('observed_max_eps'), s.get('tracking_bound'))} psi/phi "
                 f"{_fmt(s.get('tracking_bound'), '.4g')} (sigma {_fmt(s.get('tracking_sigma'), '.4g')}, "
                 f"psi {_fmt(s.get('tracking_psi'), '.4g')}, phi {_fmt(s.get('tracking_phi'), '.4g')})",
             ),
         ]
     if s.get("min_manipulability") is not None:
         rows.append(("arm", f"smallest manipulability {_fmt(s.get('min_manipulability'), '.4g')}"))
+    rows.append(("pose uncertainty", _uncertainty(s)))
     rows.append(("message", str(s.get("message", ""))))
     width = max(len(k) for k, _ in rows)
     lines = [f"scenario {s.get('name', '?')}"]
     lines += [f"  {k:<{width}}  {v}" for k, v in rows]
     return "\n".join(lines)
+
+
+def _compare(a: Any, b: Any) -> str:
+    """The comparison that holds between two numbers (``?`` when either is missing)."""
+    if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in (a, b)):
+        return "vs"
+    return "<=" if a <= b else ">"
+
+
+def _uncertainty(s: dict[str, Any]) -> str:
+    """What the final images allow about the pose, and the ground truth against the tolerance."""
+    truth = "final pose within the tolerance" if s.get("within_tolerance") else "final pose NOT within the tolerance"
+    if s.get("translation_uncertainty_mm") is None:
+        return f"not measured (too few points in view or too few images); {truth} (ground truth)"
+    return (
+        f"{_fmt(s.get('translation_uncertainty_mm'), '.3g', ' mm')}, {_fmt(s.get('rotation_uncertainty_deg'), '.3g', ' deg')} "
+        f"(3 sigma + offset; pixel noise {_fmt(s.get('pixel_sigma_px'), '.3g', ' px')} measured, reference "
+        f"{_fmt(s.get('reference_pixel_sigma_px'), '.3g', ' px')}); {truth} (ground truth)"
+    )
 
 
 def _fmt_basis(basis: Any) -> str:

@@ -11,6 +11,7 @@ use crate::core::jacobian::{
 };
 use crate::core::rz_task::{RzTask, linearise};
 use crate::core::saturation::TwistLimits;
+use crate::core::uncertainty::{ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty};
 use crate::error::{
     Error, Result, check_finite_points, check_finite_rows, check_overflow, check_positive, check_step_inputs,
 };
@@ -317,13 +318,7 @@ impl InvariantController {
 
     /// Sizes, finiteness, depths, and that the basis and three more points are visible.
     fn check_step(&self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<()> {
-        if pixels.len() != self.n {
-            return Err(Error::Shape {
-                what: "pixels",
-                expected: format!("{} points (as in the reference image)", self.n),
-                got: format!("{} points", pixels.len()),
-            });
-        }
+        check_point_total(pixels.len(), self.n)?;
         check_step_inputs(pixels, depths, visible)?;
         let Some(v) = visible else { return Ok(()) };
         let others_seen = self.others.iter().filter(|&&i| v[i]).count();
@@ -426,6 +421,21 @@ impl InvariantController {
         Ok((wz, r.det_q_star * t[(1, 0)], task.a))
     }
 
+    /// The pose uncertainty that pixel noise leaves at `pixels` (the current image, or the
+    /// average of `noise.averaged_images` images) under the invariant stop rule, with this
+    /// controller's reference image, basis and K_hat ([`crate::core::uncertainty`]).
+    pub fn pose_uncertainty(
+        &self,
+        pixels: &[[f64; 2]],
+        depths: &[f64],
+        visible: Option<&[bool]>,
+        noise: ImageNoise,
+    ) -> Result<PoseUncertainty> {
+        check_point_total(pixels.len(), self.n)?;
+        let m = Measurement { pixels, depths, reference_pixels: &self.reference_pixels, visible, k_hat: &self.k_hat };
+        invariant_pose_uncertainty(&m, self.basis, noise)
+    }
+
     /// The stop rule for different cameras (sec. 5.2): `||s - s*|| < invariant_tol`,
     /// `|tau_21| < tau21_tol`, and `tau_11 > 0`, `tau_22 > 0`, which rule out the attracting
     /// equilibrium at rz = pi (correction 8). False before the first step.
@@ -434,6 +444,18 @@ impl InvariantController {
             s.invariant_error < invariant_tol && s.tau21().abs() < tau21_tol && s.tau11() > 0.0 && s.tau22() > 0.0
         })
     }
+}
+
+/// Fails unless an image has the reference image's `n` points.
+pub(crate) fn check_point_total(got: usize, n: usize) -> Result<()> {
+    if got == n {
+        return Ok(());
+    }
+    Err(Error::Shape {
+        what: "pixels",
+        expected: format!("{n} points (as in the reference image)"),
+        got: format!("{got} points"),
+    })
 }
 
 /// The normal equations of the five-dof task for one image.

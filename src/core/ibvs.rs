@@ -7,7 +7,9 @@ use nalgebra::{Matrix6, Vector6};
 
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::{Intrinsics, pixel_interaction};
+use crate::core::control::check_point_total;
 use crate::core::saturation::TwistLimits;
+use crate::core::uncertainty::{ImageNoise, Measurement, PoseUncertainty, pixel_pose_uncertainty};
 use crate::error::{
     Error, Result, check_depths, check_finite_points, check_overflow, check_positive, check_step_inputs,
 };
@@ -178,15 +180,25 @@ impl IbvsController {
         self.step_masked(pixels, depths, Some(visible))
     }
 
+    /// The pose uncertainty that pixel noise leaves at `pixels` (the current image, or the
+    /// average of `noise.averaged_images` images) under the pixel stop rule, with this
+    /// controller's reference image and K_hat ([`crate::core::uncertainty`]; it assumes that
+    /// the reference image was taken with the servo camera).
+    pub fn pose_uncertainty(
+        &self,
+        pixels: &[[f64; 2]],
+        depths: &[f64],
+        visible: Option<&[bool]>,
+        noise: ImageNoise,
+    ) -> Result<PoseUncertainty> {
+        check_point_total(pixels.len(), self.reference.len())?;
+        let m = Measurement { pixels, depths, reference_pixels: &self.reference, visible, k_hat: &self.k_hat };
+        pixel_pose_uncertainty(&m, noise)
+    }
+
     fn step_masked(&mut self, pixels: &[[f64; 2]], depths: &[f64], visible: Option<&[bool]>) -> Result<Vector6<f64>> {
         let n = self.reference.len();
-        if pixels.len() != n {
-            return Err(Error::Shape {
-                what: "pixels",
-                expected: format!("{n} points (as in the reference image)"),
-                got: format!("{} points", pixels.len()),
-            });
-        }
+        check_point_total(pixels.len(), n)?;
         check_step_inputs(pixels, depths, visible)?;
         let used = visible.map_or(n, |v| v.iter().filter(|&&x| x).count());
         if used < IBVS_MIN_POINTS {

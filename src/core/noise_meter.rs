@@ -34,8 +34,9 @@ impl PixelNoiseMeter {
         Ok(Self { capacity, images: VecDeque::with_capacity(capacity) })
     }
 
-    /// Adds an image's pixels (`visible`: the points found; `None`: all). An image with another
-    /// number of points than the previous ones starts the measurement again.
+    /// Adds an image's pixels (`visible`: the points found; `None`: all; a hidden point's pixel
+    /// is ignored and may be NaN, a visible one must be finite). An image with another number
+    /// of points than the previous ones starts the measurement again.
     pub fn push(&mut self, pixels: &[[f64; 2]], visible: Option<&[bool]>) -> Result<()> {
         if let Some(v) = visible
             && v.len() != pixels.len()
@@ -46,16 +47,21 @@ impl PixelNoiseMeter {
                 got: format!("{} flags", v.len()),
             });
         }
+        if let Some(row) =
+            (0..pixels.len()).find(|&i| visible.is_none_or(|v| v[i]) && !pixels[i].iter().all(|x| x.is_finite()))
+        {
+            let column = usize::from(pixels[row][0].is_finite());
+            return Err(Error::NonFinitePoint { what: "pixels", row, column });
+        }
         if self.images.front().is_some_and(|f| f.len() != pixels.len()) {
             self.images.clear();
         }
         let mut row =
             if self.images.len() == self.capacity { self.images.pop_front().unwrap_or_default() } else { Vec::new() };
         row.clear();
-        row.extend(pixels.iter().enumerate().map(|(i, p)| match visible.is_none_or(|v| v[i]) {
-            true if p[0].is_finite() && p[1].is_finite() => *p,
-            _ => [f64::NAN; 2],
-        }));
+        row.extend(
+            pixels.iter().enumerate().map(|(i, p)| if visible.is_none_or(|v| v[i]) { *p } else { [f64::NAN; 2] }),
+        );
         self.images.push_back(row);
         Ok(())
     }
@@ -139,8 +145,10 @@ mod tests {
         assert_eq!(meter.sigma(), None);
         for k in 0..5 {
             let t = k as f64;
-            meter.push(&[[1.0 + 2.0 * t, 4.0], [f64::NAN, 0.0], [9.0, 9.0]], Some(&[true, true, k != 3])).unwrap();
+            meter.push(&[[1.0 + 2.0 * t, 4.0], [f64::NAN, 0.0], [9.0, 9.0]], Some(&[true, false, k != 3])).unwrap();
         }
+        let nan = meter.push(&[[1.0, 4.0], [0.0, f64::NAN], [9.0, 9.0]], None);
+        assert!(matches!(nan, Err(Error::NonFinitePoint { what: "pixels", row: 1, column: 1 })));
         assert_eq!(meter.len(), 3);
         assert_eq!(meter.sigma(), Some(0.0));
         meter.push(&[[0.0, 0.0]], None).unwrap(); // another point count: starts again

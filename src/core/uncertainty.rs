@@ -29,6 +29,9 @@ use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validat
 use crate::core::jacobian::{combined_interaction, rz_from_interactions};
 use crate::error::{Error, Result, check_depths, check_finite_points};
 
+/// The largest pixel standard deviation accepted, pixels.
+pub const MAX_PIXEL_SIGMA: f64 = 1e6;
+
 /// How many standard deviations the bounds of [`PoseUncertainty`] span by default.
 pub const DEFAULT_SIGMAS: f64 = 3.0;
 
@@ -46,7 +49,7 @@ pub struct ImageNoise {
 impl ImageNoise {
     fn validate(&self) -> Result<()> {
         for (name, value) in [("noise.current", self.current), ("noise.reference", self.reference)] {
-            if !(value.is_finite() && (0.0..=1e6).contains(&value)) {
+            if !(value.is_finite() && (0.0..=MAX_PIXEL_SIGMA).contains(&value)) {
                 return Err(Error::InvalidParameter {
                     name,
                     reason: format!("must be a pixel standard deviation in [0, 1e6], got {value:.4e}"),

@@ -46,6 +46,14 @@ pub fn max_iter(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     count(obj, "max_iter")
 }
 
+pub fn averaged_images(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    count(obj, "averaged_images")
+}
+
+pub fn capacity(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    count(obj, "capacity")
+}
+
 pub fn threads(obj: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
     opt_count(obj, "threads")
 }

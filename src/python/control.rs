@@ -5,6 +5,7 @@ use pyo3::prelude::*;
 
 use super::arrays::{bool_array, f64_array, finite_out, from_matrix, mat, points2, points3, vec1};
 use super::errors::{invalid_input, to_py};
+use super::uncertainty::{PyPoseUncertainty, UncertaintyArgs};
 use super::{
     BasisArg, PyIntrinsics, adaptive_gain_args, adaptive_gain_repr, bool_repr, depths_arg, interaction_name,
     intrinsics, intrinsics_repr, opt_repr, pixels_arg, rz_task_name, twist_limit_args,
@@ -209,6 +210,25 @@ impl PyInvariantController {
         self.inner.set_reference(points3(&s)?, r_pts).map_err(to_py)
     }
 
+    /// The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the
+    /// reference image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with
+    /// `depths` (n,), under the invariant stop rule (s and tau_21) with this controller's
+    /// reference image, basis and K_hat; `averaged_images` current images were averaged.
+    /// First order; the translation is in the depths' scale and K_hat is taken as right.
+    #[pyo3(signature = (pixels, depths, pixel_sigma, reference_sigma = None, averaged_images = 1, visible = None))]
+    fn pose_uncertainty(
+        &self,
+        pixels: &Bound<'_, PyAny>,
+        depths: &Bound<'_, PyAny>,
+        pixel_sigma: f64,
+        reference_sigma: Option<f64>,
+        #[pyo3(from_py_with = super::args::averaged_images)] averaged_images: usize,
+        visible: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyPoseUncertainty> {
+        let args = UncertaintyArgs::read(pixels, depths, visible, pixel_sigma, reference_sigma, averaged_images)?;
+        args.apply(|p, z, v, noise| self.inner.pose_uncertainty(p, z, v, noise))
+    }
+
     /// Stop rule for different cameras: ||s - s*|| < invariant_tol, |tau_21| < tau21_tol,
     /// tau_11 > 0 and tau_22 > 0 (the last two exclude the rz = pi equilibrium).
     #[pyo3(signature = (invariant_tol = 1e-4, tau21_tol = 1e-4))]
@@ -366,6 +386,25 @@ impl PyIbvsController {
         visible: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         step_controller_visible(&mut self.inner, py, pixels, depths, visible)
+    }
+
+    /// The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the
+    /// reference image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with
+    /// `depths` (n,), under the pixel stop rule with this controller's reference image and
+    /// K_hat (taken with the servo camera); `averaged_images` current images were averaged.
+    /// First order; the translation is in the depths' scale and K_hat is taken as right.
+    #[pyo3(signature = (pixels, depths, pixel_sigma, reference_sigma = None, averaged_images = 1, visible = None))]
+    fn pose_uncertainty(
+        &self,
+        pixels: &Bound<'_, PyAny>,
+        depths: &Bound<'_, PyAny>,
+        pixel_sigma: f64,
+        reference_sigma: Option<f64>,
+        #[pyo3(from_py_with = super::args::averaged_images)] averaged_images: usize,
+        visible: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyPoseUncertainty> {
+        let args = UncertaintyArgs::read(pixels, depths, visible, pixel_sigma, reference_sigma, averaged_images)?;
+        args.apply(|p, z, v, noise| self.inner.pose_uncertainty(p, z, v, noise))
     }
 
     fn __repr__(&self) -> String {

@@ -10,6 +10,7 @@ mod lens;
 mod planning;
 mod se3;
 mod sim;
+mod uncertainty;
 mod vision;
 
 use nalgebra::Matrix3;
@@ -438,6 +439,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<control::PyInvariantController>()?;
     m.add_class::<control::PyIbvsController>()?;
     m.add_class::<PyStabilityReport>()?;
+    m.add_class::<uncertainty::PyPoseUncertainty>()?;
+    m.add_class::<uncertainty::PyPixelNoiseMeter>()?;
     m.add_function(wrap_pyfunction!(project, m)?)?;
     m.add_function(wrap_pyfunction!(invariant_points, m)?)?;
     m.add_function(wrap_pyfunction!(invariant_jacobian, m)?)?;

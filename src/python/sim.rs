@@ -245,6 +245,14 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("detection_error_median_px", s.detection_error.map(|e| e.0))?;
     d.set_item("detection_error_max_px", s.detection_error.map(|e| e.1))?;
     d.set_item("min_manipulability", s.min_manipulability)?;
+    let c = s.certainty.as_ref();
+    d.set_item("pixel_sigma_px", c.map(|c| c.pixel_sigma))?;
+    d.set_item("reference_pixel_sigma_px", c.map(|c| c.reference_pixel_sigma))?;
+    d.set_item("translation_sigma_mm", c.map(|c| c.sigma.0 * 1e3))?;
+    d.set_item("rotation_sigma_deg", c.map(|c| c.sigma.1.to_degrees()))?;
+    d.set_item("translation_uncertainty_mm", c.map(|c| c.bound.0 * 1e3))?;
+    d.set_item("rotation_uncertainty_deg", c.map(|c| c.bound.1.to_degrees()))?;
+    d.set_item("within_tolerance", s.within_tolerance)?;
     Ok(d)
 }
 
@@ -345,7 +353,9 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// in parallel with the GIL released (recording off) and returns the
 /// table as a dict of NumPy arrays, one row per scenario: status (str), iterations,
 /// final_translation_error_mm, final_rotation_error_deg, final_image_error_px,
-/// final_invariant_error, prop1, prop2, max_line_deviation_mm, message (str). A scenario
+/// final_invariant_error, prop1, prop2, max_line_deviation_mm, observed_max_eps,
+/// pixel_sigma_px, translation_uncertainty_mm, rotation_uncertainty_deg (NaN where not
+/// measured), within_tolerance, message (str). A scenario
 /// whose configuration is invalid raises before anything runs; a run that fails on the way
 /// has status "error" and its message.
 #[pyfunction]
@@ -388,7 +398,8 @@ pub fn run_batch<'py>(
     let m = results.len();
     let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let mut iterations = Vec::with_capacity(m);
-    let mut cols = [(); 6].map(|_| Vec::with_capacity(m));
+    let mut cols = [(); 9].map(|_| Vec::with_capacity(m));
+    let mut within = Vec::with_capacity(m);
     let (mut prop1, mut prop2) = (Vec::with_capacity(m), Vec::with_capacity(m));
     for r in &results {
         match r {
@@ -403,10 +414,14 @@ pub fn run_batch<'py>(
                     s.final_invariant_error,
                     s.max_line_deviation * 1e3,
                     s.tracking.map_or(f64::NAN, |t| t.max_eps),
+                    s.certainty.map_or(f64::NAN, |c| c.pixel_sigma),
+                    s.certainty.map_or(f64::NAN, |c| c.bound.0 * 1e3),
+                    s.certainty.map_or(f64::NAN, |c| c.bound.1.to_degrees()),
                 ];
                 cols.iter_mut().zip(values).for_each(|(c, v)| c.push(v));
                 prop1.push(s.prop1);
                 prop2.push(s.prop2);
+                within.push(s.within_tolerance);
             }
             Err(e) => {
                 status.push("error".to_string());
@@ -415,6 +430,7 @@ pub fn run_batch<'py>(
                 cols.iter_mut().for_each(|c| c.push(f64::NAN));
                 prop1.push(false);
                 prop2.push(false);
+                within.push(false);
             }
         }
     }
@@ -434,12 +450,16 @@ pub fn run_batch<'py>(
         "final_invariant_error",
         "max_line_deviation_mm",
         "observed_max_eps",
+        "pixel_sigma_px",
+        "translation_uncertainty_mm",
+        "rotation_uncertainty_deg",
     ];
     for (name, c) in names.iter().zip(cols) {
         d.set_item(*name, PyArray1::from_vec(py, c))?;
     }
     d.set_item("prop1", PyArray1::from_vec(py, prop1))?;
     d.set_item("prop2", PyArray1::from_vec(py, prop2))?;
+    d.set_item("within_tolerance", PyArray1::from_vec(py, within))?;
     d.set_item("message", str_array(message)?)?;
     Ok(d)
 }

@@ -70,6 +70,16 @@ pub struct StopRules {
     pub window: usize,
     /// A camera farther than this (metres) from the reference pose counts as diverged.
     pub divergence_distance: f64,
+    /// When the image rule is met, the run is `converged` only if the pose uncertainty the
+    /// images still allow (3 sigma plus the offset the mean error implies, see
+    /// [`crate::core::uncertainty`]) is at most this far from the goal, metres; otherwise it is
+    /// `settled`. Also the tolerance of the summary's `within_tolerance`.
+    pub max_translation_uncertainty: f64,
+    /// The same for the rotation, degrees.
+    pub max_rotation_uncertainty_deg: f64,
+    /// The reference image's pixel noise, pixels; `None`: assumed equal to the noise measured
+    /// on the servo camera's images (one image cannot show its own noise).
+    pub reference_pixel_sigma: Option<f64>,
 }
 
 impl Default for StopRules {
@@ -81,6 +91,9 @@ impl Default for StopRules {
             tau21: 1e-4,
             window: 1,
             divergence_distance: 10.0,
+            max_translation_uncertainty: 0.005,
+            max_rotation_uncertainty_deg: 0.5,
+            reference_pixel_sigma: None,
         }
     }
 }

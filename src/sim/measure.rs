@@ -57,6 +57,15 @@ impl StopWindow {
         row
     }
 
+    /// The means returned by the last [`push`](Self::push) (None before the window is full).
+    pub(crate) fn mean(&self) -> Option<&[f64]> {
+        match self.window {
+            _ if self.rows.len() < self.window => None,
+            1 => self.rows.back().map(Vec::as_slice),
+            _ => Some(&self.mean),
+        }
+    }
+
     /// Adds the errors of one image; returns the means once the window is full.
     pub(crate) fn push(&mut self, row: Vec<f64>) -> Option<&[f64]> {
         self.rows.push_back(row);

@@ -23,6 +23,11 @@ pub enum Status {
     JointLimit,
     /// The arm's manipulability fell below `[robot] min_manipulability`.
     Singular,
+    /// The image stop rule was met, but the pose uncertainty the images allow (measured pixel
+    /// noise propagated to the pose, [`crate::core::uncertainty`]) is above the tolerance
+    /// `[stop] max_translation_uncertainty` or `max_rotation_uncertainty_deg`: the loop is
+    /// still, but the images cannot tell that the camera is at the goal.
+    Settled,
 }
 
 impl Status {
@@ -38,6 +43,7 @@ impl Status {
             Status::Observed => "observed",
             Status::JointLimit => "joint_limit",
             Status::Singular => "singular",
+            Status::Settled => "settled",
         }
     }
 }
@@ -92,6 +98,26 @@ pub struct Summary {
     pub detection_error: Option<(f64, f64)>,
     /// Smallest manipulability of the arm along the run (None for other robots).
     pub min_manipulability: Option<f64>,
+    /// What the final images say about the pose (None when it could not be computed: too few
+    /// points in view, or fewer than three images to measure the noise).
+    pub certainty: Option<Certainty>,
+    /// Ground truth: whether the final pose is within `[stop] max_translation_uncertainty` and
+    /// `max_rotation_uncertainty_deg` of the goal.
+    pub within_tolerance: bool,
+}
+
+/// The pose uncertainty the final images allow (first-order, [`crate::core::uncertainty`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Certainty {
+    /// Pixel noise measured on the servo camera's last images, pixels per coordinate.
+    pub pixel_sigma: f64,
+    /// The reference image's noise assumed, pixels.
+    pub reference_pixel_sigma: f64,
+    /// RMS translation and rotation (metres, radians) the noise leaves.
+    pub sigma: (f64, f64),
+    /// 3 sigma plus the offset the mean error implies: how far from the goal the camera may
+    /// be (metres, radians).
+    pub bound: (f64, f64),
 }
 
 /// Prop. 3 along the path: the bound `psi / phi` on `||eps(t)||` and what was observed.

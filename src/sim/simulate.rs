@@ -13,9 +13,13 @@ use crate::core::distortion::undistort_point;
 use crate::core::ibvs::{IBVS_MIN_POINTS, IbvsController};
 use crate::core::invariant::{BasisFrame, choose_basis, validate_basis};
 use crate::core::jacobian::MIN_POINTS;
+use crate::core::noise_meter::PixelNoiseMeter;
 use crate::core::planning::{InvariantPath, estimate_plane_parallax};
 use crate::core::se3::pose_error;
 use crate::core::stability::{a_matrix, stability_verdicts};
+use crate::core::uncertainty::{
+    DEFAULT_SIGMAS, ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty, pixel_pose_uncertainty,
+};
 use crate::error::{Error, Result, check_positive};
 use crate::sim::arm::{ArmEvent, ArmRobot, ArmStep};
 use crate::sim::camera_model::CameraModel;
@@ -23,7 +27,7 @@ use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthEstimator, DepthSource};
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::measure::{Metrics, ReferenceImage, StopWindow, measure, stop_rule_met};
-use crate::sim::outcome::{Outcome, Recording, Status, StopRule, Summary, Tracking};
+use crate::sim::outcome::{Certainty, Outcome, Recording, Status, StopRule, Summary, Tracking};
 use crate::sim::robot::Robot;
 use crate::sim::scene::Observation;
 
@@ -279,7 +283,14 @@ struct Run<'a> {
     recording: Option<Recording>,
     metrics: Metrics,
     iteration: usize,
+    /// The pixel noise of the last images (what the law is fed).
+    noise_meter: PixelNoiseMeter,
+    /// What the images said about the pose when the stop rule was met.
+    certainty: Option<Certainty>,
 }
+
+/// Images the noise meter looks back over.
+const NOISE_IMAGES: usize = 32;
 
 impl<'a> Run<'a> {
     fn new(config: &'a SimulationConfig, mut obs: Observation, reference_depths: Vec<f64>) -> Result<Self> {
@@ -337,6 +348,8 @@ impl<'a> Run<'a> {
             path: None,
             metrics: Metrics { invariant_error: f64::NAN, tau: [f64::NAN; 3], eps_z: f64::NAN, image_error: f64::NAN },
             iteration: 0,
+            noise_meter: PixelNoiseMeter::new(NOISE_IMAGES)?,
+            certainty: None,
         })
     }
 
@@ -383,7 +396,7 @@ impl<'a> Run<'a> {
             }
         }
         self.undistort();
-        Ok(())
+        self.noise_meter.push(&self.pixels, Some(&self.visible))
     }
 
     /// The image points through the controller's calibration (K_hat and its distortion); a
@@ -450,8 +463,8 @@ impl<'a> Run<'a> {
         if let Some(end) = self.lost_features() {
             return Some(end);
         }
-        if converged {
-            return Some((Status::Converged, "stop rule met".into()));
+        if converged && let Some(end) = self.certify() {
+            return Some(end);
         }
         let at_limit = self.iteration >= stop.max_iterations;
         if let Some(end) = self.rz_trap(at_limit) {
@@ -488,6 +501,72 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// The image rule is met: `converged` if the pose uncertainty the averaged images allow is
+    /// within the tolerance, `settled` if not; `None` (carry on) until the noise can be
+    /// measured (three images).
+    fn certify(&mut self) -> Option<End> {
+        let stop = &self.config.stop;
+        let certainty = match self.window.mean().map(|mean| self.mean_pixels(mean)) {
+            Some(pixels) => self.certainty_of(&pixels, stop.window)?,
+            None => return None,
+        };
+        self.certainty = Some(certainty);
+        let (t, r) = certainty.bound;
+        let (t_tol, r_tol) = (stop.max_translation_uncertainty, stop.max_rotation_uncertainty_deg.to_radians());
+        if t <= t_tol && r <= r_tol {
+            return Some((Status::Converged, "stop rule met".into()));
+        }
+        let why = format!(
+            "stop rule met, but the images allow {:.3} mm and {:.3} deg from the goal (tolerance {:.3} mm, {:.3} deg; \
+             pixel noise {:.3} px measured, reference {:.3} px)",
+            t * 1e3,
+            r.to_degrees(),
+            t_tol * 1e3,
+            stop.max_rotation_uncertainty_deg,
+            certainty.pixel_sigma,
+            certainty.reference_pixel_sigma
+        );
+        Some((Status::Settled, why))
+    }
+
+    /// The pixels averaged over the stop window: `p* + mean(p - p*)` (every point is in view
+    /// when a rule is met).
+    fn mean_pixels(&self, mean: &[f64]) -> Vec<[f64; 2]> {
+        let offset = 1 + 3 * self.reference.others.len();
+        let errors = mean[offset..].chunks_exact(2);
+        self.reference.pixels.iter().zip(errors).map(|(p, e)| [p[0] + e[0], p[1] + e[1]]).collect()
+    }
+
+    /// The pose uncertainty of `pixels` (the average of `averaged` images) under the law's
+    /// measurements, with its depths and K_hat; `None` when it cannot be computed.
+    fn certainty_of(&self, pixels: &[[f64; 2]], averaged: usize) -> Option<Certainty> {
+        let pixel_sigma = self.noise_meter.sigma()?;
+        let reference_pixel_sigma = self.config.stop.reference_pixel_sigma.unwrap_or(pixel_sigma);
+        let noise = ImageNoise { current: pixel_sigma, reference: reference_pixel_sigma, averaged_images: averaged };
+        let m = Measurement {
+            pixels,
+            depths: self.law_depths(),
+            reference_pixels: &self.reference.pixels,
+            visible: Some(&self.visible),
+            k_hat: &self.config.estimate,
+        };
+        // Where the loop settles is the law's business: the invariant law matches s and tau_21
+        // (fewer constraints than the pixels, whatever the stop rule reads), IBVS the pixels.
+        let u: PoseUncertainty = match self.config.law {
+            Law::Invariant(_) => invariant_pose_uncertainty(&m, self.reference.basis, noise),
+            _ => pixel_pose_uncertainty(&m, noise),
+        }
+        .ok()?;
+        let sigma = (u.translation_sigma(), u.rotation_sigma());
+        let bound = (u.translation_bound(DEFAULT_SIGMAS), u.rotation_bound(DEFAULT_SIGMAS));
+        Some(Certainty { pixel_sigma, reference_pixel_sigma, sigma, bound })
+    }
+
+    /// The depths the law is given.
+    fn law_depths(&self) -> &[f64] {
+        law_depths(&self.config.depths, &self.obs, &self.reference_depths, &self.estimated)
+    }
+
     fn lost_features(&self) -> Option<End> {
         let visible = &self.visible;
         let (n, basis) = (visible.len(), self.reference.basis);
@@ -505,11 +584,7 @@ impl<'a> Run<'a> {
     fn control(&mut self, t: f64, k: &Intrinsics) -> std::result::Result<Vector6<f64>, End> {
         self.estimate_depths()?;
         self.follow_path(t)?;
-        let depths = match self.config.depths {
-            DepthSource::True => &self.obs.depths,
-            DepthSource::Reference => &self.reference_depths,
-            DepthSource::Estimated(_) => &self.estimated,
-        };
+        let depths = law_depths(&self.config.depths, &self.obs, &self.reference_depths, &self.estimated);
         let twist =
             self.controller.step(&self.pixels, depths, &self.visible).map_err(|e| (status_of(&e), e.to_string()))?;
         if let (Some(path), AnyController::Invariant(c)) = (self.path.as_mut(), &self.controller)
@@ -616,6 +691,15 @@ impl<'a> Run<'a> {
         }
         let goal = Isometry3::identity();
         let (final_t, final_r) = pose_error(&goal, &self.pose);
+        // Ended otherwise than by the stop rule: what the last image alone allows.
+        let certainty = match (self.certainty, &self.config.law) {
+            (Some(c), _) => Some(c),
+            (None, Law::Observe) => None,
+            (None, _) => self.certainty_of(&self.pixels, 1),
+        };
+        let stop = &self.config.stop;
+        let within_tolerance =
+            final_t <= stop.max_translation_uncertainty && final_r <= stop.max_rotation_uncertainty_deg.to_radians();
         let m = &self.metrics;
         let summary = Summary {
             status,
@@ -636,6 +720,8 @@ impl<'a> Run<'a> {
             tracking: self.path.as_ref().map(|p| p.summary(self.gain)),
             detection_error: self.images.as_ref().map(ImageLoop::error_summary),
             min_manipulability: self.min_manipulability,
+            certainty,
+            within_tolerance,
         };
         Outcome { summary, recording: self.recording, reference_pixels: self.reference.pixels }
     }
@@ -647,6 +733,15 @@ fn start_joints(robot: &Robot, start: &Isometry3<f64>) -> Result<(Vec<f64>, Opti
         Robot::Arm(arm) => (arm.start.clone(), Some(arm.model.manipulability(&arm.start)?)),
         other => (other.joints(start).to_vec(), None),
     })
+}
+
+/// The depths the law is given: true, the reference image's, or estimated.
+fn law_depths<'b>(source: &DepthSource, obs: &'b Observation, reference: &'b [f64], estimated: &'b [f64]) -> &'b [f64] {
+    match source {
+        DepthSource::True => &obs.depths,
+        DepthSource::Reference => reference,
+        DepthSource::Estimated(_) => estimated,
+    }
 }
 
 /// Distance from `p` to the segment `[a, b]`.

@@ -220,8 +220,15 @@ impl Scenario {
             ("stop.invariant_error", s.invariant_error),
             ("stop.tau21", s.tau21),
             ("stop.divergence_distance", s.divergence_distance),
+            ("stop.max_translation_uncertainty", s.max_translation_uncertainty),
+            ("stop.max_rotation_uncertainty_deg", s.max_rotation_uncertainty_deg),
         ] {
             check_positive(key, v)?;
+        }
+        if let Some(sigma) = s.reference_pixel_sigma
+            && !(0.0..=1000.0).contains(&sigma)
+        {
+            return Err(scenario_error("stop.reference_pixel_sigma", format!("pixels, from 0 to 1000, got {sigma}")));
         }
         Ok(())
     }
