@@ -14,8 +14,10 @@
 //! The camera matrix must be `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`: OpenCV's and ROS's
 //! models have no skew, so a file with `K[0,1] != 0` is refused rather than read differently
 //! from the tools that wrote it. Every error is an [`Error::Calibration`] naming the file and
-//! the entry at fault, quoting at most a short excerpt of a value
-//! ([`excerpt`](crate::input_file::excerpt)), never the file's contents.
+//! the entry at fault and never the file's contents: a text where a number was expected is
+//! described by its length only (a scenario can point at any file, and its strings may be
+//! secrets); only a distortion model name that looks like one (lower-case letters, digits and `_`, at
+//! most 32) is quoted.
 //!
 //! `image_width` and `image_height` are optional (OpenCV's stereo and hand-written
 //! calibrations omit them): without them the image size is unknown (`None`).
@@ -45,7 +47,7 @@ use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, DistortionModel};
 use crate::error::{Error, Result};
 pub use crate::input_file::MAX_CALIBRATION_BYTES;
-use crate::input_file::{excerpt, read_text};
+use crate::input_file::read_text;
 
 /// The largest absolute value of a distortion coefficient (module docs).
 pub const MAX_DISTORTION_COEFFICIENT: f64 = 1e4;
@@ -164,7 +166,7 @@ impl Raw {
                         "distortion_model",
                         format!(
                             "unknown distortion model {}; expected \"plumb_bob\" or \"rational_polynomial\"",
-                            excerpt(name)
+                            model_name(name)
                         ),
                     )
                 })?;
@@ -229,11 +231,22 @@ fn strip_opencv_directive(text: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// A text from the file, by its length only (module docs).
+fn text_of_length(s: &str) -> String {
+    format!("a text of {} characters", s.chars().count())
+}
+
+/// A name quoted if it looks like one (module docs), else by its length.
+fn model_name(s: &str) -> String {
+    let plausible = !s.is_empty() && s.len() <= 32 && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    if plausible { format!("\"{s}\"") } else { text_of_length(s) }
+}
+
 fn yaml_kind(v: &Yaml) -> String {
     match v {
         Yaml::Real(s) => format!("{s:?}"),
         Yaml::Integer(i) => i.to_string(),
-        Yaml::String(s) => format!("the string {}", excerpt(s)),
+        Yaml::String(s) => text_of_length(s),
         Yaml::Boolean(b) => format!("the boolean {b}"),
         Yaml::Array(_) => "a list".into(),
         Yaml::Hash(_) => "a mapping".into(),
@@ -373,7 +386,7 @@ fn xml_text<'a>(node: XmlNode<'a, '_>) -> &'a str {
 /// The integer in the element `name` of `node`, `field` naming it in errors.
 fn xml_int(file: &str, node: XmlNode<'_, '_>, name: &str, field: &str) -> Result<i64> {
     let t = xml_text(xml_child(file, node, name, field)?);
-    t.parse::<i64>().map_err(|_| err(file, field, format!("expected an integer, got {}", excerpt(t))))
+    t.parse::<i64>().map_err(|_| err(file, field, format!("expected an integer, got {}", text_of_length(t))))
 }
 
 fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix> {
@@ -387,7 +400,7 @@ fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix>
         .enumerate()
         .map(|(i, s)| {
             parse_opencv_float(s)
-                .ok_or_else(|| err(file, format!("{key}.data[{i}]"), format!("non-numeric value {}", excerpt(s))))
+                .ok_or_else(|| err(file, format!("{key}.data[{i}]"), format!("non-numeric value: {}", text_of_length(s))))
         })
         .collect::<Result<Vec<f64>>>()?;
     Ok(RawMatrix { rows, cols, data })
@@ -403,7 +416,7 @@ fn from_xml(text: &str, file: &str) -> Result<Raw> {
         return Err(err(
             file,
             "",
-            format!("expected the root element <opencv_storage>, got {}", excerpt(root.tag_name().name())),
+            format!("expected the root element <opencv_storage>, got {}", model_name(root.tag_name().name())),
         ));
     }
     let optional_int = |name: &str| match xml_has(root, name) {
@@ -502,7 +515,7 @@ dist_coeffs: !!opencv-matrix
     #[test]
     fn reads_the_three_formats() {
         let c = parse_calibration(ROS, "ros.yaml").unwrap();
-        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.image_size, Some((640, 480)));
         assert_eq!(c.intrinsics.fku(), 800.5);
         assert_eq!(c.intrinsics.v0(), 240.75);
         assert_eq!(c.distortion.model(), DistortionModel::PlumbBob);
@@ -514,7 +527,7 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(c.distortion.coefficients()[5], 0.1);
 
         let c = parse_calibration(XML, "cv.xml").unwrap();
-        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.image_size, Some((640, 480)));
         assert_eq!(c.intrinsics.u0(), 320.0);
         assert_eq!(c.distortion.coefficients(), &[-0.3, 0.1, 0.001, -0.002, 0.0]);
     }
@@ -522,7 +535,7 @@ dist_coeffs: !!opencv-matrix
     #[test]
     fn malformed_files_name_the_field() {
         let cases: [(String, &str, &str); 9] = [
-            (ROS.replace("image_width: 640\n", ""), "image_width", "missing"),
+            (ROS.replace("image_width: 640\n", ""), "image_width", "missing (image_height is given"),
             (ROS.replace("image_height: 480", "image_height: tall"), "image_height", "integer"),
             (ROS.replace("cols: 3", "cols: 2"), "camera_matrix", "3x3"),
             (ROS.replace("800.5, 0, 320.25", "800.5, 0, abc"), "camera_matrix.data[2]", "non-numeric"),
@@ -549,5 +562,90 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(f, "");
         let e = load_calibration("/nonexistent/cal.yaml").unwrap_err();
         assert!(e.to_string().contains("/nonexistent/cal.yaml"), "{e}");
+    }
+
+    /// Regression (issue 16): nine levels of nine aliases (about 600 bytes) made the loader
+    /// build 9^9 nodes and abort the process; aliases are now refused before loading.
+    #[test]
+    fn alias_bombs_are_refused_quickly() {
+        let mut bomb = String::from("a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]\n");
+        for i in 1..10 {
+            bomb += &format!("a{i}: &a{i} [{}]\n", vec![format!("*a{}", i - 1); 9].join(", "));
+        }
+        let in_matrix = ROS.replace("data: [800.5", "data: &k [800.5").replace("cols: 5", "cols: 5\n  extra: *k");
+        for text in [bomb.clone() + ROS, in_matrix] {
+            let t = std::time::Instant::now();
+            let (field, reason) = field_of(parse_calibration(&text, "bomb.yaml").unwrap_err());
+            assert_eq!(field, "");
+            assert!(reason.contains("alias"), "{reason}");
+            assert!(t.elapsed().as_secs() < 5, "hang test: {:?}", t.elapsed());
+        }
+        // An anchor without alias is harmless and read as usual.
+        assert!(parse_calibration(&ROS.replace("data: [800.5", "data: &k [800.5"), "a.yaml").is_ok());
+    }
+
+    /// Regression (issue 16): duplicate XML elements were accepted (the first one read) while
+    /// duplicate YAML keys were refused; both are refused now.
+    #[test]
+    fn duplicates_are_refused_in_both_formats() {
+        let twice = XML.replace("<image_height>480</image_height>", "<image_height>480</image_height>\n<image_height>48</image_height>");
+        let (field, reason) = field_of(parse_calibration(&twice, "d.xml").unwrap_err());
+        assert_eq!(field, "image_height");
+        assert!(reason.contains("twice"), "{reason}");
+        let rows_twice = XML.replace("<rows>3</rows>", "<rows>3</rows><rows>3</rows>");
+        assert_eq!(field_of(parse_calibration(&rows_twice, "d.xml").unwrap_err()).0, "camera_matrix.rows");
+        let yaml_twice = ROS.replace("image_height: 480\n", "image_height: 480\nimage_height: 48\n");
+        assert!(parse_calibration(&yaml_twice, "d.yaml").is_err());
+    }
+
+    /// Regression (issue 16): OpenCV files without image_width / image_height were refused;
+    /// the size is optional and read as unknown.
+    #[test]
+    fn image_size_is_optional() {
+        let no_size = OPENCV4.replace("image_width: 640\nimage_height: 480\n", "");
+        let c = parse_calibration(&no_size, "cv.yaml").unwrap();
+        assert_eq!(c.image_size, None);
+        assert_eq!(c.intrinsics.fkv(), 810.5);
+        let xml = XML.replace("<image_width>640</image_width>\n<image_height>480</image_height>\n", "");
+        assert_eq!(parse_calibration(&xml, "cv.xml").unwrap().image_size, None);
+        let (field, _) = field_of(parse_calibration(&XML.replace("<image_width>640</image_width>", ""), "cv.xml").unwrap_err());
+        assert_eq!(field, "image_width");
+    }
+
+    /// Regression (issue 16): k1 = 1e300 loaded; coefficients and intrinsics must describe a
+    /// lens (module docs), checked at the bounds.
+    #[test]
+    fn values_that_do_not_describe_a_lens_are_refused() {
+        let k1 = |v: &str| ROS.replace("data: [-0.3, 0.1", &format!("data: [{v}, 0.1"));
+        let (field, reason) = field_of(parse_calibration(&k1("1e300"), "k.yaml").unwrap_err());
+        assert_eq!(field, "distortion_coefficients.data[0]");
+        assert!(reason.contains("lens"), "{reason}");
+        assert!(parse_calibration(&k1("-1e4"), "k.yaml").is_ok());
+        assert!(parse_calibration(&k1("-10000.001"), "k.yaml").is_err());
+        let fx = |v: &str| ROS.replace("data: [800.5,", &format!("data: [{v},"));
+        assert_eq!(field_of(parse_calibration(&fx("1e7"), "k.yaml").unwrap_err()).0, "camera_matrix.data[0]");
+        assert!(parse_calibration(&fx("1e6"), "k.yaml").is_ok());
+        assert_eq!(field_of(parse_calibration(&fx("0"), "k.yaml").unwrap_err()).0, "camera_matrix.data[0]");
+        let cy = ROS.replace("240.75", "-2e6");
+        assert_eq!(field_of(parse_calibration(&cy, "k.yaml").unwrap_err()).0, "camera_matrix.data[5]");
+    }
+
+    /// Regression (issue 16): a text value was quoted in full ("got the string \"AKIA-...\"").
+    #[test]
+    fn errors_do_not_quote_the_file() {
+        let marker = "SECRET-MARKER-0123";
+        let cases = [
+            ROS.replace("image_width: 640", &format!("image_width: {marker}")),
+            format!("{marker}\n"),
+            ROS.replace("plumb_bob", marker),
+            ROS.replace("800.5, 0, 320.25", &format!("800.5, 0, {marker}")),
+            XML.replace("810.5", marker),
+            XML.replace("<rows>3</rows>", &format!("<rows>{marker}</rows>")),
+            XML.replace("opencv_storage", marker),
+        ];
+        for text in cases {
+            let message = parse_calibration(&text, "s.yaml").unwrap_err().to_string();
+            assert!(!message.contains("SECRET"), "{message}");
+        }
     }
 }

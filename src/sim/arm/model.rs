@@ -260,12 +260,35 @@ fn chain_to<'a>(robot: &'a urdf_rs::Robot, end_effector: &str, source: &str) -> 
     Ok(chain)
 }
 
-/// The parser's error in at most one line of 160 characters: its messages may quote the
-/// text at fault, which must not carry a file's contents into the error.
+/// The parser's error in at most one line of 160 characters, with every bracketed or quoted
+/// part (`[...]`, `"..."`, `'...'`, `` `...` ``) elided: urdf-rs quotes the attribute text at
+/// fault, which must not carry a file's contents into the error.
 fn parse_message(message: &str) -> String {
     let line = message.lines().next().unwrap_or_default();
-    let short: String = line.chars().take(160).collect();
-    let cut = if short.len() < line.len() || message.lines().nth(1).is_some() { " ..." } else { "" };
+    let mut out = String::new();
+    let mut closing: Option<char> = None;
+    for c in line.chars() {
+        match closing {
+            Some(end) if c == end => {
+                out.push(end);
+                closing = None;
+            }
+            Some(_) => {}
+            None => {
+                out.push(c);
+                closing = match c {
+                    '[' => Some(']'),
+                    '"' | '\'' | '`' => Some(c),
+                    _ => None,
+                };
+                if closing.is_some() {
+                    out.push_str("...");
+                }
+            }
+        }
+    }
+    let short: String = out.chars().take(160).collect();
+    let cut = if short.len() < out.len() || message.lines().nth(1).is_some() { " ..." } else { "" };
     format!("not valid URDF: {}{cut}", short.escape_debug())
 }
 
