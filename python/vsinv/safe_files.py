@@ -32,12 +32,16 @@ def read_text(path: _PathLike, limit: int) -> str:
         fd = os.open(path, flags)
     except OSError as e:
         raise InvalidInput(f"{os.fsdecode(path)}: cannot read: {e.strerror}") from None
-    with os.fdopen(fd, "rb") as f:
-        st = os.fstat(f.fileno())
+    try:
+        st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
             raise InvalidInput(f"{os.fsdecode(path)}: not a regular file (a directory, device, FIFO or socket)")
         if st.st_size > limit:
             raise InvalidInput(f"{os.fsdecode(path)}: {st.st_size} bytes, more than the limit of {limit} bytes")
+    except BaseException:
+        os.close(fd)
+        raise
+    with os.fdopen(fd, "rb") as f:
         data = f.read(limit + 1)
     if len(data) > limit:
         raise InvalidInput(f"{os.fsdecode(path)}: more than the limit of {limit} bytes")

@@ -422,4 +422,21 @@ mod tests {
         let err = ArmModel::from_urdf_str(&two_parents, "slider").unwrap_err();
         assert!(err.to_string().contains("two joints, `slide` and `spin`"), "{err}");
     }
+
+    /// Regression (issue 16): a joint whose parent link is not defined was taken silently as
+    /// the chain's root.
+    #[test]
+    fn a_missing_parent_link_is_refused() {
+        let orphan = MIXED.replace(r#"<link name="base"/>"#, "");
+        let err = ArmModel::from_urdf_str(&orphan, "tool").unwrap_err().to_string();
+        assert!(err.contains("joint `mount_joint`") && err.contains("parent link `base`"), "{err}");
+    }
+
+    /// Regression (issue 16): the parser's message quoted the attribute text of the file.
+    #[test]
+    fn parse_errors_do_not_quote_the_file() {
+        let bad = MIXED.replace(r#"xyz="0 0 0.2""#, r#"xyz="0 SECRET-MARKER""#);
+        let err = ArmModel::from_urdf_str(&bad, "tool").unwrap_err().to_string();
+        assert!(err.contains("not valid URDF") && !err.contains("SECRET"), "{err}");
+    }
 }
