@@ -185,12 +185,13 @@ impl Raw {
     }
 }
 
-/// fx, fy in (0, [`MAX_INTRINSIC_PIXELS`]] and cx, cy within +-[`MAX_INTRINSIC_PIXELS`]
-/// (row-major K: fx at 0, cx at 2, fy at 4, cy at 5).
+/// fx, fy at most [`MAX_INTRINSIC_PIXELS`] and cx, cy within +-[`MAX_INTRINSIC_PIXELS`]
+/// (row-major K: fx at 0, cx at 2, fy at 4, cy at 5); fx, fy > 0 is checked by
+/// [`Intrinsics::from_matrix`].
 fn check_lens_intrinsics(file: &str, k: &[f64]) -> Result<()> {
     for (i, name) in [(0, "fx"), (4, "fy")] {
-        if !(k[i] > 0.0 && k[i] <= MAX_INTRINSIC_PIXELS) {
-            let reason = format!("{name} = {:e} does not describe a lens: expected (0, {MAX_INTRINSIC_PIXELS:e}] px", k[i]);
+        if k[i] > MAX_INTRINSIC_PIXELS {
+            let reason = format!("{name} = {:e} does not describe a lens: expected at most {MAX_INTRINSIC_PIXELS:e} px", k[i]);
             return Err(err(file, format!("camera_matrix.data[{i}]"), reason));
         }
     }
@@ -625,7 +626,7 @@ dist_coeffs: !!opencv-matrix
         let fx = |v: &str| ROS.replace("data: [800.5,", &format!("data: [{v},"));
         assert_eq!(field_of(parse_calibration(&fx("1e7"), "k.yaml").unwrap_err()).0, "camera_matrix.data[0]");
         assert!(parse_calibration(&fx("1e6"), "k.yaml").is_ok());
-        assert_eq!(field_of(parse_calibration(&fx("0"), "k.yaml").unwrap_err()).0, "camera_matrix.data[0]");
+        assert_eq!(field_of(parse_calibration(&fx("0"), "k.yaml").unwrap_err()).0, "camera_matrix");
         let cy = ROS.replace("240.75", "-2e6");
         assert_eq!(field_of(parse_calibration(&cy, "k.yaml").unwrap_err()).0, "camera_matrix.data[5]");
     }

@@ -296,3 +296,47 @@ def test_cli_invariance_points(folder: Path) -> None:
     check_cli(outcomes, named)
     for name, row in outcomes.items():
         assert "codec can't decode" not in row["message"], (name, row["message"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Regressions of the smaller items (issue 16)
+
+
+def test_image_size_is_optional(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import vsinv
+
+    no_size = ROS_YAML.replace("image_width: 640\nimage_height: 480\n", "")
+    (tmp_path / "nosize.yaml").write_text(no_size)
+    cal = vsinv.load_calibration(tmp_path / "nosize.yaml")
+    assert cal.image_size is None and cal.intrinsics.fku == 800.0
+    assert vsinv.load_calibration(_write(tmp_path, ROS_YAML)).image_size == (640, 480)
+    # A camera that needs the size says so by key.
+    monkeypatch.chdir(tmp_path)
+    d = vsinv.load_scenario("vision-12-6").to_dict()
+    d["camera"] = {"calibration": "nosize.yaml"}
+    with pytest.raises(vsinv.InvalidInput, match=r"camera\.calibration: the file has no image_width"):
+        vsinv.load_scenario(d)
+    d["camera"] = {"calibration": "ros.yaml"}
+    vsinv.load_scenario(d)  # with the size: accepted
+
+
+def _write(folder: Path, text: str) -> Path:
+    path = folder / "ros.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_outputs_do_not_follow_planted_links(tmp_path: Path) -> None:
+    """`--out` wrote trajectory.npz through a symbolic link planted at its name."""
+    from vsinv.cli import main
+
+    target = tmp_path / "victim.txt"
+    target.write_text("keep")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "trajectory.npz").symlink_to(target)
+    (out / "translation.png").symlink_to(target)
+    assert main(["run", "lens-12-6", "--out", os.fspath(out), "--no-progress"]) == 0
+    assert target.read_text() == "keep"
+    assert not (out / "trajectory.npz").is_symlink() and (out / "trajectory.npz").stat().st_size > 0
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []  # no temporary left

@@ -74,10 +74,10 @@ def replace_text_file(path: _PathLike, write: Callable[[IO[str]], object]) -> Pa
     """:func:`replace_file` for text (UTF-8, newlines as written: for ``csv``)."""
 
     def write_text(f: IO[bytes]) -> None:
-        with io.TextIOWrapper(f, encoding="utf-8", newline="") as text:
-            write(text)
-            text.flush()
-            text.detach()
+        text = io.TextIOWrapper(f, encoding="utf-8", newline="")
+        write(text)
+        text.flush()
+        text.detach()  # the caller closes f
 
     return replace_file(path, write_text)
 

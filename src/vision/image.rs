@@ -66,7 +66,12 @@ pub fn save_png(image: &GreyImage, path: &Path) -> Result<()> {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    let mut temp = tempfile::NamedTempFile::new_in(folder).map_err(|e| image_error(&what, e.to_string()))?;
+    let mut builder = tempfile::Builder::new();
+    // Read-write for everyone the umask allows, like a file created directly (the
+    // temporary file's default is owner-only).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut temp = builder.tempfile_in(folder).map_err(|e| image_error(&what, e.to_string()))?;
     image
         .write_to(&mut std::io::BufWriter::new(temp.as_file_mut()), ::image::ImageFormat::Png)
         .map_err(|e| image_error(&what, e.to_string()))?;

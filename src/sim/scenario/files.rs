@@ -69,3 +69,48 @@ impl FileScope<'_> {
         Ok(real)
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+    use crate::error::Error;
+
+    fn key_and_reason(r: Result<PathBuf>) -> (String, String) {
+        match r.unwrap_err() {
+            Error::Scenario { key, reason } => (key, reason),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    /// Regression (issue 16): `calibration` and `robot.urdf` accepted absolute paths and
+    /// `..` out of the scenario's folder (`calibration = "/etc/passwd"`).
+    #[test]
+    fn files_stay_in_the_folder_unless_allowed() {
+        let root = std::env::temp_dir().join(format!("vsinv-scope-{}", std::process::id()));
+        let folder = root.join("scenario");
+        std::fs::create_dir_all(folder.join("sub")).unwrap();
+        std::fs::write(folder.join("sub/cal.yaml"), "x").unwrap();
+        std::fs::write(root.join("outside.yaml"), "x").unwrap();
+        let confined = FileScope { directory: Some(&folder), access: FileAccess::ScenarioFolder };
+        assert!(confined.resolve("camera.calibration", "sub/cal.yaml").unwrap().ends_with("sub/cal.yaml"));
+        assert!(confined.resolve("camera.calibration", "sub/../sub/cal.yaml").is_ok());
+        let outside = root.join("outside.yaml");
+        let absolute = outside.to_str().unwrap();
+        for file in [absolute, "../outside.yaml", "/etc/passwd", "sub/../../outside.yaml"] {
+            let (key, reason) = key_and_reason(confined.resolve("camera.calibration", file));
+            assert_eq!(key, "camera.calibration");
+            assert!(reason.contains("allow_outside_files"), "{file}: {reason}");
+        }
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink(&outside, folder.join("link.yaml")).unwrap();
+            let (_, reason) = key_and_reason(confined.resolve("robot.urdf", "link.yaml"));
+            assert!(reason.contains("symbolic link"), "{reason}");
+        }
+        let anywhere = FileScope { directory: Some(&folder), access: FileAccess::Anywhere };
+        assert_eq!(anywhere.resolve("camera.calibration", absolute).unwrap(), outside);
+        assert!(anywhere.resolve("camera.calibration", "../outside.yaml").is_ok());
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}

@@ -163,3 +163,23 @@ impl Scenario {
         toml::to_string(self).map_err(|e| scenario_error("", e.to_string()))
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// Regression (issue 16): TOML errors quoted the source line and serde quoted string
+    /// values in full; now the line number and a short excerpt only.
+    #[test]
+    fn errors_quote_no_more_than_an_excerpt() {
+        let marker = "SECRET-MARKER";
+        let garbage = format!("name = \"x\"\nAKIA-0123456789-{marker} = = \n");
+        let e = Scenario::from_toml(&garbage).unwrap_err().to_string();
+        assert!(e.contains("line 2") && !e.contains(marker), "{e}");
+        let value = format!("name = \"x\"\n[control]\ngain = \"AKIA-0123456789-{marker}\"\n");
+        let e = Scenario::from_toml(&value).unwrap_err().to_string();
+        assert!(e.contains("control.gain") && e.contains("AKIA") && !e.contains(marker), "{e}");
+        assert_eq!(shorten_quotes(r#"a "b\"c" d"#), r#"a "b\\\"c" d"#);
+    }
+}
