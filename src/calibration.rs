@@ -116,8 +116,12 @@ impl Raw {
         let image_size = match (self.width, self.height) {
             (Some(w), Some(h)) => Some((size("image_width", w)?, size("image_height", h)?)),
             (None, None) => None,
-            (None, Some(_)) => return Err(err(file, "image_width", "missing (image_height is given: give both or neither)")),
-            (Some(_), None) => return Err(err(file, "image_height", "missing (image_width is given: give both or neither)")),
+            (None, Some(_)) => {
+                return Err(err(file, "image_width", "missing (image_height is given: give both or neither)"));
+            }
+            (Some(_), None) => {
+                return Err(err(file, "image_height", "missing (image_width is given: give both or neither)"));
+            }
         };
 
         let km = &self.camera_matrix;
@@ -191,7 +195,8 @@ impl Raw {
 fn check_lens_intrinsics(file: &str, k: &[f64]) -> Result<()> {
     for (i, name) in [(0, "fx"), (4, "fy")] {
         if k[i] > MAX_INTRINSIC_PIXELS {
-            let reason = format!("{name} = {:e} does not describe a lens: expected at most {MAX_INTRINSIC_PIXELS:e} px", k[i]);
+            let reason =
+                format!("{name} = {:e} does not describe a lens: expected at most {MAX_INTRINSIC_PIXELS:e} px", k[i]);
             return Err(err(file, format!("camera_matrix.data[{i}]"), reason));
         }
     }
@@ -239,7 +244,8 @@ fn text_of_length(s: &str) -> String {
 
 /// A name quoted if it looks like one (module docs), else by its length.
 fn model_name(s: &str) -> String {
-    let plausible = !s.is_empty() && s.len() <= 32 && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    let plausible =
+        !s.is_empty() && s.len() <= 32 && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
     if plausible { format!("\"{s}\"") } else { text_of_length(s) }
 }
 
@@ -400,8 +406,9 @@ fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix>
         .split_whitespace()
         .enumerate()
         .map(|(i, s)| {
-            parse_opencv_float(s)
-                .ok_or_else(|| err(file, format!("{key}.data[{i}]"), format!("non-numeric value: {}", text_of_length(s))))
+            parse_opencv_float(s).ok_or_else(|| {
+                err(file, format!("{key}.data[{i}]"), format!("non-numeric value: {}", text_of_length(s)))
+            })
         })
         .collect::<Result<Vec<f64>>>()?;
     Ok(RawMatrix { rows, cols, data })
@@ -589,7 +596,10 @@ dist_coeffs: !!opencv-matrix
     /// duplicate YAML keys were refused; both are refused now.
     #[test]
     fn duplicates_are_refused_in_both_formats() {
-        let twice = XML.replace("<image_height>480</image_height>", "<image_height>480</image_height>\n<image_height>48</image_height>");
+        let twice = XML.replace(
+            "<image_height>480</image_height>",
+            "<image_height>480</image_height>\n<image_height>48</image_height>",
+        );
         let (field, reason) = field_of(parse_calibration(&twice, "d.xml").unwrap_err());
         assert_eq!(field, "image_height");
         assert!(reason.contains("twice"), "{reason}");
@@ -609,7 +619,8 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(c.intrinsics.fkv(), 810.5);
         let xml = XML.replace("<image_width>640</image_width>\n<image_height>480</image_height>\n", "");
         assert_eq!(parse_calibration(&xml, "cv.xml").unwrap().image_size, None);
-        let (field, _) = field_of(parse_calibration(&XML.replace("<image_width>640</image_width>", ""), "cv.xml").unwrap_err());
+        let (field, _) =
+            field_of(parse_calibration(&XML.replace("<image_width>640</image_width>", ""), "cv.xml").unwrap_err());
         assert_eq!(field, "image_width");
     }
 

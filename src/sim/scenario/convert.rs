@@ -253,10 +253,15 @@ impl Scenario {
     }
 
     /// `[vision]`: valid values, image sizes for both cameras, no coordinate noise on top.
-    fn vision_config(&self, reference: &CameraModel, camera: &CameraModel) -> Result<Option<crate::vision::RenderConfig>> {
+    fn vision_config(
+        &self,
+        reference: &CameraModel,
+        camera: &CameraModel,
+    ) -> Result<Option<crate::vision::RenderConfig>> {
         let Some(v) = self.vision else { return Ok(None) };
         v.validate().map_err(|e| scenario_error("vision", e.to_string()))?;
-        let tables = [("reference_camera", Some(&self.reference_camera), reference), ("camera", self.camera.as_ref(), camera)];
+        let tables =
+            [("reference_camera", Some(&self.reference_camera), reference), ("camera", self.camera.as_ref(), camera)];
         for (key, spec, model) in tables {
             if model.image.is_some() {
                 continue;

@@ -63,7 +63,10 @@ impl FileScope<'_> {
             .canonicalize()
             .map_err(|e| scenario_error(key, format!("{} ({}): {e}", quoted(file), joined.display())))?;
         if !real.starts_with(&folder) {
-            let reason = format!("{} leads outside the scenario's folder (through .. or a symbolic link): {OPT_IN}", quoted(file));
+            let reason = format!(
+                "{} leads outside the scenario's folder (through .. or a symbolic link): {OPT_IN}",
+                quoted(file)
+            );
             return Err(scenario_error(key, reason));
         }
         Ok(real)

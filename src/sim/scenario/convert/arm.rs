@@ -7,8 +7,8 @@ use super::{check_values, pose_of};
 use crate::error::{Error, Result};
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::{FileScope, scenario_error};
 use crate::sim::scenario::schema::{PoseSpec, RobotSpec};
+use crate::sim::scenario::{FileScope, scenario_error};
 
 /// The arm of `[robot]`; `files` resolves a URDF path.
 pub(super) fn robot(r: &RobotSpec, files: FileScope<'_>) -> Result<Robot> {

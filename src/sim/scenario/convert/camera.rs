@@ -8,8 +8,8 @@ use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::Result;
 use crate::sim::camera_model::CameraModel;
-use crate::sim::scenario::{FileScope, scenario_error};
 use crate::sim::scenario::schema::CameraSpec;
+use crate::sim::scenario::{FileScope, scenario_error};
 use crate::sim::scene::ImageSize;
 
 /// A camera table read: its intrinsics, image size and distortion.
