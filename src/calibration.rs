@@ -152,16 +152,7 @@ impl Raw {
         if dm.rows != 1 && dm.cols != 1 {
             return Err(err(file, key, format!("expected a row or column vector, got {}x{}", dm.rows, dm.cols)));
         }
-        if let Some(i) = dm.data.iter().position(|v| !v.is_finite()) {
-            return Err(err(file, format!("{key}.data[{i}]"), format!("non-finite value {}", dm.data[i])));
-        }
-        if let Some(i) = dm.data.iter().position(|v| v.abs() > MAX_DISTORTION_COEFFICIENT) {
-            let reason = format!(
-                "{:e} does not describe a lens: distortion coefficients are within +-{MAX_DISTORTION_COEFFICIENT:e}",
-                dm.data[i]
-            );
-            return Err(err(file, format!("{key}.data[{i}]"), reason));
-        }
+        check_coefficients(file, key, &dm.data)?;
         let distortion = match &self.model {
             Some(name) => {
                 let model = DistortionModel::from_name(name).ok_or_else(|| {
@@ -187,6 +178,21 @@ impl Raw {
         })?;
         Ok(Calibration { intrinsics, distortion, image_size })
     }
+}
+
+/// Distortion coefficients: finite and within +-[`MAX_DISTORTION_COEFFICIENT`].
+fn check_coefficients(file: &str, key: &str, data: &[f64]) -> Result<()> {
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        return Err(err(file, format!("{key}.data[{i}]"), format!("non-finite value {}", data[i])));
+    }
+    if let Some(i) = data.iter().position(|v| v.abs() > MAX_DISTORTION_COEFFICIENT) {
+        let reason = format!(
+            "{:e} does not describe a lens: distortion coefficients are within +-{MAX_DISTORTION_COEFFICIENT:e}",
+            data[i]
+        );
+        return Err(err(file, format!("{key}.data[{i}]"), reason));
+    }
+    Ok(())
 }
 
 /// fx, fy at most [`MAX_INTRINSIC_PIXELS`] and cx, cy within +-[`MAX_INTRINSIC_PIXELS`]
