@@ -14,15 +14,47 @@
 //! The camera matrix must be `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`: OpenCV's and ROS's
 //! models have no skew, so a file with `K[0,1] != 0` is refused rather than read differently
 //! from the tools that wrote it. Every error is an [`Error::Calibration`] naming the file and
-//! the entry at fault.
+//! the entry at fault and never the file's contents: a text where a number was expected is
+//! described by its length only (a scenario can point at any file, and its strings may be
+//! secrets); only a distortion model name that looks like one (lower-case letters, digits and `_`, at
+//! most 32) is quoted.
+//!
+//! `image_width` and `image_height` are optional (OpenCV's stereo and hand-written
+//! calibrations omit them): without them the image size is unknown (`None`).
+//!
+//! **Values that describe a lens.** `fx` and `fy` must be in (0, 1e6] pixels, `cx` and `cy`
+//! within +-1e6 pixels (the scenario files' bounds), and every distortion coefficient within
+//! +-[`MAX_DISTORTION_COEFFICIENT`]: real lenses have coefficients of order 1 (the strongest
+//! rational models a few hundred), and larger values (`k1 = 1e300`) overflow the model.
+//!
+//! **Hostile files.** A file is read only if it is a regular file of at most
+//! [`MAX_CALIBRATION_BYTES`] (module [`input_file`](crate::input_file)). YAML aliases
+//! (`*name`) are refused: the parser expands each alias into a copy of its anchor, so nine
+//! levels of nine aliases (a 1 KB file, the "billion laughs") would build 9^9 nodes, and no
+//! real calibration file uses them (OpenCV and ROS never write anchors). Refusing them, found
+//! in one pass over the parser's events before anything is built, bounds the work by the
+//! file's size; bounding the expanded node count instead would accept files that no tool
+//! writes. XML is parsed without DTDs (roxmltree's default: no entity expansion) and with at
+//! most [`MAX_XML_NODES`] nodes. A key or element given twice is refused in both formats.
 
 use std::path::Path;
 
+use yaml_rust2::parser::{Event, MarkedEventReceiver, Parser};
+use yaml_rust2::scanner::Marker;
 use yaml_rust2::{Yaml, YamlLoader};
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, DistortionModel};
 use crate::error::{Error, Result};
+pub use crate::input_file::MAX_CALIBRATION_BYTES;
+use crate::input_file::read_text;
+
+/// The largest absolute value of a distortion coefficient (module docs).
+pub const MAX_DISTORTION_COEFFICIENT: f64 = 1e4;
+/// The largest focal length and principal-point coordinate, pixels.
+pub const MAX_INTRINSIC_PIXELS: f64 = 1e6;
+/// The most nodes (elements, text, attributes) an XML calibration file may have.
+pub const MAX_XML_NODES: u32 = 100_000;
 
 /// A camera calibration: intrinsics, lens distortion and the image size it was made for.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -31,19 +63,17 @@ pub struct Calibration {
     pub intrinsics: Intrinsics,
     /// The distortion model and coefficients.
     pub distortion: Distortion,
-    /// `(width, height)` in pixels.
-    pub image_size: (u32, u32),
+    /// `(width, height)` in pixels; `None` when the file does not give it (OpenCV files may
+    /// omit `image_width` and `image_height`).
+    pub image_size: Option<(u32, u32)>,
 }
 
-/// Reads a calibration file of any of the three formats (module docs).
+/// Reads a calibration file of any of the three formats (module docs): a regular file of at
+/// most [`MAX_CALIBRATION_BYTES`], UTF-8.
 pub fn load_calibration(path: impl AsRef<Path>) -> Result<Calibration> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Calibration {
-        file: file.clone(),
-        field: String::new(),
-        reason: format!("cannot read: {e}"),
-    })?;
+    let text = read_text(path, MAX_CALIBRATION_BYTES).map_err(|reason| err(&file, "", reason))?;
     parse_calibration(&text, &file)
 }
 
@@ -62,8 +92,8 @@ struct RawMatrix {
 
 /// The entries common to the formats, before validation.
 struct Raw {
-    width: i64,
-    height: i64,
+    width: Option<i64>,
+    height: Option<i64>,
     camera_matrix: RawMatrix,
     /// The name of the distortion entry that was found.
     dist_key: &'static str,
@@ -83,7 +113,16 @@ impl Raw {
                 .filter(|&v| v > 0)
                 .ok_or_else(|| err(file, key, format!("expected a positive integer, got {v}")))
         };
-        let image_size = (size("image_width", self.width)?, size("image_height", self.height)?);
+        let image_size = match (self.width, self.height) {
+            (Some(w), Some(h)) => Some((size("image_width", w)?, size("image_height", h)?)),
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(err(file, "image_width", "missing (image_height is given: give both or neither)"));
+            }
+            (Some(_), None) => {
+                return Err(err(file, "image_height", "missing (image_width is given: give both or neither)"));
+            }
+        };
 
         let km = &self.camera_matrix;
         if km.rows != 3 || km.cols != 3 {
@@ -93,6 +132,7 @@ impl Raw {
         if let Some(i) = km.data.iter().position(|v| !v.is_finite()) {
             return Err(err(file, format!("camera_matrix.data[{i}]"), format!("non-finite value {}", km.data[i])));
         }
+        check_lens_intrinsics(file, &km.data)?;
         let k = nalgebra::Matrix3::from_row_slice(&km.data);
         if k[(0, 1)] != 0.0 {
             return Err(err(
@@ -112,16 +152,17 @@ impl Raw {
         if dm.rows != 1 && dm.cols != 1 {
             return Err(err(file, key, format!("expected a row or column vector, got {}x{}", dm.rows, dm.cols)));
         }
-        if let Some(i) = dm.data.iter().position(|v| !v.is_finite()) {
-            return Err(err(file, format!("{key}.data[{i}]"), format!("non-finite value {}", dm.data[i])));
-        }
+        check_coefficients(file, key, &dm.data)?;
         let distortion = match &self.model {
             Some(name) => {
                 let model = DistortionModel::from_name(name).ok_or_else(|| {
                     err(
                         file,
                         "distortion_model",
-                        format!("unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""),
+                        format!(
+                            "unknown distortion model {}; expected \"plumb_bob\" or \"rational_polynomial\"",
+                            model_name(name)
+                        ),
                     )
                 })?;
                 Distortion::with_model(model, &dm.data)
@@ -137,6 +178,42 @@ impl Raw {
         })?;
         Ok(Calibration { intrinsics, distortion, image_size })
     }
+}
+
+/// Distortion coefficients: finite and within +-[`MAX_DISTORTION_COEFFICIENT`].
+fn check_coefficients(file: &str, key: &str, data: &[f64]) -> Result<()> {
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        return Err(err(file, format!("{key}.data[{i}]"), format!("non-finite value {}", data[i])));
+    }
+    if let Some(i) = data.iter().position(|v| v.abs() > MAX_DISTORTION_COEFFICIENT) {
+        let reason = format!(
+            "{:e} does not describe a lens: distortion coefficients are within +-{MAX_DISTORTION_COEFFICIENT:e}",
+            data[i]
+        );
+        return Err(err(file, format!("{key}.data[{i}]"), reason));
+    }
+    Ok(())
+}
+
+/// fx, fy at most [`MAX_INTRINSIC_PIXELS`] and cx, cy within +-[`MAX_INTRINSIC_PIXELS`]
+/// (row-major K: fx at 0, cx at 2, fy at 4, cy at 5); fx, fy > 0 is checked by
+/// [`Intrinsics::from_matrix`].
+fn check_lens_intrinsics(file: &str, k: &[f64]) -> Result<()> {
+    for (i, name) in [(0, "fx"), (4, "fy")] {
+        if k[i] > MAX_INTRINSIC_PIXELS {
+            let reason =
+                format!("{name} = {:e} does not describe a lens: expected at most {MAX_INTRINSIC_PIXELS:e} px", k[i]);
+            return Err(err(file, format!("camera_matrix.data[{i}]"), reason));
+        }
+    }
+    for (i, name) in [(2, "cx"), (5, "cy")] {
+        if k[i].abs() > MAX_INTRINSIC_PIXELS {
+            let reason =
+                format!("{name} = {:e} does not describe a lens: expected within +-{MAX_INTRINSIC_PIXELS:e} px", k[i]);
+            return Err(err(file, format!("camera_matrix.data[{i}]"), reason));
+        }
+    }
+    Ok(())
 }
 
 fn check_count(file: &str, key: &str, m: &RawMatrix) -> Result<()> {
@@ -166,11 +243,23 @@ fn strip_opencv_directive(text: &str) -> std::borrow::Cow<'_, str> {
     }
 }
 
+/// A text from the file, by its length only (module docs).
+fn text_of_length(s: &str) -> String {
+    format!("a text of {} characters", s.chars().count())
+}
+
+/// A name quoted if it looks like one (module docs), else by its length.
+fn model_name(s: &str) -> String {
+    let plausible =
+        !s.is_empty() && s.len() <= 32 && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+    if plausible { format!("\"{s}\"") } else { text_of_length(s) }
+}
+
 fn yaml_kind(v: &Yaml) -> String {
     match v {
         Yaml::Real(s) => format!("{s:?}"),
         Yaml::Integer(i) => i.to_string(),
-        Yaml::String(s) => format!("the string {s:?}"),
+        Yaml::String(s) => text_of_length(s),
         Yaml::Boolean(b) => format!("the boolean {b}"),
         Yaml::Array(_) => "a list".into(),
         Yaml::Hash(_) => "a mapping".into(),
@@ -179,9 +268,40 @@ fn yaml_kind(v: &Yaml) -> String {
     }
 }
 
+/// Finds the first YAML alias (module docs: aliases are refused, so the loader, which would
+/// expand them, runs only on files without any).
+#[derive(Default)]
+struct AliasFinder {
+    alias_at: Option<Marker>,
+}
+
+impl MarkedEventReceiver for AliasFinder {
+    fn on_event(&mut self, ev: Event, mark: Marker) {
+        if self.alias_at.is_none() && matches!(ev, Event::Alias(_)) {
+            self.alias_at = Some(mark);
+        }
+    }
+}
+
+/// The YAML documents of `text`, refusing aliases: one pass over the parser's events (linear
+/// in the text), then the loader.
+fn load_yaml(text: &str, file: &str) -> Result<Vec<Yaml>> {
+    let not_yaml = |e: yaml_rust2::ScanError| err(file, "", format!("not valid YAML: {e}"));
+    let mut finder = AliasFinder::default();
+    Parser::new_from_str(text).load(&mut finder, true).map_err(not_yaml)?;
+    if let Some(m) = finder.alias_at {
+        let reason = format!(
+            "YAML alias at line {}, column {}: aliases are refused (calibration files never need them, and nested ones expand exponentially)",
+            m.line(),
+            m.col() + 1
+        );
+        return Err(err(file, "", reason));
+    }
+    YamlLoader::load_from_str(text).map_err(not_yaml)
+}
+
 fn from_yaml(text: &str, file: &str) -> Result<Raw> {
-    let docs = YamlLoader::load_from_str(&strip_opencv_directive(text))
-        .map_err(|e| err(file, "", format!("not valid YAML: {e}")))?;
+    let docs = load_yaml(&strip_opencv_directive(text), file)?;
     let Some(doc) = docs.first() else {
         return Err(err(file, "", "empty document"));
     };
@@ -227,8 +347,12 @@ fn from_yaml(text: &str, file: &str) -> Result<Raw> {
             .collect::<Result<Vec<f64>>>()?;
         Ok(RawMatrix { rows, cols, data })
     };
-    let width = int("image_width", get("image_width")?)?;
-    let height = int("image_height", get("image_height")?)?;
+    let optional_int = |key: &str| match &doc[key] {
+        Yaml::BadValue => Ok(None),
+        v => int(key, v).map(Some),
+    };
+    let width = optional_int("image_width")?;
+    let height = optional_int("image_height")?;
     let camera_matrix = matrix("camera_matrix")?;
     let model = match &doc["distortion_model"] {
         Yaml::BadValue => None,
@@ -255,7 +379,13 @@ fn xml_child<'a, 'input>(
     name: &str,
     field: &str,
 ) -> Result<XmlNode<'a, 'input>> {
-    node.children().find(|c| c.is_element() && c.tag_name().name() == name).ok_or_else(|| err(file, field, "missing"))
+    let mut found = node.children().filter(|c| c.is_element() && c.tag_name().name() == name);
+    let first = found.next().ok_or_else(|| err(file, field, "missing"))?;
+    if let Some(second) = found.next() {
+        let pos = second.document().text_pos_at(second.range().start);
+        return Err(err(file, field, format!("given twice (again at line {}): give it once", pos.row)));
+    }
+    Ok(first)
 }
 
 fn xml_has(node: XmlNode<'_, '_>, name: &str) -> bool {
@@ -269,7 +399,7 @@ fn xml_text<'a>(node: XmlNode<'a, '_>) -> &'a str {
 /// The integer in the element `name` of `node`, `field` naming it in errors.
 fn xml_int(file: &str, node: XmlNode<'_, '_>, name: &str, field: &str) -> Result<i64> {
     let t = xml_text(xml_child(file, node, name, field)?);
-    t.parse::<i64>().map_err(|_| err(file, field, format!("expected an integer, got {t:?}")))
+    t.parse::<i64>().map_err(|_| err(file, field, format!("expected an integer, got {}", text_of_length(t))))
 }
 
 fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix> {
@@ -282,25 +412,33 @@ fn xml_matrix(file: &str, root: XmlNode<'_, '_>, key: &str) -> Result<RawMatrix>
         .split_whitespace()
         .enumerate()
         .map(|(i, s)| {
-            parse_opencv_float(s)
-                .ok_or_else(|| err(file, format!("{key}.data[{i}]"), format!("non-numeric value {s:?}")))
+            parse_opencv_float(s).ok_or_else(|| {
+                err(file, format!("{key}.data[{i}]"), format!("non-numeric value: {}", text_of_length(s)))
+            })
         })
         .collect::<Result<Vec<f64>>>()?;
     Ok(RawMatrix { rows, cols, data })
 }
 
 fn from_xml(text: &str, file: &str) -> Result<Raw> {
-    let doc = roxmltree::Document::parse(text).map_err(|e| err(file, "", format!("not valid XML: {e}")))?;
+    // No DTD (so no entity expansion) and a bounded node count (module docs).
+    let options = roxmltree::ParsingOptions { allow_dtd: false, nodes_limit: MAX_XML_NODES, ..Default::default() };
+    let doc = roxmltree::Document::parse_with_options(text, options)
+        .map_err(|e| err(file, "", format!("not valid XML: {e}")))?;
     let root = doc.root_element();
     if root.tag_name().name() != "opencv_storage" {
         return Err(err(
             file,
             "",
-            format!("expected the root element <opencv_storage>, got <{}>", root.tag_name().name()),
+            format!("expected the root element <opencv_storage>, got {}", model_name(root.tag_name().name())),
         ));
     }
-    let width = xml_int(file, root, "image_width", "image_width")?;
-    let height = xml_int(file, root, "image_height", "image_height")?;
+    let optional_int = |name: &str| match xml_has(root, name) {
+        true => xml_int(file, root, name, name).map(Some),
+        false => Ok(None),
+    };
+    let width = optional_int("image_width")?;
+    let height = optional_int("image_height")?;
     let camera_matrix = xml_matrix(file, root, "camera_matrix")?;
     let model = if xml_has(root, "distortion_model") {
         Some(xml_text(xml_child(file, root, "distortion_model", "distortion_model")?).to_string())
@@ -391,7 +529,7 @@ dist_coeffs: !!opencv-matrix
     #[test]
     fn reads_the_three_formats() {
         let c = parse_calibration(ROS, "ros.yaml").unwrap();
-        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.image_size, Some((640, 480)));
         assert_eq!(c.intrinsics.fku(), 800.5);
         assert_eq!(c.intrinsics.v0(), 240.75);
         assert_eq!(c.distortion.model(), DistortionModel::PlumbBob);
@@ -403,7 +541,7 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(c.distortion.coefficients()[5], 0.1);
 
         let c = parse_calibration(XML, "cv.xml").unwrap();
-        assert_eq!(c.image_size, (640, 480));
+        assert_eq!(c.image_size, Some((640, 480)));
         assert_eq!(c.intrinsics.u0(), 320.0);
         assert_eq!(c.distortion.coefficients(), &[-0.3, 0.1, 0.001, -0.002, 0.0]);
     }
@@ -411,7 +549,7 @@ dist_coeffs: !!opencv-matrix
     #[test]
     fn malformed_files_name_the_field() {
         let cases: [(String, &str, &str); 9] = [
-            (ROS.replace("image_width: 640\n", ""), "image_width", "missing"),
+            (ROS.replace("image_width: 640\n", ""), "image_width", "missing (image_height is given"),
             (ROS.replace("image_height: 480", "image_height: tall"), "image_height", "integer"),
             (ROS.replace("cols: 3", "cols: 2"), "camera_matrix", "3x3"),
             (ROS.replace("800.5, 0, 320.25", "800.5, 0, abc"), "camera_matrix.data[2]", "non-numeric"),
@@ -438,5 +576,94 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(f, "");
         let e = load_calibration("/nonexistent/cal.yaml").unwrap_err();
         assert!(e.to_string().contains("/nonexistent/cal.yaml"), "{e}");
+    }
+
+    /// Regression (issue 16): nine levels of nine aliases (about 600 bytes) made the loader
+    /// build 9^9 nodes and abort the process; aliases are now refused before loading.
+    #[test]
+    fn alias_bombs_are_refused_quickly() {
+        let mut bomb = String::from("a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1]\n");
+        for i in 1..10 {
+            bomb += &format!("a{i}: &a{i} [{}]\n", vec![format!("*a{}", i - 1); 9].join(", "));
+        }
+        let in_matrix = ROS.replace("data: [800.5", "data: &k [800.5").replace("cols: 5", "cols: 5\n  extra: *k");
+        for text in [bomb.clone() + ROS, in_matrix] {
+            let t = std::time::Instant::now();
+            let (field, reason) = field_of(parse_calibration(&text, "bomb.yaml").unwrap_err());
+            assert_eq!(field, "");
+            assert!(reason.contains("alias"), "{reason}");
+            assert!(t.elapsed().as_secs() < 5, "hang test: {:?}", t.elapsed());
+        }
+        // An anchor without alias is harmless and read as usual.
+        assert!(parse_calibration(&ROS.replace("data: [800.5", "data: &k [800.5"), "a.yaml").is_ok());
+    }
+
+    /// Regression (issue 16): duplicate XML elements were accepted (the first one read) while
+    /// duplicate YAML keys were refused; both are refused now.
+    #[test]
+    fn duplicates_are_refused_in_both_formats() {
+        let twice = XML.replace(
+            "<image_height>480</image_height>",
+            "<image_height>480</image_height>\n<image_height>48</image_height>",
+        );
+        let (field, reason) = field_of(parse_calibration(&twice, "d.xml").unwrap_err());
+        assert_eq!(field, "image_height");
+        assert!(reason.contains("twice"), "{reason}");
+        let rows_twice = XML.replace("<rows>3</rows>", "<rows>3</rows><rows>3</rows>");
+        assert_eq!(field_of(parse_calibration(&rows_twice, "d.xml").unwrap_err()).0, "camera_matrix.rows");
+        let yaml_twice = ROS.replace("image_height: 480\n", "image_height: 480\nimage_height: 48\n");
+        assert!(parse_calibration(&yaml_twice, "d.yaml").is_err());
+    }
+
+    /// Regression (issue 16): OpenCV files without image_width / image_height were refused;
+    /// the size is optional and read as unknown.
+    #[test]
+    fn image_size_is_optional() {
+        let no_size = OPENCV4.replace("image_width: 640\nimage_height: 480\n", "");
+        let c = parse_calibration(&no_size, "cv.yaml").unwrap();
+        assert_eq!(c.image_size, None);
+        assert_eq!(c.intrinsics.fkv(), 810.5);
+        let xml = XML.replace("<image_width>640</image_width>\n<image_height>480</image_height>\n", "");
+        assert_eq!(parse_calibration(&xml, "cv.xml").unwrap().image_size, None);
+        let (field, _) =
+            field_of(parse_calibration(&XML.replace("<image_width>640</image_width>", ""), "cv.xml").unwrap_err());
+        assert_eq!(field, "image_width");
+    }
+
+    /// Regression (issue 16): k1 = 1e300 loaded; coefficients and intrinsics must describe a
+    /// lens (module docs), checked at the bounds.
+    #[test]
+    fn values_that_do_not_describe_a_lens_are_refused() {
+        let k1 = |v: &str| ROS.replace("data: [-0.3, 0.1", &format!("data: [{v}, 0.1"));
+        let (field, reason) = field_of(parse_calibration(&k1("1e300"), "k.yaml").unwrap_err());
+        assert_eq!(field, "distortion_coefficients.data[0]");
+        assert!(reason.contains("lens"), "{reason}");
+        assert!(parse_calibration(&k1("-1e4"), "k.yaml").is_ok());
+        assert!(parse_calibration(&k1("-10000.001"), "k.yaml").is_err());
+        let fx = |v: &str| ROS.replace("data: [800.5,", &format!("data: [{v},"));
+        assert_eq!(field_of(parse_calibration(&fx("1e7"), "k.yaml").unwrap_err()).0, "camera_matrix.data[0]");
+        assert!(parse_calibration(&fx("1e6"), "k.yaml").is_ok());
+        assert_eq!(field_of(parse_calibration(&fx("0"), "k.yaml").unwrap_err()).0, "camera_matrix");
+        let cy = ROS.replace("240.75", "-2e6");
+        assert_eq!(field_of(parse_calibration(&cy, "k.yaml").unwrap_err()).0, "camera_matrix.data[5]");
+    }
+
+    /// Regression (issue 16): a text value was quoted in full ("got the string \"AKIA-...\"").
+    #[test]
+    fn errors_do_not_quote_the_file() {
+        let marker = "SECRET-MARKER-0123";
+        let cases = [
+            ROS.replace("image_width: 640", &format!("image_width: {marker}")),
+            format!("{marker}\n"),
+            ROS.replace("plumb_bob", marker),
+            ROS.replace("800.5, 0, 320.25", &format!("800.5, 0, {marker}")),
+            XML.replace("810.5", marker),
+            XML.replace("<rows>3</rows>", &format!("<rows>{marker}</rows>")),
+            XML.replace("opencv_storage", marker),
+        ];
+        for text in cases {
+            let message = parse_calibration(&text, "s.yaml").unwrap_err().to_string();
+            assert!(!message.contains("SECRET"), "{message}");
+        }
     }
 }

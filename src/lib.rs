@@ -71,6 +71,8 @@
 pub mod calibration;
 pub mod core;
 pub mod error;
+#[cfg(any(feature = "calibration", feature = "vision"))]
+pub mod input_file;
 #[cfg(feature = "sim")]
 pub mod sim;
 #[cfg(feature = "vision")]

@@ -259,9 +259,9 @@ class Scenario:
     """A validated scenario (schema in the README)."""
 
     @staticmethod
-    def from_toml(text: str) -> Scenario: ...
+    def from_toml(text: str, allow_outside_files: bool = False) -> Scenario: ...
     @staticmethod
-    def from_dict(d: dict[str, Any]) -> Scenario: ...
+    def from_dict(d: dict[str, Any], allow_outside_files: bool = False) -> Scenario: ...
     @property
     def name(self) -> str: ...
     @property
@@ -324,14 +324,21 @@ class RunResult:
         """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`
         (per second); None for the other robots."""
 
-def load_scenario(source: _ScenarioLike) -> Scenario:
+def load_scenario(source: _ScenarioLike, allow_outside_files: bool = False) -> Scenario:
     """A built-in name, a TOML file, a dict or a Scenario. Scenario angles are degrees and their
     keys say so (``rotation_deg``, ``skew_deg``, ``max_angular_speed_deg``; the older
-    ``rotation`` is read as degrees); the Python API itself is SI (radians)."""
+    ``rotation`` is read as degrees); the Python API itself is SI (radians). The files a
+    scenario names (``calibration``, ``robot.urdf``) must be inside its folder (the working
+    directory for a dict) unless ``allow_outside_files``."""
 def list_scenarios() -> list[tuple[str, str]]: ...
-def run_batch(scenarios: Iterable[_ScenarioLike], threads: int | None = None) -> dict[str, npt.NDArray[Any]]: ...
+def run_batch(
+    scenarios: Iterable[_ScenarioLike], threads: int | None = None, allow_outside_files: bool = False
+) -> dict[str, npt.NDArray[Any]]: ...
 def run_scenario(
-    scenario: _ScenarioLike, record: bool = True, progress: Callable[[int, int], object] | None = None
+    scenario: _ScenarioLike,
+    record: bool = True,
+    progress: Callable[[int, int], object] | None = None,
+    allow_outside_files: bool = False,
 ) -> RunResult: ...
 
 @final
@@ -477,7 +484,7 @@ class Calibration:
     @property
     def distortion(self) -> Distortion: ...
     @property
-    def image_size(self) -> tuple[int, int]: ...
+    def image_size(self) -> tuple[int, int] | None: ...
 
 def load_calibration(path: str | os.PathLike[str]) -> Calibration: ...
 def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:

@@ -26,7 +26,7 @@ from typing import Any, Callable, Optional, Sequence, TextIO
 import numpy as np
 
 from . import VsinvError, __version__, list_scenarios, load_scenario, run_scenario
-from .cli_images import add_image_commands, cmd_invariance, cmd_render
+from .cli_images import add_allow_outside_files, add_image_commands, cmd_invariance, cmd_render
 
 __all__ = ["main"]
 
@@ -166,6 +166,7 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object (NaN as null)")
     run.add_argument("--out", metavar="DIR", type=Path, help="write trajectory.npz and the figures (PNG) to DIR")
     run.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    add_allow_outside_files(run)
 
     sw = sub.add_parser(
         "sweep",
@@ -198,6 +199,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     sw.add_argument("--out", metavar="DIR", type=Path, help="write sweep.parquet (or sweep.csv) and stability_map.png")
     sw.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
+    add_allow_outside_files(sw)
     add_image_commands(sub)
     return parser
 
@@ -236,7 +238,7 @@ class _Progress:
 def _cmd_run(args: argparse.Namespace) -> int:
     from .plots import save_figures, save_npz, summary_json
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario, allow_outside_files=args.allow_outside_files)
     out_dir: Optional[Path] = args.out
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)  # fail before a long run, not after
@@ -431,10 +433,13 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
         with concurrent.futures.ProcessPoolExecutor(args.workers, mp_context=multiprocessing.get_context(method)) as ex:
             result = run_sweep(
                 args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed,
-                executor=ex, threads=threads, progress=progress,
+                executor=ex, threads=threads, progress=progress, allow_outside_files=args.allow_outside_files,
             )
     else:
-        result = run_sweep(args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed, progress=progress)
+        result = run_sweep(
+            args.scenario, vary, repeats=args.repeats, draws=draws, seed=args.seed, progress=progress,
+            allow_outside_files=args.allow_outside_files,
+        )
 
     grid = list(result.grid_keys)
     details = [f"{len(result.summary_by(grid)['runs'])} grid points"] if grid else []

@@ -14,7 +14,17 @@ import numpy as np
 
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
 
-__all__ = ["add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
+__all__ = ["add_allow_outside_files", "add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
+
+
+def add_allow_outside_files(parser: Any) -> None:
+    """Adds ``--allow-outside-files`` to a command that reads a scenario."""
+    parser.add_argument(
+        "--allow-outside-files",
+        action="store_true",
+        help="let the scenario name files (calibration, robot.urdf) outside its folder: absolute paths, "
+        "'..' or symbolic links leading out (refused by default: scenario files are shared)",
+    )
 
 
 def add_image_commands(sub: Any) -> None:
@@ -28,6 +38,7 @@ def add_image_commands(sub: Any) -> None:
     )
     r.add_argument("scenario", metavar="NAME|FILE", help="a built-in scenario name (see `vsinv list`) or a TOML file")
     r.add_argument("--out", metavar="DIR", type=Path, required=True, help="output directory (created if needed)")
+    add_allow_outside_files(r)
 
     inv = sub.add_parser(
         "invariance",
@@ -45,7 +56,7 @@ def add_image_commands(sub: Any) -> None:
 
 
 def cmd_render(args: argparse.Namespace) -> int:
-    written = write_scenario_images(args.scenario, args.out)
+    written = write_scenario_images(args.scenario, args.out, allow_outside_files=args.allow_outside_files)
     print(f"wrote {len(written)} files to {args.out}:")
     for path in written:
         print(f"  {path}")

@@ -11,9 +11,10 @@ search radius, 20 px by default), in the order that the dots should keep.
 from __future__ import annotations
 
 import csv
+import io
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import IO, Any, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -29,6 +30,7 @@ from ._core import (
     render_view,
     save_image,
 )
+from .safe_files import MAX_CSV_BYTES, read_text, replace_text_file
 
 __all__ = ["InvarianceResult", "read_points", "track_invariance", "write_points", "write_scenario_images"]
 
@@ -37,19 +39,26 @@ _PathLike = Union[str, Path]
 
 def write_points(path: Path, pixels: npt.NDArray[np.float64], visible: npt.NDArray[np.bool_]) -> Path:
     """Writes the ``point,u,v,visible`` CSV of a view."""
-    with open(path, "w", newline="") as f:
+    def write(f: IO[str]) -> None:
         w = csv.writer(f)
         w.writerow(["point", "u", "v", "visible"])
         for i, ((u, v), seen) in enumerate(zip(pixels, visible)):
             w.writerow([i, f"{u:.6f}", f"{v:.6f}", int(bool(seen))])
+
+    replace_text_file(path, write)
     return path
 
 
 def read_points(path: _PathLike) -> npt.NDArray[np.float64]:
     """The ``u`` and ``v`` columns of a points CSV as an (n, 2) array; a missing column or a
-    value that is not a finite number raises ``InvalidInput`` naming the file, row and column."""
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
+    value that is not a finite number raises ``InvalidInput`` naming the file, row and column.
+    The file must be a regular UTF-8 file of at most :data:`vsinv.safe_files.MAX_CSV_BYTES`;
+    a value is quoted in an error only as a short excerpt."""
+    text = read_text(path, MAX_CSV_BYTES)
+    try:
+        rows = list(csv.DictReader(io.StringIO(text, newline="")))
+    except csv.Error as e:
+        raise InvalidInput(f"{path}: not a points CSV ({e})") from None
     if not rows or any(c not in rows[0] for c in ("u", "v")):
         raise InvalidInput(f"{path}: expected a header with columns u and v and one row per dot")
     out = np.empty((len(rows), 2))
@@ -58,9 +67,9 @@ def read_points(path: _PathLike) -> npt.NDArray[np.float64]:
             try:
                 out[r, c] = float(row[key])
             except (TypeError, ValueError):
-                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {row[key]!r} is not a number") from None
+                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {_excerpt(row[key])} is not a number") from None
             if not np.isfinite(out[r, c]):
-                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {row[key]!r} is not finite")
+                raise InvalidInput(f"{path}: row {r + 2}, column {key}: {_excerpt(row[key])} is not finite")
     return out
 
 
@@ -71,12 +80,14 @@ def _write_view(out_dir: Path, stem: str, scenario: Scenario, **view: Any) -> li
     return [png, write_points(out_dir / f"{stem}.csv", pixels, visible)]
 
 
-def write_scenario_images(scenario: Union[Scenario, _PathLike], out_dir: _PathLike) -> list[Path]:
+def write_scenario_images(
+    scenario: Union[Scenario, _PathLike], out_dir: _PathLike, *, allow_outside_files: bool = False
+) -> list[Path]:
     """Writes ``reference.png`` (K* at F*) and ``start.png`` (K(0) at the start pose) with
     their points CSVs; a stationary camera (``law = "none"``) also gets ``image-K.png`` for
     each later image of its run (t = K dt, K = 1 .. max_iterations): the zoom sequence of
     sec. 5.1. Returns the paths written."""
-    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario, allow_outside_files=allow_outside_files)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     written = _write_view(out, "reference", sc, reference=True)
@@ -146,9 +157,16 @@ def _track_one(tracker: DotTracker, image: Any, p_star: Any, q_star: Any, basis:
     return pixels, found, image_error, _invariant_errors(pixels, found, q_star, basis)
 
 
+def _excerpt(value: object) -> str:
+    """At most 12 characters of a value, escaped (an error never quotes a file's contents)."""
+    text = str(value)
+    return repr(text) if len(text) <= 12 else f"{text[:12]!r}... ({len(text)} characters)"
+
+
 def write_invariance_csv(result: InvarianceResult, path: Path) -> Path:
     """One row per image and point: image, point, u, v, found, image_error_px, invariant_error."""
-    with open(path, "w", newline="") as f:
+
+    def write(f: IO[str]) -> None:
         w = csv.writer(f)
         w.writerow(["image", "point", "u", "v", "found", "image_error_px", "invariant_error"])
         for k, name in enumerate(result.names):
@@ -158,4 +176,6 @@ def write_invariance_csv(result: InvarianceResult, path: Path) -> Path:
                     [name, i, f"{u:.6f}", f"{v:.6f}", int(result.found[k, i]),
                      f"{result.image_error[k, i]:.6g}", f"{result.invariant_error[k, i]:.6g}"]
                 )
+
+    replace_text_file(path, write)
     return path

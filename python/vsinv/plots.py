@@ -20,6 +20,8 @@ from typing import TYPE_CHECKING, Any, Optional, Union
 import numpy as np
 import numpy.typing as npt
 
+from .safe_files import replace_file
+
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
@@ -74,8 +76,7 @@ def save_npz(result: RunResult, path: _PathLike) -> Path:
         out = out.with_name(out.name + ".npz")  # what numpy would write anyway
     arrays: dict[str, Any] = dict(result.arrays)
     arrays["summary_json"] = np.array(summary_json(result.summary))
-    np.savez_compressed(out, **arrays)
-    return out
+    return replace_file(out, lambda f: np.savez_compressed(f, **arrays))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -129,7 +130,7 @@ def _save(fig: Figure, out_dir: Path, name: str) -> Path:
 
     path = out_dir / name
     try:
-        fig.savefig(path, dpi=DPI)
+        replace_file(path, lambda f: fig.savefig(f, dpi=DPI, format=path.suffix.lstrip(".") or "png"))
     finally:
         plt.close(fig)
     return path

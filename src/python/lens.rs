@@ -137,28 +137,29 @@ impl PyCalibration {
     fn distortion(&self) -> PyDistortion {
         PyDistortion { inner: self.inner.distortion }
     }
-    /// (width, height) in pixels.
+    /// (width, height) in pixels, or None when the file does not give it.
     #[getter]
-    fn image_size(&self) -> (u32, u32) {
+    fn image_size(&self) -> Option<(u32, u32)> {
         self.inner.image_size
     }
     fn __repr__(&self) -> String {
         let c = &self.inner;
         let k = &c.intrinsics;
         format!(
-            "Calibration(intrinsics=Intrinsics(fku={}, fkv={}, u0={}, v0={}), distortion={:?} {:?}, image_size={:?})",
+            "Calibration(intrinsics=Intrinsics(fku={}, fkv={}, u0={}, v0={}), distortion={:?} {:?}, image_size={})",
             k.fku(),
             k.fkv(),
             k.u0(),
             k.v0(),
             c.distortion.model().name(),
             c.distortion.coefficients(),
-            c.image_size
+            c.image_size.map_or("None".to_string(), |(w, h)| format!("({w}, {h})"))
         )
     }
 }
 
-/// Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML.
+/// Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML (a regular
+/// file of at most 1 MiB; no YAML aliases).
 #[pyfunction]
 pub fn load_calibration(py: Python<'_>, path: std::path::PathBuf) -> PyResult<PyCalibration> {
     let inner = py.detach(|| crate::calibration::load_calibration(&path)).map_err(to_py)?;

@@ -8,7 +8,7 @@ use pyo3::types::{PyDict, PyString};
 use super::errors::{invalid_input, to_py};
 use crate::sim::arm::ArmRobot;
 use crate::sim::robot::Robot;
-use crate::sim::scenario::{BUILTIN, Scenario, builtin};
+use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin};
 use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).
@@ -20,15 +20,19 @@ pub struct PyScenario {
 
 #[pymethods]
 impl PyScenario {
-    /// From TOML text.
+    /// From TOML text; the files it names must be in the working directory unless
+    /// `allow_outside_files`.
     #[staticmethod]
-    fn from_toml(text: &str) -> PyResult<Self> {
-        Ok(Self { inner: Scenario::from_toml(text).map_err(to_py)? })
+    #[pyo3(signature = (text, allow_outside_files = false))]
+    fn from_toml(text: &str, allow_outside_files: bool) -> PyResult<Self> {
+        Ok(Self { inner: Scenario::from_toml_with(text, access(allow_outside_files)).map_err(to_py)? })
     }
-    /// From a dictionary with the structure of a scenario file.
+    /// From a dictionary with the structure of a scenario file; the files it names must be in
+    /// the working directory unless `allow_outside_files`.
     #[staticmethod]
-    fn from_dict(d: &Bound<'_, PyAny>) -> PyResult<Self> {
-        scenario_from_dict(d).map(|inner| Self { inner })
+    #[pyo3(signature = (d, allow_outside_files = false))]
+    fn from_dict(d: &Bound<'_, PyAny>, allow_outside_files: bool) -> PyResult<Self> {
+        scenario_from_dict(d, access(allow_outside_files)).map(|inner| Self { inner })
     }
     /// The name.
     #[getter]
@@ -55,23 +59,39 @@ impl PyScenario {
     }
 }
 
-fn scenario_from_dict(d: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+/// The file rule of an `allow_outside_files` argument.
+pub fn access(allow_outside_files: bool) -> FileAccess {
+    if allow_outside_files { FileAccess::Anywhere } else { FileAccess::ScenarioFolder }
+}
+
+fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scenario> {
     let py = d.py();
     let text: String = py
         .import("json")?
         .call_method1("dumps", (d,))
         .map_err(|e| invalid_input(format!("scenario: cannot be written as JSON ({e})")))?
         .extract()?;
-    Scenario::from_json(&text).map_err(to_py)
+    Scenario::from_json_with(&text, access).map_err(to_py)
 }
 
-/// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path.
+/// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path; the files
+/// it names must be inside its folder.
 pub fn scenario_arg(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    scenario_arg_with(obj, FileAccess::ScenarioFolder)
+}
+
+/// [`scenario_arg`] with the file rule `access` (a `Scenario` keeps its own rule unless
+/// `access` is `Anywhere`).
+pub fn scenario_arg_with(obj: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scenario> {
     if let Ok(s) = obj.cast::<PyScenario>() {
-        return Ok(s.get().inner.clone());
+        let mut inner = s.get().inner.clone();
+        if access == FileAccess::Anywhere {
+            inner.file_access = access;
+        }
+        return Ok(inner);
     }
     if obj.cast::<PyDict>().is_ok() {
-        return scenario_from_dict(obj);
+        return scenario_from_dict(obj, access);
     }
     let py = obj.py();
     let text: String = if obj.cast::<PyString>().is_ok() {
@@ -86,16 +106,19 @@ pub fn scenario_arg(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
     }
     let path = std::path::Path::new(&text);
     if path.is_file() {
-        return Scenario::from_toml_file(path).map_err(|e| invalid_input(format!("{text}: {e}")));
+        return Scenario::from_toml_file_with(path, access).map_err(|e| invalid_input(format!("{text}: {e}")));
     }
     let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
     Err(invalid_input(format!("{text:?} is neither a scenario file nor a built-in scenario ({})", names.join(", "))))
 }
 
-/// Loads a scenario from a built-in name, a TOML file path or a dictionary.
+/// Loads a scenario from a built-in name, a TOML file path or a dictionary. The files it
+/// names (`calibration`, `robot.urdf`) must be inside its folder (the working directory for
+/// a dictionary) unless `allow_outside_files`.
 #[pyfunction]
-pub fn load_scenario(source: &Bound<'_, PyAny>) -> PyResult<PyScenario> {
-    Ok(PyScenario { inner: scenario_arg(source)? })
+#[pyo3(signature = (source, allow_outside_files = false))]
+pub fn load_scenario(source: &Bound<'_, PyAny>, allow_outside_files: bool) -> PyResult<PyScenario> {
+    Ok(PyScenario { inner: scenario_arg_with(source, access(allow_outside_files))? })
 }
 
 /// The built-in scenarios as (name, description) pairs.
@@ -259,12 +282,13 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
 /// Runs a scenario (a `Scenario`, dict, built-in name or TOML path) with the GIL released.
 /// `progress(done, total)` is called every 64 iterations if given; Ctrl-C stops the run.
 #[pyfunction]
-#[pyo3(signature = (scenario, record = true, progress = None))]
+#[pyo3(signature = (scenario, record = true, progress = None, allow_outside_files = false))]
 pub fn run_scenario(
     py: Python<'_>,
     scenario: &Bound<'_, PyAny>,
     record: bool,
     progress: Option<Py<PyAny>>,
+    allow_outside_files: bool,
 ) -> PyResult<PyRunResult> {
     if let Some(cb) = &progress
         && !cb.bind(py).is_callable()
@@ -274,7 +298,7 @@ pub fn run_scenario(
             "progress: expected a callable progress(done, total) or None, got {kind}"
         )));
     }
-    let scenario = scenario_arg(scenario)?;
+    let scenario = scenario_arg_with(scenario, access(allow_outside_files))?;
     let mut config = scenario.to_config().map_err(to_py)?;
     config.record = record;
     let mut raised: Option<PyErr> = None;
@@ -359,12 +383,14 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// whose configuration is invalid raises before anything runs; a run that fails on the way
 /// has status "error" and its message.
 #[pyfunction]
-#[pyo3(signature = (scenarios, threads = None))]
+#[pyo3(signature = (scenarios, threads = None, allow_outside_files = false))]
 pub fn run_batch<'py>(
     py: Python<'py>,
     scenarios: &Bound<'py, PyAny>,
     #[pyo3(from_py_with = super::args::threads)] threads: Option<usize>,
+    allow_outside_files: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let access = access(allow_outside_files);
     // Dictionaries become JSON here (the GIL is needed); parsing, validation and the runs
     // happen in parallel with the GIL released.
     let dumps = py.import("json")?.getattr("dumps")?;
@@ -386,7 +412,7 @@ pub fn run_batch<'py>(
             // A scenario already written as JSON (sweeps serialise while the previous chunk runs).
             s.extract::<String>()
         } else {
-            scenario_arg(&item).and_then(|s| s.to_json().map_err(to_py))
+            scenario_arg_with(&item, access).and_then(|s| s.to_json().map_err(to_py))
         };
         let text = text.map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?;
         if let Some(k) = key {
@@ -394,7 +420,7 @@ pub fn run_batch<'py>(
         }
         texts.push(text);
     }
-    let results = py.detach(|| crate::sim::batch::run_json_batch(&texts, threads)).map_err(to_py)?;
+    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access)).map_err(to_py)?;
     let m = results.len();
     let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
     let mut iterations = Vec::with_capacity(m);

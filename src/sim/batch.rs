@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::sim::scenario::Scenario;
+use crate::sim::scenario::{FileAccess, Scenario};
 use crate::sim::{SimulationConfig, Summary, simulate};
 
 /// Runs every configuration (recording off) on `threads` worker threads (None: one per
@@ -20,8 +20,18 @@ pub fn run_batch(configs: &[SimulationConfig], threads: Option<usize>) -> Result
 /// scenario is validated before any runs: the first invalid one fails the whole batch with
 /// its index in the key (`[17].control.gain`).
 pub fn run_json_batch(texts: &[String], threads: Option<usize>) -> Result<Vec<Result<Summary>>> {
+    run_json_batch_with(texts, threads, FileAccess::ScenarioFolder)
+}
+
+/// [`run_json_batch`] with the rule `access` for the files the scenarios name.
+pub fn run_json_batch_with(
+    texts: &[String],
+    threads: Option<usize>,
+    access: FileAccess,
+) -> Result<Vec<Result<Summary>>> {
     pool(threads)?.install(|| {
-        let configs: Vec<Result<SimulationConfig>> = texts.par_iter().map(|t| Scenario::config_from_json(t)).collect();
+        let configs: Vec<Result<SimulationConfig>> =
+            texts.par_iter().map(|t| Scenario::config_from_json_with(t, access)).collect();
         if let Some((i, err)) = configs.iter().enumerate().find_map(|(i, c)| c.as_ref().err().map(|e| (i, e))) {
             return Err(match err {
                 Error::Scenario { key, reason } => Error::Scenario {

@@ -51,19 +51,53 @@ pub fn check_image<C: Pixels>(what: &str, image: &GreyBuffer<C>) -> Result<()> {
     Ok(())
 }
 
-/// Writes a PNG file.
+/// The largest side of an image read from a file, pixels.
+pub const MAX_IMAGE_SIDE: u32 = 65_536;
+/// The most memory decoding an image file may take, bytes.
+pub const MAX_IMAGE_ALLOC: u64 = 512 << 20;
+
+/// Writes a PNG file: the image is checked first (not empty), then encoded to a temporary
+/// file in the same folder which is renamed over `path`, so a failure leaves no partial file
+/// and a symbolic link planted at `path` is replaced, not followed.
 pub fn save_png(image: &GreyImage, path: &Path) -> Result<()> {
+    let what = path.display().to_string();
+    check_image(&what, image)?;
+    let folder = match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    };
+    let mut builder = tempfile::Builder::new();
+    // Read-write for everyone the umask allows, like a file created directly (the
+    // temporary file's default is owner-only).
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut temp = builder.tempfile_in(folder).map_err(|e| image_error(&what, e.to_string()))?;
     image
-        .save_with_format(path, ::image::ImageFormat::Png)
-        .map_err(|e| image_error(&path.display().to_string(), e.to_string()))
+        .write_to(&mut std::io::BufWriter::new(temp.as_file_mut()), ::image::ImageFormat::Png)
+        .map_err(|e| image_error(&what, e.to_string()))?;
+    temp.persist(path).map_err(|e| image_error(&what, e.error.to_string()))?;
+    Ok(())
 }
 
 /// Reads a PNG (or any format the `image` crate was built with) as 8-bit grey; colour
-/// images are converted to luma.
+/// images are converted to luma. The file must be a regular file of at most
+/// [`MAX_IMAGE_BYTES`](crate::input_file::MAX_IMAGE_BYTES); decoding is bounded by
+/// [`MAX_IMAGE_SIDE`] and [`MAX_IMAGE_ALLOC`] (a small file declaring a huge image is refused).
 pub fn load_png(path: &Path) -> Result<GreyImage> {
-    let img = ::image::open(path).map_err(|e| image_error(&path.display().to_string(), e.to_string()))?;
+    let what = path.display().to_string();
+    let bytes = crate::input_file::read_bytes(path, crate::input_file::MAX_IMAGE_BYTES)
+        .map_err(|reason| image_error(&what, reason))?;
+    let mut reader = ::image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| image_error(&what, e.to_string()))?;
+    let mut limits = ::image::Limits::default();
+    limits.max_image_width = Some(MAX_IMAGE_SIDE);
+    limits.max_image_height = Some(MAX_IMAGE_SIDE);
+    limits.max_alloc = Some(MAX_IMAGE_ALLOC);
+    reader.limits(limits);
+    let img = reader.decode().map_err(|e| image_error(&what, e.to_string()))?;
     let grey = img.into_luma8();
-    check_image(&path.display().to_string(), &grey)?;
+    check_image(&what, &grey)?;
     Ok(grey)
 }
 
@@ -90,6 +124,21 @@ mod tests {
         assert_eq!(load_png(&path).unwrap(), img);
         let err = load_png(&dir.join("missing.png")).unwrap_err();
         assert!(err.to_string().contains("missing.png"));
+        // Regression (issue 16): an empty image is refused before any file is created.
+        let empty = dir.join("empty.png");
+        assert!(save_png(&GreyImage::new(0, 0), &empty).is_err());
+        assert!(!empty.exists());
+        // Regression (issue 16): a symbolic link at the destination is replaced, not followed.
+        #[cfg(unix)]
+        {
+            let target = dir.join("target.txt");
+            std::fs::write(&target, "keep").unwrap();
+            let link = dir.join("link.png");
+            std::os::unix::fs::symlink(&target, &link).unwrap();
+            save_png(&img, &link).unwrap();
+            assert_eq!(std::fs::read_to_string(&target).unwrap(), "keep");
+            assert_eq!(load_png(&link).unwrap(), img);
+        }
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

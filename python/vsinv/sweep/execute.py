@@ -22,10 +22,12 @@ if TYPE_CHECKING:
     import concurrent.futures as cf
 
 
-def _run_chunk(scenarios: list[str], threads: Optional[int] = None) -> dict[str, Column]:
+def _run_chunk(
+    scenarios: list[str], threads: Optional[int] = None, allow_outside_files: bool = False
+) -> dict[str, Column]:
     """Run a chunk of scenarios written as JSON texts with :func:`vsinv.run_batch` (module
     level: picklable, for executors; texts pickle faster than nested dicts)."""
-    return run_batch(scenarios, threads=threads)
+    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files)
 
 
 def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
@@ -54,7 +56,7 @@ def _explain(plan: _Plan, start: int, chunk: list[dict[str, Any]], exc: BaseExce
     reproduced by validating the chunk's scenarios here."""
     for j, d in enumerate(chunk):
         try:
-            load_scenario(d)
+            load_scenario(d, allow_outside_files=plan.allow_outside_files)
         except (VsinvError, ValueError) as inner:
             i = start + j
             return InvalidInput(f"sweep run {i} ({plan.values(i)}, seed {int(plan.columns['seed'][i])}): {inner}")
@@ -96,6 +98,7 @@ def run_sweep(
     chunk_size: Optional[int] = None,
     threads: Optional[int] = None,
     progress: Optional[bool] = None,
+    allow_outside_files: bool = False,
 ) -> SweepResult:
     """Run ``base`` (a built-in name, a TOML path, a dict or a Scenario) for every
     combination of the values in ``vary`` (see the module docstring for keys, grids,
@@ -110,11 +113,13 @@ def run_sweep(
       a few kB: the cap keeps memory flat).
     - ``threads``: rayon threads per chunk (None: all cores).
     - ``progress``: a tqdm bar over runs (None: when stderr is a terminal).
+    - ``allow_outside_files``: let the scenario name files (``calibration``, ``robot.urdf``)
+      outside the working directory (see :func:`vsinv.load_scenario`).
     """
     t0 = time.perf_counter()
     if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 1024):
         raise InvalidInput(f"threads: expected None or an integer from 1 to 1024, got {threads!r}")
-    plan = _plan(base, vary, repeats, draws, seed)
+    plan = _plan(base, vary, repeats, draws, seed, allow_outside_files)
     n = len(plan)
     workers = _executor_workers(executor, threads)
     if chunk_size is None:
@@ -142,7 +147,9 @@ def run_sweep(
                         bar.update(r_stop - r_start)
                         running = None
                     if chunk:
-                        running = (start, stop, chunk, runner.submit(_run_chunk, _texts(chunk, plan.base), threads))
+                        running = (start, stop, chunk, runner.submit(
+                            _run_chunk, _texts(chunk, plan.base), threads, plan.allow_outside_files
+                        ))
         else:
             _run_on(executor, plan, n, chunk_size, threads, max(2, 2 * workers), parts, bar)
     finally:
@@ -184,7 +191,8 @@ def _run_on(
                 nxt = next(todo, None)
                 if nxt is None:
                     break
-                pending[executor.submit(_run_chunk, _texts(plan.scenarios(*nxt), plan.base), threads)] = nxt
+                texts = _texts(plan.scenarios(*nxt), plan.base)
+                pending[executor.submit(_run_chunk, texts, threads, plan.allow_outside_files)] = nxt
             if not pending:
                 return
             done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)

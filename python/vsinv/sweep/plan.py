@@ -68,6 +68,7 @@ class _Plan:
     columns: dict[str, Column]  # varied keys, "repeat", "seed", one row per run
     points: npt.NDArray[np.int64]
     seed_varied: bool
+    allow_outside_files: bool = False
 
     @property
     def keys(self) -> tuple[str, ...]:
@@ -92,7 +93,8 @@ class _Plan:
 
 
 def _plan(
-    base: Any, vary: Mapping[str, Any], repeats: int, draws: Optional[int], seed: int
+    base: Any, vary: Mapping[str, Any], repeats: int, draws: Optional[int], seed: int,
+    allow_outside_files: bool = False,
 ) -> _Plan:
     if not isinstance(vary, Mapping):
         raise InvalidInput(f"vary: expected a dict of key -> values, got {type(vary).__name__}")
@@ -100,7 +102,7 @@ def _plan(
         raise InvalidInput(f"repeats: expected an integer >= 1, got {repeats!r}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidInput(f"seed: expected a non-negative integer, got {seed!r}")
-    base_dict = load_scenario(base).to_dict()
+    base_dict = load_scenario(base, allow_outside_files=allow_outside_files).to_dict()
 
     grid: dict[str, Column] = {}
     dists: dict[str, Distribution] = {}
@@ -132,7 +134,7 @@ def _plan(
             v = _native(v)
             v = list(v) if isinstance(v, tuple) else v
             try:
-                load_scenario(_apply(base_dict, {key: v}, paths))
+                load_scenario(_apply(base_dict, {key: v}, paths), allow_outside_files=allow_outside_files)
             except (VsinvError, ValueError, TypeError, KeyError) as exc:
                 msg = str(exc) if not isinstance(exc, KeyError) else f"missing {exc}"
                 if msg.startswith(f"vary key {key!r}"):
@@ -169,7 +171,7 @@ def _plan(
         columns["seed"] = np.asarray(columns["noise.seed"], dtype=np.int64)
     else:
         columns["seed"] = noise_seeds(int(seed), points, rep)
-    return _Plan(base_dict, tuple(grid), tuple(dists), paths, columns, points, seed_varied)
+    return _Plan(base_dict, tuple(grid), tuple(dists), paths, columns, points, seed_varied, allow_outside_files)
 
 
 def build_scenarios(
@@ -179,7 +181,8 @@ def build_scenarios(
     repeats: int = 1,
     draws: Optional[int] = None,
     seed: int = 0,
+    allow_outside_files: bool = False,
 ) -> list[dict[str, Any]]:
     """The scenario dicts :func:`sweep` would run, in order (to inspect or run elsewhere)."""
-    plan = _plan(base, vary, repeats, draws, seed)
+    plan = _plan(base, vary, repeats, draws, seed, allow_outside_files)
     return plan.scenarios(0, len(plan))

@@ -24,6 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ..plots import DPI, _use_agg
+from ..safe_files import replace_file
 from .columns import _binned
 
 if TYPE_CHECKING:
@@ -366,7 +367,7 @@ def plot_stability_map(result: SweepResult, path: _PathLike, keys: Union[str, Se
     fig = stability_map_figure(result, keys)
     out = Path(path)
     try:
-        fig.savefig(out, dpi=DPI)
+        replace_file(out, lambda f: fig.savefig(f, dpi=DPI, format=out.suffix.lstrip(".") or "png"))
     finally:
         plt.close(fig)
     return out

@@ -15,6 +15,7 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from .._core import InvalidInput
+from ..safe_files import replace_file, replace_text_file
 from .columns import Column, _binned, _column, _exportable, _hashable
 
 _PathLike = Union[str, "os.PathLike[str]"]
@@ -85,16 +86,17 @@ class SweepResult:
                     b"vsinv.repeats": str(self.repeats).encode(),
                     b"vsinv.seed": str(self.seed).encode(),
                 }
-                pq.write_table(table.replace_schema_metadata(meta), out)
+                replace_file(out, lambda f: pq.write_table(table.replace_schema_metadata(meta), f))
                 return out
         names = list(self.columns)
         cols = [_exportable(self.columns[k]) for k in names]
-        with open(out, "w", newline="") as fh:
+        def write(fh: Any) -> None:
             w = csv.writer(fh)
             w.writerow(names)
             for row in zip(*cols):
                 w.writerow(row)
-        return out
+
+        return replace_text_file(out, write)
 
     def summary_by(
         self, keys: Union[str, Sequence[str], None] = None, *, bins: Optional[int] = None

@@ -114,16 +114,18 @@ impl ArmModel {
         Self::parse(urdf, end_effector, "<string>")
     }
 
-    /// The chain from the root link to `end_effector` in a URDF file.
+    /// The chain from the root link to `end_effector` in a URDF file: a regular file of at
+    /// most [`MAX_URDF_BYTES`](crate::input_file::MAX_URDF_BYTES), UTF-8.
     pub fn from_urdf_file(path: impl AsRef<Path>, end_effector: &str) -> Result<Self> {
         let file = path.as_ref().display().to_string();
-        let text = std::fs::read_to_string(path.as_ref()).map_err(|e| urdf_error(&file, e.to_string()))?;
+        let text = crate::input_file::read_text(path.as_ref(), crate::input_file::MAX_URDF_BYTES)
+            .map_err(|e| urdf_error(&file, e))?;
         Self::parse(&text, end_effector, &file)
     }
 
     /// Parses URDF text; `source` labels the errors.
     pub(super) fn parse(urdf: &str, end_effector: &str, source: &str) -> Result<Self> {
-        let robot = urdf_rs::read_from_string(urdf).map_err(|e| urdf_error(source, format!("not valid URDF: {e}")))?;
+        let robot = urdf_rs::read_from_string(urdf).map_err(|e| urdf_error(source, parse_message(&e.to_string())))?;
         let chain = chain_to(&robot, end_effector, source)?;
         let base = chain.first().map_or(end_effector, |j| j.parent.link.as_str());
         let mut joints = Vec::new();
@@ -232,8 +234,9 @@ fn chain_to<'a>(robot: &'a urdf_rs::Robot, end_effector: &str, source: &str) -> 
     let known =
         robot.links.iter().any(|l| l.name == end_effector) || robot.joints.iter().any(|j| j.child.link == end_effector);
     if !known {
-        let names: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
-        return Err(urdf_error(source, format!("no link `{end_effector}` (links: {})", names.join(", "))));
+        let names: Vec<&str> = robot.links.iter().take(20).map(|l| l.name.as_str()).collect();
+        let more = if robot.links.len() > 20 { ", ..." } else { "" };
+        return Err(urdf_error(source, format!("no link `{end_effector}` (links: {}{more})", names.join(", "))));
     }
     let mut chain = Vec::new();
     let mut link = end_effector;
@@ -244,8 +247,49 @@ fn chain_to<'a>(robot: &'a urdf_rs::Robot, end_effector: &str, source: &str) -> 
         chain.push(joint);
         link = &joint.parent.link;
     }
+    if let Some(top) = chain.last()
+        && !robot.links.iter().any(|l| l.name == top.parent.link)
+    {
+        let reason = format!(
+            "joint `{}` has the parent link `{}`, which is not defined (no <link name=\"{}\">)",
+            top.name, top.parent.link, top.parent.link
+        );
+        return Err(urdf_error(source, reason));
+    }
     chain.reverse();
     Ok(chain)
+}
+
+/// The parser's error in at most one line of 160 characters, with every bracketed or quoted
+/// part (`[...]`, `"..."`, `'...'`, `` `...` ``) elided: urdf-rs quotes the attribute text at
+/// fault, which must not carry a file's contents into the error.
+fn parse_message(message: &str) -> String {
+    let line = message.lines().next().unwrap_or_default();
+    let mut out = String::new();
+    let mut closing: Option<char> = None;
+    for c in line.chars() {
+        match closing {
+            Some(end) if c == end => {
+                out.push(end);
+                closing = None;
+            }
+            Some(_) => {}
+            None => {
+                out.push(c);
+                closing = match c {
+                    '[' => Some(']'),
+                    '"' | '\'' | '`' => Some(c),
+                    _ => None,
+                };
+                if closing.is_some() {
+                    out.push_str("...");
+                }
+            }
+        }
+    }
+    let short: String = out.chars().take(160).collect();
+    let cut = if short.len() < out.len() || message.lines().nth(1).is_some() { " ..." } else { "" };
+    format!("not valid URDF: {}{cut}", short.escape_debug())
 }
 
 /// The joint whose child is `link`, if any.
@@ -377,5 +421,22 @@ mod tests {
         let two_parents = MIXED.replace(r#"<child link="wrist"/>"#, r#"<child link="slider"/>"#);
         let err = ArmModel::from_urdf_str(&two_parents, "slider").unwrap_err();
         assert!(err.to_string().contains("two joints, `slide` and `spin`"), "{err}");
+    }
+
+    /// Regression (issue 16): a joint whose parent link is not defined was taken silently as
+    /// the chain's root.
+    #[test]
+    fn a_missing_parent_link_is_refused() {
+        let orphan = MIXED.replace(r#"<link name="base"/>"#, "");
+        let err = ArmModel::from_urdf_str(&orphan, "tool").unwrap_err().to_string();
+        assert!(err.contains("joint `mount_joint`") && err.contains("parent link `base`"), "{err}");
+    }
+
+    /// Regression (issue 16): the parser's message quoted the attribute text of the file.
+    #[test]
+    fn parse_errors_do_not_quote_the_file() {
+        let bad = MIXED.replace(r#"xyz="0 0 0.2""#, r#"xyz="0 SECRET-MARKER""#);
+        let err = ArmModel::from_urdf_str(&bad, "tool").unwrap_err().to_string();
+        assert!(err.contains("not valid URDF") && !err.contains("SECRET"), "{err}");
     }
 }

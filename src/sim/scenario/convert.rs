@@ -4,8 +4,8 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, DepthsName, LawName, RobotKind};
-use super::{Scenario, scenario_error};
+use super::schema::{BodySpec, ControlSpec, DepthEstimationSpec, DepthsName, LawName, RobotKind};
+use super::{FileScope, Scenario, scenario_error};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::core::control::InvariantControllerConfig;
@@ -57,16 +57,12 @@ fn first_given<const N: usize>(keys: [(&str, bool); N]) -> Option<&str> {
     keys.into_iter().find_map(|(key, given)| given.then_some(key))
 }
 
-/// A relative path starts at the scenario file's directory if known, else the working one.
-fn resolve_path(file: &str, directory: Option<&std::path::Path>) -> std::path::PathBuf {
-    let path = std::path::Path::new(file);
-    match directory {
-        Some(dir) if path.is_relative() => dir.join(path),
-        _ => path.to_path_buf(),
-    }
-}
-
 impl Scenario {
+    /// Where the files this scenario names are resolved.
+    fn files(&self) -> FileScope<'_> {
+        FileScope { directory: self.directory.as_deref(), access: self.file_access }
+    }
+
     /// Checks everything that the schema alone cannot: counts, signs, that the object is in
     /// front of the reference camera and of the start pose.
     pub fn validate(&self) -> Result<()> {
@@ -81,6 +77,7 @@ impl Scenario {
         let start = self.start_pose(&robot)?;
         let c = &self.control;
         self.check_numbers()?;
+        let vision = self.vision_config(&reference_camera, &camera)?;
         Ok(SimulationConfig {
             scene,
             basis: self.object.basis,
@@ -96,7 +93,7 @@ impl Scenario {
             noise: self.noise,
             stop: self.stop,
             path: self.path_plan()?,
-            vision: self.vision_config()?,
+            vision,
             record: true,
         })
     }
@@ -140,7 +137,7 @@ impl Scenario {
         if self.reference_camera.zoom.is_some() {
             return Err(scenario_error("reference_camera.zoom", "the reference image is taken with one camera"));
         }
-        let dir = self.directory.as_deref();
+        let dir = self.files();
         let reference_camera = self.reference_camera.model("reference_camera", dir)?;
         let camera = match &self.camera {
             Some(c) => c.model("camera", dir)?,
@@ -263,11 +260,23 @@ impl Scenario {
     }
 
     /// `[vision]`: valid values, image sizes for both cameras, no coordinate noise on top.
-    fn vision_config(&self) -> Result<Option<crate::vision::RenderConfig>> {
+    fn vision_config(
+        &self,
+        reference: &CameraModel,
+        camera: &CameraModel,
+    ) -> Result<Option<crate::vision::RenderConfig>> {
         let Some(v) = self.vision else { return Ok(None) };
         v.validate().map_err(|e| scenario_error("vision", e.to_string()))?;
-        let sized = |c: &CameraSpec| c.width.is_some() && c.height.is_some();
-        if !sized(&self.reference_camera) || !self.camera.as_ref().is_none_or(sized) {
+        let tables =
+            [("reference_camera", Some(&self.reference_camera), reference), ("camera", self.camera.as_ref(), camera)];
+        for (key, spec, model) in tables {
+            if model.image.is_some() {
+                continue;
+            }
+            if spec.is_some_and(|c| c.calibration.is_some()) {
+                let reason = "the file has no image_width and image_height, which [vision] needs (images are rendered at that size)";
+                return Err(scenario_error(&format!("{key}.calibration"), reason));
+            }
             return Err(scenario_error("vision", "images need width and height in the camera tables"));
         }
         if self.noise.pixel_sigma > 0.0 {
@@ -293,7 +302,7 @@ impl Scenario {
             ("robot.damping", r.damping.is_some()),
         ];
         match (r.kind, first_given(arm_key)) {
-            (RobotKind::Urdf, _) => arm::robot(r, self.directory.as_deref()),
+            (RobotKind::Urdf, _) => arm::robot(r, self.files()),
             (_, Some(key)) => Err(scenario_error(key, "applies to kind = \"urdf\" only")),
             (RobotKind::Free, None) => {
                 if r.joint_min.is_some() || r.joint_max.is_some() || r.joint_velocity.is_some() {

@@ -6,13 +6,63 @@
 
 mod builtin;
 mod convert;
+mod files;
 pub mod schema;
 
 pub use builtin::{BUILTIN, builtin};
+pub use files::FileAccess;
+pub(crate) use files::FileScope;
 pub use schema::*;
 
 use crate::error::{Error, Result};
 use crate::sim::config::SimulationConfig;
+
+/// The largest scenario file, bytes.
+pub use crate::input_file::MAX_SCENARIO_BYTES;
+
+/// A TOML syntax error: the parser's message and the line, without the quoted source.
+fn toml_message(text: &str, e: &toml::de::Error) -> String {
+    let message = shorten_quotes(e.message().trim());
+    match e.span() {
+        Some(span) => {
+            let line = text.as_bytes()[..span.start.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1;
+            format!("TOML syntax error at line {line}: {message}")
+        }
+        None => format!("TOML syntax error: {message}"),
+    }
+}
+
+/// A message with every quoted value (`"..."`, as serde quotes strings) cut to a short
+/// excerpt ([`excerpt`](crate::input_file::excerpt)).
+fn shorten_quotes(message: &str) -> String {
+    let mut out = String::new();
+    let mut rest = message;
+    while let Some(start) = rest.find('"') {
+        out.push_str(&rest[..start]);
+        let after = &rest[start + 1..];
+        // serde's quotes are Debug-escaped: the closing quote is the first one not escaped.
+        let mut end = None;
+        let mut escaped = false;
+        for (i, c) in after.char_indices() {
+            match c {
+                '\\' if !escaped => escaped = true,
+                '"' if !escaped => {
+                    end = Some(i);
+                    break;
+                }
+                _ => escaped = false,
+            }
+        }
+        let Some(end) = end else {
+            out.push_str(&crate::input_file::excerpt(after));
+            return out;
+        };
+        out.push_str(&crate::input_file::excerpt(&after[..end]));
+        rest = &after[end + 1..];
+    }
+    out.push_str(rest);
+    out
+}
 
 pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
     // serde_path_to_error names the document root ".".
@@ -28,35 +78,68 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// Reads a TOML file; relative `robot.urdf` paths start at the file's directory.
+    /// Reads a TOML file (a regular file of at most [`MAX_SCENARIO_BYTES`]); the files it
+    /// names (`calibration`, `robot.urdf`) must be inside its folder ([`FileAccess`]).
     pub fn from_toml_file(path: impl AsRef<std::path::Path>) -> Result<Self> {
+        Self::from_toml_file_with(path, FileAccess::ScenarioFolder)
+    }
+
+    /// Reads a TOML file, its files resolved by the rule `access`.
+    pub fn from_toml_file_with(path: impl AsRef<std::path::Path>, access: FileAccess) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| scenario_error("", format!("{}: {e}", path.display())))?;
+        let text = crate::input_file::read_text(path, MAX_SCENARIO_BYTES)
+            .map_err(|reason| scenario_error("", format!("{}: {reason}", path.display())))?;
         let mut scenario = Self::parse_toml(&text)?;
         scenario.directory = path.parent().map(std::path::Path::to_path_buf);
+        scenario.file_access = access;
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// Parses TOML text, its files resolved by the rule `access` (relative to the working
+    /// directory).
+    pub fn from_toml_with(text: &str, access: FileAccess) -> Result<Self> {
+        let mut scenario = Self::parse_toml(text)?;
+        scenario.file_access = access;
         scenario.validate()?;
         Ok(scenario)
     }
 
     fn parse_toml(text: &str) -> Result<Self> {
-        let de = toml::Deserializer::parse(text).map_err(|e| scenario_error("", e.to_string().trim().to_string()))?;
+        // The parser's message only, with the line: its Display quotes the source line, which
+        // may be anything (a binary file, a secret).
+        let de = toml::Deserializer::parse(text).map_err(|e| scenario_error("", toml_message(text, &e)))?;
         let scenario: Scenario = serde_path_to_error::deserialize(de).map_err(|e| {
             let key = e.path().to_string();
-            scenario_error(&key, e.into_inner().message().trim().to_string())
+            scenario_error(&key, shorten_quotes(e.into_inner().message().trim()))
         })?;
         Ok(scenario)
     }
 
     /// Parses JSON text (the form Python dictionaries take on their way in).
     pub fn from_json(text: &str) -> Result<Self> {
-        let scenario = Self::parse_json(text)?;
+        Self::from_json_with(text, FileAccess::ScenarioFolder)
+    }
+
+    /// Parses JSON text, its files resolved by the rule `access` (relative to the working
+    /// directory).
+    pub fn from_json_with(text: &str, access: FileAccess) -> Result<Self> {
+        let mut scenario = Self::parse_json(text)?;
+        scenario.file_access = access;
         scenario.validate()?;
         Ok(scenario)
     }
 
     /// The simulation described by JSON text, parsed and validated once (batch runs).
     pub fn config_from_json(text: &str) -> Result<SimulationConfig> {
-        Self::parse_json(text)?.to_config()
+        Self::config_from_json_with(text, FileAccess::ScenarioFolder)
+    }
+
+    /// [`Scenario::config_from_json`] with the file rule `access`.
+    pub fn config_from_json_with(text: &str, access: FileAccess) -> Result<SimulationConfig> {
+        let mut scenario = Self::parse_json(text)?;
+        scenario.file_access = access;
+        scenario.to_config()
     }
 
     fn parse_json(text: &str) -> Result<Self> {
@@ -65,8 +148,8 @@ impl Scenario {
             let key = e.path().to_string();
             let message = e.into_inner().to_string();
             // serde_json appends the position in the JSON text, meaningless for a dictionary.
-            let message = message.split(" at line ").next().unwrap_or_default().to_string();
-            scenario_error(&key, message)
+            let message = message.split(" at line ").next().unwrap_or_default();
+            scenario_error(&key, shorten_quotes(message))
         })
     }
 
@@ -78,5 +161,25 @@ impl Scenario {
     /// The scenario as TOML text.
     pub fn to_toml(&self) -> Result<String> {
         toml::to_string(self).map_err(|e| scenario_error("", e.to_string()))
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// Regression (issue 16): TOML errors quoted the source line and serde quoted string
+    /// values in full; now the line number and a short excerpt only.
+    #[test]
+    fn errors_quote_no_more_than_an_excerpt() {
+        let marker = "SECRET-MARKER";
+        let garbage = format!("name = \"x\"\nAKIA-0123456789-{marker} = = \n");
+        let e = Scenario::from_toml(&garbage).unwrap_err().to_string();
+        assert!(e.contains("line 2") && !e.contains(marker), "{e}");
+        let value = format!("name = \"x\"\n[control]\ngain = \"AKIA-0123456789-{marker}\"\n");
+        let e = Scenario::from_toml(&value).unwrap_err().to_string();
+        assert!(e.contains("control.gain") && e.contains("AKIA") && !e.contains(marker), "{e}");
+        assert_eq!(shorten_quotes(r#"a "b\"c" d"#), r#"a "b\\\"c" d"#);
     }
 }

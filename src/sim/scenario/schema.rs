@@ -365,7 +365,11 @@ pub struct Scenario {
     /// The translation pair for `control.depths = "estimated"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_estimation: Option<DepthEstimationSpec>,
-    /// The directory of the scenario file, if any: relative `robot.urdf` paths start there.
+    /// The directory of the scenario file, if any: relative `calibration` and `robot.urdf`
+    /// paths start there.
     #[serde(skip)]
     pub directory: Option<std::path::PathBuf>,
+    /// Where the files the scenario names may be (default: inside its folder).
+    #[serde(skip)]
+    pub file_access: super::FileAccess,
 }

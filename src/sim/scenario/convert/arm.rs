@@ -1,19 +1,18 @@
 //! `[robot] kind = "urdf"`: the model, the mount, the base, the start joints and the limits,
 //! each checked with an error naming its key.
 
-use std::path::Path;
 use std::sync::Arc;
 
-use super::{check_values, pose_of, resolve_path};
+use super::{check_values, pose_of};
 use crate::error::{Error, Result};
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::scenario_error;
 use crate::sim::scenario::schema::{PoseSpec, RobotSpec};
+use crate::sim::scenario::{FileScope, scenario_error};
 
-/// The arm of `[robot]`; `directory` is the scenario file's, for relative URDF paths.
-pub(super) fn robot(r: &RobotSpec, directory: Option<&Path>) -> Result<Robot> {
-    let model = model(r, directory)?;
+/// The arm of `[robot]`; `files` resolves a URDF path.
+pub(super) fn robot(r: &RobotSpec, files: FileScope<'_>) -> Result<Robot> {
+    let model = model(r, files)?;
     let units = Units::of(&model);
     let n = model.dof();
     let joints =
@@ -36,7 +35,7 @@ pub(super) fn robot(r: &RobotSpec, directory: Option<&Path>) -> Result<Robot> {
 }
 
 /// `robot.urdf` (a built-in name or a file) up to `robot.end_effector`.
-fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
+fn model(r: &RobotSpec, files: FileScope<'_>) -> Result<ArmModel> {
     let urdf = r.urdf.as_deref().ok_or_else(|| {
         scenario_error("robot.urdf", format!("missing: a built-in arm ({}) or a URDF file", BUILTIN_ARMS.join(", ")))
     })?;
@@ -47,8 +46,13 @@ fn model(r: &RobotSpec, directory: Option<&Path>) -> Result<ArmModel> {
             return Err(scenario_error("robot.end_effector", "needed with a URDF file: the link carrying the camera"));
         }
         (false, Some(link)) => {
-            let path = resolve_path(urdf, directory);
-            if !path.is_file() {
+            let looks_like_a_path = urdf.contains(['/', '.']);
+            let path = match files.resolve("robot.urdf", urdf) {
+                Ok(path) => path,
+                Err(e) if looks_like_a_path => return Err(e),
+                Err(_) => files.directory.unwrap_or(std::path::Path::new(".")).join(urdf),
+            };
+            if !path.exists() {
                 let reason = format!(
                     "`{urdf}` is neither a built-in arm ({}) nor a file ({} not found)",
                     BUILTIN_ARMS.join(", "),

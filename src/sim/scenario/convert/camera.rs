@@ -2,16 +2,14 @@
 //! image size and lens distortion, given as numbers or read from a calibration file, each
 //! checked with an error naming its key.
 
-use std::path::Path;
-
-use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, first_given, resolve_path};
+use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, first_given};
 use crate::calibration::load_calibration;
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::Result;
 use crate::sim::camera_model::CameraModel;
-use crate::sim::scenario::scenario_error;
 use crate::sim::scenario::schema::CameraSpec;
+use crate::sim::scenario::{FileScope, scenario_error};
 use crate::sim::scene::ImageSize;
 
 /// A camera table read: its intrinsics, image size and distortion.
@@ -24,9 +22,9 @@ pub(super) struct Lens {
 impl CameraSpec {
     /// The table as numbers, or its calibration file (which then replaces fku, fkv, u0, v0,
     /// width, height and distortion; a file has no skew).
-    pub(super) fn lens(&self, key: &str, directory: Option<&Path>) -> Result<Lens> {
+    pub(super) fn lens(&self, key: &str, files: FileScope<'_>) -> Result<Lens> {
         match &self.calibration {
-            Some(file) => self.read_calibration(key, file, directory),
+            Some(file) => self.read_calibration(key, file, files),
             None => Ok(Lens {
                 intrinsics: self.intrinsics(key)?,
                 image: self.image_size(key)?,
@@ -35,7 +33,7 @@ impl CameraSpec {
         }
     }
 
-    fn read_calibration(&self, key: &str, file: &str, directory: Option<&Path>) -> Result<Lens> {
+    fn read_calibration(&self, key: &str, file: &str, files: FileScope<'_>) -> Result<Lens> {
         let given = [
             ("fku", self.fku.is_some()),
             ("fkv", self.fkv.is_some()),
@@ -53,12 +51,14 @@ impl CameraSpec {
             let reason = "calibration files have no skew: skew_deg must be 90 (the default) with calibration";
             return Err(scenario_error(&format!("{key}.skew_deg"), reason));
         }
-        let calibration = load_calibration(resolve_path(file, directory))
-            .map_err(|e| scenario_error(&format!("{key}.calibration"), e.to_string()))?;
-        let (width, height) = calibration.image_size;
+        let cal_key = format!("{key}.calibration");
+        let calibration =
+            load_calibration(files.resolve(&cal_key, file)?).map_err(|e| scenario_error(&cal_key, e.to_string()))?;
         Ok(Lens {
             intrinsics: calibration.intrinsics,
-            image: Some(ImageSize { width: f64::from(width), height: f64::from(height) }),
+            image: calibration
+                .image_size
+                .map(|(width, height)| ImageSize { width: f64::from(width), height: f64::from(height) }),
             distortion: calibration.distortion,
         })
     }
@@ -118,8 +118,8 @@ impl CameraSpec {
     }
 
     /// The camera of a run: the table's lens with its zoom schedule.
-    pub(super) fn model(&self, key: &str, directory: Option<&Path>) -> Result<CameraModel> {
-        let lens = self.lens(key, directory)?;
+    pub(super) fn model(&self, key: &str, files: FileScope<'_>) -> Result<CameraModel> {
+        let lens = self.lens(key, files)?;
         let model = CameraModel {
             intrinsics: lens.intrinsics,
             zoom: self.zoom.clone(),
