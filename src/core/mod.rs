@@ -16,10 +16,13 @@
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
 //! | rigid motions, exact twist integration | [`se3`] |
 //! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
+//! | the widest triangle (basis choice, sec. 5.1) in `O(n log n)` | [`widest_triangle`] |
 
 pub mod adaptive_gain;
+mod boundary_points;
 pub mod camera;
 pub mod control;
+pub(crate) mod convex_hull;
 pub mod depth;
 pub mod distortion;
 pub mod ibvs;
@@ -30,3 +33,4 @@ pub mod rz_task;
 pub mod saturation;
 pub mod se3;
 pub mod stability;
+pub mod widest_triangle;
