@@ -1,4 +1,5 @@
 //! The fast widest-triangle search against the exhaustive one it replaces.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use super::*;
 use crate::core::convex_hull::cross;
