@@ -360,7 +360,9 @@ fn structure_ratio(
     Ok(r)
 }
 
-/// Three points well spread in the image (the widest triangle), sorted.
+/// Three points well spread in the image (the widest triangle; among equal areas the first
+/// (i, j, k) in index order), sorted. O(n log n); refuses (InvalidInput, `pixels`) point sets
+/// with more than 10,000 convex-hull vertices. Runs without the GIL.
 #[pyfunction]
 fn choose_basis(py: Python<'_>, pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
     let a = pixels_arg(pixels, "pixels")?;
