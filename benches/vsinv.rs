@@ -37,6 +37,10 @@
 //!   `max_iterations`; the scenario converges only at 572), `(T(51) - T(1)) / 50` per
 //!   iteration. The 1-iteration run also pays the reference image and the tracker's start,
 //!   which cancel out.
+//! - `choose_basis/{uniform,disk}/n`: [`vsinv::choose_basis`] (basis `"auto"`, the widest
+//!   triangle) of n = 10^3 .. 10^6 pixels uniform in a 640 x 480 image or in a disc
+//!   (about 3.4 n^(1/3) hull vertices); `choose_basis/circle/n`: n points on a circle, all
+//!   hull vertices (the `O(h^2)` case), n = 10^3 and 10^4 (the limit).
 //!
 //! The scene is synthetic and deterministic: a non-planar object (a grid about 0.6 m in
 //! front of the reference camera with +-60 mm relief), a reference image taken with a
@@ -301,9 +305,54 @@ fn config() -> Criterion {
     Criterion::default().warm_up_time(Duration::from_secs(1)).measurement_time(Duration::from_secs(2)).sample_size(50)
 }
 
+/// `n` pixels of a deterministic pseudo-random set: uniform in 640 x 480 px, uniform in a
+/// disc, or evenly on a circle.
+fn pixel_set(shape: &str, n: usize) -> Vec<[f64; 2]> {
+    let mut state = 0x2545_F491_4F6C_DD1D_u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let tau = std::f64::consts::TAU;
+    (0..n)
+        .map(|i| match shape {
+            "uniform" => [640.0 * next(), 480.0 * next()],
+            "disk" => {
+                let (r, t) = (200.0 * next().sqrt(), tau * next());
+                [320.0 + r * t.cos(), 240.0 + r * t.sin()]
+            }
+            _ => {
+                let t = tau * i as f64 / n as f64;
+                [320.0 + 200.0 * t.cos(), 240.0 + 200.0 * t.sin()]
+            }
+        })
+        .collect()
+}
+
+fn basis_choice(c: &mut Criterion) {
+    let mut group = c.benchmark_group("choose_basis");
+    group.sample_size(10).measurement_time(Duration::from_secs(3)).sampling_mode(SamplingMode::Flat);
+    let cases = [
+        ("uniform", &[1_000, 10_000, 100_000, 1_000_000][..]),
+        ("disk", &[1_000, 10_000, 100_000, 1_000_000][..]),
+        ("circle", &[1_000, 10_000][..]),
+    ];
+    for (shape, sizes) in cases {
+        for &n in sizes {
+            let px = pixel_set(shape, n);
+            choose_basis(&px).expect("basis");
+            group.throughput(Throughput::Elements(n as u64));
+            group.bench_with_input(BenchmarkId::new(shape, n), &px, |b, px| b.iter(|| choose_basis(black_box(px))));
+        }
+    }
+    group.finish();
+}
+
 criterion_group! {
     name = benches;
     config = config();
-    targets = control_step, pose_integration, simulation, batch, vision
+    targets = control_step, pose_integration, simulation, batch, vision, basis_choice
 }
 criterion_main!(benches);

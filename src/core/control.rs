@@ -58,6 +58,28 @@ pub struct InvariantControllerConfig {
     pub twist_limits: Option<TwistLimits>,
 }
 
+impl InvariantControllerConfig {
+    /// Checks the gains, the adaptive gain, the speed limits and the structure threshold
+    /// (what [`InvariantController::new`] checks besides the pixels and the basis).
+    pub fn validate(&self) -> Result<()> {
+        check_positive("gain", self.gain)?;
+        check_positive("gain_rz", self.gain_rz)?;
+        if let Some(g) = &self.adaptive_gain {
+            g.validate()?;
+        }
+        if let Some(l) = &self.twist_limits {
+            l.validate()?;
+        }
+        if !(self.min_structure_ratio.is_finite() && self.min_structure_ratio >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "min_structure_ratio",
+                reason: "must be finite and >= 0".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for InvariantControllerConfig {
     fn default() -> Self {
         Self {
@@ -148,20 +170,7 @@ impl InvariantController {
         check_finite_points("reference_pixels", reference_pixels)?;
         let n = reference_pixels.len();
         check_point_count(n, MIN_POINTS)?;
-        check_positive("gain", config.gain)?;
-        check_positive("gain_rz", config.gain_rz)?;
-        if let Some(g) = &config.adaptive_gain {
-            g.validate()?;
-        }
-        if let Some(l) = &config.twist_limits {
-            l.validate()?;
-        }
-        if !(config.min_structure_ratio.is_finite() && config.min_structure_ratio >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "min_structure_ratio",
-                reason: "must be finite and >= 0".into(),
-            });
-        }
+        config.validate()?;
         let basis = validate_basis(basis, n)?;
         let frame = BasisFrame::new(reference_pixels, basis, "reference")?;
         let others = non_basis_indices(n, basis);

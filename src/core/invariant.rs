@@ -4,6 +4,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::core::widest_triangle::widest_triangle;
 use crate::error::{Error, Result, check_finite_points};
 
 /// Below this normalised triangle area (twice the area over the squared longest side) the
@@ -34,31 +35,28 @@ fn triangle_ratio(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
 }
 
 /// Chooses three points well spread in the image, as the paper does (sec. 5.1): the triangle
-/// of largest area, ties broken by the smallest indices. The result is sorted.
+/// of largest area, ties broken by the smallest indices (the first `(i, j, k)` in
+/// lexicographic order). The result is sorted.
+///
+/// `O(n log n)` for `n` points (a convex hull, then an exhaustive search over the points on
+/// its boundary; see [`crate::core::widest_triangle`]): 10^6 points take about 0.2 s. Fails
+/// with `InvalidParameter("pixels")` when more than
+/// [`MAX_HULL_POINTS`](crate::core::widest_triangle::MAX_HULL_POINTS) points are vertices of
+/// the convex hull (e.g. that many points on a circle), and with `CollinearBasis` when the
+/// widest triangle is flat.
 pub fn choose_basis(pixels: &[[f64; 2]]) -> Result<[usize; 3]> {
     check_finite_points("pixels", pixels)?;
     let n = pixels.len();
     if n < 3 {
         return Err(Error::TooFewPoints { needed: 3, got: n, why: "a basis needs three points" });
     }
-    let mut best = (0.0_f64, [0, 1, 2]);
-    for i in 0..n {
-        for j in i + 1..n {
-            let (a, b) = (pixels[i], pixels[j]);
-            for (k, c) in pixels.iter().enumerate().skip(j + 1) {
-                let area = ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs();
-                if area > best.0 {
-                    best = (area, [i, j, k]);
-                }
-            }
-        }
-    }
-    let [i, j, k] = best.1;
+    let (_, basis) = widest_triangle(pixels)?;
+    let [i, j, k] = basis;
     let ratio = triangle_ratio(pixels[i], pixels[j], pixels[k]);
     if ratio < COLLINEAR_RATIO {
-        return Err(Error::CollinearBasis { basis: best.1, image: "reference", ratio });
+        return Err(Error::CollinearBasis { basis, image: "reference", ratio });
     }
-    Ok(best.1)
+    Ok(basis)
 }
 
 /// The basis matrix Q of eq. (6) and its inverse, from the pixels of the three basis points.

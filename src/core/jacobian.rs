@@ -32,6 +32,14 @@ pub(crate) fn check_point_count(n: usize, min_points: usize) -> Result<()> {
     Ok(())
 }
 
+/// Validates pixels and depths (all but the basis: what can be checked before choosing one).
+pub(crate) fn check_pixels_and_depths(pixels: &[[f64; 2]], depths: &[f64], min_points: usize) -> Result<()> {
+    check_finite_points("pixels", pixels)?;
+    let n = pixels.len();
+    check_point_count(n, min_points)?;
+    check_depths(depths, n)
+}
+
 /// Validates pixels and depths and the basis; returns the basis.
 pub(crate) fn check_inputs(
     pixels: &[[f64; 2]],
@@ -39,11 +47,8 @@ pub(crate) fn check_inputs(
     basis: [usize; 3],
     min_points: usize,
 ) -> Result<[usize; 3]> {
-    check_finite_points("pixels", pixels)?;
-    let n = pixels.len();
-    check_point_count(n, min_points)?;
-    check_depths(depths, n)?;
-    validate_basis(basis, n)
+    check_pixels_and_depths(pixels, depths, min_points)?;
+    validate_basis(basis, pixels.len())
 }
 
 /// `L_k - q_1k L_1 - q_2k L_2 - q_3k L_3` for the two image rows (the third row is zero).

@@ -18,10 +18,13 @@
 //! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
 //! | pixel noise measured from an image stream, not in the paper | [`noise_meter`] |
 //! | pose uncertainty left by pixel noise (first-order propagation), not in the paper | [`uncertainty`] |
+//! | the widest triangle (basis choice, sec. 5.1) in `O(n log n)` | [`widest_triangle`] |
 
 pub mod adaptive_gain;
+mod boundary_points;
 pub mod camera;
 pub mod control;
+pub(crate) mod convex_hull;
 pub mod depth;
 pub mod distortion;
 pub mod ibvs;
@@ -34,3 +37,4 @@ pub mod saturation;
 pub mod se3;
 pub mod stability;
 pub mod uncertainty;
+pub mod widest_triangle;

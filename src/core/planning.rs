@@ -263,14 +263,20 @@ pub struct InvariantPath {
 pub const MIN_PATH_DURATION: f64 = 1e-6;
 
 impl InvariantPath {
-    /// The path for the reference invariant points `q_star`, the plane + parallax estimate
-    /// and a duration `T` (the paper samples it N times at the control period: T = N dt).
-    /// `beta_k(0) e*/||e*|| = mu_k* e*` (correction 7), `Delta(0) = Gamma / gamma_3`.
-    pub fn new(q_star: &[Vector3<f64>], estimate: &PlaneParallax, duration: f64) -> Result<Self> {
+    /// Checks a path duration (finite, at least [`MIN_PATH_DURATION`]), before any work.
+    pub fn check_duration(duration: f64) -> Result<()> {
         if !(duration.is_finite() && duration >= MIN_PATH_DURATION) {
             let reason = format!("must be finite and at least {MIN_PATH_DURATION:e} s, got {duration}");
             return Err(Error::InvalidParameter { name: "path duration", reason });
         }
+        Ok(())
+    }
+
+    /// The path for the reference invariant points `q_star`, the plane + parallax estimate
+    /// and a duration `T` (the paper samples it N times at the control period: T = N dt).
+    /// `beta_k(0) e*/||e*|| = mu_k* e*` (correction 7), `Delta(0) = Gamma / gamma_3`.
+    pub fn new(q_star: &[Vector3<f64>], estimate: &PlaneParallax, duration: f64) -> Result<Self> {
+        Self::check_duration(duration)?;
         if q_star.len() != estimate.mu_e.len() {
             return Err(Error::Shape {
                 what: "q_star",

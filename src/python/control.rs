@@ -102,7 +102,12 @@ impl PyInvariantController {
             adaptive_gain,
             twist_limits,
         };
-        let inner = InvariantController::new(px, k_hat, basis.resolve(px)?, config).map_err(to_py)?;
+        let basis = basis.resolve(reference_pixels.py(), px, || {
+            crate::error::check_finite_points("reference_pixels", px)?;
+            crate::core::jacobian::check_point_count(px.len(), crate::core::jacobian::MIN_POINTS)?;
+            config.validate()
+        })?;
+        let inner = InvariantController::new(px, k_hat, basis, config).map_err(to_py)?;
         Ok(Self { inner })
     }
 

@@ -24,6 +24,7 @@ use errors::{invalid_input, to_py};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::core::ibvs::Interaction;
+use crate::core::jacobian::check_pixels_and_depths;
 use crate::core::rz_task::RzTask;
 use crate::core::saturation::TwistLimits;
 use crate::core::stability::{StabilityReport, check_upper_triangular};
@@ -55,12 +56,30 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
 }
 
 impl BasisArg {
-    pub(crate) fn resolve(self, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
+    /// The indices; for "auto", the widest triangle of `pixels`, searched only after
+    /// `validate` has accepted the other arguments (bad input fails before the search) and
+    /// without the GIL.
+    pub(crate) fn resolve(
+        self,
+        py: Python<'_>,
+        pixels: &[[f64; 2]],
+        validate: impl FnOnce() -> crate::Result<()>,
+    ) -> PyResult<[usize; 3]> {
         match self {
             BasisArg::Fixed(b) => Ok(b),
-            BasisArg::Auto => crate::core::invariant::choose_basis(pixels).map_err(to_py),
+            BasisArg::Auto => {
+                validate().map_err(to_py)?;
+                choose_basis_detached(py, pixels)
+            }
         }
     }
+}
+
+/// `choose_basis`, with the GIL released when the search is not trivially short.
+fn choose_basis_detached(py: Python<'_>, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
+    let search = || crate::core::invariant::choose_basis(pixels);
+    let small = pixels.len() <= crate::core::widest_triangle::EXHAUSTIVE_MAX_POINTS / 4;
+    if small { search() } else { py.detach(search) }.map_err(to_py)
 }
 
 /// Intrinsic parameters of eq. (4): `Intrinsics(fku, fkv, u0, v0, skew=pi/2)`, pixels and
@@ -195,6 +214,9 @@ fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
     f64_array(obj, "depths", &[None])
 }
 
+/// The fewest points `invariant_jacobian` and `jacobian_factors` take (the basis and one more).
+const MIN_JACOBIAN_POINTS: usize = 4;
+
 type PixelsAndDepths<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>);
 type PixelsPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
@@ -220,7 +242,7 @@ fn invariant_points<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let a = pixels_arg(pixels, "pixels")?;
     let px = points2(&a)?;
-    let q = crate::core::invariant::invariant_points(px, basis.resolve(px)?).map_err(to_py)?;
+    let q = crate::core::invariant::invariant_points(px, basis.resolve(py, px, || Ok(()))?).map_err(to_py)?;
     finite_out("pixels", q.as_flattened())?;
     mat(py, q.len(), 3, q.into_flattened())
 }
@@ -239,7 +261,9 @@ fn invariant_jacobian<'py>(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
-    let j = crate::core::jacobian::invariant_jacobian(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    let z = z.as_slice()?;
+    let basis = basis.resolve(py, px, || check_pixels_and_depths(px, z, MIN_JACOBIAN_POINTS))?;
+    let j = crate::core::jacobian::invariant_jacobian(px, z, &k, basis).map_err(to_py)?;
     finite_out("pixels, depths, K", j.as_slice())?;
     from_matrix(py, &j)
 }
@@ -273,7 +297,9 @@ fn jacobian_factors<'py>(
 ) -> PyResult<PixelsPair<'py>> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
-    let (phi, psi) = crate::core::jacobian::jacobian_factors(px, z.as_slice()?, basis.resolve(px)?).map_err(to_py)?;
+    let z = z.as_slice()?;
+    let basis = basis.resolve(py, px, || check_pixels_and_depths(px, z, MIN_JACOBIAN_POINTS))?;
+    let (phi, psi) = crate::core::jacobian::jacobian_factors(px, z, basis).map_err(to_py)?;
     finite_out("pixels, depths", phi.as_slice())?;
     finite_out("pixels, depths", psi.as_slice())?;
     Ok((from_matrix(py, &phi)?, from_matrix(py, &psi)?))
@@ -295,8 +321,20 @@ fn rz_coefficients<'py>(
     let r = pixels_arg(reference_pixels, "reference_pixels")?;
     let (px, rpx) = (points2(&a)?, points2(&r)?);
     let k = intrinsics(K, "K")?;
-    let (coef_a, c) =
-        crate::core::jacobian::rz_coefficients(px, z.as_slice()?, rpx, &k, basis.resolve(rpx)?).map_err(to_py)?;
+    let z = z.as_slice()?;
+    let basis = basis.resolve(py, rpx, || {
+        check_pixels_and_depths(px, z, 3)?;
+        crate::error::check_finite_points("reference_pixels", rpx)?;
+        match rpx.len() == px.len() {
+            true => Ok(()),
+            false => Err(crate::Error::Shape {
+                what: "reference_pixels",
+                expected: format!("{} points", px.len()),
+                got: format!("{} points", rpx.len()),
+            }),
+        }
+    })?;
+    let (coef_a, c) = crate::core::jacobian::rz_coefficients(px, z, rpx, &k, basis).map_err(to_py)?;
     finite_out("pixels, depths, reference_pixels, K", &[coef_a])?;
     finite_out("pixels, depths, reference_pixels, K", c.as_slice())?;
     Ok((coef_a, vec1(py, c.as_slice())))
@@ -307,6 +345,7 @@ fn rz_coefficients<'py>(
 #[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
 #[allow(non_snake_case)]
 fn structure_ratio(
+    py: Python<'_>,
     pixels: &Bound<'_, PyAny>,
     depths: &Bound<'_, PyAny>,
     K: &Bound<'_, PyAny>,
@@ -315,16 +354,20 @@ fn structure_ratio(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let k = intrinsics(K, "K")?;
-    let r = crate::core::jacobian::structure_ratio(px, z.as_slice()?, &k, basis.resolve(px)?).map_err(to_py)?;
+    let z = z.as_slice()?;
+    let basis = basis.resolve(py, px, || check_pixels_and_depths(px, z, crate::core::jacobian::MIN_POINTS))?;
+    let r = crate::core::jacobian::structure_ratio(px, z, &k, basis).map_err(to_py)?;
     finite_out("pixels, depths, K", &[r])?;
     Ok(r)
 }
 
-/// Three points well spread in the image (the widest triangle), sorted.
+/// Three points well spread in the image (the widest triangle; among equal areas the first
+/// (i, j, k) in index order), sorted. O(n log n); refuses (InvalidInput, `pixels`) point sets
+/// with more than 10,000 convex-hull vertices. Runs without the GIL.
 #[pyfunction]
-fn choose_basis(pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
+fn choose_basis(py: Python<'_>, pixels: &Bound<'_, PyAny>) -> PyResult<(usize, usize, usize)> {
     let a = pixels_arg(pixels, "pixels")?;
-    let [i, j, k] = crate::core::invariant::choose_basis(points2(&a)?).map_err(to_py)?;
+    let [i, j, k] = choose_basis_detached(py, points2(&a)?)?;
     Ok((i, j, k))
 }
 

@@ -15,6 +15,7 @@ use crate::core::planning::{InvariantPath, PlaneParallax, estimate_plane_paralla
 
 /// Invariant points of the non-basis points of a current and a reference image.
 fn invariant_pairs(
+    py: Python<'_>,
     current: &[[f64; 2]],
     reference: &[[f64; 2]],
     basis: BasisArg,
@@ -28,7 +29,8 @@ fn invariant_pairs(
     }
     crate::error::check_finite_points("current_pixels", current).map_err(to_py)?;
     crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
-    let basis = validate_basis(basis.resolve(reference)?, reference.len()).map_err(to_py)?;
+    // Both images were checked above: "auto" searches only valid input.
+    let basis = validate_basis(basis.resolve(py, reference, || Ok(()))?, reference.len()).map_err(to_py)?;
     let cur = BasisFrame::new(current, basis, "current").map_err(to_py)?;
     let star = BasisFrame::new(reference, basis, "reference").map_err(to_py)?;
     let others = non_basis_indices(current.len(), basis);
@@ -87,12 +89,13 @@ impl PyPlaneParallax {
 #[pyfunction]
 #[pyo3(signature = (current_pixels, reference_pixels, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(current_pixels, reference_pixels, basis=(0, 1, 2))")]
 pub fn estimate_plane_parallax(
+    py: Python<'_>,
     current_pixels: &Bound<'_, PyAny>,
     reference_pixels: &Bound<'_, PyAny>,
     basis: BasisArg,
 ) -> PyResult<PyPlaneParallax> {
     let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
-    let (q, q_star) = invariant_pairs(points2(&c)?, points2(&r)?, basis)?;
+    let (q, q_star) = invariant_pairs(py, points2(&c)?, points2(&r)?, basis)?;
     Ok(PyPlaneParallax { inner: core_estimate(&q, &q_star).map_err(to_py)? })
 }
 
@@ -115,7 +118,8 @@ impl PyInvariantPath {
         basis: BasisArg,
     ) -> PyResult<Self> {
         let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
-        let (q, q_star) = invariant_pairs(points2(&c)?, points2(&r)?, basis)?;
+        InvariantPath::check_duration(duration).map_err(to_py)?;
+        let (q, q_star) = invariant_pairs(py, points2(&c)?, points2(&r)?, basis)?;
         let estimate = core_estimate(&q, &q_star).map_err(to_py)?;
         let inner = InvariantPath::new(&q_star, &estimate, duration).map_err(to_py)?;
         Ok(Self { inner, estimate: Py::new(py, PyPlaneParallax { inner: estimate })? })

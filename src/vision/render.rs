@@ -18,6 +18,10 @@ use crate::vision::image::GreyImage;
 /// Supersampling per axis on boundary pixels.
 const SUBSAMPLES: usize = 8;
 
+/// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
+/// sizes are refused with `InvalidParameter("image size")` before any allocation.
+pub const MAX_RENDER_PIXELS: u64 = 1 << 28;
+
 /// A white disc in F* (the reference camera frame).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Disc {
@@ -197,8 +201,9 @@ impl Renderer {
         let (pose, k, size) = (view.pose, view.intrinsics, view.size);
         let warp = Warp::new(k, view.distortion);
         let (width, height) = size;
-        if width == 0 || height == 0 || u64::from(width) * u64::from(height) > 1 << 28 {
-            return Err(Error::InvalidParameter { name: "image size", reason: format!("{width} x {height}") });
+        if width == 0 || height == 0 || u64::from(width) * u64::from(height) > MAX_RENDER_PIXELS {
+            let reason = format!("{width} x {height}: at least 1 x 1 and at most {MAX_RENDER_PIXELS} pixels (2^28)");
+            return Err(Error::InvalidParameter { name: "image size", reason });
         }
         if let Some(v) = visible
             && v.len() != discs.len()
