@@ -4,7 +4,7 @@
 //! exponential decay of the error sooner, a small one `lambda_inf` far from it keeps the first
 //! commands moderate; `lambda'_0` is the slope of `lambda` at `x = 0` (in absolute value).
 
-use crate::error::{Error, Result, check_positive};
+use crate::error::{Error, Result, Short, check_positive};
 
 /// The parameters of `lambda(x)`; `lambda_0 >= lambda_inf > 0`, `lambda'_0 > 0`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,7 +36,8 @@ impl AdaptiveGain {
                 name: "adaptive_gain.at_infinity",
                 reason: format!(
                     "the gain for a large error ({}) must not exceed the gain at zero error ({})",
-                    self.at_infinity, self.at_zero
+                    Short(self.at_infinity),
+                    Short(self.at_zero)
                 ),
             });
         }

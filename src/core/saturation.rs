@@ -4,7 +4,7 @@
 
 use nalgebra::Vector6;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short};
 
 /// The largest commanded speeds: `||v|| <= linear` (m/s) and `||w|| <= angular` (rad/s).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,7 +27,7 @@ impl TwistLimits {
     pub fn validate(&self) -> Result<()> {
         for (name, value) in [("max_linear_speed", self.linear), ("max_angular_speed", self.angular)] {
             if !(value > 0.0) {
-                return Err(Error::InvalidParameter { name, reason: format!("must be > 0, got {value}") });
+                return Err(Error::InvalidParameter { name, reason: format!("must be > 0, got {}", Short(value)) });
             }
         }
         Ok(())
