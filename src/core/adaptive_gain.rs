@@ -44,7 +44,9 @@ impl AdaptiveGain {
         Ok(())
     }
 
-    /// `lambda(x)` for an error norm `x >= 0`.
+    /// `lambda(x)` for an error norm `x >= 0`. Contract: for validated parameters and any
+    /// `x >= 0` (`+inf` included) the result is finite and in `[lambda_inf, lambda_0]`; a NaN
+    /// `x` gives NaN (the controllers pass norms of errors they have checked to be finite).
     #[inline]
     pub fn value(&self, error_norm: f64) -> f64 {
         let span = self.at_zero - self.at_infinity;
@@ -79,5 +81,16 @@ mod tests {
         assert!(AdaptiveGain::new(0.5, 1.0, 5.0).is_err());
         assert!(AdaptiveGain::new(1.0, 0.0, 5.0).is_err());
         assert!(AdaptiveGain::new(1.0, 0.5, f64::NAN).is_err());
+    }
+
+    /// The documented contract (issue 16 sweep): finite and within the limits for x >= 0.
+    #[test]
+    fn value_is_within_the_limits_for_every_norm() {
+        let g = AdaptiveGain::new(4.0, 0.4, 30.0).unwrap();
+        for x in [0.0, 5e-324, 1e-300, 0.5, 1e300, f64::MAX, f64::INFINITY] {
+            let v = g.value(x);
+            assert!(v.is_finite() && (0.4..=4.0).contains(&v), "{x}: {v}");
+        }
+        assert!(g.value(f64::NAN).is_nan());
     }
 }
