@@ -131,7 +131,7 @@ fn resection_depths_check_their_slices() {
     let k = lens(800.0);
     let (first, first_depths) = view(&object, &random_pose(&mut Lcg(9), 0.05, 0.2), &k);
     let (reference, _) = view(&object, &Isometry3::identity(), &k);
-    let mut estimator = ResectionDepths::new(&first, &first_depths, &reference, 0.6).unwrap();
+    let estimator = std::cell::RefCell::new(ResectionDepths::new(&first, &first_depths, &reference, 0.6).unwrap());
     let (current, _) = view(&object, &random_pose(&mut Lcg(11), 0.1, 0.3), &k);
     let n = object.len();
     run(300, (length(n), length(n), length(n), 0..n, hostile()), |(np, nv, nd, at, v)| {
@@ -141,7 +141,7 @@ fn resection_depths_check_their_slices() {
         }
         let visible = vec![true; nv];
         let mut depths = vec![0.0; nd];
-        let r = estimator.estimate(&pixels, &visible, &mut depths);
+        let r = estimator.borrow_mut().estimate(&pixels, &visible, &mut depths);
         outcome("ResectionDepths::estimate", &r, |_| finite(&depths))?;
         prop_assert!(np == n && nv == n && nd == n || r.is_err(), "lengths {np} {nv} {nd}");
         Ok(())
@@ -153,8 +153,8 @@ fn resection_depths_check_their_slices() {
 fn scalar_functions_are_err_or_finite() {
     let k = Intrinsics::new(800.0, 760.0, 320.0, 240.0, 1.5).unwrap();
     let (km, k_inv) = (k.matrix(), k.matrix().try_inverse().unwrap());
-    let six = prop::array::uniform6(hostile());
-    let inputs = (six.clone(), six, prop::array::uniform5(hostile()), prop::array::uniform3(hostile()));
+    let six = || prop::array::uniform6(hostile());
+    let inputs = (six(), six(), prop::array::uniform5(hostile()), prop::array::uniform3(hostile()));
     run(1500, inputs, |(a, b, c, d)| {
         outcome("se3::exp_twist", &se3::exp_twist(&a), |m| finite(m.to_homogeneous().iter()))?;
         let pose = se3::pose_from_position_thetau([a[0], a[1], a[2]], [b[0], b[1], b[2]]);
@@ -222,7 +222,8 @@ fn error_messages_print_short_numbers() {
     use vsinv::core::saturation::TwistLimits;
     let k = lens(800.0);
     let mut messages: Vec<String> = Vec::new();
-    let mut keep = |r: std::result::Result<(), vsinv::Error>| messages.push(r.expect_err("an error").to_string());
+    // Some of these are valid for some x (a focal term of 1e300 is finite): only errors count.
+    let mut keep = |r: std::result::Result<(), vsinv::Error>| messages.extend(r.err().map(|e| e.to_string()));
     for x in [1e-320, -1e-320, 1e300, -1e300, -f64::MAX] {
         keep(Intrinsics::new(x, 800.0, 0.0, 0.0, 1.5).map(drop));
         keep(Intrinsics::new(800.0, 800.0, 0.0, 0.0, x).map(drop));
@@ -249,6 +250,7 @@ fn error_messages_print_short_numbers() {
             keep(vsinv::sim::Scenario::from_toml(&toml).map(drop));
         }
     }
+    assert!(messages.len() > 60, "{} errors", messages.len());
     for m in &messages {
         assert!(longest_digit_run(m) <= MAX_DIGITS, "long number in {m:?}");
     }
