@@ -48,7 +48,7 @@ impl Intrinsics {
                 reason: format!("focal terms must be > 0, got fku = {}, fkv = {}", Short(fku), Short(fkv)),
             });
         }
-        if !(theta >= MIN_AXIS_ANGLE && theta <= std::f64::consts::PI - MIN_AXIS_ANGLE) {
+        if !(MIN_AXIS_ANGLE..=std::f64::consts::PI - MIN_AXIS_ANGLE).contains(&theta) {
             return Err(Error::InvalidIntrinsics {
                 reason: format!(
                     "skew angle must be in [{MIN_AXIS_ANGLE:e}, pi - {MIN_AXIS_ANGLE:e}] rad, got {}",
@@ -241,7 +241,11 @@ pub fn pixel_interactions(pixels: &[[f64; 2]], depths: &[f64], intrinsics: &Intr
     crate::error::check_depths(depths, pixels.len())?;
     let k = intrinsics.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
-    pixels.iter().zip(depths).map(|(&p, &z)| pixel_interaction(&k, &k_inv, p, z)).collect()
+    let ls: Vec<Matrix2x6<f64>> =
+        pixels.iter().zip(depths).map(|(&p, &z)| pixel_interaction_unchecked(&k, &k_inv, p, z)).collect();
+    let entries: Vec<&[f64]> = ls.iter().map(|l| l.as_slice()).collect();
+    check_overflow("pixels, depths", "interaction matrices", &entries)?;
+    Ok(ls)
 }
 
 /// Interaction matrix of an image point in normalised coordinates (Espiau et al. 1992):

@@ -6,7 +6,7 @@
 //! same component (dots merging as they pass each other), both are reported lost for that
 //! image and keep their predicted motion.
 
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Result, Short, fixed_or_short};
 use crate::vision::dots::{Dot, Window, detect_in};
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
 
@@ -198,7 +198,7 @@ fn initial_dot<C: Pixels>(
     }
     let not_found = |reason: &str| Error::InvalidImage {
         what: "initial_pixels".into(),
-        reason: format!("point {i} at ({:.1}, {:.1}): {reason}", click[0], click[1]),
+        reason: format!("point {i} at ({}, {}): {reason}", fixed_or_short(click[0], 1), fixed_or_short(click[1], 1)),
     };
     let (w, h) = (f64::from(image.width()), f64::from(image.height()));
     if click[0] < -0.5 || click[1] < -0.5 || click[0] > w - 0.5 || click[1] > h - 0.5 {
