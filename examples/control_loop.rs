@@ -45,7 +45,7 @@ fn main() -> vsinv::Result<()> {
     while iterations < 2000 && !invariant.converged(1e-5, 1e-5) {
         let (px, _) = view(&object, &pose, &k)?;
         let twist = invariant.step(&px, &z_star)?; // reference depths, as in the paper
-        pose *= exp_twist(&(twist * dt).into());
+        pose *= exp_twist(&(twist * dt).into())?;
         iterations += 1;
     }
     let (t, r) = pose_error(&Isometry3::identity(), &pose);
@@ -62,7 +62,7 @@ fn main() -> vsinv::Result<()> {
     for _ in 0..2000 {
         let (px, z) = view(&object, &pose, &k)?;
         let twist = ibvs.step(&px, &z)?;
-        pose *= exp_twist(&(twist * dt).into());
+        pose *= exp_twist(&(twist * dt).into())?;
     }
     let (t, r) = pose_error(&Isometry3::identity(), &pose);
     println!(

@@ -74,7 +74,7 @@ pub enum Error {
         ratio: f64,
     },
     /// A point is at or behind the camera centre (depth <= 0).
-    #[error("point {index} is at or behind the camera (depth {depth})")]
+    #[error("point {index} is at or behind the camera (depth {})", Short(*depth))]
     PointBehindCamera {
         /// Index of the point.
         index: usize,
@@ -173,6 +173,35 @@ impl Error {
                 | Error::RzSingular { .. }
         )
     }
+}
+
+/// A number as error messages print it: the shortest text that reads back to the same `f64`
+/// for ordinary magnitudes (`0.25`, `1200`), scientific notation with four significant digits
+/// for very small or very large ones (`1.0e-320`, `1.235e300`), where `{}` would print
+/// hundreds of digits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Short(pub f64);
+
+impl std::fmt::Display for Short {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        let magnitude = x.abs();
+        if x == 0.0 || !x.is_finite() || (1e-3..1e15).contains(&magnitude) {
+            // At most 17 significant digits after at most two zeros: no long runs.
+            return write!(f, "{x}");
+        }
+        let text = format!("{x:.3e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        let mantissa = mantissa.trim_end_matches('0');
+        let mantissa = if mantissa.ends_with('.') { format!("{mantissa}0") } else { mantissa.to_string() };
+        write!(f, "{mantissa}e{exponent}")
+    }
+}
+
+/// `value` with `decimals` decimals when that is short (|value| < 1e9), else [`Short`]: for
+/// status lines and reprs that print a fixed number of decimals.
+pub fn fixed_or_short(value: f64, decimals: usize) -> String {
+    if value.abs() < 1e9 { format!("{value:.decimals$}") } else { Short(value).to_string() }
 }
 
 /// Shorthand for `Result<T, vsinv::Error>`.
@@ -297,6 +326,40 @@ pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(Error::InvalidParameter { name, reason: format!("must be finite and > 0, got {value}") })
+        Err(Error::InvalidParameter { name, reason: format!("must be finite and > 0, got {}", Short(value)) })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Short;
+
+    #[test]
+    fn short_numbers() {
+        let cases = [
+            (1e-320, "1.0e-320"),
+            (1e300, "1.0e300"),
+            (-1.23456e300, "-1.235e300"),
+            (5e-324, "4.941e-324"),
+            (f64::MAX, "1.798e308"),
+            (0.25, "0.25"),
+            (1200.0, "1200"),
+            (-0.001, "-0.001"),
+            (0.0, "0"),
+            (-0.0, "-0"),
+            (f64::NAN, "NaN"),
+            (f64::NEG_INFINITY, "-inf"),
+            (1e15, "1.0e15"),
+            (0.1 + 0.2, "0.30000000000000004"),
+        ];
+        for (x, text) in cases {
+            assert_eq!(Short(x).to_string(), text, "{x:e}");
+        }
+        // Ordinary magnitudes read back exactly.
+        for x in [0.1 + 0.2, 123456.789, 1e-3, 999999999999999.9, -7.25e-2] {
+            assert_eq!(Short(x).to_string().parse::<f64>().ok(), Some(x));
+        }
+        assert_eq!(super::fixed_or_short(1.5, 2), "1.50");
+        assert_eq!(super::fixed_or_short(-1e300, 2), "-1.0e300");
     }
 }

@@ -34,7 +34,8 @@ fn a_equals_its_block_form_at_any_pose() {
 }
 
 /// Prop. 1's verdict equals the signs of the eigenvalues of A over a grid of K_hat that
-/// includes negative focal terms, skew and negative kappa.
+/// includes negative focal terms and skew; a kappa <= 0 (excluded by the paper: depth
+/// estimates are kappa zeta > 0) is an error (issue 16).
 #[test]
 fn prop1_verdict_equals_eigenvalue_signs_over_a_grid() {
     let k = Intrinsics::new(1200.0, 1150.0, 390.0, 280.0, 1.5).unwrap().matrix();
@@ -44,6 +45,11 @@ fn prop1_verdict_equals_eigenvalue_signs_over_a_grid() {
             for &k01 in &[-800.0, 0.0, 300.0] {
                 for &kappa in &[-1.0, 0.5, 2.0] {
                     let k_hat = Matrix3::new(fku, k01, 300.0, 0.0, k11, 250.0, 0.0, 0.0, 1.0);
+                    if kappa <= 0.0 {
+                        assert!(check_stability(&[k], &k_hat, kappa, 1.0).is_err());
+                        assert!(a_matrix(&k, &k_hat, kappa).is_err());
+                        continue;
+                    }
                     let report = check_stability(&[k], &k_hat, kappa, 1.0).unwrap();
                     let stable = report.eigenvalues[0].iter().all(|e| e.re > 0.0);
                     assert_eq!(report.prop1, stable, "K_hat = {k_hat}, kappa = {kappa}");
@@ -65,7 +71,9 @@ fn prop2_is_sufficient_and_stricter() {
     let skewed = Matrix3::new(300.0, -3000.0, 384.0, 0.0, 5000.0, 288.0, 0.0, 0.0, 1.0);
     let r = check_stability(&schedule, &skewed, 1.0, 1.0).unwrap();
     assert!(r.prop1 && !r.prop2 && r.sigma <= 0.0, "{r:?}");
-    assert!(r.tracking_bound(1.0).unwrap().is_infinite());
+    // No bound when Prop. 2 fails: an error naming sigma (issue 16: was Ok(inf)).
+    let e = r.tracking_bound(1.0).unwrap_err().to_string();
+    assert!(e.contains("sigma"), "{e}");
 }
 
 /// Prop. 3: psi/phi with psi = 2 max||b|| and phi = lambda sigma.

@@ -1,5 +1,7 @@
 """Bad input raises the package's own exceptions, never a panic or a silent answer."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -385,3 +387,60 @@ def test_more_regressions(scene):
     bad[0, 0] = np.nan
     with pytest.raises(vsinv.InvalidInput, match="first_pixels: non-finite value at row 0, column 0"):
         vsinv.depths_from_translation(bad, scene["cur"])  # said "first image" before
+
+
+def test_issue16_non_finite_results_raise_invalid_input():
+    """Issue 16, item 4: these returned inf/NaN or accepted values the paper excludes."""
+    for twist, dt in [([0, 0, 0, 1e300, 0, 0], 1.0), ([1.0, 0, 0, 1e200, 0, 0], 1.0), ([1e300] * 6, 1e10)]:
+        with pytest.raises(vsinv.InvalidInput, match="twist"):
+            vsinv.exp_twist(twist, dt)
+    for position, thetau, name in [([0, 0, 0], [np.nan, 0, 0], "thetau"), ([np.inf, 0, 0], [0, 0, 0], "position"),
+                                   ([0, 0, 0], [1e300, 1e300, 0], "thetau")]:
+        with pytest.raises(vsinv.InvalidInput, match=name):
+            vsinv.pose_from_position_thetau(position, thetau)
+    for skew in (1e-300, 1e-4, np.pi - 1e-4):
+        with pytest.raises(vsinv.InvalidInput, match="skew"):
+            vsinv.Intrinsics(800.0, 800.0, 384.0, 288.0, skew=skew)
+    for kappa in (0.0, -1.0, -1e-320):
+        with pytest.raises(vsinv.InvalidInput, match="kappa"):
+            vsinv.check_stability(lens(600.0), lens(600.0), kappa=kappa)
+    for sigma in (0.0, -0.5, -1e300):
+        with pytest.raises(vsinv.InvalidInput, match="sigma"):
+            vsinv.tracking_bound(1.0, sigma, 1.0)
+    report = vsinv.check_stability(lens(600.0), -np.diag([600.0, 600.0, -1.0]), kappa=1.0)
+    assert not report.prop2 and report.sigma <= 0
+    with pytest.raises(vsinv.InvalidInput, match="sigma"):
+        report.tracking_bound(0.1)
+
+
+def test_issue16_invariant_path_sample_refuses_nan():
+    obj = object_points()
+    ref, _ = view(obj, np.eye(4), lens(1200.0))
+    from conftest import pose
+    cur, _ = view(obj, pose((0.08, -0.05, -0.15), (0.1, -0.15, 0.4)), lens(700.0))
+    path = vsinv.InvariantPath(cur, ref, duration=2.0)
+    for t in (np.nan, np.inf):
+        with pytest.raises(vsinv.InvalidInput, match="t"):
+            path.sample(t)
+    q, r = path.sample(-1.0)
+    assert np.isfinite(q).all() and np.isfinite(r).all()
+
+
+def test_issue16_messages_print_short_numbers():
+    """Issue 16, item 6: `{}` of 1e-320 or 1e300 printed 300+ digits in messages."""
+    calls = [
+        lambda: vsinv.Intrinsics(1e-320, 800.0, 0.0, 0.0),
+        lambda: vsinv.Intrinsics(-1e300, 800.0, 0.0, 0.0),
+        lambda: vsinv.Intrinsics(800.0, 800.0, 0.0, 0.0, skew=1e-320),
+        lambda: vsinv.tracking_bound(1.0, -1e-320, 1.0),
+        lambda: vsinv.tracking_bound(-1e300, 1.0, 1.0),
+        lambda: vsinv.check_stability(lens(600.0), lens(600.0), kappa=-1e300),
+        lambda: vsinv.InvariantController(view(object_points(), np.eye(4), lens(800.0))[0], lens(800.0), gain=-1e300),
+    ]
+    texts = []
+    for f in calls:
+        with pytest.raises(vsinv.InvalidInput) as info:
+            f()
+        texts.append(str(info.value))
+        assert not re.search(r"\d{21,}", texts[-1]), texts[-1]
+    assert any("1.0e-320" in t for t in texts) and any("1.0e300" in t for t in texts), texts

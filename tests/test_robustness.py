@@ -166,6 +166,13 @@ def call(fn: Callable[..., Any], *args: Any, _api: Optional[str] = None, _expect
         assert elapsed < CALL_LIMIT_S, f"{api} took {elapsed:.2f} s to raise"
         msg = str(exc)
         assert msg.strip(), f"{api}: {type(exc).__name__} with an empty message"
+        # Numbers in messages are short (issue 16): {} of 1e-320 or 1e300 printed 300+ digits.
+        # An integer the caller passed may be echoed as given.
+        echoed = [str(abs(a)) for a in (*args, *kwargs.values()) if isinstance(a, int) and abs(a) >= 10**20]
+        short = msg
+        for text in echoed:
+            short = short.replace(text, "")
+        assert not re.search(r"\d{21,}", short), f"{api}: a number with more than 20 digits in {msg!r}"
         assert _expect not in (SAME, RETURN), f"{api}: raised {type(exc).__name__}: {msg}"
         if _expect in (INVALID, NONFINITE):
             assert isinstance(exc, vsinv.InvalidInput), f"{api}: expected InvalidInput, got {type(exc).__name__}: {msg}"

@@ -4,7 +4,7 @@
 //! exponential decay of the error sooner, a small one `lambda_inf` far from it keeps the first
 //! commands moderate; `lambda'_0` is the slope of `lambda` at `x = 0` (in absolute value).
 
-use crate::error::{Error, Result, check_positive};
+use crate::error::{Error, Result, Short, check_positive};
 
 /// The parameters of `lambda(x)`; `lambda_0 >= lambda_inf > 0`, `lambda'_0 > 0`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,14 +36,17 @@ impl AdaptiveGain {
                 name: "adaptive_gain.at_infinity",
                 reason: format!(
                     "the gain for a large error ({}) must not exceed the gain at zero error ({})",
-                    self.at_infinity, self.at_zero
+                    Short(self.at_infinity),
+                    Short(self.at_zero)
                 ),
             });
         }
         Ok(())
     }
 
-    /// `lambda(x)` for an error norm `x >= 0`.
+    /// `lambda(x)` for an error norm `x >= 0`. Contract: for validated parameters and any
+    /// `x >= 0` (`+inf` included) the result is finite and in `[lambda_inf, lambda_0]`; a NaN
+    /// `x` gives NaN (the controllers pass norms of errors they have checked to be finite).
     #[inline]
     pub fn value(&self, error_norm: f64) -> f64 {
         let span = self.at_zero - self.at_infinity;
@@ -78,5 +81,16 @@ mod tests {
         assert!(AdaptiveGain::new(0.5, 1.0, 5.0).is_err());
         assert!(AdaptiveGain::new(1.0, 0.0, 5.0).is_err());
         assert!(AdaptiveGain::new(1.0, 0.5, f64::NAN).is_err());
+    }
+
+    /// The documented contract (issue 16 sweep): finite and within the limits for x >= 0.
+    #[test]
+    fn value_is_within_the_limits_for_every_norm() {
+        let g = AdaptiveGain::new(4.0, 0.4, 30.0).unwrap();
+        for x in [0.0, 5e-324, 1e-300, 0.5, 1e300, f64::MAX, f64::INFINITY] {
+            let v = g.value(x);
+            assert!(v.is_finite() && (0.4..=4.0).contains(&v), "{x}: {v}");
+        }
+        assert!(g.value(f64::NAN).is_nan());
     }
 }

@@ -4,7 +4,7 @@
 use nalgebra::{Matrix2x6, Matrix3, Matrix5, Vector2, Vector3, Vector5, Vector6};
 
 use crate::core::adaptive_gain::AdaptiveGain;
-use crate::core::camera::{Intrinsics, normalised_interaction};
+use crate::core::camera::{Intrinsics, normalised_interaction_unchecked};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::core::jacobian::{
     DEFAULT_MIN_STRUCTURE_RATIO, MIN_POINTS, balanced_ratio, check_point_count, combined_interaction,
@@ -346,7 +346,7 @@ impl InvariantController {
     #[inline]
     fn normalised_interaction(&self, pixels: &[[f64; 2]], depths: &[f64], i: usize) -> Matrix2x6<f64> {
         let m = self.k_inv * Vector3::new(pixels[i][0], pixels[i][1], 1.0);
-        normalised_interaction(m.x, m.y, depths[i])
+        normalised_interaction_unchecked(m.x, m.y, depths[i])
     }
 
     /// `J^T J`, `J^T (s - s*)` and `J^T ds*/dt` accumulated point by point (only the upper

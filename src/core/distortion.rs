@@ -26,7 +26,7 @@
 use nalgebra::{Matrix2, Vector2};
 
 use crate::core::camera::Intrinsics;
-use crate::error::{Error, Result, check_finite, check_finite_points};
+use crate::error::{Error, Result, Short, check_finite, check_finite_points, check_overflow};
 
 /// The distortion models OpenCV and ROS share.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -157,9 +157,21 @@ impl Distortion {
         (a / b, (da * b - a * db) / (b * b), b)
     }
 
-    /// The distorted normalised coordinates `d(m)` (module docs).
+    /// The distorted normalised coordinates `d(m)` (module docs); fails for a non-finite `m`
+    /// and where `d(m)` overflows (`|m|` beyond about 1e50 with a nonzero `k3`, 1e154 in any case).
+    pub fn distort(&self, m: [f64; 2]) -> Result<[f64; 2]> {
+        check_finite("m", &m)?;
+        if self.is_identity() {
+            return Ok(m);
+        }
+        let d = self.distort_unchecked(m);
+        check_overflow("m", "distorted coordinates", &[&d])?;
+        Ok(d)
+    }
+
+    /// [`Distortion::distort`] without the checks.
     #[inline]
-    pub fn distort(&self, m: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn distort_unchecked(&self, m: [f64; 2]) -> [f64; 2] {
         let [x, y] = m;
         let [_, _, p1, p2, ..] = self.c;
         let r2 = x * x + y * y;
@@ -174,9 +186,18 @@ impl Distortion {
     /// | 2 x y c' + 2 p1 x + 2 p2 y         c + 2 y^2 c' + 6 p1 y + 2 p2 x |
     /// ```
     ///
-    /// The model folds where its determinant is <= 0.
+    /// The model folds where its determinant is <= 0. Fails for a non-finite `m` and where an
+    /// entry overflows.
+    pub fn jacobian(&self, m: [f64; 2]) -> Result<Matrix2<f64>> {
+        check_finite("m", &m)?;
+        let j = self.jacobian_unchecked(m);
+        check_overflow("m", "distortion Jacobian", &[j.as_slice()])?;
+        Ok(j)
+    }
+
+    /// [`Distortion::jacobian`] without the checks.
     #[inline]
-    pub fn jacobian(&self, m: [f64; 2]) -> Matrix2<f64> {
+    pub(crate) fn jacobian_unchecked(&self, m: [f64; 2]) -> Matrix2<f64> {
         let [x, y] = m;
         let [_, _, p1, p2, ..] = self.c;
         let (c, dc, _) = self.radial(x * x + y * y);
@@ -195,26 +216,31 @@ impl Distortion {
     /// model's denominator and the Jacobian determinant positive at `m` and at 32 points of
     /// the segment from the origin to `m` (past a fold the determinant can turn positive
     /// again). `None` beyond the fold, where a lens does not image the point where the
-    /// model says.
+    /// model says, and for a non-finite `m` or `d(m)` (an overflow): `Some` is always finite.
     #[inline]
     pub fn distort_valid(&self, m: [f64; 2]) -> Option<[f64; 2]> {
+        if !(m[0].is_finite() && m[1].is_finite()) {
+            return None;
+        }
         if self.is_identity() {
             return Some(m);
         }
         let regular = |s: f64| {
             let p = [s * m[0], s * m[1]];
             let (_, _, den) = self.radial(p[0] * p[0] + p[1] * p[1]);
-            den > 0.0 && self.jacobian(p).determinant() > 0.0
+            den > 0.0 && self.jacobian_unchecked(p).determinant() > 0.0
         };
-        (1..=32).all(|i| regular(f64::from(i) / 32.0)).then(|| self.distort(m))
+        let d = (1..=32).all(|i| regular(f64::from(i) / 32.0)).then(|| self.distort_unchecked(m))?;
+        (d[0].is_finite() && d[1].is_finite()).then_some(d)
     }
 }
 
 /// The distorted pixel `K d(m)` of normalised coordinates `m` (`None` beyond the fold, see
-/// [`Distortion::distort_valid`]).
+/// [`Distortion::distort_valid`], and where the pixel overflows: `Some` is always finite).
 #[inline]
 pub fn distort_normalised(m: [f64; 2], intrinsics: &Intrinsics, distortion: &Distortion) -> Option<[f64; 2]> {
-    distortion.distort_valid(m).map(|md| to_pixel(&intrinsics.matrix(), md))
+    let p = to_pixel(&intrinsics.matrix(), distortion.distort_valid(m)?);
+    (p[0].is_finite() && p[1].is_finite()).then_some(p)
 }
 
 /// One pixel of [`undistort_points`] with the default tolerance and iteration cap.
@@ -248,7 +274,7 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
         .iter()
         .enumerate()
         .map(|(index, &p)| {
-            let m = intrinsics.normalise(p);
+            let m = intrinsics.normalise_unchecked(p);
             let (_, _, den) = distortion.radial(m[0] * m[0] + m[1] * m[1]);
             if !(den > 0.0) {
                 return Err(Error::Distortion {
@@ -256,7 +282,7 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
                     reason: format!("the rational model's denominator is {den:.3e} <= 0 at this point"),
                 });
             }
-            let p = to_pixel(&k, distortion.distort(m));
+            let p = to_pixel(&k, distortion.distort_unchecked(m));
             if !(p[0].is_finite() && p[1].is_finite()) {
                 return Err(Error::Distortion { index, reason: "the distorted pixel overflows (non-finite)".into() });
             }
@@ -290,7 +316,10 @@ pub fn undistort_points(
 ) -> Result<Vec<[f64; 2]>> {
     check_finite_points("pixels", pixels)?;
     if !(tol >= 0.0) || !tol.is_finite() {
-        return Err(Error::InvalidParameter { name: "tol", reason: format!("must be finite and >= 0, got {tol}") });
+        return Err(Error::InvalidParameter {
+            name: "tol",
+            reason: format!("must be finite and >= 0, got {}", Short(tol)),
+        });
     }
     if max_iter == 0 {
         return Err(Error::InvalidParameter { name: "max_iter", reason: "must be >= 1".into() });
@@ -311,7 +340,7 @@ pub fn undistort_points(
 /// is undefined or folds).
 #[inline]
 fn residual(d: &Distortion, k2: &Matrix2<f64>, m: [f64; 2], target: [f64; 2]) -> (Vector2<f64>, f64) {
-    let dm = d.distort(m);
+    let dm = d.distort_unchecked(m);
     let r = Vector2::new(dm[0] - target[0], dm[1] - target[1]);
     let px = k2 * r;
     let norm = px.x.abs().max(px.y.abs());
@@ -328,13 +357,13 @@ fn undistort_one(
     tol: f64,
     max_iter: usize,
 ) -> std::result::Result<[f64; 2], String> {
-    let target = intrinsics.normalise(p);
+    let target = intrinsics.normalise_unchecked(p);
     if d.is_identity() {
         return Ok(p);
     }
     let valid = |m: [f64; 2]| {
         let (_, _, den) = d.radial(m[0] * m[0] + m[1] * m[1]);
-        den > 0.0 && d.jacobian(m).determinant() > 0.0
+        den > 0.0 && d.jacobian_unchecked(m).determinant() > 0.0
     };
     // Start at the distorted point, moved towards the origin (where J = I) if the model folds there.
     let mut m = target;
@@ -350,7 +379,7 @@ fn undistort_one(
     // Within tolerance: one more full Newton step (kept if it does not increase the residual)
     // takes the answer to rounding error at the price of one iteration.
     let polish = |m: [f64; 2], r: Vector2<f64>, err: f64| {
-        let Some(step) = d.jacobian(m).try_inverse().map(|ji| ji * r) else { return m };
+        let Some(step) = d.jacobian_unchecked(m).try_inverse().map(|ji| ji * r) else { return m };
         let cand = [m[0] - step.x, m[1] - step.y];
         if valid(cand) && residual(d, k2, cand, target).1 <= err { cand } else { m }
     };
@@ -358,9 +387,9 @@ fn undistort_one(
         if err <= tol {
             return Ok(to_pixel(k, polish(m, r, err)));
         }
-        let j = d.jacobian(m);
+        let j = d.jacobian_unchecked(m);
         let Some(step) = j.try_inverse().map(|ji| ji * r) else {
-            return Err(format!("the distortion Jacobian is singular at {m:?}"));
+            return Err(format!("the distortion Jacobian is singular at ({}, {})", Short(m[0]), Short(m[1])));
         };
         let mut t = 1.0;
         let mut accepted = false;
@@ -379,7 +408,7 @@ fn undistort_one(
         if !accepted {
             return Err(format!(
                 "the model folds: no pre-image with a positive Jacobian determinant (residual {err:.3e} px at the fold); the pixel lies beyond the image of the fold, det J = {:.3e}",
-                d.jacobian(m).determinant()
+                d.jacobian_unchecked(m).determinant()
             ));
         }
     }
@@ -423,12 +452,12 @@ mod tests {
         let h = 1e-6;
         for d in [barrel(), rational()] {
             for m in [[0.3, -0.2], [-0.5, 0.4], [0.05, 0.6], [0.0, 0.0]] {
-                let j = d.jacobian(m);
+                let j = d.jacobian(m).unwrap();
                 for c in 0..2 {
                     let (mut a, mut b) = (m, m);
                     a[c] += h;
                     b[c] -= h;
-                    let (da, db) = (d.distort(a), d.distort(b));
+                    let (da, db) = (d.distort(a).unwrap(), d.distort(b).unwrap());
                     for r in 0..2 {
                         let fd = (da[r] - db[r]) / (2.0 * h);
                         assert!((fd - j[(r, c)]).abs() < 1e-8, "{m:?} ({r}, {c}): {fd} vs {}", j[(r, c)]);
@@ -466,8 +495,8 @@ mod tests {
         let k = Intrinsics::new(800.0, 780.0, 330.0, 250.0, 1.3).unwrap();
         let d = barrel();
         let p = [500.0, 100.0];
-        let m = k.normalise(p);
-        let md = d.distort(m);
+        let m = k.normalise(p).unwrap();
+        let md = d.distort(m).unwrap();
         let km = k.matrix();
         let expected = km * nalgebra::Vector3::new(md[0], md[1], 1.0);
         let got = distort_points(&[p], &k, &d).unwrap()[0];
@@ -501,5 +530,21 @@ mod tests {
             Err(Error::Distortion { index: 0, reason }) => assert!(reason.contains("converge"), "{reason}"),
             other => panic!("{other:?}"),
         }
+    }
+
+    /// Regression (issue 16): `distort` of huge points returned inf or NaN without an error.
+    #[test]
+    fn huge_points_are_errors_or_none() {
+        let d = Distortion::from_coefficients(&[1.0, 0.5, 0.0, 0.0, 0.1]).unwrap();
+        let k = Intrinsics::pinhole(800.0, 800.0, 320.0, 240.0).unwrap();
+        for m in [[1e150, 0.0], [1e60, 1e60], [f64::NAN, 0.0], [0.0, f64::INFINITY]] {
+            assert!(d.distort(m).is_err(), "{m:?}");
+            assert!(d.distort_valid(m).is_none(), "{m:?}");
+            assert!(distort_normalised(m, &k, &d).is_none(), "{m:?}");
+        }
+        assert!(d.jacobian([1e200, 0.0]).is_err());
+        assert!(d.jacobian([f64::NAN, 0.0]).is_err());
+        assert!(Distortion::none().distort([1e300, 1e300]).is_ok_and(|v| v == [1e300, 1e300]));
+        assert_eq!(d.distort([0.1, 0.2]).unwrap(), d.distort_valid([0.1, 0.2]).unwrap());
     }
 }

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix6, Vector6};
 
 use crate::core::adaptive_gain::AdaptiveGain;
-use crate::core::camera::{Intrinsics, pixel_interaction};
+use crate::core::camera::{Intrinsics, pixel_interaction_unchecked};
 use crate::core::control::check_point_total;
 use crate::core::saturation::TwistLimits;
 use crate::core::uncertainty::{ImageNoise, Measurement, PoseUncertainty, pixel_pose_uncertainty};
@@ -212,12 +212,14 @@ impl IbvsController {
             err2 += e.norm_squared();
             let desired = || {
                 let z = self.reference_depths.as_ref().map_or(1.0, |z| z[i]);
-                pixel_interaction(&self.k, &self.k_inv, self.reference[i], z)
+                pixel_interaction_unchecked(&self.k, &self.k_inv, self.reference[i], z)
             };
             let l = match self.interaction {
-                Interaction::Current => pixel_interaction(&self.k, &self.k_inv, pixels[i], depths[i]),
+                Interaction::Current => pixel_interaction_unchecked(&self.k, &self.k_inv, pixels[i], depths[i]),
                 Interaction::Desired => desired(),
-                Interaction::Mean => (pixel_interaction(&self.k, &self.k_inv, pixels[i], depths[i]) + desired()) * 0.5,
+                Interaction::Mean => {
+                    (pixel_interaction_unchecked(&self.k, &self.k_inv, pixels[i], depths[i]) + desired()) * 0.5
+                }
             };
             ltl += l.tr_mul(&l);
             lte += l.tr_mul(&e);

@@ -69,8 +69,11 @@ pub struct BasisFrame {
 }
 
 impl BasisFrame {
-    /// Builds Q from `pixels[basis]`; fails when the three pixels are (nearly) collinear.
+    /// Builds Q from `pixels[basis]`; fails for a basis that does not name three distinct
+    /// points of `pixels` (it panicked for an index out of range before issue 16) and when the
+    /// three pixels are (nearly) collinear or not finite.
     pub fn new(pixels: &[[f64; 2]], basis: [usize; 3], image: &'static str) -> Result<Self> {
+        validate_basis(basis, pixels.len())?;
         let [a, b, c] = basis.map(|i| pixels[i]);
         let ratio = triangle_ratio(a, b, c);
         if ratio.is_nan() || ratio < COLLINEAR_RATIO {
@@ -82,7 +85,8 @@ impl BasisFrame {
         Ok(Self { q, q_inv })
     }
 
-    /// `q = Q^-1 p` (sec. 2.3); its three coordinates sum to 1.
+    /// `q = Q^-1 p` (sec. 2.3); its three coordinates sum to 1. Contract: finite for a finite
+    /// pixel of moderate size (the callers check pixels and the overflow of their results).
     #[inline]
     pub fn transform(&self, pixel: [f64; 2]) -> Vector3<f64> {
         self.q_inv * Vector3::new(pixel[0], pixel[1], 1.0)
@@ -191,5 +195,16 @@ mod tests {
         let b = choose_basis(&px).unwrap();
         assert!(b == [1, 3, 4], "{b:?}");
         assert!(choose_basis(&[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]).is_err());
+    }
+
+    /// Regression (issue 16 sweep): a basis index out of range panicked.
+    #[test]
+    fn basis_frame_checks_its_indices() {
+        let px = [[10.0, 20.0], [300.0, 40.0], [150.0, 280.0]];
+        assert!(BasisFrame::new(&px, [0, 1, 3], "current").is_err());
+        assert!(BasisFrame::new(&px, [0, 1, 1], "current").is_err());
+        assert!(BasisFrame::new(&px[..2], [0, 1, 2], "current").is_err());
+        assert!(BasisFrame::new(&[[f64::NAN, 0.0], [1.0, 0.0], [0.0, 1.0]], [0, 1, 2], "current").is_err());
+        assert!(BasisFrame::new(&px, [2, 0, 1], "current").is_ok());
     }
 }

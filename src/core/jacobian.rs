@@ -7,9 +7,9 @@
 
 use nalgebra::{DMatrix, Matrix2x6, Matrix3, Matrix5, Vector3, Vector5};
 
-use crate::core::camera::{Intrinsics, f_of_matrix, pixel_interaction};
+use crate::core::camera::{Intrinsics, f_of_matrix, pixel_interaction_unchecked};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
-use crate::error::{Error, Result, check_depths, check_finite_points, check_overflow};
+use crate::error::{Error, Result, check_depths, check_finite_matrix, check_finite_points, check_overflow};
 
 /// Minimum number of points for the five-dof law: each non-basis point gives two
 /// independent rows, so rank J = 5 needs `n >= 6` (paper-corrections, "How many points").
@@ -73,13 +73,13 @@ pub fn invariant_interaction(
     let frame = BasisFrame::new(pixels, basis, "current")?;
     let k = intrinsics.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
-    let l_basis = basis.map(|i| pixel_interaction(&k, &k_inv, pixels[i], depths[i]));
+    let l_basis = basis.map(|i| pixel_interaction_unchecked(&k, &k_inv, pixels[i], depths[i]));
     let q_inv_2 = frame.q_inv.fixed_columns::<2>(0).into_owned();
     let others = non_basis_indices(pixels.len(), basis);
     let mut j = DMatrix::zeros(3 * others.len(), 6);
     for (row, &idx) in others.iter().enumerate() {
         let q_k = frame.transform(pixels[idx]);
-        let l_k = pixel_interaction(&k, &k_inv, pixels[idx], depths[idx]);
+        let l_k = pixel_interaction_unchecked(&k, &k_inv, pixels[idx], depths[idx]);
         let block = q_inv_2 * combined_interaction(&l_k, &l_basis, &q_k);
         j.fixed_view_mut::<3, 6>(3 * row, 0).copy_from(&block);
     }
@@ -142,11 +142,27 @@ pub fn jacobian_factors(
 
 /// `[Phi K, Psi F(K)]`: the Jacobian assembled from its factors for a (possibly estimated)
 /// upper-triangular K (eq. 13 with `Phi(zeta_hat) = Phi(zeta) / kappa`, correction 3).
-pub fn jacobian_from_factors(phi: &DMatrix<f64>, psi: &DMatrix<f64>, k: &Matrix3<f64>) -> DMatrix<f64> {
-    let mut j = DMatrix::zeros(phi.nrows(), 5);
+/// Fails for factors of the wrong shapes (`Phi` with 3 columns, `Psi` with 2 and as many
+/// rows), non-finite entries, a K that is not upper triangular with a nonzero diagonal, and
+/// entries that overflow.
+pub fn jacobian_from_factors(phi: &DMatrix<f64>, psi: &DMatrix<f64>, k: &Matrix3<f64>) -> Result<DMatrix<f64>> {
+    let rows = phi.nrows();
+    for (what, m, cols) in [("phi", phi, 3), ("psi", psi, 2)] {
+        if m.ncols() != cols || m.nrows() != rows {
+            return Err(Error::Shape {
+                what,
+                expected: format!("a {rows} x {cols} matrix"),
+                got: format!("{} x {}", m.nrows(), m.ncols()),
+            });
+        }
+        check_finite_matrix(what, m)?;
+    }
+    let f = f_of_matrix(k)?;
+    let mut j = DMatrix::zeros(rows, 5);
     j.columns_mut(0, 3).copy_from(&(phi * k));
-    j.columns_mut(3, 2).copy_from(&(psi * f_of_matrix(k)));
-    j
+    j.columns_mut(3, 2).copy_from(&(psi * f));
+    check_overflow("phi, psi, K", "Jacobian entries", &[j.as_slice()])?;
+    Ok(j)
 }
 
 /// The coefficients of eq. (23), `d eps_z/dt = a w_z + c^T (vx, vy, vz, wx, wy)`, from the
@@ -171,7 +187,7 @@ pub fn rz_coefficients(
     let reference = RzReference::new(&BasisFrame::new(reference_pixels, basis, "reference")?);
     let k = intrinsics.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K is singular".into() })?;
-    let l_basis = basis.map(|i| pixel_interaction(&k, &k_inv, pixels[i], depths[i]));
+    let l_basis = basis.map(|i| pixel_interaction_unchecked(&k, &k_inv, pixels[i], depths[i]));
     let (a, c) = rz_from_interactions(&reference, &l_basis);
     check_overflow("pixels, depths", "rz coefficients", &[&[a], c.as_slice()])?;
     Ok((a, c))

@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::error::{Error, Result, check_finite_rows};
+use crate::error::{Error, Result, Short, check_finite, check_finite_rows};
 
 /// Off-diagonal entries of F in the order (01, 02, 10, 12, 20, 21).
 const OFF: [(usize, usize); 6] = [(0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1)];
@@ -50,9 +50,17 @@ fn normalised(q: &Vector3<f64>) -> Vector3<f64> {
 
 impl PlaneParallax {
     /// The current invariant point that eq. (9) predicts for non-basis point `j`:
-    /// `Gamma (q_j* + mu_j* e*)`, scaled to sum to 1.
-    pub fn predict(&self, q_star: &Vector3<f64>, j: usize) -> Vector3<f64> {
-        normalised(&self.gamma.component_mul(&(q_star + self.mu_e[j])))
+    /// `Gamma (q_j* + mu_j* e*)`, scaled to sum to 1. Fails for `j` out of range, a non-finite
+    /// `q_star` and a prediction that is not finite (a sum of zero).
+    pub fn predict(&self, q_star: &Vector3<f64>, j: usize) -> Result<Vector3<f64>> {
+        let Some(mu_e) = self.mu_e.get(j) else {
+            let reason = format!("non-basis point {j} out of range: the estimate has {}", self.mu_e.len());
+            return Err(Error::InvalidParameter { name: "j", reason });
+        };
+        check_finite("q_star", q_star.as_slice())?;
+        let q = normalised(&self.gamma.component_mul(&(q_star + mu_e)));
+        crate::error::check_overflow("q_star", "predicted invariant point", &[q.as_slice()])?;
+        Ok(q)
     }
 }
 
@@ -266,7 +274,7 @@ impl InvariantPath {
     /// Checks a path duration (finite, at least [`MIN_PATH_DURATION`]), before any work.
     pub fn check_duration(duration: f64) -> Result<()> {
         if !(duration.is_finite() && duration >= MIN_PATH_DURATION) {
-            let reason = format!("must be finite and at least {MIN_PATH_DURATION:e} s, got {duration}");
+            let reason = format!("must be finite and at least {MIN_PATH_DURATION:e} s, got {}", Short(duration));
             return Err(Error::InvalidParameter { name: "path duration", reason });
         }
         Ok(())
@@ -296,8 +304,41 @@ impl InvariantPath {
         self.duration
     }
 
-    /// `q_k*(t)` and `dq_k*/dt` for every non-basis point (constant at the reference after T).
-    pub fn sample(&self, t: f64, points: &mut [[f64; 3]], rates: &mut [[f64; 3]]) {
+    /// The number of non-basis points: the length `points` and `rates` of
+    /// [`InvariantPath::sample`] must have.
+    pub fn len(&self) -> usize {
+        self.q_star.len()
+    }
+
+    /// True for a path without points (never built by [`InvariantPath::new`], which needs
+    /// the points of a plane + parallax estimate).
+    pub fn is_empty(&self) -> bool {
+        self.q_star.is_empty()
+    }
+
+    /// Writes `q_k*(t)` and `dq_k*/dt` for every non-basis point into `points` and `rates`
+    /// (constant at the reference after T; `t < 0` gives the start with the start's rate,
+    /// `t = +inf` the end). Fails, writing nothing, when either slice does not have one entry
+    /// per non-basis point ([`InvariantPath::len`]) or `t` is NaN.
+    pub fn sample(&self, t: f64, points: &mut [[f64; 3]], rates: &mut [[f64; 3]]) -> Result<()> {
+        let n = self.q_star.len();
+        for (what, len) in [("points", points.len()), ("rates", rates.len())] {
+            if len != n {
+                return Err(Error::Shape {
+                    what,
+                    expected: format!("{n} rows (one per non-basis point)"),
+                    got: format!("{len} rows"),
+                });
+            }
+        }
+        if t.is_nan() {
+            return Err(Error::NonFinite { what: "t", index: 0 });
+        }
+        self.sample_unchecked(t, points, rates);
+        Ok(())
+    }
+
+    fn sample_unchecked(&self, t: f64, points: &mut [[f64; 3]], rates: &mut [[f64; 3]]) {
         let tau = (t / self.duration).clamp(0.0, 1.0);
         let moving = t < self.duration;
         let delta = self.delta0 + (Vector3::repeat(1.0) - self.delta0) * tau;

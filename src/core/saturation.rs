@@ -4,7 +4,7 @@
 
 use nalgebra::Vector6;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short};
 
 /// The largest commanded speeds: `||v|| <= linear` (m/s) and `||w|| <= angular` (rad/s).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -27,13 +27,17 @@ impl TwistLimits {
     pub fn validate(&self) -> Result<()> {
         for (name, value) in [("max_linear_speed", self.linear), ("max_angular_speed", self.angular)] {
             if !(value > 0.0) {
-                return Err(Error::InvalidParameter { name, reason: format!("must be > 0, got {value}") });
+                return Err(Error::InvalidParameter { name, reason: format!("must be > 0, got {}", Short(value)) });
             }
         }
         Ok(())
     }
 
-    /// The factor in (0, 1] that brings `twist = (v, w)` within both maxima.
+    /// The factor in (0, 1] that brings `twist = (v, w)` within both maxima. Contract: the
+    /// twist is finite (the controllers' twists are checked, the simulator's robots refuse
+    /// non-finite ones). For a finite twist the factor is in [0, 1]: 0 only when a norm
+    /// overflows (entries beyond about 1e154), where the scaled twist is zero; a NaN entry
+    /// gives 1 (no limit applies) and is left to the caller's finiteness check.
     #[inline]
     pub fn scale(&self, twist: &Vector6<f64>) -> f64 {
         let v = twist.fixed_rows::<3>(0).norm();
@@ -63,6 +67,19 @@ impl TwistLimits {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    /// The documented contract (issue 16 sweep).
+    #[test]
+    fn factor_for_extreme_twists() {
+        let limits = TwistLimits::new(0.25, 1.0).unwrap();
+        let mut huge = Vector6::new(1e200, 1e200, 0.0, 0.0, 0.0, 0.0);
+        assert_eq!(limits.apply(&mut huge), 0.0);
+        assert!(huge.iter().all(|v| *v == 0.0));
+        let mut big = Vector6::new(1e100, 0.0, 0.0, 0.0, 0.0, 1e100);
+        let s = limits.apply(&mut big);
+        assert!(s > 0.0 && s < 1.0 && big.iter().all(|v| v.is_finite()));
+        assert_eq!(limits.scale(&Vector6::repeat(f64::NAN)), 1.0);
+    }
 
     #[test]
     fn scales_the_whole_twist_by_the_tighter_limit() {

@@ -6,8 +6,8 @@
 
 use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
 
-use crate::core::camera::f_of_matrix;
-use crate::error::{Error, Result, check_finite, check_finite_matrix, check_overflow};
+use crate::core::camera::f_unchecked;
+use crate::error::{Error, Result, Short, check_finite, check_finite_matrix, check_overflow};
 
 /// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
 /// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
@@ -24,19 +24,30 @@ pub fn check_upper_triangular(what: &'static str, k: &Matrix3<f64>) -> Result<()
     Ok(())
 }
 
-/// `A = blockdiag(kappa K_hat^-1 K, F(K_hat)^-1 F(K))` (eq. 19).
+/// The depth scale `kappa` of sec. 4.1: the depth estimates are `kappa zeta`, so kappa is
+/// finite and > 0 (a depth estimate is positive).
+fn check_kappa(kappa: f64) -> Result<()> {
+    check_finite("kappa", &[kappa])?;
+    if kappa > 0.0 {
+        return Ok(());
+    }
+    let reason = format!("the depth scale of sec. 4.1 must be > 0 (depth estimates kappa zeta), got {}", Short(kappa));
+    Err(Error::InvalidParameter { name: "kappa", reason })
+}
+
+/// `A = blockdiag(kappa K_hat^-1 K, F(K_hat)^-1 F(K))` (eq. 19); `kappa` finite and > 0.
 pub fn a_matrix(k: &Matrix3<f64>, k_hat: &Matrix3<f64>, kappa: f64) -> Result<Matrix5<f64>> {
     check_upper_triangular("K", k)?;
     check_upper_triangular("K_hat", k_hat)?;
-    check_finite("kappa", &[kappa])?;
+    check_kappa(kappa)?;
     // K_hat is triangular with nonzero diagonal: solve instead of inverting.
     let top = k_hat
         .solve_upper_triangular(k)
         .ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?
         * kappa;
-    let f_hat = f_of_matrix(k_hat);
+    let f_hat = f_unchecked(k_hat);
     let bottom: Matrix2<f64> = f_hat
-        .solve_upper_triangular(&f_of_matrix(k))
+        .solve_upper_triangular(&f_unchecked(k))
         .ok_or_else(|| Error::InvalidIntrinsics { reason: "F(K_hat) is singular".into() })?;
     let mut a = Matrix5::zeros();
     a.fixed_view_mut::<3, 3>(0, 0).copy_from(&top);
@@ -65,25 +76,32 @@ pub struct StabilityReport {
 
 impl StabilityReport {
     /// Prop. 3: the bound `psi/phi` on `||eps(t)||` for `||b(t)|| <= max_b`, with
-    /// `psi = 2 max_b` and `phi = lambda sigma` (eq. 20). Infinite when Prop. 2 fails.
+    /// `psi = 2 max_b` and `phi = lambda sigma` (eq. 20). An error when Prop. 2 fails
+    /// (`sigma <= 0`): there is no bound then.
     pub fn tracking_bound(&self, max_b: f64) -> Result<f64> {
         tracking_bound(self.gain, self.sigma, max_b)
     }
 }
 
-/// Prop. 3 bound `psi / phi = 2 max_b / (lambda sigma)` (eq. 20); infinite if `sigma <= 0`.
+/// Prop. 3 bound `psi / phi = 2 max_b / (lambda sigma)` (eq. 20), finite. Fails for a
+/// non-finite argument, `gain <= 0`, `max_b < 0`, `sigma <= 0` (Prop. 2 does not hold, so
+/// Prop. 3 gives no bound) and a bound that overflows (a tiny `gain sigma`).
 pub fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> Result<f64> {
     check_finite("gain", &[gain])?;
     check_finite("sigma", &[sigma])?;
     check_finite("max_b", &[max_b])?;
     if gain <= 0.0 {
-        return Err(Error::InvalidParameter { name: "gain", reason: format!("must be > 0, got {gain}") });
+        return Err(Error::InvalidParameter { name: "gain", reason: format!("must be > 0, got {}", Short(gain)) });
     }
     if max_b < 0.0 {
-        return Err(Error::InvalidParameter { name: "max_b", reason: format!("must be >= 0, got {max_b}") });
+        return Err(Error::InvalidParameter { name: "max_b", reason: format!("must be >= 0, got {}", Short(max_b)) });
     }
-    if !(sigma > 0.0) {
-        return Ok(f64::INFINITY);
+    if sigma <= 0.0 {
+        let reason = format!(
+            "must be > 0 (smallest eigenvalue of A + A^T; Prop. 2 fails and Prop. 3 gives no bound), got {}",
+            Short(sigma)
+        );
+        return Err(Error::InvalidParameter { name: "sigma", reason });
     }
     let bound = 2.0 * max_b / (gain * sigma);
     check_overflow("tracking_bound inputs", "bound", &[&[bound]])?;
@@ -100,7 +118,7 @@ pub fn stability_verdicts(
     gain: f64,
 ) -> Result<(bool, bool, f64)> {
     check_finite("gain", &[gain])?;
-    check_finite("kappa", &[kappa])?;
+    check_kappa(kappa)?;
     let mut sigma = f64::INFINITY;
     for k in k_schedule {
         let a = a_matrix(k, k_hat, kappa)?;
@@ -110,12 +128,13 @@ pub fn stability_verdicts(
         let s2 = (bottom + bottom.transpose()).symmetric_eigenvalues().min();
         sigma = sigma.min(s3.min(s2));
     }
-    let base = gain > 0.0 && kappa > 0.0;
+    let base = gain > 0.0;
     Ok((base && k_hat[(0, 0)] > 0.0 && k_hat[(1, 1)] > 0.0, base && sigma > 0.0, sigma))
 }
 
 /// Props. 1 and 2 for a schedule of true intrinsics `k_schedule` (one matrix for a fixed
-/// camera), an estimate `k_hat` (any signs), the depth scale `kappa` and the gain lambda.
+/// camera), an estimate `k_hat` (any signs), the depth scale `kappa` (finite and > 0) and the
+/// gain lambda.
 pub fn check_stability(
     k_schedule: &[Matrix3<f64>],
     k_hat: &Matrix3<f64>,
@@ -126,7 +145,8 @@ pub fn check_stability(
         return Err(Error::Shape { what: "K", expected: "at least one 3x3 matrix".into(), got: "none".into() });
     }
     check_finite("gain", &[gain])?;
-    let base = gain > 0.0 && kappa > 0.0;
+    check_kappa(kappa)?;
+    let base = gain > 0.0;
     let prop1_hat = k_hat[(0, 0)] > 0.0 && k_hat[(1, 1)] > 0.0;
     let mut eigenvalues = Vec::with_capacity(k_schedule.len());
     let mut sigma = f64::INFINITY;

@@ -163,11 +163,12 @@ pub fn invariant_pose_uncertainty(
     let (mut jac, mut error) = (DMatrix::zeros(rows, 6), DVector::zeros(rows));
     let k = m.k_hat.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
-    let l_basis = basis.map(|i| pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i]));
+    let l_of = |i: usize| pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i]);
+    let l_basis = [l_of(basis[0])?, l_of(basis[1])?, l_of(basis[2])?];
     let q_inv_2 = current.q_inv.fixed_columns::<2>(0).into_owned();
     for (row, &i) in others.iter().enumerate() {
         let q = current.transform(m.pixels[i]);
-        let l_i = pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i]);
+        let l_i = l_of(i)?;
         jac.fixed_view_mut::<3, 6>(3 * row, 0).copy_from(&(q_inv_2 * combined_interaction(&l_i, &l_basis, &q)));
         error.fixed_rows_mut::<3>(3 * row).copy_from(&(q - star.transform(m.reference_pixels[i])));
     }
@@ -239,7 +240,7 @@ pub fn pixel_pose_uncertainty(m: &Measurement<'_>, noise: ImageNoise) -> Result<
     let rows = 2 * used.len();
     let (mut jac, mut error) = (DMatrix::zeros(rows, 6), DVector::zeros(rows));
     for (row, &i) in used.iter().enumerate() {
-        let l = pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i]);
+        let l = pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i])?;
         jac.fixed_view_mut::<2, 6>(2 * row, 0).copy_from(&l);
         error[2 * row] = m.pixels[i][0] - m.reference_pixels[i][0];
         error[2 * row + 1] = m.pixels[i][1] - m.reference_pixels[i][1];

@@ -28,6 +28,7 @@ use crate::core::jacobian::check_pixels_and_depths;
 use crate::core::rz_task::RzTask;
 use crate::core::saturation::TwistLimits;
 use crate::core::stability::{StabilityReport, check_upper_triangular};
+use crate::error::fixed_or_short;
 
 /// A basis argument: three point indices, or "auto" for the widest triangle of the
 /// reference (or given) image.
@@ -403,14 +404,17 @@ impl PyStabilityReport {
         let arr = PyArray1::from_vec(py, flat);
         if self.single { Ok(arr.into_any()) } else { Ok(arr.reshape([self.inner.eigenvalues.len(), 5])?.into_any()) }
     }
-    /// Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b.
+    /// Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b; InvalidInput when
+    /// Prop. 2 fails (sigma <= 0: no bound).
     fn tracking_bound(&self, max_b: f64) -> PyResult<f64> {
         self.inner.tracking_bound(max_b).map_err(to_py)
     }
     fn __repr__(&self) -> String {
         format!(
-            "StabilityReport(prop1={}, prop2={}, sigma={:.6})",
-            self.inner.prop1, self.inner.prop2, self.inner.sigma
+            "StabilityReport(prop1={}, prop2={}, sigma={})",
+            self.inner.prop1,
+            self.inner.prop2,
+            fixed_or_short(self.inner.sigma, 6)
         )
     }
 }
@@ -469,7 +473,8 @@ fn check_stability(
     Ok(PyStabilityReport { inner, single })
 }
 
-/// Prop. 3 bound psi/phi = 2 max_b / (gain sigma) (eq. 20).
+/// Prop. 3 bound psi/phi = 2 max_b / (gain sigma) (eq. 20); InvalidInput for gain <= 0,
+/// sigma <= 0 (Prop. 2 fails: no bound), max_b < 0 or a bound that overflows.
 #[pyfunction]
 fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> PyResult<f64> {
     crate::core::stability::tracking_bound(gain, sigma, max_b).map_err(to_py)

@@ -140,9 +140,9 @@ impl PyInvariantPath {
         if !t.is_finite() {
             return Err(invalid_input(format!("t must be finite, got {t}")));
         }
-        let m = self.estimate.get().inner.mu_e.len();
+        let m = self.inner.len();
         let (mut p, mut r) = (vec![[0.0; 3]; m], vec![[0.0; 3]; m]);
-        self.inner.sample(t, &mut p, &mut r);
+        self.inner.sample(t, &mut p, &mut r).map_err(to_py)?;
         Ok((mat(py, m, 3, p.into_flattened())?, mat(py, m, 3, r.into_flattened())?))
     }
 }

@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use super::arrays::{f64_array, from_matrix, vec1};
 use super::errors::{invalid_input, to_py};
 use crate::core::se3;
-use crate::error::check_finite;
+use crate::error::{Short, check_finite};
 
 fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<[f64; N]> {
     let a = f64_array(obj, what, &[Some(N)])?;
@@ -24,10 +24,9 @@ fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResul
 pub fn exp_twist<'py>(py: Python<'py>, twist: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let t: [f64; 6] = vector(twist, "twist")?;
     check_finite("dt", &[dt]).map_err(to_py)?;
-    let m = se3::exp_twist(&t.map(|x| x * dt)).to_homogeneous();
-    if !m.iter().all(|x| x.is_finite()) {
-        return Err(invalid_input(format!("twist, dt: the motion twist * dt overflows (twist {t:?}, dt {dt})")));
-    }
+    let overflow =
+        || invalid_input(format!("twist, dt: the motion twist * dt overflows (twist {t:?}, dt {})", Short(dt)));
+    let m = se3::exp_twist(&t.map(|x| x * dt)).map_err(|_| overflow())?.to_homogeneous();
     from_matrix(py, &m)
 }
 
@@ -40,10 +39,7 @@ pub fn pose_from_position_thetau<'py>(
     thetau: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (position, thetau) = (vector(position, "position")?, vector(thetau, "thetau")?);
-    let m = se3::pose_from_position_thetau(position, thetau).to_homogeneous();
-    if !m.iter().all(|x| x.is_finite()) {
-        return Err(invalid_input(format!("thetau: rotation angle too large to represent, got {thetau:?}")));
-    }
+    let m = se3::pose_from_position_thetau(position, thetau).map_err(to_py)?.to_homogeneous();
     from_matrix(py, &m)
 }
 

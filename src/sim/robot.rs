@@ -11,7 +11,7 @@ use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vect
 use std::sync::Arc;
 
 use crate::core::se3::exp_twist;
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, Short, check_finite};
 use crate::sim::arm::ArmRobot;
 
 /// Joint limits of the Cartesian robot: `q = (x, y, z, a, b, c)` with the camera centre at
@@ -46,7 +46,7 @@ impl JointLimits {
         check_finite("joint limits", &[self.min, self.max, self.velocity].concat())?;
         let bad = |reason: String| Err(Error::InvalidParameter { name: "robot limits", reason });
         if let Some(i) = (0..6).find(|&i| self.min[i] >= self.max[i]) {
-            return bad(format!("joint {i}: min {} must be below max {}", self.min[i], self.max[i]));
+            return bad(format!("joint {i}: min {} must be below max {}", Short(self.min[i]), Short(self.max[i])));
         }
         if let Some(i) = (0..6).find(|&i| self.velocity[i] <= 0.0) {
             return bad(format!("joint {i}: velocity limit must be > 0"));
@@ -171,8 +171,10 @@ impl Robot {
                 return Err(Error::InvalidParameter {
                     name: "start",
                     reason: format!(
-                        "joint {i} = {:.4} is outside the robot's limits [{}, {}]",
-                        q[i], limits.min[i], limits.max[i]
+                        "joint {i} = {} is outside the robot's limits [{}, {}]",
+                        Short(q[i]),
+                        Short(limits.min[i]),
+                        Short(limits.max[i])
                     ),
                 });
             }
@@ -186,7 +188,7 @@ impl Robot {
         check_finite("twist", twist.as_slice())?;
         match self {
             Robot::FreeFlying => {
-                let pose = pose * exp_twist(&(twist * dt).into());
+                let pose = pose * exp_twist(&(twist * dt).into())?;
                 Ok(RobotStep { joints: self.joints(&pose), pose, twist: *twist, limited: false })
             }
             Robot::Cartesian(_) | Robot::Arm(_) => self.step_pose(pose, twist, dt),
@@ -199,7 +201,7 @@ impl Robot {
         check_finite("twist", twist.as_slice())?;
         match self {
             Robot::FreeFlying => {
-                let pose = pose * exp_twist(&(twist * dt).into());
+                let pose = pose * exp_twist(&(twist * dt).into())?;
                 Ok(RobotStep { joints: [f64::NAN; 6], pose, twist: *twist, limited: false })
             }
             Robot::Cartesian(limits) => {
@@ -221,11 +223,11 @@ impl Robot {
                     }
                 }
                 if !limited {
-                    let pose = pose * exp_twist(&(twist * dt).into());
+                    let pose = pose * exp_twist(&(twist * dt).into())?;
                     return Ok(RobotStep { joints: cartesian_joints(&pose), pose, twist: *twist, limited });
                 }
                 let executed = cartesian_twist(&q, &dq);
-                let mut pose = pose * exp_twist(&(executed * dt).into());
+                let mut pose = pose * exp_twist(&(executed * dt).into())?;
                 let mut joints = cartesian_joints(&pose);
                 if (0..6).any(|i| joints[i] < limits.min[i] || joints[i] > limits.max[i]) {
                     (0..6).for_each(|i| joints[i] = joints[i].clamp(limits.min[i], limits.max[i]));
@@ -293,7 +295,7 @@ mod tests {
     fn unlimited_step_is_exact() {
         let start = cartesian_pose(&[0.1, 0.0, -0.2, 0.1, 0.2, 0.5]);
         let tw = Vector6::new(0.05, -0.02, 0.03, 0.2, -0.1, 0.4);
-        let expected = start * exp_twist(&(tw * 0.04).into());
+        let expected = start * exp_twist(&(tw * 0.04).into()).unwrap();
         for robot in [Robot::FreeFlying, Robot::Cartesian(JointLimits::default())] {
             let s = robot.step(&start, &tw, 0.04).unwrap();
             assert!(!s.limited);

@@ -213,17 +213,16 @@ impl Scene {
                 out.visible[i] = false;
                 continue;
             }
+            // None beyond the lens's fold or where the pixel overflows: not seen.
             let px = if lens {
-                match distort_normalised([c.x / c.z, c.y / c.z], k, distortion) {
-                    Some(px) => px,
-                    None => {
-                        out.pixels[i] = [f64::NAN; 2];
-                        out.visible[i] = false;
-                        continue;
-                    }
-                }
+                distort_normalised([c.x / c.z, c.y / c.z], k, distortion)
             } else {
-                crate::core::camera::project_with(&km, &c)
+                crate::core::camera::project_with(&km, &c).ok()
+            };
+            let Some(px) = px else {
+                out.pixels[i] = [f64::NAN; 2];
+                out.visible[i] = false;
+                continue;
             };
             out.pixels[i] = px;
             let inside = image.is_none_or(|s| px[0] >= 0.0 && px[0] < s.width && px[1] >= 0.0 && px[1] < s.height);

@@ -20,7 +20,7 @@ use crate::core::stability::{a_matrix, stability_verdicts};
 use crate::core::uncertainty::{
     DEFAULT_SIGMAS, ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty, pixel_pose_uncertainty,
 };
-use crate::error::{Error, Result, check_positive};
+use crate::error::{Error, Result, check_positive, fixed_or_short};
 use crate::sim::arm::{ArmEvent, ArmRobot, ArmStep};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
@@ -458,7 +458,7 @@ impl<'a> Run<'a> {
         let stop = &self.config.stop;
         let distance = self.pose.translation.vector.norm();
         if distance.is_nan() || distance > stop.divergence_distance {
-            return Some((Status::Diverged, format!("camera {distance:.2} m from the goal")));
+            return Some((Status::Diverged, format!("camera {} m from the goal", fixed_or_short(distance, 2))));
         }
         if let Some(end) = self.lost_features() {
             return Some(end);
@@ -624,7 +624,9 @@ impl<'a> Run<'a> {
             self.path = Some(planned);
         }
         if let Some(p) = self.path.as_mut() {
-            p.path.sample(t, &mut p.points, &mut p.rates);
+            p.path
+                .sample(t, &mut p.points, &mut p.rates)
+                .map_err(|e| (Status::Diverged, format!("path sample: {e}")))?;
             c.set_reference(&p.points, Some(&p.rates)).map_err(|e| (Status::Diverged, format!("path sample: {e}")))?;
         }
         Ok(())

@@ -6,7 +6,7 @@
 
 use nalgebra::Isometry3;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short};
 use crate::sim::config::SimulationConfig;
 use crate::sim::image_loop::{pixel_size, scene_discs};
 use crate::sim::scene::Observation;
@@ -42,7 +42,10 @@ pub fn render_view(config: &SimulationConfig, shot: Shot, pose: Option<&Isometry
         Shot::Reference => (&config.reference_camera, "reference_camera", Isometry3::identity(), 0.0, 0),
         Shot::Servo { time } => {
             if !(time.is_finite() && time >= 0.0) {
-                return Err(Error::InvalidParameter { name: "time", reason: format!("must be >= 0 s, got {time}") });
+                return Err(Error::InvalidParameter {
+                    name: "time",
+                    reason: format!("must be >= 0 s, got {}", Short(time)),
+                });
             }
             // The simulator's image of iteration i is frame i + 1.
             let frame = (time / config.dt).round() as u64 + 1;

@@ -12,7 +12,7 @@ use nalgebra::{Isometry3, Matrix2, Matrix3, Point3, Vector2, Vector3};
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, distort_normalised, undistort_point};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short};
 use crate::vision::image::GreyImage;
 
 /// Supersampling per axis on boundary pixels.
@@ -44,7 +44,10 @@ impl Disc {
     pub fn new(center: [f64; 3], normal: [f64; 3], radius: f64) -> Result<Self> {
         crate::error::check_finite("disc", &[center, normal].concat())?;
         if !(radius.is_finite() && radius > 0.0) {
-            return Err(Error::InvalidParameter { name: "dot_radius", reason: format!("must be > 0, got {radius}") });
+            return Err(Error::InvalidParameter {
+                name: "dot_radius",
+                reason: format!("must be > 0, got {}", Short(radius)),
+            });
         }
         let normal = Vector3::from(normal);
         let largest = normal.amax();
@@ -88,13 +91,13 @@ impl RenderConfig {
     pub fn validate(&self) -> Result<()> {
         let bad = |name, reason: String| Err(Error::InvalidParameter { name, reason });
         if !(self.dot_radius.is_finite() && self.dot_radius > 0.0) {
-            return bad("dot_radius", format!("must be > 0 metres, got {}", self.dot_radius));
+            return bad("dot_radius", format!("must be > 0 metres, got {}", Short(self.dot_radius)));
         }
         if !(self.blur_sigma.is_finite() && (0.0..=20.0).contains(&self.blur_sigma)) {
-            return bad("blur_sigma", format!("must be in [0, 20] pixels, got {}", self.blur_sigma));
+            return bad("blur_sigma", format!("must be in [0, 20] pixels, got {}", Short(self.blur_sigma)));
         }
         if !(self.noise_sigma.is_finite() && (0.0..=100.0).contains(&self.noise_sigma)) {
-            return bad("noise_sigma", format!("must be in [0, 100] grey levels, got {}", self.noise_sigma));
+            return bad("noise_sigma", format!("must be in [0, 100] grey levels, got {}", Short(self.noise_sigma)));
         }
         if self.foreground <= self.background {
             return bad("foreground", format!("must be brighter than background ({})", self.background));
@@ -446,9 +449,9 @@ impl Warp {
             return Some(Local { ideal: [u, v], jacobian: Matrix2::identity() });
         };
         let ideal = undistort_point([u, v], k, distortion).ok()?;
-        let m = k.normalise(ideal);
+        let m = k.normalise(ideal).ok()?;
         let k2 = k.matrix().fixed_view::<2, 2>(0, 0).into_owned();
-        let jacobian = k2 * distortion.jacobian(m).try_inverse()? * k2.try_inverse()?;
+        let jacobian = k2 * distortion.jacobian(m).ok()?.try_inverse()? * k2.try_inverse()?;
         Some(Local { ideal, jacobian })
     }
 
@@ -461,7 +464,7 @@ impl Warp {
         for i in 0..72 {
             let t = f64::from(i) * std::f64::consts::TAU / 72.0;
             let x = h * Vector3::new(r * t.cos(), r * t.sin(), 1.0);
-            let p = distort_normalised(k.normalise([x.x / x.z, x.y / x.z]), k, distortion)?;
+            let p = distort_normalised(k.normalise([x.x / x.z, x.y / x.z]).ok()?, k, distortion)?;
             bbox = [bbox[0].min(p[0]), bbox[1].min(p[1]), bbox[2].max(p[0]), bbox[3].max(p[1])];
         }
         Some([bbox[0] - 1.0, bbox[1] - 1.0, bbox[2] + 1.0, bbox[3] + 1.0])
@@ -558,7 +561,7 @@ mod tests {
         for t in 0..64 {
             let a = t as f64 / 64.0 * std::f64::consts::TAU;
             let p = disc.center + disc.radius * (a.cos() * e1 + a.sin() * e2);
-            let (px, _) = camera().project(&(inv * Point3::from(p)));
+            let (px, _) = camera().project(&(inv * Point3::from(p))).unwrap();
             // Normalised by |C| |x|^2, the conic vanishes on the boundary.
             let x2 = px[0] * px[0] + px[1] * px[1] + 1.0;
             assert!(ell.value(px[0], px[1]).abs() / (scale * x2) < 1e-12, "t = {t}");
@@ -566,7 +569,7 @@ mod tests {
             assert!(px[1] >= ell.bbox[1] - 1e-9 && px[1] <= ell.bbox[3] + 1e-9);
         }
         // The centre's projection is inside.
-        let (c, _) = camera().project(&(inv * Point3::from(disc.center)));
+        let (c, _) = camera().project(&(inv * Point3::from(disc.center))).unwrap();
         assert!(ell.value(c[0], c[1]) < 0.0);
     }
 

@@ -6,7 +6,7 @@
 //! same component (dots merging as they pass each other), both are reported lost for that
 //! image and keep their predicted motion.
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short, fixed_or_short};
 use crate::vision::dots::{Dot, Window, detect_in};
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
 
@@ -198,7 +198,7 @@ fn initial_dot<C: Pixels>(
     }
     let not_found = |reason: &str| Error::InvalidImage {
         what: "initial_pixels".into(),
-        reason: format!("point {i} at ({:.1}, {:.1}): {reason}", click[0], click[1]),
+        reason: format!("point {i} at ({}, {}): {reason}", fixed_or_short(click[0], 1), fixed_or_short(click[1], 1)),
     };
     let (w, h) = (f64::from(image.width()), f64::from(image.height()));
     if click[0] < -0.5 || click[1] < -0.5 || click[0] > w - 0.5 || click[1] > h - 0.5 {
@@ -209,13 +209,13 @@ fn initial_dot<C: Pixels>(
     // peak; a window without contrast has no dot.
     let (background, peak) = window_levels(image, window);
     if peak.saturating_sub(background) < MIN_CONTRAST {
-        return Err(not_found(&format!("no dot within {} px (no contrast)", config.search_radius)));
+        return Err(not_found(&format!("no dot within {} px (no contrast)", Short(config.search_radius))));
     }
     let threshold = background + (peak - background) / 2;
     let best = detect_in(image, window, threshold, config.min_area, None)
         .into_iter()
         .min_by(|a, b| distance(a.centroid, click).total_cmp(&distance(b.centroid, click)))
-        .ok_or_else(|| not_found(&format!("no dot within {} px", config.search_radius)))?;
+        .ok_or_else(|| not_found(&format!("no dot within {} px", Short(config.search_radius))))?;
     Ok(TrackedDot {
         position: best.centroid,
         predicted: best.centroid,

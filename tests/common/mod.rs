@@ -87,7 +87,7 @@ where
     let mut pose = start;
     for i in 0..iterations {
         match law(&pose, i) {
-            Some(tw) => pose *= vsinv::core::se3::exp_twist(&tw.map(|x| x * dt)),
+            Some(tw) => pose *= vsinv::core::se3::exp_twist(&tw.map(|x| x * dt)).expect("a finite motion"),
             None => return (pose, i),
         }
     }

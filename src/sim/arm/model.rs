@@ -5,7 +5,7 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Short};
 
 /// How an actuated joint moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -202,7 +202,13 @@ impl ArmModel {
         match self.joints.iter().zip(q).find(|(j, q)| !(j.lower <= **q && **q <= j.upper)) {
             Some((j, q)) => Err(Error::InvalidParameter {
                 name: "joint positions",
-                reason: format!("{} = {q} is outside its limits [{}, {}]", j.name, j.lower, j.upper),
+                reason: format!(
+                    "{} = {} is outside its limits [{}, {}]",
+                    j.name,
+                    Short(*q),
+                    Short(j.lower),
+                    Short(j.upper)
+                ),
             }),
             None => Ok(()),
         }
@@ -351,10 +357,14 @@ fn actuated(joint: &urdf_rs::Joint, kind: JointKind, origin: Isometry3<f64>, sou
         _ => (limit.lower, limit.upper, limit.velocity),
     };
     if !(lower < upper) {
-        return Err(bad(format!("position limits [{lower}, {upper}] are empty or missing (<limit lower upper>)")));
+        return Err(bad(format!(
+            "position limits [{}, {}] are empty or missing (<limit lower upper>)",
+            Short(lower),
+            Short(upper)
+        )));
     }
     if !(velocity > 0.0) {
-        return Err(bad(format!("velocity limit {velocity} must be > 0")));
+        return Err(bad(format!("velocity limit {} must be > 0", Short(velocity))));
     }
     Ok(ArmJoint { name: joint.name.clone(), kind, origin, axis, lower, upper, velocity })
 }

@@ -7,7 +7,7 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix3, Matrix6, Matrix6xX, Vector6};
 
 use super::{ArmLimits, ArmModel};
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, Result, Short, check_finite};
 
 /// Default largest damping factor of the least squares (see [`ArmRobot::damping`]).
 pub const DEFAULT_DAMPING: f64 = 0.02;
@@ -60,7 +60,11 @@ impl ArmEvent {
     pub fn message(&self) -> String {
         match self {
             ArmEvent::JointLimit { joint, value, bound } => {
-                format!("joint {joint} would reach {value:.4}, beyond its limit {bound:.4}: stopped there")
+                format!(
+                    "joint {joint} would reach {}, beyond its limit {}: stopped there",
+                    Short(*value),
+                    Short(*bound)
+                )
             }
             ArmEvent::Singular { manipulability } => {
                 format!("manipulability {manipulability:.3e} below robot.min_manipulability: near a singularity")
@@ -135,12 +139,12 @@ impl ArmRobot {
             return bad("robot limits", format!("joint {}: needs lower < upper and velocity > 0", self.name(i)));
         }
         if !(self.damping.is_finite() && self.damping > 0.0) {
-            return bad("robot.damping", format!("must be finite and > 0, got {}", self.damping));
+            return bad("robot.damping", format!("must be finite and > 0, got {}", Short(self.damping)));
         }
         if !(self.min_manipulability.is_finite() && self.min_manipulability >= 0.0) {
             return bad(
                 "robot.min_manipulability",
-                format!("must be finite and >= 0, got {}", self.min_manipulability),
+                format!("must be finite and >= 0, got {}", Short(self.min_manipulability)),
             );
         }
         check_finite("robot.base", self.base.to_homogeneous().as_slice())?;
@@ -154,7 +158,8 @@ impl ArmRobot {
         self.model.fk(q)?;
         if let Some(i) = (0..self.dof()).find(|&i| !(self.limits.lower[i] <= q[i] && q[i] <= self.limits.upper[i])) {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
-            let reason = format!("{} = {} is outside its limits [{lo}, {hi}]", self.name(i), q[i]);
+            let reason =
+                format!("{} = {} is outside its limits [{}, {}]", self.name(i), Short(q[i]), Short(lo), Short(hi));
             return Err(Error::InvalidParameter { name: "robot.joints", reason });
         }
         let w = self.model.manipulability(q)?;

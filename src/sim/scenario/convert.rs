@@ -13,7 +13,7 @@ use crate::core::distortion::Distortion;
 use crate::core::ibvs::IBVS_MIN_POINTS;
 use crate::core::jacobian::MIN_POINTS;
 use crate::core::saturation::TwistLimits;
-use crate::error::Result;
+use crate::error::{Result, Short};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
@@ -32,7 +32,11 @@ pub(super) fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f
 }
 
 fn check_positive(key: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(scenario_error(key, format!("must be finite and > 0, got {v}"))) }
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(scenario_error(key, format!("must be finite and > 0, got {}", Short(v))))
+    }
 }
 
 /// Lengths (m), angles (deg) and pixel coordinates of a scenario: finite and within +-1e6.
@@ -46,7 +50,7 @@ pub(super) fn check_values(key: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
         Some(i) => Err(scenario_error(
             &format!("{key}[{i}]"),
-            format!("must be finite and within +-{MAX_MAGNITUDE:e}, got {}", values[i]),
+            format!("must be finite and within +-{MAX_MAGNITUDE:e}, got {}", Short(values[i])),
         )),
         None => Ok(()),
     }
@@ -114,7 +118,7 @@ impl Scenario {
             return Err(scenario_error(&format!("object.points[{i}]"), "non-finite coordinate"));
         }
         if let Some(i) = points.iter().position(|p| p[2] <= MIN_DEPTH) {
-            let reason = format!("the object is behind the reference camera (z = {} m in F*)", points[i][2]);
+            let reason = format!("the object is behind the reference camera (z = {} m in F*)", Short(points[i][2]));
             return Err(scenario_error(&format!("object.points[{i}]"), reason));
         }
         if let Some(b) = self.object.basis {
@@ -198,12 +202,15 @@ impl Scenario {
             check_positive(key, v)?;
         }
         if c.dt > 1.0 {
-            return Err(scenario_error("control.dt", format!("a control period of at most 1 s, got {} s", c.dt)));
+            return Err(scenario_error(
+                "control.dt",
+                format!("a control period of at most 1 s, got {} s", Short(c.dt)),
+            ));
         }
         if !(self.noise.pixel_sigma >= 0.0 && self.noise.pixel_sigma <= 1000.0) {
             return Err(scenario_error(
                 "noise.pixel_sigma",
-                format!("pixels, from 0 to 1000, got {}", self.noise.pixel_sigma),
+                format!("pixels, from 0 to 1000, got {}", Short(self.noise.pixel_sigma)),
             ));
         }
         let s = &self.stop;
@@ -343,7 +350,7 @@ fn arm_start(arm: &crate::sim::arm::ArmRobot, given: Option<Isometry3<f64>>) -> 
         let (dt, dr) = crate::core::se3::pose_error(&start, &given);
         if dt > 1e-6 || dr > 1e-6 {
             let reason = format!(
-                "the arm's camera at robot.joints is {:.3} mm and {:.4} degrees away from [start]; \
+                "the arm's camera at robot.joints is {:.3e} mm and {:.3e} degrees away from [start]; \
                  leave [start] out (it follows from robot.joints) or make it agree",
                 dt * 1e3,
                 dr.to_degrees()

@@ -17,14 +17,21 @@ pub fn object() -> Vec<[f64; 3]> {
 
 /// Pixels and depths of the object seen by a camera at `pose` (camera frame in F*), into
 /// buffers reused from one period to the next.
-pub fn view(object: &[[f64; 3]], pose: &Isometry3<f64>, k: &Intrinsics, pixels: &mut [[f64; 2]], depths: &mut [f64]) {
+pub fn view(
+    object: &[[f64; 3]],
+    pose: &Isometry3<f64>,
+    k: &Intrinsics,
+    pixels: &mut [[f64; 2]],
+    depths: &mut [f64],
+) -> Result<()> {
     let inv = pose.inverse();
     for (i, p) in object.iter().enumerate() {
         let c = inv * Point3::from(*p);
-        let (px, z) = k.project(&c);
+        let (px, z) = k.project(&c)?;
         pixels[i] = px;
         depths[i] = z;
     }
+    Ok(())
 }
 
 /// A start about 100 mm and 25 degrees from the reference pose.
@@ -49,7 +56,7 @@ pub fn controllers() -> Result<(InvariantController, IbvsController, Vec<f64>)> 
     let (k_star, _, k_hat) = cameras()?;
     let object = object();
     let (mut reference, mut z_star) = (vec![[0.0; 2]; object.len()], vec![0.0; object.len()]);
-    view(&object, &Isometry3::identity(), &k_star, &mut reference, &mut z_star);
+    view(&object, &Isometry3::identity(), &k_star, &mut reference, &mut z_star)?;
     let basis = vsinv::choose_basis(&reference)?;
     let invariant = InvariantController::new(&reference, k_hat, basis, InvariantControllerConfig::default())?;
     let ibvs = IbvsController::new(&reference, k_hat, 1.0, Interaction::Current, Some(&z_star))?;
@@ -66,9 +73,9 @@ pub fn run_invariant_loop(max_iterations: usize) -> Result<(usize, f64, f64)> {
     let mut pose = start_pose();
     let mut iterations = 0;
     while iterations < max_iterations && !ctl.converged(1e-6, 1e-6) {
-        view(&object, &pose, &k, &mut pixels, &mut depths);
+        view(&object, &pose, &k, &mut pixels, &mut depths)?;
         let twist = ctl.step(&pixels, &z_star)?;
-        pose *= exp_twist(&(twist * DT).into());
+        pose *= exp_twist(&(twist * DT).into())?;
         iterations += 1;
     }
     let (t, r) = pose_error(&Isometry3::identity(), &pose);

@@ -58,13 +58,13 @@ fn control_steps_allocate_nothing_after_warm_up() {
     let mut pose = start_pose();
     // Warm-up: the first steps size the controllers' buffers.
     for _ in 0..3 {
-        view(&object, &pose, &k, &mut pixels, &mut depths);
+        view(&object, &pose, &k, &mut pixels, &mut depths).expect("view");
         invariant.step(&pixels, &z_star).expect("step");
         ibvs.step(&pixels, &depths).expect("step");
     }
     let mut counted = [0usize; 3];
     for _ in 0..200 {
-        view(&object, &pose, &k, &mut pixels, &mut depths);
+        view(&object, &pose, &k, &mut pixels, &mut depths).expect("view");
         let mut twist = Default::default();
         counted[0] += allocations_in(|| twist = invariant.step(&pixels, &z_star).expect("step"));
         counted[1] += allocations_in(|| {
@@ -73,7 +73,7 @@ fn control_steps_allocate_nothing_after_warm_up() {
         counted[2] += allocations_in(|| {
             invariant.step_visible(&pixels, &z_star, &visible).expect("step");
         });
-        pose *= exp_twist(&(twist * DT).into());
+        pose *= exp_twist(&(twist * DT).into()).expect("motion");
     }
     assert_eq!(counted, [0, 0, 0], "allocations in 200 steps: invariant, IBVS, invariant with visibility");
     // The counter does count: a Vec allocates.

@@ -6,7 +6,7 @@ use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, first_given};
 use crate::calibration::load_calibration;
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
-use crate::error::Result;
+use crate::error::{Result, Short};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::scenario::schema::CameraSpec;
 use crate::sim::scenario::{FileScope, scenario_error};
@@ -73,17 +73,18 @@ impl CameraSpec {
         for (name, v) in [("fku", fku), ("fkv", fkv)] {
             check_positive(&format!("{key}.{name}"), v)?;
             if v > MAX_MAGNITUDE {
-                return Err(scenario_error(&format!("{key}.{name}"), format!("at most 1e6 px, got {v}")));
+                return Err(scenario_error(&format!("{key}.{name}"), format!("at most 1e6 px, got {}", Short(v))));
             }
         }
         for (name, v) in [("u0", u0), ("v0", v0)] {
             if !(v.abs() <= MAX_MAGNITUDE) {
-                let reason = format!("must be finite and within +-1e6 px, got {v}");
+                let reason = format!("must be finite and within +-1e6 px, got {}", Short(v));
                 return Err(scenario_error(&format!("{key}.{name}"), reason));
             }
         }
         if !(self.skew_deg > 0.0 && self.skew_deg < 180.0) {
-            let reason = format!("the angle between the image axes must be in (0, 180) degrees, got {}", self.skew_deg);
+            let reason =
+                format!("the angle between the image axes must be in (0, 180) degrees, got {}", Short(self.skew_deg));
             return Err(scenario_error(&format!("{key}.skew_deg"), reason));
         }
         Intrinsics::new(fku, fkv, u0, v0, self.skew_deg.to_radians()).map_err(|e| scenario_error(key, e.to_string()))
@@ -94,7 +95,7 @@ impl CameraSpec {
             (Some(width), Some(height)) => {
                 for (name, v) in [("width", width), ("height", height)] {
                     if !(1.0..=MAX_IMAGE_SIDE).contains(&v) {
-                        let reason = format!("pixels, from 1 to {MAX_IMAGE_SIDE}, got {v}");
+                        let reason = format!("pixels, from 1 to {MAX_IMAGE_SIDE}, got {}", Short(v));
                         return Err(scenario_error(&format!("{key}.{name}"), reason));
                     }
                 }
@@ -111,7 +112,7 @@ impl CameraSpec {
         if let Some(i) = c.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
             return Err(scenario_error(
                 &format!("{key}[{i}]"),
-                format!("must be finite and within +-1e6, got {}", c[i]),
+                format!("must be finite and within +-1e6, got {}", Short(c[i])),
             ));
         }
         Distortion::from_coefficients(c).map_err(|e| scenario_error(&key, e.to_string()))
