@@ -24,7 +24,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Vector3, Vector6};
 
-use crate::core::camera::{Intrinsics, pixel_interaction};
+use crate::core::camera::{Intrinsics, pixel_interaction_unchecked};
 use crate::core::invariant::{BasisFrame, RzReference, non_basis_indices, validate_basis};
 use crate::core::jacobian::{combined_interaction, rz_from_interactions};
 use crate::error::{Error, Result, check_depths, check_finite_points};
@@ -163,12 +163,13 @@ pub fn invariant_pose_uncertainty(
     let (mut jac, mut error) = (DMatrix::zeros(rows, 6), DVector::zeros(rows));
     let k = m.k_hat.matrix();
     let k_inv = k.try_inverse().ok_or_else(|| Error::InvalidIntrinsics { reason: "K_hat is singular".into() })?;
-    let l_of = |i: usize| pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i]);
-    let l_basis = [l_of(basis[0])?, l_of(basis[1])?, l_of(basis[2])?];
+    // Depths are checked positive; an overflow is caught with the Jacobians in `propagate`.
+    let l_of = |i: usize| pixel_interaction_unchecked(&k, &k_inv, m.pixels[i], m.depths[i]);
+    let l_basis = basis.map(l_of);
     let q_inv_2 = current.q_inv.fixed_columns::<2>(0).into_owned();
     for (row, &i) in others.iter().enumerate() {
         let q = current.transform(m.pixels[i]);
-        let l_i = l_of(i)?;
+        let l_i = l_of(i);
         jac.fixed_view_mut::<3, 6>(3 * row, 0).copy_from(&(q_inv_2 * combined_interaction(&l_i, &l_basis, &q)));
         error.fixed_rows_mut::<3>(3 * row).copy_from(&(q - star.transform(m.reference_pixels[i])));
     }
@@ -200,31 +201,57 @@ fn invariant_pixel_jacobian(
     others: &[usize],
     q_star_inv: &Matrix3<f64>,
     t: Option<&Matrix3<f64>>,
-) -> DMatrix<f64> {
+) -> Sparse {
     let rows = 3 * others.len() + 1;
-    let mut g = DMatrix::zeros(rows, 2 * pixels.len());
+    let mut g = Sparse { cols: 2 * pixels.len(), entries: Vec::with_capacity(24 * others.len() + 6) };
     let sign = if t.is_some() { -1.0 } else { 1.0 };
     for (row, &i) in others.iter().enumerate() {
         let q: Vector3<f64> = frame.transform(pixels[i]);
         for axis in 0..2 {
             let column = frame.q_inv.column(axis) * sign;
-            g.fixed_view_mut::<3, 1>(3 * row, 2 * i + axis).copy_from(&column);
-            for (b, &j) in basis.iter().enumerate() {
-                g.fixed_view_mut::<3, 1>(3 * row, 2 * j + axis).copy_from(&(-column * q[b]));
+            for r in 0..3 {
+                g.entries.push((3 * row + r, 2 * i + axis, column[r]));
+                for (b, &j) in basis.iter().enumerate() {
+                    g.entries.push((3 * row + r, 2 * j + axis, -column[r] * q[b]));
+                }
             }
         }
     }
     for (b, &j) in basis.iter().enumerate() {
         let w = q_star_inv[(b, 0)];
         match t {
-            None => g[(rows - 1, 2 * j + 1)] = w,
+            None => g.entries.push((rows - 1, 2 * j + 1, w)),
             Some(t) => {
-                g[(rows - 1, 2 * j)] = -t[(1, 0)] * w;
-                g[(rows - 1, 2 * j + 1)] = -t[(1, 1)] * w;
+                g.entries.push((rows - 1, 2 * j, -t[(1, 0)] * w));
+                g.entries.push((rows - 1, 2 * j + 1, -t[(1, 1)] * w));
             }
         }
     }
     g
+}
+
+/// A sparse matrix as `(row, column, value)` entries (repeated entries add up): the
+/// measurement Jacobians `G` have at most eight entries a row, so they are never formed densely.
+struct Sparse {
+    cols: usize,
+    entries: Vec<(usize, usize, f64)>,
+}
+
+impl Sparse {
+    fn identity(n: usize) -> Self {
+        Self { cols: n, entries: (0..n).map(|i| (i, i, 1.0)).collect() }
+    }
+
+    /// `P G` for a dense `P` with one column per row of `G`.
+    fn left_mul(&self, p: &DMatrix<f64>) -> DMatrix<f64> {
+        let mut out = DMatrix::zeros(p.nrows(), self.cols);
+        for &(r, c, v) in &self.entries {
+            for k in 0..p.nrows() {
+                out[(k, c)] += p[(k, r)] * v;
+            }
+        }
+        out
+    }
 }
 
 /// Pose uncertainty under the pixel stop rule (the same camera, or IBVS): `m = p`, the
@@ -240,12 +267,12 @@ pub fn pixel_pose_uncertainty(m: &Measurement<'_>, noise: ImageNoise) -> Result<
     let rows = 2 * used.len();
     let (mut jac, mut error) = (DMatrix::zeros(rows, 6), DVector::zeros(rows));
     for (row, &i) in used.iter().enumerate() {
-        let l = pixel_interaction(&k, &k_inv, m.pixels[i], m.depths[i])?;
+        let l = pixel_interaction_unchecked(&k, &k_inv, m.pixels[i], m.depths[i]);
         jac.fixed_view_mut::<2, 6>(2 * row, 0).copy_from(&l);
         error[2 * row] = m.pixels[i][0] - m.reference_pixels[i][0];
         error[2 * row + 1] = m.pixels[i][1] - m.reference_pixels[i][1];
     }
-    let identity = DMatrix::identity(rows, rows);
+    let identity = Sparse::identity(rows);
     propagate(&jac, &error, &identity, &identity, noise)
 }
 
@@ -253,11 +280,11 @@ pub fn pixel_pose_uncertainty(m: &Measurement<'_>, noise: ImageNoise) -> Result<
 fn propagate(
     jac: &DMatrix<f64>,
     error: &DVector<f64>,
-    g: &DMatrix<f64>,
-    g_star: &DMatrix<f64>,
+    g: &Sparse,
+    g_star: &Sparse,
     noise: ImageNoise,
 ) -> Result<PoseUncertainty> {
-    let values = [jac.as_slice(), error.as_slice(), g.as_slice(), g_star.as_slice()];
+    let values = [jac.as_slice(), error.as_slice()];
     crate::error::check_overflow("pixels, depths", "measurement Jacobians", &values)?;
     let svd = jac.clone().svd(true, true);
     let (s_max, s_min) = (svd.singular_values.max(), svd.singular_values.min());
@@ -273,8 +300,8 @@ fn propagate(
         ratio: 0.0,
         hint: "the measurement Jacobian has no pseudo-inverse",
     })?;
-    let current = &pinv * g;
-    let reference = &pinv * g_star;
+    let current = g.left_mul(&pinv);
+    let reference = g_star.left_mul(&pinv);
     let n = noise.averaged_images as f64;
     let cov = (&current * current.transpose()) * (noise.current * noise.current / n)
         + (&reference * reference.transpose()) * (noise.reference * noise.reference);
@@ -338,9 +365,10 @@ mod tests {
         let cur = BasisFrame::new(&pixels, basis, "current").unwrap();
         let star = BasisFrame::new(&reference, basis, "reference").unwrap();
         let rz = RzReference::new(&star);
-        let g = invariant_pixel_jacobian(&pixels, &cur, basis, &others, &rz.q_star_inv, None);
+        let dense = |g: Sparse| g.left_mul(&DMatrix::identity(3 * others.len() + 1, 3 * others.len() + 1));
+        let g = dense(invariant_pixel_jacobian(&pixels, &cur, basis, &others, &rz.q_star_inv, None));
         let t = rz.t_matrix(&cur);
-        let g_star = invariant_pixel_jacobian(&reference, &star, basis, &others, &rz.q_star_inv, Some(&t));
+        let g_star = dense(invariant_pixel_jacobian(&reference, &star, basis, &others, &rz.q_star_inv, Some(&t)));
         for col in 0..16 {
             let d_cur = central(&|d| measure(&bump(&pixels, col, d), &reference, basis));
             let d_ref = central(&|d| measure(&pixels, &bump(&reference, col, d), basis));
@@ -510,5 +538,26 @@ mod tests {
         let same = [[100.0, 100.0]; 3];
         let flat = Measurement { pixels: &same, depths: &[0.5; 3], reference_pixels: &same, visible: None, k_hat: &k };
         assert!(matches!(pixel_pose_uncertainty(&flat, noise), Err(Error::DegenerateEstimate { .. })));
+    }
+
+    #[test]
+    fn many_points_take_memory_in_proportion() {
+        // 50,000 points: a dense G would be 100,000 x 100,000 (80 GB); the sparse one is 8 MB.
+        let k = Intrinsics::pinhole(800.0, 790.0, 330.0, 250.0).unwrap();
+        let points: Vec<[f64; 3]> = (0..50_000)
+            .map(|i| [(i % 250) as f64 * 1e-3 - 0.12, (i / 250) as f64 * 1e-3 - 0.1, 0.5 + (i % 7) as f64 * 0.02])
+            .collect();
+        let (pixels, depths) = project_points(&points, &k).unwrap();
+        let m = Measurement { pixels: &pixels, depths: &depths, reference_pixels: &pixels, visible: None, k_hat: &k };
+        let noise = ImageNoise { current: 0.5, reference: 0.5, averaged_images: 1 };
+        let few = pixel_pose_uncertainty(
+            &Measurement { pixels: &pixels[..500], depths: &depths[..500], reference_pixels: &pixels[..500], ..m },
+            noise,
+        )
+        .unwrap();
+        let many = pixel_pose_uncertainty(&m, noise).unwrap();
+        assert!(many.translation_sigma() < few.translation_sigma());
+        let basis = [0, 249, 49_999];
+        assert!(invariant_pose_uncertainty(&m, basis, noise).unwrap().translation_sigma().is_finite());
     }
 }
