@@ -504,8 +504,8 @@ mod tests {
             invariant_pose_uncertainty(&m, [0, 1, 2], ImageNoise { current: 0.0, reference: 0.0, averaged_images: 1 })
                 .unwrap();
         // First order: the offset is the displacement, to within its square.
-        for c in 0..6 {
-            assert!((u.offset[c] - x[c]).abs() < 2e-5, "component {c}: {} vs {}", u.offset[c], x[c]);
+        for (c, (got, want)) in u.offset.iter().zip(x).enumerate() {
+            assert!((got - want).abs() < 2e-5, "component {c}: {got} vs {want}");
         }
         assert_eq!(u.covariance, Matrix6::zeros());
         assert_eq!(u.translation_bound(3.0), u.offset.fixed_rows::<3>(0).norm());
