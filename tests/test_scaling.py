@@ -186,3 +186,36 @@ def test_a_long_search_releases_the_gil() -> None:
     during = [t for t in ticks if span["start"] < t < span["end"]]
     # The main thread ran while the search did (with the GIL held it could not tick at all).
     assert len(during) >= 5, f"{len(during)} ticks during a {span['end'] - span['start']:.2f} s search"
+
+
+def _urdf(chain: int, extra_links: int) -> str:
+    """A serial arm of `chain` revolute joints along x, plus `extra_links` fixed links hanging off
+    its base (a large file whose chain stays short)."""
+    links = ['<link name="base"/>'] + [f'<link name="l{i}"/>' for i in range(chain)]
+    joints = [
+        f'<joint name="j{i}" type="revolute"><parent link="{"base" if i == 0 else f"l{i - 1}"}"/>'
+        f'<child link="l{i}"/><origin xyz="{0.3 / chain:.6f} 0 0" rpy="0 0 0"/><axis xyz="0 {i % 2} {(i + 1) % 2}"/>'
+        f'<limit lower="-3.1" upper="3.1" velocity="2.0" effort="10"/></joint>'
+        for i in range(chain)
+    ]
+    links += [f'<link name="x{i}"/>' for i in range(extra_links)]
+    joints += [
+        f'<joint name="f{i}" type="fixed"><parent link="base"/><child link="x{i}"/></joint>' for i in range(extra_links)
+    ]
+    return '<robot name="big">' + "".join(links + joints) + "</robot>"
+
+
+@pytest.mark.parametrize("chain, extra_links", [(6, 20_000), (2_000, 0)])
+def test_large_urdf_answers_or_is_refused_quickly(tmp_path, chain: int, extra_links: int) -> None:
+    # Cost: parsing is linear in the file (at most 8 MiB), a step linear in the chain's joints.
+    (tmp_path / "big.urdf").write_text(_urdf(chain, extra_links))
+    code = (
+        f"import os; os.chdir({str(tmp_path)!r})\n"
+        "s = vsinv.load_scenario('arm-ur5-12-6').to_dict()\n"
+        f"s['robot'] = {{'kind': 'urdf', 'urdf': 'big.urdf', 'end_effector': 'l{chain - 1}', 'joints': [10.0] * {chain}}}\n"
+        "s['stop'] = dict(s['stop'], max_iterations=3)\n"
+        "vsinv.run_scenario(s, record=False)"
+    )
+    elapsed, outcome = run_case(code, None)
+    assert elapsed < BOUND_S, f"{chain} joints, {extra_links} links: {elapsed:.1f} s"
+    assert outcome == "ok" or outcome.startswith("InvalidInput"), outcome

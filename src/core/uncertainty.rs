@@ -146,12 +146,13 @@ pub fn invariant_pose_uncertainty(
     noise.validate()?;
     let used = m.check()?;
     let basis = validate_basis(basis, m.pixels.len())?;
-    let others: Vec<usize> =
-        non_basis_indices(m.pixels.len(), basis).into_iter().filter(|i| used.contains(i)).collect();
-    if basis.iter().any(|b| !used.contains(b)) || others.len() < 3 {
+    let mut in_use = vec![false; m.pixels.len()];
+    used.iter().for_each(|&i| in_use[i] = true);
+    let others: Vec<usize> = non_basis_indices(m.pixels.len(), basis).into_iter().filter(|&i| in_use[i]).collect();
+    if basis.iter().any(|&b| !in_use[b]) || others.len() < 3 {
         return Err(Error::TooFewPoints {
             needed: 6,
-            got: others.len() + basis.iter().filter(|b| used.contains(b)).count(),
+            got: others.len() + basis.iter().filter(|&&b| in_use[b]).count(),
             why: "the three basis points and three more must be in use",
         });
     }
