@@ -391,8 +391,17 @@ pub fn run_batch<'py>(
     allow_outside_files: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let access = access(allow_outside_files);
-    // Dictionaries become JSON here (the GIL is needed); parsing, validation and the runs
-    // happen in parallel with the GIL released.
+    let texts = batch_texts(scenarios, access)?;
+    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access)).map_err(to_py)?;
+    let mut table = BatchTable::with_capacity(results.len());
+    results.iter().for_each(|r| table.push(r));
+    table.into_dict(py)
+}
+
+/// The batch's scenarios as JSON texts. Dictionaries become JSON here (the GIL is needed);
+/// parsing, validation and the runs happen in parallel with the GIL released.
+fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec<String>> {
+    let py = scenarios.py();
     let dumps = py.import("json")?.getattr("dumps")?;
     let mut texts = Vec::new();
     // Names and paths repeat in a batch: load each once.
@@ -420,72 +429,101 @@ pub fn run_batch<'py>(
         }
         texts.push(text);
     }
-    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access)).map_err(to_py)?;
-    let m = results.len();
-    let (mut status, mut message) = (Vec::with_capacity(m), Vec::with_capacity(m));
-    let mut iterations = Vec::with_capacity(m);
-    let mut cols = [(); 9].map(|_| Vec::with_capacity(m));
-    let mut within = Vec::with_capacity(m);
-    let (mut prop1, mut prop2) = (Vec::with_capacity(m), Vec::with_capacity(m));
-    for r in &results {
-        match r {
-            Ok(s) => {
-                status.push(s.status.as_str().to_string());
-                message.push(s.message.clone());
-                iterations.push(s.iterations as i64);
-                let values = [
-                    s.final_translation_error * 1e3,
-                    s.final_rotation_error.to_degrees(),
-                    s.final_image_error,
-                    s.final_invariant_error,
-                    s.max_line_deviation * 1e3,
-                    s.tracking.map_or(f64::NAN, |t| t.max_eps),
-                    s.certainty.map_or(f64::NAN, |c| c.pixel_sigma),
-                    s.certainty.map_or(f64::NAN, |c| c.bound.0 * 1e3),
-                    s.certainty.map_or(f64::NAN, |c| c.bound.1.to_degrees()),
-                ];
-                cols.iter_mut().zip(values).for_each(|(c, v)| c.push(v));
-                prop1.push(s.prop1);
-                prop2.push(s.prop2);
-                within.push(s.within_tolerance);
-            }
-            Err(e) => {
-                status.push("error".to_string());
-                message.push(e.to_string());
-                iterations.push(0);
-                cols.iter_mut().for_each(|c| c.push(f64::NAN));
-                prop1.push(false);
-                prop2.push(false);
-                within.push(false);
-            }
+    Ok(texts)
+}
+
+/// The float columns of `run_batch`'s table, in the order of [`BatchTable::floats`].
+const BATCH_FLOAT_COLUMNS: [&str; 9] = [
+    "final_translation_error_mm",
+    "final_rotation_error_deg",
+    "final_image_error_px",
+    "final_invariant_error",
+    "max_line_deviation_mm",
+    "observed_max_eps",
+    "pixel_sigma_px",
+    "translation_uncertainty_mm",
+    "rotation_uncertainty_deg",
+];
+
+/// `run_batch`'s table, one row per run.
+struct BatchTable {
+    status: Vec<String>,
+    message: Vec<String>,
+    iterations: Vec<i64>,
+    floats: [Vec<f64>; 9],
+    prop1: Vec<bool>,
+    prop2: Vec<bool>,
+    within: Vec<bool>,
+}
+
+impl BatchTable {
+    fn with_capacity(m: usize) -> Self {
+        Self {
+            status: Vec::with_capacity(m),
+            message: Vec::with_capacity(m),
+            iterations: Vec::with_capacity(m),
+            floats: [(); 9].map(|_| Vec::with_capacity(m)),
+            prop1: Vec::with_capacity(m),
+            prop2: Vec::with_capacity(m),
+            within: Vec::with_capacity(m),
         }
     }
-    let np = py.import("numpy")?;
-    let d = PyDict::new(py);
-    let str_array = |v: Vec<String>| -> PyResult<Bound<'py, PyAny>> {
-        let kwargs = PyDict::new(py);
-        kwargs.set_item("dtype", "str")?;
-        np.call_method("array", (v,), Some(&kwargs))
-    };
-    d.set_item("status", str_array(status)?)?;
-    d.set_item("iterations", PyArray1::from_vec(py, iterations))?;
-    let names = [
-        "final_translation_error_mm",
-        "final_rotation_error_deg",
-        "final_image_error_px",
-        "final_invariant_error",
-        "max_line_deviation_mm",
-        "observed_max_eps",
-        "pixel_sigma_px",
-        "translation_uncertainty_mm",
-        "rotation_uncertainty_deg",
-    ];
-    for (name, c) in names.iter().zip(cols) {
-        d.set_item(*name, PyArray1::from_vec(py, c))?;
+
+    /// A run's row: its summary, or status "error" and the message.
+    fn push(&mut self, result: &crate::Result<crate::sim::outcome::Summary>) {
+        let s = match result {
+            Ok(s) => s,
+            Err(e) => return self.push_error(e),
+        };
+        self.status.push(s.status.as_str().to_string());
+        self.message.push(s.message.clone());
+        self.iterations.push(s.iterations as i64);
+        let values = [
+            s.final_translation_error * 1e3,
+            s.final_rotation_error.to_degrees(),
+            s.final_image_error,
+            s.final_invariant_error,
+            s.max_line_deviation * 1e3,
+            s.tracking.map_or(f64::NAN, |t| t.max_eps),
+            s.certainty.map_or(f64::NAN, |c| c.pixel_sigma),
+            s.certainty.map_or(f64::NAN, |c| c.bound.0 * 1e3),
+            s.certainty.map_or(f64::NAN, |c| c.bound.1.to_degrees()),
+        ];
+        self.floats.iter_mut().zip(values).for_each(|(c, v)| c.push(v));
+        self.prop1.push(s.prop1);
+        self.prop2.push(s.prop2);
+        self.within.push(s.within_tolerance);
     }
-    d.set_item("prop1", PyArray1::from_vec(py, prop1))?;
-    d.set_item("prop2", PyArray1::from_vec(py, prop2))?;
-    d.set_item("within_tolerance", PyArray1::from_vec(py, within))?;
-    d.set_item("message", str_array(message)?)?;
-    Ok(d)
+
+    /// A run that failed on the way: status "error" and its message.
+    fn push_error(&mut self, e: &crate::Error) {
+        self.status.push("error".to_string());
+        self.message.push(e.to_string());
+        self.iterations.push(0);
+        self.floats.iter_mut().for_each(|c| c.push(f64::NAN));
+        self.prop1.push(false);
+        self.prop2.push(false);
+        self.within.push(false);
+    }
+
+    /// The table as a dict of NumPy arrays (strings as a `str` array).
+    fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+        let np = py.import("numpy")?;
+        let d = PyDict::new(py);
+        let str_array = |v: Vec<String>| -> PyResult<Bound<'_, PyAny>> {
+            let kwargs = PyDict::new(py);
+            kwargs.set_item("dtype", "str")?;
+            np.call_method("array", (v,), Some(&kwargs))
+        };
+        d.set_item("status", str_array(self.status)?)?;
+        d.set_item("iterations", PyArray1::from_vec(py, self.iterations))?;
+        for (name, c) in BATCH_FLOAT_COLUMNS.iter().zip(self.floats) {
+            d.set_item(*name, PyArray1::from_vec(py, c))?;
+        }
+        d.set_item("prop1", PyArray1::from_vec(py, self.prop1))?;
+        d.set_item("prop2", PyArray1::from_vec(py, self.prop2))?;
+        d.set_item("within_tolerance", PyArray1::from_vec(py, self.within))?;
+        d.set_item("message", str_array(self.message)?)?;
+        Ok(d)
+    }
 }
