@@ -10,6 +10,7 @@
 //! |---|---|---|---|
 //! | the control core: the paper's mathematics | [`core`] | always | nalgebra, thiserror |
 //! | the one error type | [`error`] | always | |
+//! | the servo session: stop rules, depth sources, path following, verdicts | `servo` | `servo` | |
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
 //! | images: rendering, dot detection and tracking | `vision` | `vision` (default) | image, imageproc |
@@ -73,6 +74,8 @@ pub mod core;
 pub mod error;
 #[cfg(any(feature = "calibration", feature = "vision"))]
 pub mod input_file;
+#[cfg(feature = "servo")]
+pub mod servo;
 #[cfg(feature = "sim")]
 pub mod sim;
 #[cfg(feature = "vision")]

@@ -14,6 +14,7 @@
 //! | Props. 1-3, appendix B | [`stability`] |
 //! | plane + parallax (eq. 9), the invariant-space path (eq. 10), sec. 3 | [`planning`] |
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
+//! | the depth estimator a servo session runs each step (appendix A's resection, or yours) | [`depth_estimator`] |
 //! | rigid motions, exact twist integration | [`se3`] |
 //! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
 //! | pixel noise measured from an image stream, not in the paper | [`noise_meter`] |
@@ -26,6 +27,7 @@ pub mod camera;
 pub mod control;
 pub(crate) mod convex_hull;
 pub mod depth;
+pub mod depth_estimator;
 pub mod distortion;
 pub mod ibvs;
 pub mod invariant;

@@ -2,36 +2,14 @@
 
 use nalgebra::Isometry3;
 
-use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
-use crate::core::control::InvariantControllerConfig;
 use crate::core::distortion::Distortion;
-use crate::core::ibvs::Interaction;
-use crate::core::saturation::TwistLimits;
 use crate::sim::camera_model::CameraModel;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::robot::Robot;
 use crate::sim::scene::Scene;
 
-/// The control law run by the simulator.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Law {
-    /// The invariant law of sec. 4.
-    Invariant(InvariantControllerConfig),
-    /// No control: the camera stays still (sec. 5.1, a stationary zooming camera).
-    Observe,
-    /// Classic pixel-space IBVS.
-    Ibvs {
-        /// lambda.
-        gain: f64,
-        /// Where the interaction matrix is evaluated.
-        interaction: Interaction,
-        /// A gain that depends on the pixel error norm, replacing `gain`.
-        adaptive_gain: Option<AdaptiveGain>,
-        /// Largest linear and angular speeds.
-        twist_limits: Option<TwistLimits>,
-    },
-}
+pub use crate::servo::{Law, PathPlan, StopRules};
 
 /// Gaussian pixel noise (the `[noise]` table of a scenario).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -48,53 +26,6 @@ pub struct Noise {
 impl Default for Noise {
     fn default() -> Self {
         Self { pixel_sigma: 0.0, seed: 0, on_reference: false }
-    }
-}
-
-/// When a run stops (the `[stop]` table of a scenario).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct StopRules {
-    /// Iteration limit.
-    pub max_iterations: usize,
-    /// Same camera (K = K* throughout) or IBVS: stop when every point is closer than this to
-    /// its reference pixel (the paper's 0.5 px).
-    pub pixel_error: f64,
-    /// Different cameras: stop when `||s - s*||` is below this, with `|tau_21|` below
-    /// `tau21` and `tau_11 > 0`, `tau_22 > 0` (correction 8).
-    pub invariant_error: f64,
-    /// Threshold on `|tau_21|` for the invariant rule.
-    pub tau21: f64,
-    /// The errors are averaged over this many last iterations before the comparison (1: no
-    /// averaging; noisy runs want 10 or so).
-    pub window: usize,
-    /// A camera farther than this (metres) from the reference pose counts as diverged.
-    pub divergence_distance: f64,
-    /// When the image rule is met, the run is `converged` only if the pose uncertainty the
-    /// images still allow (3 sigma plus the offset the mean error implies, see
-    /// [`crate::core::uncertainty`]) is at most this far from the goal, metres; otherwise it is
-    /// `settled`. Also the tolerance of the summary's `within_tolerance`.
-    pub max_translation_uncertainty: f64,
-    /// The same for the rotation, degrees.
-    pub max_rotation_uncertainty_deg: f64,
-    /// The reference image's pixel noise, pixels; `None`: assumed equal to the noise measured
-    /// on the servo camera's images (one image cannot show its own noise).
-    pub reference_pixel_sigma: Option<f64>,
-}
-
-impl Default for StopRules {
-    fn default() -> Self {
-        Self {
-            max_iterations: 2000,
-            pixel_error: 0.5,
-            invariant_error: 1e-4,
-            tau21: 1e-4,
-            window: 1,
-            divergence_distance: 10.0,
-            max_translation_uncertainty: 0.005,
-            max_rotation_uncertainty_deg: 0.5,
-            reference_pixel_sigma: None,
-        }
     }
 }
 
@@ -135,12 +66,4 @@ pub struct SimulationConfig {
     pub vision: Option<crate::vision::RenderConfig>,
     /// Keep the per-iteration record.
     pub record: bool,
-}
-
-/// A path planned in the invariant space from the first image (sec. 3, the `[path]` table).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct PathPlan {
-    /// Number of samples at the control period: the path lasts `samples * dt` (the paper's N).
-    pub samples: usize,
 }

@@ -5,27 +5,14 @@ use nalgebra::{Isometry3, Vector3};
 
 use crate::core::camera::Intrinsics;
 use crate::core::depth::{ResectionDepths, depths_from_translation};
+pub use crate::core::depth_estimator::DepthEstimator;
 use crate::error::{Error, Result};
 use crate::sim::scene::{Observation, Scene};
-
-/// A depth estimator running inside the loop: from the current (noisy) pixels, the depths
-/// of all points up to one positive scale (`zeta_hat = kappa(t) zeta`, sec. 4.1). The
-/// appendix-A method plugs in here.
-pub trait DepthEstimator: Send {
-    /// Fills `depths` (one per point; entries of hidden points are ignored by the law).
-    fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()>;
-}
 
 /// Builds a fresh [`DepthEstimator`] for each run, from the scene and the reference image.
 pub trait DepthEstimatorFactory: Send + Sync {
     /// The estimator for one run.
     fn start(&self, scene: &Scene, reference_pixels: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>>;
-}
-
-impl DepthEstimator for ResectionDepths {
-    fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()> {
-        ResectionDepths::estimate(self, pixels, visible, depths)
-    }
 }
 
 /// Appendix A in the simulator: two images of the object taken by `camera` (unknown to the

@@ -11,8 +11,7 @@
 //! | fixed cameras and zooms | [`camera_model`] |
 //! | true, reference and estimated depths (appendix A) | [`depth_source`] |
 //! | what a run needs: law, noise, stop rules | [`config`] |
-//! | the closed loop, one named step at a time | [`simulate`](mod@simulate) |
-//! | per-image measurements and the stop rules' window | `measure` (private) |
+//! | the world loop: observe the scene, drive a [`crate::servo::Servo`], move the robot, record | [`simulate`](mod@simulate) |
 //! | images in the loop: render, detect, track (`[vision]`) | `image_loop` (private) |
 //! | a scenario's views as images (reference, start, any pose) | [`views`] |
 //! | status, summary, recording | [`outcome`] |
@@ -26,7 +25,6 @@ pub mod camera_model;
 pub mod config;
 pub mod depth_source;
 mod image_loop;
-mod measure;
 pub mod outcome;
 pub mod robot;
 pub mod scenario;

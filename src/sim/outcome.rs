@@ -1,61 +1,6 @@
 //! How a run ended: status, summary, Prop. 3 figures along a path, per-iteration recording.
 
-/// How a run ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Status {
-    /// The stop rule was met.
-    Converged,
-    /// The iteration limit was reached.
-    MaxIterations,
-    /// Fewer than 6 points (or a basis point) visible.
-    LostFeatures,
-    /// The camera ran away, the twist became non-finite, or the rz law became singular.
-    Diverged,
-    /// The structure cannot be servoed (planar object, equal depth estimates, collinear basis).
-    Degenerate,
-    /// The invariant law settled at the rz = pi equilibrium (`s = s*`, `tau_21 = 0`, but
-    /// `tau_11 < 0` or `tau_22 < 0`): the camera is rotated by about 180 degrees about its
-    /// optical axis (the paper's eq. 24 alone, from a start beyond 90 degrees).
-    RzTrap,
-    /// No control (`law = "none"`, a stationary camera): every image was taken.
-    Observed,
-    /// An arm joint would have left its position limits (clamped there).
-    JointLimit,
-    /// The arm's manipulability fell below `[robot] min_manipulability`.
-    Singular,
-    /// The image stop rule was met, but the pose uncertainty the images allow (measured pixel
-    /// noise propagated to the pose, [`crate::core::uncertainty`]) is above the tolerance
-    /// `[stop] max_translation_uncertainty` or `max_rotation_uncertainty_deg`: the loop is
-    /// still, but the images cannot tell that the camera is at the goal.
-    Settled,
-}
-
-impl Status {
-    /// The name used in summaries and JSON.
-    pub fn as_str(&self) -> &'static str {
-        match self {
-            Status::Converged => "converged",
-            Status::MaxIterations => "max_iterations",
-            Status::LostFeatures => "lost_features",
-            Status::Diverged => "diverged",
-            Status::Degenerate => "degenerate",
-            Status::RzTrap => "rz_trap",
-            Status::Observed => "observed",
-            Status::JointLimit => "joint_limit",
-            Status::Singular => "singular",
-            Status::Settled => "settled",
-        }
-    }
-}
-
-/// Which stop rule applies.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StopRule {
-    /// Image error (same camera, or IBVS).
-    Pixel,
-    /// Invariant error with tau_21 and the signs of tau_11, tau_22 (different cameras).
-    Invariant,
-}
+pub use crate::servo::{Certainty, Status, StopRule};
 
 /// The outcome of a run.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,20 +49,6 @@ pub struct Summary {
     /// Ground truth: whether the final pose is within `[stop] max_translation_uncertainty` and
     /// `max_rotation_uncertainty_deg` of the goal.
     pub within_tolerance: bool,
-}
-
-/// The pose uncertainty the final images allow (first-order, [`crate::core::uncertainty`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Certainty {
-    /// Pixel noise measured on the servo camera's last images, pixels per coordinate.
-    pub pixel_sigma: f64,
-    /// The reference image's noise assumed, pixels.
-    pub reference_pixel_sigma: f64,
-    /// RMS translation and rotation (metres, radians) the noise leaves.
-    pub sigma: (f64, f64),
-    /// 3 sigma plus the offset the mean error implies: how far from the goal the camera may
-    /// be (metres, radians).
-    pub bound: (f64, f64),
 }
 
 /// Prop. 3 along the path: the bound `psi / phi` on `||eps(t)||` and what was observed.

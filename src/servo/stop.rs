@@ -1,0 +1,95 @@
+//! When a servo session stops: the thresholds (the `[stop]` table of a scenario) and the two
+//! image rules, pixel and invariant.
+
+use crate::error::{Error, Result};
+
+/// When the loop stops (the `[stop]` table of a scenario).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize), serde(deny_unknown_fields, default))]
+pub struct StopRules {
+    /// Iteration limit.
+    pub max_iterations: usize,
+    /// Same camera (K = K* throughout) or IBVS: stop when every point is closer than this to
+    /// its reference pixel (the paper's 0.5 px).
+    pub pixel_error: f64,
+    /// Different cameras: stop when `||s - s*||` is below this, with `|tau_21|` below
+    /// `tau21` and `tau_11 > 0`, `tau_22 > 0` (correction 8).
+    pub invariant_error: f64,
+    /// Threshold on `|tau_21|` for the invariant rule.
+    pub tau21: f64,
+    /// The errors are averaged over this many last iterations before the comparison (1: no
+    /// averaging; noisy runs want 10 or so).
+    pub window: usize,
+    /// A camera farther than this (metres) from the reference pose counts as diverged (read
+    /// by the simulator, which knows the pose).
+    pub divergence_distance: f64,
+    /// When the image rule is met, the run is `converged` only if the pose uncertainty the
+    /// images still allow (3 sigma plus the offset the mean error implies, see
+    /// [`crate::core::uncertainty`]) is at most this far from the goal, metres; otherwise it is
+    /// `settled`. Also the tolerance of the summary's `within_tolerance`.
+    pub max_translation_uncertainty: f64,
+    /// The same for the rotation, degrees.
+    pub max_rotation_uncertainty_deg: f64,
+    /// The reference image's pixel noise, pixels; `None`: assumed equal to the noise measured
+    /// on the servo camera's images (one image cannot show its own noise).
+    pub reference_pixel_sigma: Option<f64>,
+}
+
+impl Default for StopRules {
+    fn default() -> Self {
+        Self {
+            max_iterations: 2000,
+            pixel_error: 0.5,
+            invariant_error: 1e-4,
+            tau21: 1e-4,
+            window: 1,
+            divergence_distance: 10.0,
+            max_translation_uncertainty: 0.005,
+            max_rotation_uncertainty_deg: 0.5,
+            reference_pixel_sigma: None,
+        }
+    }
+}
+
+impl StopRules {
+    /// Checks the counts (the thresholds are compared as they are).
+    pub fn validate(&self) -> Result<()> {
+        if self.window == 0 || self.max_iterations == 0 {
+            return Err(Error::InvalidParameter {
+                name: "stop",
+                reason: "window and max_iterations must be >= 1".into(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Which image rule decides convergence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopRule {
+    /// Image error (same camera, or IBVS).
+    Pixel,
+    /// Invariant error with tau_21 and the signs of tau_11, tau_22 (different cameras).
+    Invariant,
+}
+
+/// Whether the window-averaged errors (`mean`, laid out as [`super::measure::measure`] writes
+/// its rows) meet the stop rule; `tau` are the current image's tau_11, tau_21, tau_22. NaN (a
+/// point hidden in the window) never passes a comparison.
+pub(crate) fn stop_rule_met(rule: StopRule, stop: &StopRules, mean: &[f64], n_others: usize, tau: [f64; 3]) -> bool {
+    let m_inv = 3 * n_others;
+    match rule {
+        StopRule::Pixel => {
+            let image = mean[1 + m_inv..]
+                .chunks_exact(2)
+                .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
+                .fold(0.0, |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+            image < stop.pixel_error
+        }
+        // correction 8: tau_21 near zero alone also admits the rz = pi equilibrium.
+        StopRule::Invariant => {
+            let invariant = mean[1..1 + m_inv].iter().map(|v| v * v).sum::<f64>().sqrt();
+            invariant < stop.invariant_error && mean[0].abs() < stop.tau21 && tau[0] > 0.0 && tau[2] > 0.0
+        }
+    }
+}
