@@ -3,6 +3,7 @@
 //! the pose is integrated with the SE(3) exponential, as a robot controller would.
 
 use vsinv::core::se3::{exp_twist, pose_error};
+use vsinv::servo::{Law, Servo, ServoConfig, ServoDepths, ServoReference, Status, Verdict};
 use vsinv::nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, Result};
 
@@ -80,4 +81,37 @@ pub fn run_invariant_loop(max_iterations: usize) -> Result<(usize, f64, f64)> {
     }
     let (t, r) = pose_error(&Isometry3::identity(), &pose);
     Ok((iterations, t, r))
+}
+
+/// The servo session for the reference image: the invariant law with K_hat, the reference
+/// depths zeta*, default stop rules, at 100 Hz.
+pub fn servo() -> Result<Servo> {
+    let (k_star, _, k_hat) = cameras()?;
+    let object = object();
+    let (mut reference, mut z_star) = (vec![[0.0; 2]; object.len()], vec![0.0; object.len()]);
+    view(&object, &Isometry3::identity(), &k_star, &mut reference, &mut z_star)?;
+    let mut config = ServoConfig::new(Law::Invariant(InvariantControllerConfig::default()), k_hat);
+    config.dt = DT;
+    config.stop.max_iterations = 5000;
+    Servo::new(config, ServoReference { pixels: reference, depths: Some(z_star) }, ServoDepths::Reference)
+}
+
+/// Runs a servo session at 100 Hz until its verdict stops it; returns the status, the
+/// iterations and the final distance (m) and angle (rad) from the reference pose.
+pub fn run_servo_loop() -> Result<(Status, usize, f64, f64)> {
+    let (_, k, _) = cameras()?;
+    let mut servo = servo()?;
+    let object = object();
+    let (mut pixels, mut depths) = (vec![[0.0; 2]; object.len()], vec![0.0; object.len()]);
+    let mut pose = start_pose();
+    let status = loop {
+        view(&object, &pose, &k, &mut pixels, &mut depths)?;
+        let step = servo.step(&pixels, None, None)?;
+        if let Verdict::Stop { status, .. } = step.verdict {
+            break status;
+        }
+        pose *= exp_twist(&(step.twist * DT).into())?;
+    };
+    let (t, r) = pose_error(&Isometry3::identity(), &pose);
+    Ok((status, servo.iterations(), t, r))
 }

@@ -83,6 +83,37 @@ fn control_steps_allocate_nothing_after_warm_up() {
 }
 
 #[test]
+fn servo_steps_allocate_nothing_while_running() {
+    let (_, k, _) = cameras().expect("cameras");
+    let mut servo = vsinv_embedded::servo().expect("servo");
+    let object = object();
+    let (mut pixels, mut depths) = (vec![[0.0; 2]; object.len()], vec![0.0; object.len()]);
+    let mut pose = start_pose();
+    // Warm-up: the noise meter's 32 images and the stop window fill their buffers.
+    let mut allocations = 0;
+    for i in 0..300 {
+        view(&object, &pose, &k, &mut pixels, &mut depths).expect("view");
+        let mut step = None;
+        let counted = allocations_in(|| step = Some(servo.step(&pixels, None, None).expect("step")));
+        let step = step.expect("a step");
+        assert!(step.verdict.is_running(), "{:?}", step.verdict);
+        if i >= 40 {
+            allocations += counted;
+        }
+        pose *= exp_twist(&(step.twist * DT).into()).expect("motion");
+    }
+    assert_eq!(allocations, 0, "allocations in 260 running servo steps");
+    assert!(pose.translation.vector.norm() < start_pose().translation.vector.norm());
+}
+
+#[test]
+fn servo_loop_stops_converged_on_the_core_alone() {
+    let (status, iterations, t, r) = vsinv_embedded::run_servo_loop().expect("loop");
+    assert_eq!(status, vsinv::servo::Status::Converged, "{iterations} iterations, {t} m, {r} rad");
+    assert!(t < 1e-3 && r.to_degrees() < 0.1, "{iterations} iterations, {t} m, {r} rad");
+}
+
+#[test]
 fn loop_converges_on_the_core_alone() {
     let (iterations, t, r) = vsinv_embedded::run_invariant_loop(5000).expect("loop");
     assert!(t < 1e-3 && r.to_degrees() < 0.1, "{iterations} iterations, {t} m, {r} rad");
