@@ -374,6 +374,19 @@ impl Servo {
     }
 }
 
+impl std::fmt::Debug for Servo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Servo")
+            .field("law", &self.law.name())
+            .field("points", &self.pixels.len())
+            .field("basis", &self.reference.basis)
+            .field("stop_rule", &self.rule)
+            .field("depths", &self.depth_source)
+            .field("iterations", &self.iteration)
+            .finish_non_exhaustive()
+    }
+}
+
 /// What a session shows of itself between steps.
 impl Servo {
     /// The image points in use after the last observation (undistorted), one per point.

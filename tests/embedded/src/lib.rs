@@ -3,8 +3,8 @@
 //! the pose is integrated with the SE(3) exponential, as a robot controller would.
 
 use vsinv::core::se3::{exp_twist, pose_error};
-use vsinv::servo::{Law, Servo, ServoConfig, ServoDepths, ServoReference, Status, Verdict};
 use vsinv::nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use vsinv::servo::{Law, Servo, ServoConfig, ServoDepths, ServoReference, Status, Verdict};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, Result};
 
 /// Control period of a 100 Hz loop, seconds.
