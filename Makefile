@@ -2,7 +2,7 @@
 # the package and runs the main job.
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
-RUST_EXAMPLES := control_loop simulation batch
+RUST_EXAMPLES := control_loop servo_loop simulation batch
 
 .PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
