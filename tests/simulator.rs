@@ -152,7 +152,9 @@ fn cartesian_robot_respects_joint_limits() {
     s.robot.joint_velocity = Some(vel);
     s.stop.max_iterations = 400;
     let config = s.to_config().unwrap();
-    let vsinv::sim::robot::Robot::Cartesian(limits) = config.robot else { panic!("not cartesian") };
+    let vsinv::sim::robot::Robot::Cartesian(vsinv::sim::robot::CartesianRobot { limits }) = config.robot else {
+        panic!("not cartesian")
+    };
     let o = simulate(&config, &mut |_, _| true).unwrap();
     let rec = o.recording.unwrap();
     let rows = rec.len();

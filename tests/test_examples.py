@@ -15,6 +15,7 @@ EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
     ("script", "expected"),
     [
         ("python_controller.py", "converged after"),
+        ("python_servo.py", "servo session: converged after"),
         ("python_scenario.py", "lens-12-6: converged"),
         ("python_batch.py", "+200% | converged"),
         ("python_sweep.py", "runs written to"),
@@ -34,5 +35,5 @@ def test_example_runs(tmp_path, script, expected):
 
 
 def test_every_python_example_is_tested():
-    tested = {"python_controller.py", "python_scenario.py", "python_batch.py", "python_sweep.py", "python_vision.py"}
+    tested = {"python_controller.py", "python_servo.py", "python_scenario.py", "python_batch.py", "python_sweep.py", "python_vision.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested

@@ -15,6 +15,8 @@ __all__ = [
     "Intrinsics",
     "InvariantController",
     "IbvsController",
+    "Servo",
+    "ServoStep",
     "StabilityReport",
     "PoseUncertainty",
     "PixelNoiseMeter",
@@ -200,6 +202,90 @@ class IbvsController:
     def last_gain(self) -> float | None: ...
     @property
     def saturation(self) -> float | None: ...
+
+@final
+class Servo:
+    """A servo session: the reference image, the law, the depth source and the stop rules.
+
+    Each ``step(pixels, visible, depths)`` returns the twist to send and the verdict: the
+    loop logic (stop rules certified by the pose uncertainty, lost features, the rz = pi
+    trap, the iteration limit, depth estimation, path following) that the simulator runs
+    too. Arguments of another law are refused by name.
+    """
+
+    def __new__(
+        cls,
+        reference_pixels: _ArrayLike,
+        K_hat: _IntrinsicsLike,
+        law: Literal["invariant", "ibvs", "none"] = "invariant",
+        *,
+        reference_depths: _ArrayLike | None = None,
+        depths: Literal["reference", "per_step"] | float | ResectionDepths = "reference",
+        basis: tuple[int, int, int] | Sequence[int] | Literal["auto"] = "auto",
+        gain: float = 1.0,
+        gain_rz: float | None = None,
+        rz_task: Literal["angle", "tau21"] | None = None,
+        feedforward: bool | None = None,
+        min_structure_ratio: float | None = None,
+        interaction: Literal["current", "desired", "mean"] | None = None,
+        adaptive_gain: tuple[float, float, float] | None = None,
+        max_linear_speed: float | None = None,
+        max_angular_speed: float | None = None,
+        stop: dict[str, float | int | None] | None = None,
+        stop_rule: Literal["pixel", "invariant"] | None = None,
+        path_samples: int | None = None,
+        dt: float = 0.04,
+    ) -> Servo: ...
+    def step(
+        self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None, depths: _ArrayLike | None = None
+    ) -> ServoStep:
+        """One step: the twist to send (zero when stopping), the verdict and the telemetry."""
+    @property
+    def iterations(self) -> int:
+        """Control steps applied."""
+    @property
+    def basis(self) -> tuple[int, int, int]:
+        """The basis in use."""
+    @property
+    def law(self) -> Literal["invariant", "ibvs", "none"]:
+        """The law."""
+    @property
+    def stop_rule(self) -> Literal["pixel", "invariant"]:
+        """The image rule that decides convergence."""
+    @property
+    def reference_pixels(self) -> _F64Array:
+        """The reference pixels (n, 2)."""
+    @property
+    def pixel_sigma(self) -> float | None:
+        """The pixel noise measured on the last images (None before three), pixels."""
+    def certainty(self) -> dict[str, float] | None:
+        """What the images say about the pose (pixel_sigma, reference_pixel_sigma, translation_sigma,
+        translation_bound in metres, rotation_sigma, rotation_bound in radians); None when it cannot
+        be computed."""
+
+@final
+class ServoStep:
+    """What one ``Servo.step`` returns."""
+
+    @property
+    def twist(self) -> _F64Array:
+        """(vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero when stopping."""
+    @property
+    def verdict(
+        self,
+    ) -> Literal[
+        "running", "converged", "settled", "lost_features", "rz_trap", "degenerate", "diverged", "max_iterations", "observed"
+    ]:
+        """"running", or why to stop."""
+    @property
+    def reason(self) -> str | None:
+        """Why the session stops, in words (None while running)."""
+    @property
+    def running(self) -> bool:
+        """Whether the loop goes on."""
+    @property
+    def telemetry(self) -> dict[str, Any]:
+        """iteration, invariant_error, image_error, tau, eps_z, eps (5,), tracking_error, law_ran."""
 
 @final
 class PoseUncertainty:

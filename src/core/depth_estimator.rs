@@ -6,7 +6,7 @@ use crate::error::Result;
 
 /// A depth estimator running inside the loop: from the current (noisy) pixels, the depths
 /// of all points up to one positive scale (`zeta_hat = kappa(t) zeta`, sec. 4.1).
-pub trait DepthEstimator: Send {
+pub trait DepthEstimator: Send + Sync {
     /// Fills `depths` (one per point; entries of hidden points are ignored by the law).
     fn estimate(&mut self, pixels: &[[f64; 2]], visible: &[bool], depths: &mut [f64]) -> Result<()>;
 }

@@ -301,7 +301,7 @@ impl PyInvariantController {
 
 /// The adaptive gain `(lambda_0, lambda_inf, lambda'_0)` and the speed limits (m/s, rad/s;
 /// None leaves one free) of a controller.
-fn command_options(
+pub(super) fn command_options(
     adaptive_gain: Option<(f64, f64, f64)>,
     max_linear_speed: Option<f64>,
     max_angular_speed: Option<f64>,

@@ -9,6 +9,7 @@ mod errors;
 mod lens;
 mod planning;
 mod se3;
+mod servo;
 mod sim;
 mod uncertainty;
 mod vision;
@@ -200,7 +201,7 @@ fn matrix3(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Matrix3<f64>>
 }
 
 /// An `Intrinsics` or a 3x3 array, validated.
-fn intrinsics(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Intrinsics> {
+pub(crate) fn intrinsics(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Intrinsics> {
     if let Ok(k) = obj.cast::<PyIntrinsics>() {
         return Ok(k.get().inner);
     }
@@ -211,7 +212,7 @@ pub(crate) fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F
     f64_array(obj, what, &[None, Some(2)])
 }
 
-fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
+pub(crate) fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
     f64_array(obj, "depths", &[None])
 }
 
@@ -486,6 +487,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyIntrinsics>()?;
     m.add_class::<control::PyInvariantController>()?;
     m.add_class::<control::PyIbvsController>()?;
+    m.add_class::<servo::PyServo>()?;
+    m.add_class::<servo::PyServoStep>()?;
     m.add_class::<PyStabilityReport>()?;
     m.add_class::<uncertainty::PyPoseUncertainty>()?;
     m.add_class::<uncertainty::PyPixelNoiseMeter>()?;

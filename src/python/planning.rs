@@ -179,7 +179,7 @@ pub fn depths_from_translation<'py>(
 /// against the reconstruction from the translation pair.
 #[pyclass(name = "ResectionDepths", module = "vsinv._core")]
 pub struct PyResectionDepths {
-    inner: ResectionDepths,
+    pub(super) inner: ResectionDepths,
     n: usize,
 }
 

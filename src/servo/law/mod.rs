@@ -69,7 +69,7 @@ impl Law {
 }
 
 /// A control law as a servo session runs it.
-pub trait ServoLaw: Send {
+pub trait ServoLaw: Send + Sync {
     /// Its name in scenarios and summaries (`invariant`, `ibvs`, `none`).
     fn name(&self) -> &'static str;
     /// The fewest points in view it can servo on.

@@ -27,7 +27,7 @@ mod model;
 pub mod servo;
 
 pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
-pub use servo::{ArmEvent, ArmRobot, ArmStep};
+pub use servo::{ArmRobot, ArmStep};
 
 use crate::error::{Error, Result};
 

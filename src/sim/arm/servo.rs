@@ -8,6 +8,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix3, Matrix6, Mat
 
 use super::{ArmLimits, ArmModel};
 use crate::error::{Error, Result, Short, check_finite};
+use crate::sim::robot::{CameraRobot, RobotEvent, RobotMotion};
 
 /// Default largest damping factor of the least squares (see [`ArmRobot::damping`]).
 pub const DEFAULT_DAMPING: f64 = 0.02;
@@ -36,43 +37,6 @@ pub struct ArmRobot {
     pub min_manipulability: f64,
 }
 
-/// Why an arm step ends the run.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ArmEvent {
-    /// A joint would have left its limits: it was clamped there.
-    JointLimit {
-        /// The joint's name.
-        joint: String,
-        /// Where integration would have taken it.
-        value: f64,
-        /// The limit it stopped at.
-        bound: f64,
-    },
-    /// The manipulability fell below the threshold.
-    Singular {
-        /// The manipulability reached.
-        manipulability: f64,
-    },
-}
-
-impl ArmEvent {
-    /// The reason, in words.
-    pub fn message(&self) -> String {
-        match self {
-            ArmEvent::JointLimit { joint, value, bound } => {
-                format!(
-                    "joint {joint} would reach {}, beyond its limit {}: stopped there",
-                    Short(*value),
-                    Short(*bound)
-                )
-            }
-            ArmEvent::Singular { manipulability } => {
-                format!("manipulability {manipulability:.3e} below robot.min_manipulability: near a singularity")
-            }
-        }
-    }
-}
-
 /// What one arm step did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ArmStep {
@@ -89,7 +53,7 @@ pub struct ArmStep {
     /// Whether the speed limits scaled the motion down.
     pub limited: bool,
     /// Set when the run must end here.
-    pub event: Option<ArmEvent>,
+    pub event: Option<RobotEvent>,
 }
 
 /// `[t]x`, the cross-product matrix.
@@ -240,7 +204,7 @@ impl ArmRobot {
         let mut joints: Vec<f64> = q.iter().zip(dq.iter()).map(|(q, v)| q + v * dt).collect();
         let clamped = self.clamp(&mut joints);
         let manipulability = self.model.manipulability(&joints)?;
-        let singular = (manipulability < self.min_manipulability).then_some(ArmEvent::Singular { manipulability });
+        let singular = (manipulability < self.min_manipulability).then_some(RobotEvent::Singular { manipulability });
         let twist = self.camera_twist(&jac, &dq);
         Ok(ArmStep {
             pose: self.camera_pose(&joints)?,
@@ -260,13 +224,13 @@ impl ArmRobot {
     }
 
     /// Clamps joints to their limits; the first joint that was outside, if any.
-    fn clamp(&self, q: &mut [f64]) -> Option<ArmEvent> {
+    fn clamp(&self, q: &mut [f64]) -> Option<RobotEvent> {
         let mut event = None;
         for (i, qi) in q.iter_mut().enumerate() {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
             if *qi < lo || *qi > hi {
                 let bound = if *qi < lo { lo } else { hi };
-                event.get_or_insert(ArmEvent::JointLimit { joint: self.name(i).to_string(), value: *qi, bound });
+                event.get_or_insert(RobotEvent::JointLimit { joint: self.name(i).to_string(), value: *qi, bound });
                 *qi = bound;
             }
         }
@@ -288,4 +252,35 @@ fn damped_cholesky(mut gram: DMatrix<f64>, d: f64) -> Result<Cholesky<f64, Dyn>>
         name: "robot.damping",
         reason: "the damped least squares matrix is not positive definite".into(),
     })
+}
+
+/// The arm behind the robots' one interface: its joints are its state.
+impl CameraRobot for ArmRobot {
+    fn dof(&self) -> usize {
+        self.model.dof()
+    }
+
+    /// The arm is valid and `pose` is its camera pose at the start joints.
+    fn start(&self, pose: &Isometry3<f64>) -> Result<(Vec<f64>, Option<f64>)> {
+        self.validate()?;
+        let (dt, dr) = crate::core::se3::pose_error(&self.camera_pose(&self.start)?, pose);
+        if dt > 1e-9 || dr > 1e-9 {
+            let reason = format!("the start pose is {dt:.3e} m, {dr:.3e} rad from the camera pose at the arm's joints");
+            return Err(Error::InvalidParameter { name: "start", reason });
+        }
+        Ok((self.start.clone(), Some(self.model.manipulability(&self.start)?)))
+    }
+
+    fn step(&self, _pose: &Isometry3<f64>, joints: &[f64], twist: &Vector6<f64>, dt: f64) -> Result<RobotMotion> {
+        let step = ArmRobot::step(self, joints, twist, dt)?;
+        Ok(RobotMotion {
+            pose: step.pose,
+            joints: step.joints,
+            twist: step.twist,
+            joint_velocities: Some(step.velocities),
+            manipulability: Some(step.manipulability),
+            limited: step.limited,
+            event: step.event,
+        })
+    }
 }

@@ -17,7 +17,7 @@ use crate::error::{Result, Short};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
-use crate::sim::robot::{JointLimits, Robot};
+use crate::sim::robot::{CartesianRobot, JointLimits, Robot};
 use crate::sim::scene::{Body, MIN_DEPTH, Scene};
 
 mod arm;
@@ -339,7 +339,7 @@ fn cartesian(r: &super::schema::RobotSpec) -> Result<Robot> {
         velocity: six("robot.joint_velocity", &r.joint_velocity, d.velocity)?,
     };
     limits.validate().map_err(|e| scenario_error("robot", e.to_string()))?;
-    Ok(Robot::Cartesian(limits))
+    Ok(Robot::Cartesian(CartesianRobot { limits }))
 }
 
 /// An arm's start pose: the camera pose at its start joints, which a given `[start]` must

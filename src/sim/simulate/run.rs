@@ -8,12 +8,11 @@ use crate::core::se3::pose_error;
 use crate::core::stability::stability_verdicts;
 use crate::error::{Result, fixed_or_short};
 use crate::servo::{Servo, ServoStep, Verdict};
-use crate::sim::arm::{ArmEvent, ArmRobot, ArmStep};
 use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::outcome::{Outcome, Recording, Status, Summary};
-use crate::sim::robot::Robot;
+use crate::sim::robot::{RobotEvent, RobotMotion};
 use crate::sim::scene::Observation;
 
 use super::pixel_noise::PixelNoise;
@@ -38,12 +37,12 @@ pub(super) struct Run<'a> {
     images: Option<ImageLoop>,
     detection: Vec<f64>,
     pose: Isometry3<f64>,
-    /// Joint positions: the state of an arm, derived from the pose for the other robots.
+    /// Joint positions: the robot's state.
     joints: Vec<f64>,
-    /// Smallest manipulability of an arm so far.
+    /// Smallest manipulability so far (robots that have one).
     min_manipulability: Option<f64>,
-    /// Set when an arm step ends the run (joint limit, singularity).
-    arm_end: Option<End>,
+    /// Set when a robot step ends the run (joint limit, singularity).
+    robot_end: Option<End>,
     max_line_deviation: f64,
     /// Largest commanded linear (m/s) and angular (rad/s) speeds so far.
     peak_speeds: (f64, f64),
@@ -64,7 +63,7 @@ impl<'a> Run<'a> {
             Some(v) => Some(ImageLoop::new(v, &config.scene, pixel_size(config.camera.image, "camera")?)?),
             None => None,
         };
-        let (joints, min_manipulability) = start_joints(&config.robot, &config.start)?;
+        let (joints, min_manipulability) = config.robot.as_robot().start(&config.start)?;
         Ok(Self {
             config,
             servo,
@@ -80,7 +79,7 @@ impl<'a> Run<'a> {
             recording: config.record.then(|| Recording { n_points: n, n_joints: joints.len(), ..Default::default() }),
             joints,
             min_manipulability,
-            arm_end: None,
+            robot_end: None,
             max_line_deviation: 0.0,
             peak_speeds: (0.0, 0.0),
             prop3: Prop3Figures::new(),
@@ -96,7 +95,7 @@ impl<'a> Run<'a> {
             return Ok(Some((Status::LostFeatures, format!("dot tracking failed: {e}"))));
         }
         self.record_observation(t);
-        if let Some(end) = self.arm_end.take() {
+        if let Some(end) = self.robot_end.take() {
             return Ok(Some(end));
         }
         if let Some(end) = self.stop_check(progress) {
@@ -196,48 +195,36 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// Sends the twist to the robot and integrates it over one period.
+    /// Sends the twist to the robot for one period. A non-finite pose is never taken (the
+    /// run ends at the last finite one); a robot event (joint limit, singularity) ends the
+    /// run once the image where the robot stopped is recorded.
     fn move_robot(&mut self, twist: &Vector6<f64>) -> std::result::Result<(), End> {
         let (v, w) = (twist.fixed_rows::<3>(0).norm(), twist.fixed_rows::<3>(3).norm());
         self.peak_speeds = (self.peak_speeds.0.max(v), self.peak_speeds.1.max(w));
-        let config = self.config;
-        if let Robot::Arm(arm) = &config.robot {
-            return self.move_arm(arm, twist);
-        }
-        let robot = &config.robot;
-        let moved =
-            robot.step_pose(&self.pose, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
-        // Quarantine: a non-finite pose is never taken; the run ends at the last finite one.
+        let robot = self.config.robot.as_robot();
+        let moved: RobotMotion = robot
+            .step(&self.pose, &self.joints, twist, self.config.dt)
+            .map_err(|e| (Status::Diverged, e.to_string()))?;
         let finite =
             moved.pose.translation.vector.iter().chain(moved.pose.rotation.coords.iter()).all(|v| v.is_finite());
         if !finite {
             return Err((Status::Diverged, "the integrated pose is not finite".into()));
         }
         self.pose = moved.pose;
+        self.joints.copy_from_slice(&moved.joints);
+        if let (Some(w), Some(m)) = (self.min_manipulability, moved.manipulability) {
+            self.min_manipulability = Some(w.min(m));
+        }
         if let Some(r) = self.recording.as_mut() {
             r.twist.extend_from_slice(moved.twist.as_slice());
-            let joints = if moved.joints[0].is_nan() { robot.joints(&self.pose) } else { moved.joints };
-            self.joints.copy_from_slice(&joints);
+            if let Some(velocities) = &moved.joint_velocities {
+                r.joint_velocities.extend_from_slice(velocities);
+            }
         }
-        Ok(())
-    }
-
-    /// Moves an arm from its joint positions; a joint limit or a singularity ends the run
-    /// once the image where the arm stopped is recorded.
-    fn move_arm(&mut self, arm: &ArmRobot, twist: &Vector6<f64>) -> std::result::Result<(), End> {
-        let step: ArmStep =
-            arm.step(&self.joints, twist, self.config.dt).map_err(|e| (Status::Diverged, e.to_string()))?;
-        self.pose = step.pose;
-        self.joints.copy_from_slice(&step.joints);
-        self.min_manipulability = self.min_manipulability.map(|w| w.min(step.manipulability));
-        if let Some(r) = self.recording.as_mut() {
-            r.twist.extend_from_slice(step.twist.as_slice());
-            r.joint_velocities.extend_from_slice(&step.velocities);
-        }
-        self.arm_end = step.event.map(|event| {
+        self.robot_end = moved.event.map(|event| {
             let status = match event {
-                ArmEvent::JointLimit { .. } => Status::JointLimit,
-                ArmEvent::Singular { .. } => Status::Singular,
+                RobotEvent::JointLimit { .. } => Status::JointLimit,
+                RobotEvent::Singular { .. } => Status::Singular,
             };
             (status, event.message())
         });
@@ -289,14 +276,6 @@ impl<'a> Run<'a> {
             within_tolerance,
         }
     }
-}
-
-/// The joint positions at the start and, for an arm, its manipulability there.
-fn start_joints(robot: &Robot, start: &Isometry3<f64>) -> Result<(Vec<f64>, Option<f64>)> {
-    Ok(match robot {
-        Robot::Arm(arm) => (arm.start.clone(), Some(arm.model.manipulability(&arm.start)?)),
-        other => (other.joints(start).to_vec(), None),
-    })
 }
 
 /// Distance from `p` to the segment `[a, b]`.

@@ -1,18 +1,13 @@
-//! Robots carrying the camera on their end-effector: a free-flying camera, a six-axis
-//! Cartesian robot like the paper's AFMA (three prismatic axes and a three-axis wrist) with
-//! joint position and velocity limits, and a serial arm from URDF ([`ArmRobot`]).
-//!
-//! The robot base frame is F*. The camera twist is mapped to joint velocities through the
-//! robot Jacobian, saturated, and integrated. With no limit active the new pose is exactly
-//! `pose * exp(twist dt)` (SE(3) exponential) for a constant twist.
+//! A six-axis Cartesian robot like the paper's AFMA: three prismatic axes and a three-axis
+//! wrist, with joint position and velocity limits. The camera twist is mapped to joint
+//! velocities through the robot Jacobian, saturated, and integrated; with no limit active
+//! the new pose is exactly `pose * exp(twist dt)`.
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
-use std::sync::Arc;
-
 use crate::core::se3::exp_twist;
 use crate::error::{Error, Result, Short, check_finite};
-use crate::sim::arm::ArmRobot;
+use crate::sim::robot::{CameraRobot, RobotMotion};
 
 /// Joint limits of the Cartesian robot: `q = (x, y, z, a, b, c)` with the camera centre at
 /// `(x, y, z)` (metres, in F*) and the orientation `R = Rx(a) Ry(b) Rz(c)` (radians).
@@ -57,32 +52,6 @@ impl JointLimits {
         }
         Ok(())
     }
-}
-
-/// The robot that carries the camera.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Robot {
-    /// A camera that follows any twist exactly.
-    FreeFlying,
-    /// A Cartesian robot with a three-axis wrist and joint limits.
-    Cartesian(JointLimits),
-    /// A serial arm whose joint positions are its state: it moves through
-    /// [`ArmRobot::step`], not [`Robot::step`].
-    Arm(Arc<ArmRobot>),
-}
-
-/// What one robot step did.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RobotStep {
-    /// New camera pose in F*.
-    pub pose: Isometry3<f64>,
-    /// New joint positions: `(x, y, z, a, b, c)` for the Cartesian robot, `(x, y, z, theta-u)`
-    /// for the free-flying camera.
-    pub joints: [f64; 6],
-    /// The twist actually executed (after saturation), camera frame.
-    pub twist: Vector6<f64>,
-    /// Whether a velocity or position limit changed the motion.
-    pub limited: bool,
 }
 
 /// Orientation `Rx(a) Ry(b) Rz(c)` of the Cartesian robot's wrist.
@@ -145,113 +114,68 @@ pub fn cartesian_twist(q: &[f64; 6], dq: &[f64; 6]) -> Vector6<f64> {
     Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
 }
 
-impl Robot {
-    /// Joint positions at a pose (NaN for an arm, whose joints the pose does not determine).
-    pub fn joints(&self, pose: &Isometry3<f64>) -> [f64; 6] {
-        match self {
-            Robot::Arm(_) => [f64::NAN; 6],
-            Robot::FreeFlying => {
-                let t = pose.translation.vector;
-                let r = pose.rotation.scaled_axis();
-                [t.x, t.y, t.z, r.x, r.y, r.z]
-            }
-            Robot::Cartesian(_) => cartesian_joints(pose),
-        }
-    }
-
-    /// Checks that a pose is reachable (inside the joint limits); for an arm, checks it and
-    /// that the pose is the camera pose at its start joints.
-    pub fn check_reachable(&self, pose: &Isometry3<f64>) -> Result<()> {
-        if let Robot::Arm(arm) = self {
-            return check_arm_start(arm, pose);
-        }
-        if let Robot::Cartesian(limits) = self {
-            let q = cartesian_joints(pose);
-            if let Some(i) = (0..6).find(|&i| q[i] < limits.min[i] || q[i] > limits.max[i]) {
-                return Err(Error::InvalidParameter {
-                    name: "start",
-                    reason: format!(
-                        "joint {i} = {} is outside the robot's limits [{}, {}]",
-                        Short(q[i]),
-                        Short(limits.min[i]),
-                        Short(limits.max[i])
-                    ),
-                });
-            }
-        }
-        Ok(())
-    }
-
-    /// Moves the camera from `pose` under `twist` (camera frame) for `dt` seconds (an arm
-    /// is an error: use [`ArmRobot::step`]).
-    pub fn step(&self, pose: &Isometry3<f64>, twist: &Vector6<f64>, dt: f64) -> Result<RobotStep> {
-        check_finite("twist", twist.as_slice())?;
-        match self {
-            Robot::FreeFlying => {
-                let pose = pose * exp_twist(&(twist * dt).into())?;
-                Ok(RobotStep { joints: self.joints(&pose), pose, twist: *twist, limited: false })
-            }
-            Robot::Cartesian(_) | Robot::Arm(_) => self.step_pose(pose, twist, dt),
-        }
-    }
-
-    /// [`Robot::step`] without the joint positions of the free-flying camera (its theta-u
-    /// costs an atan2 that a simulation loop only needs when it records).
-    pub fn step_pose(&self, pose: &Isometry3<f64>, twist: &Vector6<f64>, dt: f64) -> Result<RobotStep> {
-        check_finite("twist", twist.as_slice())?;
-        match self {
-            Robot::FreeFlying => {
-                let pose = pose * exp_twist(&(twist * dt).into())?;
-                Ok(RobotStep { joints: [f64::NAN; 6], pose, twist: *twist, limited: false })
-            }
-            Robot::Cartesian(limits) => {
-                let q = cartesian_joints(pose);
-                let mut dq = cartesian_joint_velocities(&q, twist)?;
-                let mut limited = false;
-                // Velocity saturation: one common scale keeps the direction of motion.
-                let scale = (0..6).map(|i| limits.velocity[i] / dq[i].abs()).fold(1.0_f64, f64::min);
-                if scale < 1.0 {
-                    dq.iter_mut().for_each(|v| *v *= scale);
-                    limited = true;
-                }
-                // Position limits: a joint at a stop does not move further out.
-                for i in 0..6 {
-                    let next = q[i] + dq[i] * dt;
-                    if next > limits.max[i] || next < limits.min[i] {
-                        dq[i] = (next.clamp(limits.min[i], limits.max[i]) - q[i]) / dt;
-                        limited = true;
-                    }
-                }
-                if !limited {
-                    let pose = pose * exp_twist(&(twist * dt).into())?;
-                    return Ok(RobotStep { joints: cartesian_joints(&pose), pose, twist: *twist, limited });
-                }
-                let executed = cartesian_twist(&q, &dq);
-                let mut pose = pose * exp_twist(&(executed * dt).into())?;
-                let mut joints = cartesian_joints(&pose);
-                if (0..6).any(|i| joints[i] < limits.min[i] || joints[i] > limits.max[i]) {
-                    (0..6).for_each(|i| joints[i] = joints[i].clamp(limits.min[i], limits.max[i]));
-                    pose = cartesian_pose(&joints);
-                }
-                Ok(RobotStep { pose, joints, twist: executed, limited })
-            }
-            Robot::Arm(_) => Err(Error::InvalidParameter {
-                name: "robot",
-                reason: "an arm moves from its joint positions: use ArmRobot::step".into(),
-            }),
-        }
-    }
+/// The Cartesian robot: its joint limits.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CartesianRobot {
+    /// Position and speed limits of `(x, y, z, a, b, c)`.
+    pub limits: JointLimits,
 }
 
-/// An arm's start: valid, and `pose` is its camera pose at the start joints.
-fn check_arm_start(arm: &ArmRobot, pose: &Isometry3<f64>) -> Result<()> {
-    arm.validate()?;
-    let (dt, dr) = crate::core::se3::pose_error(&arm.camera_pose(&arm.start)?, pose);
-    if dt > 1e-9 || dr > 1e-9 {
-        let reason = format!("the start pose is {dt:.3e} m, {dr:.3e} rad from the camera pose at the arm's joints");
-        return Err(Error::InvalidParameter { name: "start", reason });
+impl CameraRobot for CartesianRobot {
+    fn dof(&self) -> usize {
+        6
     }
-    Ok(())
+
+    /// Checks that a pose is inside the joint limits.
+    fn start(&self, pose: &Isometry3<f64>) -> Result<(Vec<f64>, Option<f64>)> {
+        let (q, limits) = (cartesian_joints(pose), &self.limits);
+        if let Some(i) = (0..6).find(|&i| q[i] < limits.min[i] || q[i] > limits.max[i]) {
+            return Err(Error::InvalidParameter {
+                name: "start",
+                reason: format!(
+                    "joint {i} = {} is outside the robot's limits [{}, {}]",
+                    Short(q[i]),
+                    Short(limits.min[i]),
+                    Short(limits.max[i])
+                ),
+            });
+        }
+        Ok((q.to_vec(), None))
+    }
+
+    /// Velocity saturation with one common scale (the direction of motion is kept), then
+    /// position limits: a joint at a stop does not move further out.
+    fn step(&self, pose: &Isometry3<f64>, _joints: &[f64], twist: &Vector6<f64>, dt: f64) -> Result<RobotMotion> {
+        check_finite("twist", twist.as_slice())?;
+        let limits = &self.limits;
+        let q = cartesian_joints(pose);
+        let mut dq = cartesian_joint_velocities(&q, twist)?;
+        let mut limited = false;
+        let scale = (0..6).map(|i| limits.velocity[i] / dq[i].abs()).fold(1.0_f64, f64::min);
+        if scale < 1.0 {
+            dq.iter_mut().for_each(|v| *v *= scale);
+            limited = true;
+        }
+        for i in 0..6 {
+            let next = q[i] + dq[i] * dt;
+            if next > limits.max[i] || next < limits.min[i] {
+                dq[i] = (next.clamp(limits.min[i], limits.max[i]) - q[i]) / dt;
+                limited = true;
+            }
+        }
+        if !limited {
+            let pose = pose * exp_twist(&(twist * dt).into())?;
+            return Ok(RobotMotion::moved(pose, cartesian_joints(&pose).to_vec(), *twist, false));
+        }
+        let executed = cartesian_twist(&q, &dq);
+        let mut pose = pose * exp_twist(&(executed * dt).into())?;
+        let mut joints = cartesian_joints(&pose);
+        if (0..6).any(|i| joints[i] < limits.min[i] || joints[i] > limits.max[i]) {
+            (0..6).for_each(|i| joints[i] = joints[i].clamp(limits.min[i], limits.max[i]));
+            pose = cartesian_pose(&joints);
+        }
+        Ok(RobotMotion::moved(pose, joints.to_vec(), executed, true))
+    }
 }
 
 #[cfg(test)]
@@ -259,6 +183,7 @@ fn check_arm_start(arm: &ArmRobot, pose: &Isometry3<f64>) -> Result<()> {
 mod tests {
     use super::*;
     use crate::core::se3::pose_error;
+    use crate::sim::robot::FreeFlying;
 
     #[test]
     fn kinematics_round_trip() {
@@ -296,8 +221,9 @@ mod tests {
         let start = cartesian_pose(&[0.1, 0.0, -0.2, 0.1, 0.2, 0.5]);
         let tw = Vector6::new(0.05, -0.02, 0.03, 0.2, -0.1, 0.4);
         let expected = start * exp_twist(&(tw * 0.04).into()).unwrap();
-        for robot in [Robot::FreeFlying, Robot::Cartesian(JointLimits::default())] {
-            let s = robot.step(&start, &tw, 0.04).unwrap();
+        let robots: [&dyn CameraRobot; 2] = [&FreeFlying, &CartesianRobot::default()];
+        for robot in robots {
+            let s = robot.step(&start, &[], &tw, 0.04).unwrap();
             assert!(!s.limited);
             let (dt, dr) = pose_error(&expected, &s.pose);
             assert!(dt < 1e-14 && dr < 1e-12);
@@ -307,10 +233,10 @@ mod tests {
     #[test]
     fn limits_are_respected() {
         let limits = JointLimits { min: [-0.1; 6], max: [0.1, 0.1, 0.1, 0.5, 0.5, 0.5], velocity: [0.2; 6] };
-        let robot = Robot::Cartesian(limits);
+        let robot = CartesianRobot { limits };
         let mut pose = cartesian_pose(&[0.0; 6]);
         for _ in 0..200 {
-            let s = robot.step(&pose, &Vector6::new(1.0, -2.0, 0.5, 3.0, 1.0, -2.0), 0.04).unwrap();
+            let s = robot.step(&pose, &[], &Vector6::new(1.0, -2.0, 0.5, 3.0, 1.0, -2.0), 0.04).unwrap();
             assert!(s.limited);
             for i in 0..6 {
                 assert!(s.joints[i] >= limits.min[i] - 1e-12 && s.joints[i] <= limits.max[i] + 1e-12);

@@ -1,0 +1,355 @@
+//! `vsinv.Servo`: the servo session (the `servo` layer) stepped from NumPy arrays.
+
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use super::arrays::{bool_array, mat, points2, vec1};
+use super::errors::{invalid_input, to_py};
+use super::{BasisArg, depths_arg, intrinsics, pixels_arg};
+use crate::core::adaptive_gain::AdaptiveGain;
+use crate::core::control::InvariantControllerConfig;
+use crate::core::ibvs::Interaction;
+use crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO;
+use crate::core::saturation::TwistLimits;
+use crate::servo::{
+    Law, PathPlan, Servo, ServoConfig, ServoDepths, ServoReference, ServoStep, StopRule, StopRules, Telemetry, Verdict,
+};
+
+/// The keyword arguments that tune a law; each belongs to some laws only.
+struct LawArgs<'a> {
+    law: &'a str,
+    gain: f64,
+    gain_rz: Option<f64>,
+    rz_task: Option<&'a str>,
+    feedforward: Option<bool>,
+    min_structure_ratio: Option<f64>,
+    interaction: Option<&'a str>,
+    adaptive_gain: Option<AdaptiveGain>,
+    twist_limits: Option<TwistLimits>,
+}
+
+impl LawArgs<'_> {
+    /// The law, refusing an argument of another law by name.
+    fn law(&self) -> PyResult<Law> {
+        let invariant_only = [
+            ("gain_rz", self.gain_rz.is_some()),
+            ("rz_task", self.rz_task.is_some()),
+            ("feedforward", self.feedforward.is_some()),
+            ("min_structure_ratio", self.min_structure_ratio.is_some()),
+        ];
+        let ibvs_only = [("interaction", self.interaction.is_some())];
+        let moving = [("adaptive_gain", self.adaptive_gain.is_some()), ("max speeds", self.twist_limits.is_some())];
+        let refused: &[(&str, bool)] = match self.law {
+            "invariant" => &ibvs_only,
+            "ibvs" => &invariant_only,
+            "none" => &[invariant_only.as_slice(), &ibvs_only, &moving].concat(),
+            other => {
+                return Err(invalid_input(format!("law: expected \"invariant\", \"ibvs\" or \"none\", got {other:?}")));
+            }
+        };
+        if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
+            return Err(invalid_input(format!("{name}: not an argument of the {:?} law", self.law)));
+        }
+        Ok(match self.law {
+            "invariant" => Law::Invariant(InvariantControllerConfig {
+                gain: self.gain,
+                gain_rz: self.gain_rz.unwrap_or(1.0),
+                feedforward: self.feedforward.unwrap_or(true),
+                min_structure_ratio: self.min_structure_ratio.unwrap_or(DEFAULT_MIN_STRUCTURE_RATIO),
+                rz_task: self.rz_task.unwrap_or("angle").parse().map_err(to_py)?,
+                adaptive_gain: self.adaptive_gain,
+                twist_limits: self.twist_limits,
+            }),
+            "ibvs" => Law::Ibvs {
+                gain: self.gain,
+                interaction: self.interaction.unwrap_or("current").parse::<Interaction>().map_err(to_py)?,
+                adaptive_gain: self.adaptive_gain,
+                twist_limits: self.twist_limits,
+            },
+            _ => Law::Observe,
+        })
+    }
+}
+
+/// The `stop` dictionary over the default stop rules; an unknown key is refused by name.
+fn stop_rules(stop: Option<&Bound<'_, PyDict>>) -> PyResult<StopRules> {
+    let mut rules = StopRules::default();
+    let Some(stop) = stop else { return Ok(rules) };
+    for (key, value) in stop.iter() {
+        let key: String = key.extract().map_err(|_| invalid_input("stop: keys must be strings".into()))?;
+        let bad = |_| invalid_input(format!("stop.{key}: expected a number"));
+        match key.as_str() {
+            "max_iterations" => rules.max_iterations = value.extract().map_err(bad)?,
+            "window" => rules.window = value.extract().map_err(bad)?,
+            "pixel_error" => rules.pixel_error = value.extract().map_err(bad)?,
+            "invariant_error" => rules.invariant_error = value.extract().map_err(bad)?,
+            "tau21" => rules.tau21 = value.extract().map_err(bad)?,
+            "max_translation_uncertainty" => rules.max_translation_uncertainty = value.extract().map_err(bad)?,
+            "max_rotation_uncertainty_deg" => rules.max_rotation_uncertainty_deg = value.extract().map_err(bad)?,
+            "reference_pixel_sigma" => rules.reference_pixel_sigma = value.extract().map_err(bad)?,
+            _ => {
+                let known = "max_iterations, window, pixel_error, invariant_error, tau21, \
+                             max_translation_uncertainty, max_rotation_uncertainty_deg, reference_pixel_sigma";
+                return Err(invalid_input(format!("stop.{key}: unknown key; known: {known}")));
+            }
+        }
+    }
+    Ok(rules)
+}
+
+/// `depths`: "reference", "per_step", one depth in metres for every point, or a
+/// `ResectionDepths` estimator (appendix A; the session runs a copy of it).
+fn depth_source(depths: &Bound<'_, PyAny>) -> PyResult<ServoDepths> {
+    if let Ok(e) = depths.cast::<super::planning::PyResectionDepths>() {
+        return Ok(ServoDepths::Estimated(Box::new(e.borrow().inner.clone())));
+    }
+    if let Ok(s) = depths.cast::<PyString>() {
+        return match s.to_str()? {
+            "reference" => Ok(ServoDepths::Reference),
+            "per_step" => Ok(ServoDepths::PerStep),
+            other => {
+                Err(invalid_input(format!("depths: expected \"reference\", \"per_step\" or a depth, got {other:?}")))
+            }
+        };
+    }
+    let z: f64 = depths.extract().map_err(|_| {
+        invalid_input("depths: expected \"reference\", \"per_step\", a number or a ResectionDepths".into())
+    })?;
+    Ok(ServoDepths::Constant(z))
+}
+
+fn parse_stop_rule(name: Option<&str>) -> PyResult<Option<StopRule>> {
+    match name {
+        None => Ok(None),
+        Some("pixel") => Ok(Some(StopRule::Pixel)),
+        Some("invariant") => Ok(Some(StopRule::Invariant)),
+        Some(other) => Err(invalid_input(format!("stop_rule: expected \"pixel\" or \"invariant\", got {other:?}"))),
+    }
+}
+
+/// A servo session: the reference image, the law, the depth source and the stop rules; each
+/// `step(pixels, visible, depths)` returns the twist to send and the verdict.
+#[pyclass(name = "Servo", module = "vsinv._core")]
+pub(super) struct PyServo {
+    inner: Servo,
+}
+
+#[pymethods]
+impl PyServo {
+    #[new]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    #[pyo3(
+        signature = (reference_pixels, K_hat, law = "invariant", *, reference_depths = None, depths = None, basis = BasisArg::Auto, gain = 1.0, gain_rz = None, rz_task = None, feedforward = None, min_structure_ratio = None, interaction = None, adaptive_gain = None, max_linear_speed = None, max_angular_speed = None, stop = None, stop_rule = None, path_samples = None, dt = 0.04),
+        text_signature = "(reference_pixels, K_hat, law='invariant', *, reference_depths=None, depths='reference', basis='auto', gain=1.0, gain_rz=None, rz_task=None, feedforward=None, min_structure_ratio=None, interaction=None, adaptive_gain=None, max_linear_speed=None, max_angular_speed=None, stop=None, stop_rule=None, path_samples=None, dt=0.04)"
+    )]
+    fn new(
+        py: Python<'_>,
+        reference_pixels: &Bound<'_, PyAny>,
+        K_hat: &Bound<'_, PyAny>,
+        law: &str,
+        reference_depths: Option<&Bound<'_, PyAny>>,
+        depths: Option<&Bound<'_, PyAny>>,
+        basis: BasisArg,
+        gain: f64,
+        gain_rz: Option<f64>,
+        rz_task: Option<&str>,
+        feedforward: Option<bool>,
+        min_structure_ratio: Option<f64>,
+        interaction: Option<&str>,
+        #[pyo3(from_py_with = super::args::adaptive_gain)] adaptive_gain: Option<(f64, f64, f64)>,
+        max_linear_speed: Option<f64>,
+        max_angular_speed: Option<f64>,
+        stop: Option<&Bound<'_, PyDict>>,
+        stop_rule: Option<&str>,
+        path_samples: Option<usize>,
+        dt: f64,
+    ) -> PyResult<Self> {
+        let a = pixels_arg(reference_pixels, "reference_pixels")?;
+        let pixels = points2(&a)?.to_vec();
+        let k_hat = intrinsics(K_hat, "K_hat")?;
+        let (adaptive_gain, twist_limits) =
+            super::control::command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
+        let args = LawArgs {
+            law,
+            gain,
+            gain_rz,
+            rz_task,
+            feedforward,
+            min_structure_ratio,
+            interaction,
+            adaptive_gain,
+            twist_limits,
+        };
+        let law = args.law()?;
+        let reference_depths = match reference_depths {
+            Some(z) => Some(depths_arg(z)?.as_slice()?.to_vec()),
+            None => None,
+        };
+        let source = match depths {
+            Some(d) => depth_source(d)?,
+            None => ServoDepths::Reference,
+        };
+        let mut config = ServoConfig::new(law, k_hat);
+        (config.stop, config.stop_rule, config.dt) = (stop_rules(stop)?, parse_stop_rule(stop_rule)?, dt);
+        config.path = path_samples.map(|samples| PathPlan { samples });
+        config.basis = match basis {
+            BasisArg::Fixed(b) => Some(b),
+            BasisArg::Auto => None,
+        };
+        let reference = ServoReference { pixels, depths: reference_depths };
+        let inner = py.detach(|| Servo::new(config, reference, source)).map_err(to_py)?;
+        Ok(Self { inner })
+    }
+
+    /// One step from the current pixels (n, 2): `visible` a bool array (n,) of the points found
+    /// (None: all), `depths` (n,) with `depths="per_step"`. Returns a ServoStep: the twist to
+    /// send (zero when stopping), the verdict and the telemetry.
+    #[pyo3(signature = (pixels, visible = None, depths = None))]
+    fn step(
+        &mut self,
+        pixels: &Bound<'_, PyAny>,
+        visible: Option<&Bound<'_, PyAny>>,
+        depths: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyServoStep> {
+        let a = pixels_arg(pixels, "pixels")?;
+        let px = points2(&a)?;
+        let v = visible.map(|v| bool_array(v, "visible", px.len())).transpose()?;
+        let z = depths.map(depths_arg).transpose()?;
+        let step = self
+            .inner
+            .step(px, v.as_ref().map(|v| v.as_slice()).transpose()?, z.as_ref().map(|z| z.as_slice()).transpose()?)
+            .map_err(to_py)?;
+        Ok(PyServoStep::from(step))
+    }
+
+    /// Control steps applied.
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations()
+    }
+    /// The basis in use (three point indices).
+    #[getter]
+    fn basis(&self) -> (usize, usize, usize) {
+        let [a, b, c] = self.inner.basis();
+        (a, b, c)
+    }
+    /// The law: "invariant", "ibvs" or "none".
+    #[getter]
+    fn law(&self) -> &'static str {
+        self.inner.law().name()
+    }
+    /// The image rule that decides convergence: "pixel" or "invariant".
+    #[getter]
+    fn stop_rule(&self) -> &'static str {
+        match self.inner.stop_rule() {
+            StopRule::Pixel => "pixel",
+            StopRule::Invariant => "invariant",
+        }
+    }
+    /// The reference pixels (n, 2).
+    #[getter]
+    fn reference_pixels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let px = self.inner.reference_pixels();
+        mat(py, px.len(), 2, px.as_flattened().to_vec())
+    }
+    /// The pixel noise measured on the last images (None before three), pixels.
+    #[getter]
+    fn pixel_sigma(&self) -> Option<f64> {
+        self.inner.pixel_sigma()
+    }
+    /// What the images say about the pose: at the image rule, from the averaged images;
+    /// otherwise from the last image. A dict of pixel_sigma, reference_pixel_sigma (pixels),
+    /// translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound (radians);
+    /// None when it cannot be computed.
+    fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(c) = self.inner.certainty() else { return Ok(None) };
+        let d = PyDict::new(py);
+        d.set_item("pixel_sigma", c.pixel_sigma)?;
+        d.set_item("reference_pixel_sigma", c.reference_pixel_sigma)?;
+        d.set_item("translation_sigma", c.sigma.0)?;
+        d.set_item("rotation_sigma", c.sigma.1)?;
+        d.set_item("translation_bound", c.bound.0)?;
+        d.set_item("rotation_bound", c.bound.1)?;
+        Ok(Some(d))
+    }
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "Servo(law={:?}, points={}, basis={:?}, iterations={})",
+            s.law().name(),
+            s.pixels().len(),
+            s.basis(),
+            s.iterations()
+        )
+    }
+}
+
+/// What one step returns.
+#[pyclass(name = "ServoStep", module = "vsinv._core", frozen)]
+pub(super) struct PyServoStep {
+    twist: [f64; 6],
+    verdict: &'static str,
+    reason: Option<String>,
+    telemetry: Telemetry,
+}
+
+impl From<ServoStep> for PyServoStep {
+    fn from(step: ServoStep) -> Self {
+        let (verdict, reason) = match step.verdict {
+            Verdict::Running => ("running", None),
+            Verdict::Stop { status, reason } => (status.as_str(), Some(reason)),
+        };
+        let twist = [0, 1, 2, 3, 4, 5].map(|i| step.twist[i]);
+        Self { twist, verdict, reason, telemetry: step.telemetry }
+    }
+}
+
+#[pymethods]
+impl PyServoStep {
+    /// The twist to send (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero
+    /// when the verdict is to stop.
+    #[getter]
+    fn twist<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, &self.twist)
+    }
+    /// "running", or why to stop: "converged", "settled", "lost_features", "rz_trap",
+    /// "degenerate", "diverged", "max_iterations", "observed".
+    #[getter]
+    fn verdict(&self) -> &'static str {
+        self.verdict
+    }
+    /// Why the session stops, in words (None while running).
+    #[getter]
+    fn reason(&self) -> Option<&str> {
+        self.reason.as_deref()
+    }
+    /// Whether the loop goes on.
+    #[getter]
+    fn running(&self) -> bool {
+        self.reason.is_none()
+    }
+    /// The figures of this step: a dict of iteration, invariant_error, image_error (pixels),
+    /// tau (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran; NaN where a
+    /// figure does not apply.
+    #[getter]
+    fn telemetry<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let t = &self.telemetry;
+        let d = PyDict::new(py);
+        d.set_item("iteration", t.iteration)?;
+        d.set_item("invariant_error", t.invariant_error)?;
+        d.set_item("image_error", t.image_error)?;
+        d.set_item("tau", (t.tau[0], t.tau[1], t.tau[2]))?;
+        d.set_item("eps_z", t.eps_z)?;
+        d.set_item("eps", vec1(py, &t.eps))?;
+        d.set_item("tracking_error", t.tracking_error)?;
+        d.set_item("law_ran", t.law_ran)?;
+        Ok(d)
+    }
+    fn __repr__(&self) -> String {
+        match &self.reason {
+            None => format!("ServoStep(verdict='running', twist={:?})", self.twist),
+            Some(r) => format!("ServoStep(verdict={:?}, reason={r:?})", self.verdict),
+        }
+    }
+}
