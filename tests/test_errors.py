@@ -540,6 +540,8 @@ def test_attributes_of_scenario_errors(tmp_path):
     assert str(err) == "scenario: control.gain: must be finite and > 0, got -1"
     err = raised(lambda: vsinv.run_batch([d]))
     assert (err.kind, err.key) == ("scenario", "[0].control.gain")
+    err = raised(lambda: vsinv.run_batch(["lens-12-12", 5]))  # re-raised with the item's index
+    assert (err.kind, err.argument) == ("invalid_argument", "scenario") and str(err).startswith("scenario 1: ")
     arm = vsinv.load_scenario("arm-ur5-12-6").to_dict()
     arm["robot"]["end_effector"] = "nolink"
     err = raised(lambda: vsinv.run_scenario(arm))
