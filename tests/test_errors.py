@@ -444,3 +444,139 @@ def test_issue16_messages_print_short_numbers():
         texts.append(str(info.value))
         assert not re.search(r"\d{21,}", texts[-1]), texts[-1]
     assert any("1.0e-320" in t for t in texts) and any("1.0e300" in t for t in texts), texts
+
+
+# Issue 17, item 6: exceptions carry the error's fields as attributes ------------------------
+
+ATTRIBUTES = ("kind", "argument", "index", "row", "column", "expected", "got", "needed", "count", "reason", "basis",
+              "image", "ratio", "threshold", "depth", "estimate", "hint", "key", "file", "field", "a_hat")
+
+
+def raised(f):
+    """The VsinvError `f` raises."""
+    with pytest.raises(vsinv.VsinvError) as info:
+        f()
+    return info.value
+
+
+def fields(err):
+    """The attributes that apply (not None)."""
+    return {name: getattr(err, name) for name in ATTRIBUTES if getattr(err, name) is not None}
+
+
+def test_every_attribute_is_declared_and_none_by_default():
+    for cls in (vsinv.VsinvError, vsinv.InvalidInput, vsinv.DegenerateGeometry, vsinv.NotReady):
+        assert fields(cls("raised by Python code")) == {}
+    for name in ATTRIBUTES:
+        assert name in vsinv.VsinvError.__doc__
+
+
+def test_attributes_of_bad_arrays(scene):
+    ctl = vsinv.InvariantController(scene["ref"], scene["k"])
+    cur = scene["cur"].copy()
+    cur[5, 1] = np.nan
+    err = raised(lambda: ctl.step(cur, scene["z"]))
+    assert isinstance(err, vsinv.InvalidInput)
+    assert fields(err) == {"kind": "non_finite_point", "argument": "pixels", "row": 5, "column": 1}
+    assert str(err) == "pixels: non-finite value at row 5, column 1"
+    z = np.where(np.arange(12) == 3, np.nan, 1.0)
+    err = raised(lambda: vsinv.IbvsController(scene["ref"], scene["k"], reference_depths=z))
+    assert fields(err) == {"kind": "non_finite", "argument": "reference_depths", "index": 3}
+    err = raised(lambda: ctl.step(scene["cur"][:10], scene["z"][:10]))
+    assert (err.kind, err.argument, err.got) == ("shape", "pixels", "10 points")
+    assert err.expected.startswith("12 points")
+    err = raised(lambda: ctl.step(np.zeros((12, 3)), scene["z"]))  # read by the bindings
+    assert fields(err) == {"kind": "shape", "argument": "pixels", "expected": "shape (n, 2)", "got": "[12, 3]"}
+    assert str(err) == "pixels: expected shape (n, 2), got [12, 3]"
+    err = raised(lambda: ctl.step(np.zeros((12, 2), complex), scene["z"]))
+    assert (err.kind, err.argument) == ("invalid_argument", "pixels")
+    k = np.stack([scene["k"].matrix, np.full((3, 3), np.nan)])
+    err = raised(lambda: vsinv.check_stability(k, scene["k"]))
+    assert fields(err) == {"kind": "non_finite_point", "argument": "K", "row": 0, "column": 0}
+
+
+def test_attributes_of_bad_parameters(scene):
+    err = raised(lambda: vsinv.InvariantController(scene["ref"], scene["k"], gain=0.0))
+    assert fields(err) == {"kind": "invalid_parameter", "argument": "gain", "reason": "must be finite and > 0, got 0"}
+    err = raised(lambda: vsinv.Intrinsics(-1.0, 1.0, 0.0, 0.0))
+    assert err.kind == "invalid_intrinsics" and "focal" in err.reason and err.argument is None
+    err = raised(lambda: vsinv.check_stability([scene["k"], np.ones((3, 3))], scene["k"]))
+    assert (err.kind, err.argument) == ("invalid_intrinsics", "K") and str(err).startswith("K: matrix 1: ")
+    for f, argument in [(lambda: vsinv.InvariantController(scene["ref"], scene["k"], basis="widest"), "basis"),
+                        (lambda: vsinv.detect_dots(np.zeros((4, 4), np.uint8), threshold=300), "threshold"),
+                        (lambda: vsinv.run_batch([], threads=-1), "threads"),
+                        (lambda: vsinv.load_scenario("/nonexistent.toml"), "scenario")]:
+        err = raised(f)
+        assert (type(err), err.kind, err.argument) == (vsinv.InvalidInput, "invalid_argument", argument)
+    err = raised(lambda: vsinv.InvariantController(scene["ref"], scene["k"]).eps)
+    assert isinstance(err, vsinv.NotReady) and fields(err) == {"kind": "not_ready"}
+
+
+def test_attributes_of_degenerate_geometry(scene):
+    px, z = scene["ref"], scene["z_star"]
+    err = raised(lambda: vsinv.InvariantController(px[:5], scene["k"]))
+    assert isinstance(err, vsinv.DegenerateGeometry)
+    assert (err.kind, err.needed, err.count) == ("too_few_points", 6, 5) and "five dof" in err.reason
+    line = px.copy()
+    line[2] = (line[0] + line[1]) / 2
+    err = raised(lambda: vsinv.InvariantController(line, scene["k"]))
+    assert fields(err) == {"kind": "collinear_basis", "basis": (0, 1, 2), "image": "reference", "ratio": 0.0}
+    ctl = vsinv.InvariantController(px, scene["k"])
+    bad = scene["z"].copy()
+    bad[7] = -0.5
+    err = raised(lambda: ctl.step(scene["cur"], bad))
+    assert fields(err) == {"kind": "point_behind_camera", "index": 7, "depth": -0.5}
+    err = raised(lambda: ctl.step(scene["cur"], np.full(12, 0.6)))
+    assert err.kind == "degenerate_structure" and err.ratio < err.threshold == 1e-3
+    err = raised(lambda: vsinv.depths_from_translation(px, px))
+    assert err.kind == "degenerate_estimate" and "epipole" in err.estimate and "did not move" in err.hint
+
+
+def test_attributes_of_scenario_errors(tmp_path):
+    d = vsinv.load_scenario("lens-12-12").to_dict()
+    d["control"]["gain"] = -1.0
+    err = raised(lambda: vsinv.Scenario.from_dict(d))
+    assert fields(err) == {"kind": "scenario", "key": "control.gain", "reason": "must be finite and > 0, got -1"}
+    assert str(err) == "scenario: control.gain: must be finite and > 0, got -1"
+    err = raised(lambda: vsinv.run_batch([d]))
+    assert (err.kind, err.key) == ("scenario", "[0].control.gain")
+    err = raised(lambda: vsinv.run_batch(["lens-12-12", 5]))  # re-raised with the item's index
+    assert (err.kind, err.argument) == ("invalid_argument", "scenario") and str(err).startswith("scenario 1: ")
+    arm = vsinv.load_scenario("arm-ur5-12-6").to_dict()
+    arm["robot"]["end_effector"] = "nolink"
+    err = raised(lambda: vsinv.run_scenario(arm))
+    assert (err.kind, err.key) == ("scenario", "robot.end_effector") and "no link `nolink`" in err.reason
+    path = tmp_path / "bad.toml"
+    path.write_text(vsinv.load_scenario("lens-12-12").to_toml().replace("gain = ", "gain = -", 1))
+    err = raised(lambda: vsinv.load_scenario(path))
+    assert (err.kind, err.file, err.key) == ("scenario", str(path), "control.gain")
+    assert str(err).startswith(f"{path}: scenario: control.gain: ")
+
+
+def test_attributes_of_file_image_and_lens_errors(tmp_path):
+    from test_distortion import ROS
+
+    err = raised(lambda: vsinv.load_calibration("/nonexistent/cal.yaml"))
+    assert (err.kind, err.file, err.field) == ("calibration", "/nonexistent/cal.yaml", None)
+    assert err.reason.startswith("cannot read")
+    path = tmp_path / "bad.yaml"
+    path.write_text(ROS.replace("data: [812.25, 0.0, 323.5", "data: [812.25, 0.0, abc", 1))
+    err = raised(lambda: vsinv.load_calibration(path))
+    assert (err.kind, err.file, err.field) == ("calibration", str(path), "camera_matrix.data[2]")
+    err = raised(lambda: vsinv.detect_dots(np.zeros((4, 4, 3), np.uint8)))
+    assert (err.kind, err.argument) == ("invalid_image", "image") and "grey" in err.reason
+    k = vsinv.Intrinsics(500.0, 500.0, 320.0, 240.0)
+    px = np.array([[320.0, 240.0], [570.0, 240.0], [670.0, 240.0]])
+    err = raised(lambda: vsinv.undistort_points(px, k, [-0.4, 0.0, 0.0, 0.0]))
+    assert (err.kind, err.index) == ("distortion", 2) and "folds" in err.reason
+
+
+def test_attributes_survive_pickling(scene):
+    import pickle
+
+    ctl = vsinv.InvariantController(scene["ref"], scene["k"])
+    cur = scene["cur"].copy()
+    cur[5, 1] = np.nan
+    err = raised(lambda: ctl.step(cur, scene["z"]))
+    back = pickle.loads(pickle.dumps(err))
+    assert type(back) is vsinv.InvalidInput and str(back) == str(err) and fields(back) == fields(err)

@@ -110,14 +110,16 @@ def test_lost_features_and_the_iteration_limit():
 )
 def test_an_argument_of_another_law_is_refused_by_name(law, kwargs, name):
     px, z = reference()
-    with pytest.raises(vsinv.InvalidInput, match=f'^{name}: not an argument of the "{law}" law'):
+    with pytest.raises(vsinv.InvalidInput, match=f'^{name}: not an argument of the "{law}" law') as err:
         vsinv.Servo(px, K_HAT, law, reference_depths=z, **kwargs)
+    assert err.value.argument == name and err.value.kind == "invalid_argument"
 
 
 def test_bad_input_is_refused_by_name():
     px, z = reference()
-    with pytest.raises(vsinv.InvalidInput, match="stop.windw: unknown key"):
+    with pytest.raises(vsinv.InvalidInput, match="stop.windw: unknown key") as err:
         vsinv.Servo(px, K_HAT, reference_depths=z, stop={"windw": 3})
+    assert err.value.argument == "stop.windw"
     with pytest.raises(vsinv.InvalidInput, match="law: expected"):
         vsinv.Servo(px, K_HAT, "pbvs", reference_depths=z)
     with pytest.raises(vsinv.InvalidInput, match="depths"):
@@ -125,8 +127,9 @@ def test_bad_input_is_refused_by_name():
     servo = vsinv.Servo(px, K_HAT, reference_depths=z)
     bad = px.copy()
     bad[4, 1] = np.nan
-    with pytest.raises(vsinv.InvalidInput, match="row 4"):
+    with pytest.raises(vsinv.InvalidInput, match="row 4") as err:
         servo.step(bad)
+    assert (err.value.argument, err.value.row, err.value.column) == ("pixels", 4, 1)
     with pytest.raises(vsinv.InvalidInput, match="pixels"):
         servo.step(px[:7])
     with pytest.raises(vsinv.InvalidInput, match="depths"):

@@ -63,10 +63,69 @@ _ArrayLike = npt.ArrayLike
 _F64Array = npt.NDArray[np.float64]
 _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 
-class VsinvError(Exception): ...
-class InvalidInput(VsinvError, ValueError): ...
-class DegenerateGeometry(VsinvError, ValueError): ...
-class NotReady(VsinvError, RuntimeError): ...
+class VsinvError(Exception):
+    """Base class of every vsinv error.
+
+    The structured fields of the error are attributes, None where they do not apply (and on
+    exceptions raised by Python code); match on them rather than on the message.
+    """
+
+    kind: str | None
+    """The kind of error: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics',
+    'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis',
+    'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario',
+    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular' or 'not_ready'."""
+    argument: str | None
+    """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
+    index: int | None
+    """The flat index of a non-finite value, or the point at fault."""
+    row: int | None
+    """The row (point) of a non-finite entry of a 2-d array."""
+    column: int | None
+    """The column (coordinate) of a non-finite entry of a 2-d array."""
+    expected: str | None
+    """The size expected, in words ('12 points', 'shape (n, 2)')."""
+    got: str | None
+    """The size given."""
+    needed: int | None
+    """The fewest points the task takes."""
+    count: int | None
+    """The number of points given."""
+    reason: str | None
+    """What is wrong."""
+    basis: tuple[int, int, int] | None
+    """The basis indices of a collinear basis."""
+    image: str | None
+    """'current' or 'reference': the image of a collinear basis."""
+    ratio: float | None
+    """The singular-value or area ratio that failed."""
+    threshold: float | None
+    """The threshold the ratio was held to."""
+    depth: float | None
+    """The depth of a point at or behind the camera."""
+    estimate: str | None
+    """What was being estimated (a degenerate estimate)."""
+    hint: str | None
+    """What usually causes a degenerate estimate."""
+    key: str | None
+    """The dotted scenario key at fault ('control.gain'); None for the whole document."""
+    file: str | None
+    """The file at fault (a scenario, calibration or URDF file)."""
+    field: str | None
+    """The entry of a calibration file at fault ('camera_matrix.data')."""
+    a_hat: float | None
+    """The vanishing coefficient of the rz law (eq. 23)."""
+
+class InvalidInput(VsinvError, ValueError):
+    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or
+    parameters, a bad scenario, image, URDF or calibration file."""
+
+class DegenerateGeometry(VsinvError, ValueError):
+    """Geometry the method cannot work with: collinear basis points, too few points, a planar
+    object or equal depth estimates, points at or behind the camera."""
+
+class NotReady(VsinvError, RuntimeError):
+    """A state read before it exists (kind 'not_ready')."""
 
 @final
 class Intrinsics:

@@ -5,8 +5,9 @@
 
 use pyo3::exceptions::{PyOverflowError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::PyString;
 
-use super::errors::invalid_input;
+use super::errors::invalid_argument;
 
 /// An integer in `[min, max]`; `TypeError` for a non-integer, `InvalidInput` otherwise.
 fn int_in_range(obj: &Bound<'_, PyAny>, what: &str, min: i128, max: i128) -> PyResult<i128> {
@@ -14,12 +15,12 @@ fn int_in_range(obj: &Bound<'_, PyAny>, what: &str, min: i128, max: i128) -> PyR
     let value: i128 = match obj.extract::<i128>() {
         Ok(v) => v,
         Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
-            return Err(invalid_input(format!("{what}: expected an integer in [{min}, {max}], got {obj}")));
+            return Err(invalid_argument(what, format!("{what}: expected an integer in [{min}, {max}], got {obj}")));
         }
         Err(e) => return Err(e),
     };
     if value < min || value > max {
-        return Err(invalid_input(format!("{what}: expected an integer in [{min}, {max}], got {value}")));
+        return Err(invalid_argument(what, format!("{what}: expected an integer in [{min}, {max}], got {value}")));
     }
     Ok(value)
 }
@@ -74,10 +75,66 @@ pub fn adaptive_gain(obj: &Bound<'_, PyAny>) -> PyResult<Option<(f64, f64, f64)>
     let py = obj.py();
     match obj.extract::<(f64, f64, f64)>() {
         Ok(t) => Ok(Some(t)),
-        Err(e) if e.is_instance_of::<PyValueError>(py) => Err(invalid_input(format!(
-            "adaptive_gain: expected (lambda_0, lambda_inf, lambda'_0), three numbers ({})",
-            e.value(py)
-        ))),
+        Err(e) if e.is_instance_of::<PyValueError>(py) => Err(invalid_argument(
+            "adaptive_gain",
+            format!("adaptive_gain: expected (lambda_0, lambda_inf, lambda'_0), three numbers ({})", e.value(py)),
+        )),
         Err(e) => Err(e),
     }
+}
+
+/// A basis argument: three point indices, or "auto" for the widest triangle of the
+/// reference (or given) image.
+#[derive(Clone, Copy)]
+pub(crate) enum BasisArg {
+    Fixed([usize; 3]),
+    Auto,
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        if let Ok(s) = obj.cast::<PyString>() {
+            return match s.to_str()? {
+                "auto" => Ok(BasisArg::Auto),
+                other => {
+                    Err(invalid_argument("basis", format!("basis: expected three indices or \"auto\", got {other:?}")))
+                }
+            };
+        }
+        let v: Vec<i64> = obj
+            .extract()
+            .map_err(|_| invalid_argument("basis", "basis: expected three integer indices or \"auto\"".into()))?;
+        match v.as_slice() {
+            &[a, b, c] if a >= 0 && b >= 0 && c >= 0 => Ok(BasisArg::Fixed([a as usize, b as usize, c as usize])),
+            _ => Err(invalid_argument("basis", format!("basis: expected three non-negative indices, got {v:?}"))),
+        }
+    }
+}
+
+impl BasisArg {
+    /// The indices; for "auto", the widest triangle of `pixels`, searched only after
+    /// `validate` has accepted the other arguments (bad input fails before the search) and
+    /// without the GIL.
+    pub(crate) fn resolve(
+        self,
+        py: Python<'_>,
+        pixels: &[[f64; 2]],
+        validate: impl FnOnce() -> crate::Result<()>,
+    ) -> PyResult<[usize; 3]> {
+        match self {
+            BasisArg::Fixed(b) => Ok(b),
+            BasisArg::Auto => {
+                validate()?;
+                choose_basis_detached(py, pixels)
+            }
+        }
+    }
+}
+
+/// `choose_basis`, with the GIL released when the search is not trivially short.
+pub(crate) fn choose_basis_detached(py: Python<'_>, pixels: &[[f64; 2]]) -> PyResult<[usize; 3]> {
+    let search = || crate::core::invariant::choose_basis(pixels);
+    let small = pixels.len() <= crate::core::widest_triangle::EXHAUSTIVE_MAX_POINTS / 4;
+    Ok(if small { search() } else { py.detach(search) }?)
 }

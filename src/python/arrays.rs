@@ -7,7 +7,7 @@ use numpy::{
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 
-use super::errors::invalid_input;
+use super::errors::{invalid_argument, invalid_input, shape_error};
 
 /// A read-only float64 array borrowed from Python, C-contiguous.
 pub struct F64Array<'py> {
@@ -41,12 +41,12 @@ fn contiguous_copy(
     let py = obj.py();
     let raw = numpy_fn(py, &ASARRAY, "asarray")?
         .call1(py, (obj,))
-        .map_err(|e| invalid_input(format!("{what}: cannot be read as an array ({e})")))?;
+        .map_err(|e| invalid_argument(what, format!("{what}: cannot be read as an array ({e})")))?;
     let raw = raw.bind(py);
     let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
     if kind.is_empty() || !kinds.contains(kind.as_str()) {
         let dtype = raw.getattr("dtype")?.str()?.to_string();
-        return Err(invalid_input(format!("{what}: expected {expected}, got dtype {dtype}")));
+        return Err(invalid_argument(what, format!("{what}: expected {expected}, got dtype {dtype}")));
     }
     numpy_fn(py, &CONTIGUOUS, "ascontiguousarray")?.call1(py, (raw, dtype))
 }
@@ -65,7 +65,7 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str, dims: &[Option<usize>
             converted
                 .bind(py)
                 .cast::<PyArrayDyn<f64>>()
-                .map_err(|_| invalid_input(format!("{what}: conversion to float64 failed")))?
+                .map_err(|_| invalid_argument(what, format!("{what}: conversion to float64 failed")))?
                 .clone()
         }
     };
@@ -73,9 +73,10 @@ pub fn f64_array<'py>(obj: &Bound<'py, PyAny>, what: &str, dims: &[Option<usize>
     let shape_ok = shape.len() == dims.len() && shape.iter().zip(dims).all(|(s, d)| d.is_none_or(|d| d == *s));
     if !shape_ok {
         let want: Vec<String> = dims.iter().map(|d| d.map_or("n".to_string(), |d| d.to_string())).collect();
-        return Err(invalid_input(format!("{what}: expected shape ({}), got {:?}", want.join(", "), shape)));
+        return Err(shape_error(what, format!("shape ({})", want.join(", ")), format!("{shape:?}")));
     }
-    let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
+    let array =
+        array.try_readonly().map_err(|e| invalid_argument(what, format!("{what}: array is being written to ({e})")))?;
     Ok(F64Array { array })
 }
 
@@ -103,15 +104,19 @@ pub fn bool_array<'py>(obj: &Bound<'py, PyAny>, what: &str, n: usize) -> PyResul
             let converted = converted.bind(py);
             let shape: Vec<usize> = converted.getattr("shape")?.extract()?;
             if shape.len() != 1 {
-                return Err(invalid_input(format!("{what}: expected shape ({n},), got {shape:?}")));
+                return Err(shape_error(what, format!("shape ({n},)"), format!("{shape:?}")));
             }
-            converted.cast::<PyArray1<bool>>().map_err(|_| invalid_input(format!("{what}: not a bool array")))?.clone()
+            converted
+                .cast::<PyArray1<bool>>()
+                .map_err(|_| invalid_argument(what, format!("{what}: not a bool array")))?
+                .clone()
         }
     };
     if array.len() != n {
-        return Err(invalid_input(format!("{what}: expected shape ({n},), got ({},)", array.len())));
+        return Err(shape_error(what, format!("shape ({n},)"), format!("({},)", array.len())));
     }
-    let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
+    let array =
+        array.try_readonly().map_err(|e| invalid_argument(what, format!("{what}: array is being written to ({e})")))?;
     Ok(BoolArray { array })
 }
 
@@ -121,7 +126,10 @@ pub fn finite_out(inputs: &str, values: &[f64]) -> PyResult<()> {
     if values.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
-        Err(invalid_input(format!("{inputs}: the result is not finite (values too large or too small for float64)")))
+        Err(invalid_argument(
+            inputs,
+            format!("{inputs}: the result is not finite (values too large or too small for float64)"),
+        ))
     }
 }
 
@@ -155,4 +163,14 @@ pub fn from_matrix<'py, R: nalgebra::Dim, C: nalgebra::Dim, S: nalgebra::RawStor
     let (rows, cols) = m.shape();
     let data: Vec<f64> = (0..rows).flat_map(|r| (0..cols).map(move |c| (r, c))).map(|(r, c)| m[(r, c)]).collect();
     mat(py, rows, cols, data)
+}
+
+/// An `(n, 2)` pixel array argument.
+pub(crate) fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F64Array<'py>> {
+    f64_array(obj, what, &[None, Some(2)])
+}
+
+/// An `(n,)` depth array argument.
+pub(crate) fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
+    f64_array(obj, "depths", &[None])
 }

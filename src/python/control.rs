@@ -4,15 +4,13 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{bool_array, f64_array, finite_out, from_matrix, mat, points2, points3, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::shape_error;
 use super::uncertainty::{PyPoseUncertainty, UncertaintyArgs};
-use super::{
-    BasisArg, PyIntrinsics, adaptive_gain_args, adaptive_gain_repr, bool_repr, depths_arg, interaction_name,
-    intrinsics, intrinsics_repr, opt_repr, pixels_arg, rz_task_name, twist_limit_args,
-};
+use super::{BasisArg, PyIntrinsics, depths_arg, intrinsics, intrinsics_repr, pixels_arg};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::control::{Controller, InvariantController, InvariantControllerConfig};
 use crate::core::ibvs::{IbvsController, Interaction};
+use crate::core::rz_task::RzTask;
 use crate::core::saturation::TwistLimits;
 
 /// Reads the step's arrays in place and returns the twist as a new (6,) array.
@@ -23,7 +21,7 @@ fn step_controller<'py, C: Controller>(
     depths: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
-    let tw = ctl.step(points2(&a)?, z.as_slice()?).map_err(to_py)?;
+    let tw = ctl.step(points2(&a)?, z.as_slice()?)?;
     finite_out("pixels, depths", tw.as_slice())?;
     Ok(vec1(py, tw.as_slice()))
 }
@@ -39,7 +37,7 @@ fn step_controller_visible<'py, C: Controller>(
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
     let v = bool_array(visible, "visible", px.len())?;
-    let tw = ctl.step_visible(px, z.as_slice()?, v.as_slice()?).map_err(to_py)?;
+    let tw = ctl.step_visible(px, z.as_slice()?, v.as_slice()?)?;
     finite_out("pixels, depths", tw.as_slice())?;
     Ok(vec1(py, tw.as_slice()))
 }
@@ -91,7 +89,7 @@ impl PyInvariantController {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let px = points2(&a)?;
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let rz_task = rz_task.parse().map_err(to_py)?;
+        let rz_task = rz_task.parse()?;
         let (adaptive_gain, twist_limits) = command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
         let config = InvariantControllerConfig {
             gain,
@@ -107,7 +105,7 @@ impl PyInvariantController {
             crate::core::jacobian::check_point_count(px.len(), crate::core::jacobian::MIN_POINTS)?;
             config.validate()
         })?;
-        let inner = InvariantController::new(px, k_hat, basis, config).map_err(to_py)?;
+        let inner = InvariantController::new(px, k_hat, basis, config)?;
         Ok(Self { inner })
     }
 
@@ -140,7 +138,7 @@ impl PyInvariantController {
     #[allow(non_snake_case)]
     fn set_k_hat(&mut self, K_hat: &Bound<'_, PyAny>) -> PyResult<()> {
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        self.inner.set_k_hat(k_hat).map_err(to_py)
+        Ok(self.inner.set_k_hat(k_hat)?)
     }
 
     /// The estimated intrinsics K_hat used in the Jacobian.
@@ -212,7 +210,7 @@ impl PyInvariantController {
             Some(r) => Some(points3(r)?),
             None => None,
         };
-        self.inner.set_reference(points3(&s)?, r_pts).map_err(to_py)
+        Ok(self.inner.set_reference(points3(&s)?, r_pts)?)
     }
 
     /// The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the
@@ -306,12 +304,12 @@ pub(super) fn command_options(
     max_linear_speed: Option<f64>,
     max_angular_speed: Option<f64>,
 ) -> PyResult<(Option<AdaptiveGain>, Option<TwistLimits>)> {
-    let gain = adaptive_gain.map(|(a, b, c)| AdaptiveGain::new(a, b, c)).transpose().map_err(to_py)?;
+    let gain = adaptive_gain.map(|(a, b, c)| AdaptiveGain::new(a, b, c)).transpose()?;
     let limits = if max_linear_speed.is_none() && max_angular_speed.is_none() {
         None
     } else {
         let (v, w) = (max_linear_speed.unwrap_or(f64::INFINITY), max_angular_speed.unwrap_or(f64::INFINITY));
-        Some(TwistLimits::new(v, w).map_err(to_py)?)
+        Some(TwistLimits::new(v, w)?)
     };
     Ok((gain, limits))
 }
@@ -345,28 +343,25 @@ impl PyIbvsController {
     ) -> PyResult<Self> {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let kind: Interaction = interaction.parse().map_err(to_py)?;
+        let kind: Interaction = interaction.parse()?;
         let z = reference_depths.map(|z| f64_array(z, "reference_depths", &[None])).transpose()?;
         if let Some(z) = &z {
-            crate::error::check_finite("reference_depths", z.as_slice()?).map_err(to_py)?;
+            crate::error::check_finite("reference_depths", z.as_slice()?)?;
         }
         if let Some(z) = &z
             && z.shape()[0] != a.shape()[0]
         {
-            return Err(invalid_input(format!(
-                "reference_depths: expected {} values (one per reference pixel), got {}",
-                a.shape()[0],
-                z.shape()[0]
-            )));
+            let expected = format!("{} values (one per reference pixel)", a.shape()[0]);
+            return Err(shape_error("reference_depths", expected, z.shape()[0].to_string()));
         }
         let z_slice = match &z {
             Some(z) => Some(z.as_slice()?),
             None => None,
         };
-        let mut inner = IbvsController::new(points2(&a)?, k_hat, gain, kind, z_slice).map_err(to_py)?;
+        let mut inner = IbvsController::new(points2(&a)?, k_hat, gain, kind, z_slice)?;
         let (adaptive_gain, twist_limits) = command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
-        inner.set_adaptive_gain(adaptive_gain).map_err(to_py)?;
-        inner.set_twist_limits(twist_limits).map_err(to_py)?;
+        inner.set_adaptive_gain(adaptive_gain)?;
+        inner.set_twist_limits(twist_limits)?;
         Ok(Self { inner })
     }
 
@@ -465,4 +460,51 @@ impl PyIbvsController {
     fn saturation(&self) -> Option<f64> {
         self.inner.last_command().map(|c| c.1)
     }
+}
+
+/// A float or None in Python notation.
+fn opt_repr(x: Option<f64>) -> String {
+    x.map_or_else(|| "None".to_string(), |x| format!("{x:?}"))
+}
+
+/// A Python bool.
+fn bool_repr(b: bool) -> &'static str {
+    if b { "True" } else { "False" }
+}
+
+/// The adaptive gain as the constructor's `(lambda_0, lambda_inf, lambda'_0)`.
+fn adaptive_gain_args(g: Option<AdaptiveGain>) -> Option<(f64, f64, f64)> {
+    g.map(|g| (g.at_zero, g.at_infinity, g.slope_at_zero))
+}
+
+/// The speed limits as the constructor's `(max_linear_speed, max_angular_speed)` (None: free).
+fn twist_limit_args(l: Option<TwistLimits>) -> (Option<f64>, Option<f64>) {
+    let finite = |x: f64| x.is_finite().then_some(x);
+    l.map_or((None, None), |l| (finite(l.linear), finite(l.angular)))
+}
+
+fn adaptive_gain_repr(g: Option<AdaptiveGain>) -> String {
+    adaptive_gain_args(g).map_or_else(|| "None".to_string(), |(a, b, c)| format!("({a:?}, {b:?}, {c:?})"))
+}
+
+fn rz_task_name(t: RzTask) -> &'static str {
+    match t {
+        RzTask::Angle => "angle",
+        RzTask::Tau21 => "tau21",
+    }
+}
+
+fn interaction_name(i: Interaction) -> &'static str {
+    match i {
+        Interaction::Current => "current",
+        Interaction::Desired => "desired",
+        Interaction::Mean => "mean",
+    }
+}
+
+/// Adds the controllers.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyInvariantController>()?;
+    m.add_class::<PyIbvsController>()?;
+    Ok(())
 }

@@ -5,7 +5,7 @@ use numpy::PyArray2;
 use pyo3::prelude::*;
 
 use super::arrays::{f64_array, mat, points2, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::invalid_argument;
 use super::{PyIntrinsics, intrinsics, pixels_arg};
 use crate::calibration::Calibration;
 use crate::core::distortion::{
@@ -34,14 +34,16 @@ impl PyDistortion {
             None => Distortion::from_coefficients(c.as_slice()?),
             Some(name) => {
                 let m = DistortionModel::from_name(name).ok_or_else(|| {
-                    invalid_input(format!(
-                        "model: unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""
-                    ))
+                    invalid_argument(
+                        "model",
+                        format!(
+                            "model: unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""
+                        ),
+                    )
                 })?;
                 Distortion::with_model(m, c.as_slice()?)
             }
-        }
-        .map_err(to_py)?;
+        }?;
         Ok(Self { inner })
     }
     /// "plumb_bob" or "rational_polynomial".
@@ -70,8 +72,10 @@ fn distortion_arg(obj: &Bound<'_, PyAny>) -> PyResult<Distortion> {
     let c = f64_array(obj, "coefficients", &[None])
         .or_else(|_| f64_array(obj, "coefficients", &[Some(1), None]))
         .or_else(|_| f64_array(obj, "coefficients", &[None, Some(1)]))
-        .map_err(|_| invalid_input("coefficients: expected a Distortion or 4, 5 or 8 coefficients".into()))?;
-    Distortion::from_coefficients(c.as_slice()?).map_err(to_py)
+        .map_err(|_| {
+            invalid_argument("coefficients", "coefficients: expected a Distortion or 4, 5 or 8 coefficients".into())
+        })?;
+    Ok(Distortion::from_coefficients(c.as_slice()?)?)
 }
 
 /// Runs `f` on the pixels, with the GIL released when there are many.
@@ -80,7 +84,7 @@ fn run_points<'py>(
     px: &[[f64; 2]],
     f: impl FnOnce(&[[f64; 2]]) -> crate::Result<Vec<[f64; 2]>> + Send,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let out = if px.len() >= DETACH_MIN_POINTS { py.detach(|| f(px)) } else { f(px) }.map_err(to_py)?;
+    let out = if px.len() >= DETACH_MIN_POINTS { py.detach(|| f(px)) } else { f(px) }?;
     super::arrays::finite_out("pixels, K, distortion", out.as_flattened())?;
     mat(py, out.len(), 2, out.into_flattened())
 }
@@ -162,6 +166,16 @@ impl PyCalibration {
 /// file of at most 1 MiB; no YAML aliases).
 #[pyfunction]
 pub fn load_calibration(py: Python<'_>, path: std::path::PathBuf) -> PyResult<PyCalibration> {
-    let inner = py.detach(|| crate::calibration::load_calibration(&path)).map_err(to_py)?;
+    let inner = py.detach(|| crate::calibration::load_calibration(&path))?;
     Ok(PyCalibration { inner })
+}
+
+/// Adds lens distortion and calibration files.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyDistortion>()?;
+    m.add_class::<PyCalibration>()?;
+    m.add_function(wrap_pyfunction!(distort_points, m)?)?;
+    m.add_function(wrap_pyfunction!(undistort_points, m)?)?;
+    m.add_function(wrap_pyfunction!(load_calibration, m)?)?;
+    Ok(())
 }

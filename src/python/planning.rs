@@ -7,7 +7,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{bool_array, f64_array, mat, points2, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::{PyError, invalid_argument, shape_error, shape_error_saying};
 use super::{BasisArg, pixels_arg};
 use crate::core::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
 use crate::core::invariant::{BasisFrame, non_basis_indices, validate_basis};
@@ -21,18 +21,16 @@ fn invariant_pairs(
     basis: BasisArg,
 ) -> PyResult<(Vec<Vector3<f64>>, Vec<Vector3<f64>>)> {
     if current.len() != reference.len() {
-        return Err(invalid_input(format!(
-            "current_pixels has {} points, reference_pixels {}",
-            current.len(),
-            reference.len()
-        )));
+        let (expected, got) = (format!("{} points", reference.len()), format!("{} points", current.len()));
+        let msg = format!("current_pixels has {} points, reference_pixels {}", current.len(), reference.len());
+        return Err(shape_error_saying("current_pixels", expected, got, msg));
     }
-    crate::error::check_finite_points("current_pixels", current).map_err(to_py)?;
-    crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
+    crate::error::check_finite_points("current_pixels", current)?;
+    crate::error::check_finite_points("reference_pixels", reference)?;
     // Both images were checked above: "auto" searches only valid input.
-    let basis = validate_basis(basis.resolve(py, reference, || Ok(()))?, reference.len()).map_err(to_py)?;
-    let cur = BasisFrame::new(current, basis, "current").map_err(to_py)?;
-    let star = BasisFrame::new(reference, basis, "reference").map_err(to_py)?;
+    let basis = validate_basis(basis.resolve(py, reference, || Ok(()))?, reference.len())?;
+    let cur = BasisFrame::new(current, basis, "current")?;
+    let star = BasisFrame::new(reference, basis, "reference")?;
     let others = non_basis_indices(current.len(), basis);
     Ok((
         others.iter().map(|&i| cur.transform(current[i])).collect(),
@@ -96,7 +94,7 @@ pub fn estimate_plane_parallax(
 ) -> PyResult<PyPlaneParallax> {
     let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
     let (q, q_star) = invariant_pairs(py, points2(&c)?, points2(&r)?, basis)?;
-    Ok(PyPlaneParallax { inner: core_estimate(&q, &q_star).map_err(to_py)? })
+    Ok(PyPlaneParallax { inner: core_estimate(&q, &q_star)? })
 }
 
 /// The path of eq. (10) from the current image (t = 0) to the reference image (t = T).
@@ -118,10 +116,10 @@ impl PyInvariantPath {
         basis: BasisArg,
     ) -> PyResult<Self> {
         let (c, r) = (pixels_arg(current_pixels, "current_pixels")?, pixels_arg(reference_pixels, "reference_pixels")?);
-        InvariantPath::check_duration(duration).map_err(to_py)?;
+        InvariantPath::check_duration(duration)?;
         let (q, q_star) = invariant_pairs(py, points2(&c)?, points2(&r)?, basis)?;
-        let estimate = core_estimate(&q, &q_star).map_err(to_py)?;
-        let inner = InvariantPath::new(&q_star, &estimate, duration).map_err(to_py)?;
+        let estimate = core_estimate(&q, &q_star)?;
+        let inner = InvariantPath::new(&q_star, &estimate, duration)?;
         Ok(Self { inner, estimate: Py::new(py, PyPlaneParallax { inner: estimate })? })
     }
     /// T, seconds.
@@ -138,11 +136,11 @@ impl PyInvariantPath {
     /// `InvariantController.set_reference`.
     fn sample<'py>(&self, py: Python<'py>, t: f64) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
         if !t.is_finite() {
-            return Err(invalid_input(format!("t must be finite, got {t}")));
+            return Err(invalid_argument("t", format!("t must be finite, got {t}")));
         }
         let m = self.inner.len();
         let (mut p, mut r) = (vec![[0.0; 3]; m], vec![[0.0; 3]; m]);
-        self.inner.sample(t, &mut p, &mut r).map_err(to_py)?;
+        self.inner.sample(t, &mut p, &mut r)?;
         Ok((mat(py, m, 3, p.into_flattened())?, mat(py, m, 3, r.into_flattened())?))
     }
 }
@@ -156,20 +154,25 @@ pub fn depths_from_translation<'py>(
     second_pixels: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
     let (a, b) = (pixels_arg(first_pixels, "first_pixels")?, pixels_arg(second_pixels, "second_pixels")?);
-    crate::error::check_finite_points("first_pixels", points2(&a)?).map_err(to_py)?;
-    crate::error::check_finite_points("second_pixels", points2(&b)?).map_err(to_py)?;
+    crate::error::check_finite_points("first_pixels", points2(&a)?)?;
+    crate::error::check_finite_points("second_pixels", points2(&b)?)?;
     if a.shape()[0] != b.shape()[0] {
-        return Err(invalid_input(format!(
+        let (expected, got) = (format!("{} points", a.shape()[0]), format!("{} points", b.shape()[0]));
+        let msg = format!(
             "second_pixels has {} points, first_pixels {}: one per point of the first image",
             b.shape()[0],
             a.shape()[0]
-        )));
+        );
+        return Err(shape_error_saying("second_pixels", expected, got, msg));
     }
     let d = core_depths_from_translation(points2(&a)?, points2(&b)?).map_err(|e| match e {
         crate::Error::InvalidParameter { name: "depth_estimation", reason } => {
-            invalid_input(format!("first_pixels, second_pixels: {reason}"))
+            let msg = format!("first_pixels, second_pixels: {reason}");
+            let err =
+                PyError::invalid(msg).kind("invalid_parameter").argument("first_pixels, second_pixels").reason(reason);
+            PyErr::from(err)
         }
-        e => to_py(e),
+        e => e.into(),
     })?;
     super::arrays::finite_out("first_pixels, second_pixels", &d.depths)?;
     Ok((PyArray1::from_vec(py, d.depths), vec1(py, d.epipole.as_slice()), d.residual))
@@ -197,17 +200,14 @@ impl PyResectionDepths {
         let z = f64_array(first_depths, "first_depths", &[None])?;
         let r = pixels_arg(reference_pixels, "reference_pixels")?;
         let (first, reference) = (points2(&a)?, points2(&r)?);
-        crate::error::check_finite_points("first_pixels", first).map_err(to_py)?;
-        crate::error::check_finite_points("reference_pixels", reference).map_err(to_py)?;
+        crate::error::check_finite_points("first_pixels", first)?;
+        crate::error::check_finite_points("reference_pixels", reference)?;
         if z.shape()[0] != first.len() {
-            return Err(invalid_input(format!(
-                "first_depths: expected {} values (one per row of first_pixels), got {}",
-                first.len(),
-                z.shape()[0]
-            )));
+            let expected = format!("{} values (one per row of first_pixels)", first.len());
+            return Err(shape_error("first_depths", expected, z.shape()[0].to_string()));
         }
-        crate::error::check_depths(z.as_slice()?, first.len()).map_err(to_py)?;
-        let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth).map_err(to_py)?;
+        crate::error::check_depths(z.as_slice()?, first.len())?;
+        let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth)?;
         Ok(Self { inner, n: first.len() })
     }
 
@@ -223,7 +223,7 @@ impl PyResectionDepths {
         let a = pixels_arg(pixels, "pixels")?;
         let px = points2(&a)?;
         if px.len() != self.n {
-            return Err(invalid_input(format!("pixels: expected {} points, got {}", self.n, px.len())));
+            return Err(shape_error("pixels", format!("{} points", self.n), px.len().to_string()));
         }
         let flags = visible.map(|v| bool_array(v, "visible", self.n)).transpose()?;
         let all = vec![true; self.n];
@@ -233,7 +233,7 @@ impl PyResectionDepths {
         };
         for (i, p) in px.iter().enumerate() {
             if visible[i] && !(p[0].is_finite() && p[1].is_finite()) {
-                return Err(to_py(crate::Error::NonFinitePoint {
+                return Err(PyErr::from(crate::Error::NonFinitePoint {
                     what: "pixels",
                     row: i,
                     column: usize::from(p[0].is_finite()),
@@ -241,8 +241,18 @@ impl PyResectionDepths {
             }
         }
         let mut out = vec![0.0; self.n];
-        self.inner.estimate(px, visible, &mut out).map_err(to_py)?;
+        self.inner.estimate(px, visible, &mut out)?;
         super::arrays::finite_out("pixels", &out)?;
         Ok(PyArray1::from_vec(py, out))
     }
+}
+
+/// Adds path planning and depth estimation.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyPlaneParallax>()?;
+    m.add_class::<PyInvariantPath>()?;
+    m.add_class::<PyResectionDepths>()?;
+    m.add_function(wrap_pyfunction!(estimate_plane_parallax, m)?)?;
+    m.add_function(wrap_pyfunction!(depths_from_translation, m)?)?;
+    Ok(())
 }

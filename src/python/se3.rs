@@ -6,14 +6,15 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{f64_array, from_matrix, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::invalid_argument;
 use crate::core::se3;
 use crate::error::{Short, check_finite};
 
 fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<[f64; N]> {
     let a = f64_array(obj, what, &[Some(N)])?;
-    let v: [f64; N] = a.as_slice()?.try_into().map_err(|_| invalid_input(format!("{what}: expected {N} values")))?;
-    check_finite(what, &v).map_err(to_py)?;
+    let v: [f64; N] =
+        a.as_slice()?.try_into().map_err(|_| invalid_argument(what, format!("{what}: expected {N} values")))?;
+    check_finite(what, &v)?;
     Ok(v)
 }
 
@@ -23,9 +24,13 @@ fn vector<const N: usize>(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResul
 #[pyo3(signature = (twist, dt = 1.0))]
 pub fn exp_twist<'py>(py: Python<'py>, twist: &Bound<'py, PyAny>, dt: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let t: [f64; 6] = vector(twist, "twist")?;
-    check_finite("dt", &[dt]).map_err(to_py)?;
-    let overflow =
-        || invalid_input(format!("twist, dt: the motion twist * dt overflows (twist {t:?}, dt {})", Short(dt)));
+    check_finite("dt", &[dt])?;
+    let overflow = || {
+        invalid_argument(
+            "twist, dt",
+            format!("twist, dt: the motion twist * dt overflows (twist {t:?}, dt {})", Short(dt)),
+        )
+    };
     let m = se3::exp_twist(&t.map(|x| x * dt)).map_err(|_| overflow())?.to_homogeneous();
     from_matrix(py, &m)
 }
@@ -39,7 +44,7 @@ pub fn pose_from_position_thetau<'py>(
     thetau: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (position, thetau) = (vector(position, "position")?, vector(thetau, "thetau")?);
-    let m = se3::pose_from_position_thetau(position, thetau).map_err(to_py)?.to_homogeneous();
+    let m = se3::pose_from_position_thetau(position, thetau)?.to_homogeneous();
     from_matrix(py, &m)
 }
 
@@ -52,6 +57,14 @@ pub fn thetau_from_pose<'py>(
     pose: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
     let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
-    let pose = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?)).map_err(to_py)?;
+    let pose = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
     Ok((vec1(py, pose.translation.vector.as_slice()), vec1(py, &se3::thetau_from_pose(&pose))))
+}
+
+/// Adds the pose helpers.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(exp_twist, m)?)?;
+    m.add_function(wrap_pyfunction!(pose_from_position_thetau, m)?)?;
+    m.add_function(wrap_pyfunction!(thetau_from_pose, m)?)?;
+    Ok(())
 }

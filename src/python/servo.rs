@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use super::arrays::{bool_array, mat, points2, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::invalid_argument;
 use super::{BasisArg, depths_arg, intrinsics, pixels_arg};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::control::InvariantControllerConfig;
@@ -45,11 +45,14 @@ impl LawArgs<'_> {
             "ibvs" => &invariant_only,
             "none" => &[invariant_only.as_slice(), &ibvs_only, &moving].concat(),
             other => {
-                return Err(invalid_input(format!("law: expected \"invariant\", \"ibvs\" or \"none\", got {other:?}")));
+                return Err(invalid_argument(
+                    "law",
+                    format!("law: expected \"invariant\", \"ibvs\" or \"none\", got {other:?}"),
+                ));
             }
         };
         if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
-            return Err(invalid_input(format!("{name}: not an argument of the {:?} law", self.law)));
+            return Err(invalid_argument(name, format!("{name}: not an argument of the {:?} law", self.law)));
         }
         Ok(match self.law {
             "invariant" => Law::Invariant(InvariantControllerConfig {
@@ -57,13 +60,13 @@ impl LawArgs<'_> {
                 gain_rz: self.gain_rz.unwrap_or(1.0),
                 feedforward: self.feedforward.unwrap_or(true),
                 min_structure_ratio: self.min_structure_ratio.unwrap_or(DEFAULT_MIN_STRUCTURE_RATIO),
-                rz_task: self.rz_task.unwrap_or("angle").parse().map_err(to_py)?,
+                rz_task: self.rz_task.unwrap_or("angle").parse()?,
                 adaptive_gain: self.adaptive_gain,
                 twist_limits: self.twist_limits,
             }),
             "ibvs" => Law::Ibvs {
                 gain: self.gain,
-                interaction: self.interaction.unwrap_or("current").parse::<Interaction>().map_err(to_py)?,
+                interaction: self.interaction.unwrap_or("current").parse::<Interaction>()?,
                 adaptive_gain: self.adaptive_gain,
                 twist_limits: self.twist_limits,
             },
@@ -77,8 +80,8 @@ fn stop_rules(stop: Option<&Bound<'_, PyDict>>) -> PyResult<StopRules> {
     let mut rules = StopRules::default();
     let Some(stop) = stop else { return Ok(rules) };
     for (key, value) in stop.iter() {
-        let key: String = key.extract().map_err(|_| invalid_input("stop: keys must be strings".into()))?;
-        let bad = |_| invalid_input(format!("stop.{key}: expected a number"));
+        let key: String = key.extract().map_err(|_| invalid_argument("stop", "stop: keys must be strings".into()))?;
+        let bad = |_| invalid_argument(&format!("stop.{key}"), format!("stop.{key}: expected a number"));
         match key.as_str() {
             "max_iterations" => rules.max_iterations = value.extract().map_err(bad)?,
             "window" => rules.window = value.extract().map_err(bad)?,
@@ -91,7 +94,10 @@ fn stop_rules(stop: Option<&Bound<'_, PyDict>>) -> PyResult<StopRules> {
             _ => {
                 let known = "max_iterations, window, pixel_error, invariant_error, tau21, \
                              max_translation_uncertainty, max_rotation_uncertainty_deg, reference_pixel_sigma";
-                return Err(invalid_input(format!("stop.{key}: unknown key; known: {known}")));
+                return Err(invalid_argument(
+                    &format!("stop.{key}"),
+                    format!("stop.{key}: unknown key; known: {known}"),
+                ));
             }
         }
     }
@@ -108,13 +114,14 @@ fn depth_source(depths: &Bound<'_, PyAny>) -> PyResult<ServoDepths> {
         return match s.to_str()? {
             "reference" => Ok(ServoDepths::Reference),
             "per_step" => Ok(ServoDepths::PerStep),
-            other => {
-                Err(invalid_input(format!("depths: expected \"reference\", \"per_step\" or a depth, got {other:?}")))
-            }
+            other => Err(invalid_argument(
+                "depths",
+                format!("depths: expected \"reference\", \"per_step\" or a depth, got {other:?}"),
+            )),
         };
     }
     let z: f64 = depths.extract().map_err(|_| {
-        invalid_input("depths: expected \"reference\", \"per_step\", a number or a ResectionDepths".into())
+        invalid_argument("depths", "depths: expected \"reference\", \"per_step\", a number or a ResectionDepths".into())
     })?;
     Ok(ServoDepths::Constant(z))
 }
@@ -124,7 +131,9 @@ fn parse_stop_rule(name: Option<&str>) -> PyResult<Option<StopRule>> {
         None => Ok(None),
         Some("pixel") => Ok(Some(StopRule::Pixel)),
         Some("invariant") => Ok(Some(StopRule::Invariant)),
-        Some(other) => Err(invalid_input(format!("stop_rule: expected \"pixel\" or \"invariant\", got {other:?}"))),
+        Some(other) => {
+            Err(invalid_argument("stop_rule", format!("stop_rule: expected \"pixel\" or \"invariant\", got {other:?}")))
+        }
     }
 }
 
@@ -198,7 +207,7 @@ impl PyServo {
             BasisArg::Auto => None,
         };
         let reference = ServoReference { pixels, depths: reference_depths };
-        let inner = py.detach(|| Servo::new(config, reference, source)).map_err(to_py)?;
+        let inner = py.detach(|| Servo::new(config, reference, source))?;
         Ok(Self { inner })
     }
 
@@ -216,10 +225,11 @@ impl PyServo {
         let px = points2(&a)?;
         let v = visible.map(|v| bool_array(v, "visible", px.len())).transpose()?;
         let z = depths.map(depths_arg).transpose()?;
-        let step = self
-            .inner
-            .step(px, v.as_ref().map(|v| v.as_slice()).transpose()?, z.as_ref().map(|z| z.as_slice()).transpose()?)
-            .map_err(to_py)?;
+        let step = self.inner.step(
+            px,
+            v.as_ref().map(|v| v.as_slice()).transpose()?,
+            z.as_ref().map(|z| z.as_slice()).transpose()?,
+        )?;
         Ok(PyServoStep::from(step))
     }
 
@@ -352,4 +362,11 @@ impl PyServoStep {
             Some(r) => format!("ServoStep(verdict={:?}, reason={r:?})", self.verdict),
         }
     }
+}
+
+/// Adds the servo session's classes to the module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyServo>()?;
+    m.add_class::<PyServoStep>()?;
+    Ok(())
 }

@@ -5,7 +5,7 @@ use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
-use super::errors::{invalid_input, to_py};
+use super::errors::{PyError, invalid_argument, reraise};
 use crate::sim::arm::ArmRobot;
 use crate::sim::robot::Robot;
 use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin};
@@ -25,7 +25,7 @@ impl PyScenario {
     #[staticmethod]
     #[pyo3(signature = (text, allow_outside_files = false))]
     fn from_toml(text: &str, allow_outside_files: bool) -> PyResult<Self> {
-        Ok(Self { inner: Scenario::from_toml_with(text, access(allow_outside_files)).map_err(to_py)? })
+        Ok(Self { inner: Scenario::from_toml_with(text, access(allow_outside_files))? })
     }
     /// From a dictionary with the structure of a scenario file; the files it names must be in
     /// the working directory unless `allow_outside_files`.
@@ -47,12 +47,12 @@ impl PyScenario {
     /// The scenario as a dictionary (every default filled in); edit it and pass it back to
     /// `run_scenario` or `Scenario.from_dict`.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let text = self.inner.to_json().map_err(to_py)?;
+        let text = self.inner.to_json()?;
         py.import("json")?.call_method1("loads", (text,))
     }
     /// The scenario as TOML text.
     fn to_toml(&self) -> PyResult<String> {
-        self.inner.to_toml().map_err(to_py)
+        Ok(self.inner.to_toml()?)
     }
     fn __repr__(&self) -> String {
         format!("Scenario(name={:?})", self.inner.name)
@@ -69,9 +69,9 @@ fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scen
     let text: String = py
         .import("json")?
         .call_method1("dumps", (d,))
-        .map_err(|e| invalid_input(format!("scenario: cannot be written as JSON ({e})")))?
+        .map_err(|e| invalid_argument("scenario", format!("scenario: cannot be written as JSON ({e})")))?
         .extract()?;
-    Scenario::from_json_with(&text, access).map_err(to_py)
+    Ok(Scenario::from_json_with(&text, access)?)
 }
 
 /// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path; the files
@@ -98,18 +98,19 @@ pub fn scenario_arg_with(obj: &Bound<'_, PyAny>, access: FileAccess) -> PyResult
         obj.extract()?
     } else {
         py.import("os")?.call_method1("fsdecode", (obj,)).and_then(|p| p.extract()).map_err(|_| {
-            invalid_input("scenario: expected a Scenario, a dict, a built-in name or a file path".into())
+            invalid_argument("scenario", "scenario: expected a Scenario, a dict, a built-in name or a file path".into())
         })?
     };
     if BUILTIN.iter().any(|(n, _)| *n == text) {
-        return builtin(&text).map_err(to_py);
+        return Ok(builtin(&text)?);
     }
     let path = std::path::Path::new(&text);
     if path.is_file() {
-        return Scenario::from_toml_file_with(path, access).map_err(|e| invalid_input(format!("{text}: {e}")));
+        return Scenario::from_toml_file_with(path, access).map_err(|e| PyError::from(&e).in_file(&text).into());
     }
     let names: Vec<&str> = BUILTIN.iter().map(|(n, _)| *n).collect();
-    Err(invalid_input(format!("{text:?} is neither a scenario file nor a built-in scenario ({})", names.join(", "))))
+    let msg = format!("{text:?} is neither a scenario file nor a built-in scenario ({})", names.join(", "));
+    Err(invalid_argument("scenario", msg))
 }
 
 /// Loads a scenario from a built-in name, a TOML file path or a dictionary. The files it
@@ -124,7 +125,7 @@ pub fn load_scenario(source: &Bound<'_, PyAny>, allow_outside_files: bool) -> Py
 /// The built-in scenarios as (name, description) pairs.
 #[pyfunction]
 pub fn list_scenarios() -> PyResult<Vec<(String, String)>> {
-    BUILTIN.iter().map(|(n, _)| builtin(n).map(|s| (s.name, s.description)).map_err(to_py)).collect()
+    BUILTIN.iter().map(|(n, _)| builtin(n).map(|s| (s.name, s.description)).map_err(PyErr::from)).collect()
 }
 
 /// The result of a run: `.summary` (a dict) and the recorded arrays, NumPy views of the
@@ -299,7 +300,7 @@ pub fn run_scenario(
         )));
     }
     let scenario = scenario_arg_with(scenario, access(allow_outside_files))?;
-    let mut config = scenario.to_config().map_err(to_py)?;
+    let mut config = scenario.to_config()?;
     config.record = record;
     let mut raised: Option<PyErr> = None;
     let outcome = py.detach(|| {
@@ -323,7 +324,7 @@ pub fn run_scenario(
     if let Some(e) = raised {
         return Err(e);
     }
-    let mut outcome = outcome.map_err(to_py)?;
+    let mut outcome = outcome?;
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
     let (rows, n) = (r.len(), scenario.object.points.len());
@@ -392,7 +393,7 @@ pub fn run_batch<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let access = access(allow_outside_files);
     let texts = batch_texts(scenarios, access)?;
-    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access)).map_err(to_py)?;
+    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access))?;
     let mut table = BatchTable::with_capacity(results.len());
     results.iter().for_each(|r| table.push(r));
     table.into_dict(py)
@@ -421,9 +422,9 @@ fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec
             // A scenario already written as JSON (sweeps serialise while the previous chunk runs).
             s.extract::<String>()
         } else {
-            scenario_arg_with(&item, access).and_then(|s| s.to_json().map_err(to_py))
+            scenario_arg_with(&item, access).and_then(|s| Ok(s.to_json()?))
         };
-        let text = text.map_err(|e| invalid_input(format!("scenario {i}: {}", e.value(py))))?;
+        let text = text.map_err(|e| reraise(&e, format!("scenario {i}: {}", e.value(py)), None))?;
         if let Some(k) = key {
             loaded.insert(k, text.clone());
         }
@@ -526,4 +527,15 @@ impl BatchTable {
         d.set_item("message", str_array(self.message)?)?;
         Ok(d)
     }
+}
+
+/// Adds scenarios and the simulator.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyScenario>()?;
+    m.add_class::<PyRunResult>()?;
+    m.add_function(wrap_pyfunction!(load_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(list_scenarios, m)?)?;
+    m.add_function(wrap_pyfunction!(run_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(run_batch, m)?)?;
+    Ok(())
 }

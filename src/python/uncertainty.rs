@@ -4,7 +4,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{bool_array, from_matrix, points2, vec1};
-use super::errors::{invalid_input, to_py};
+use super::errors::invalid_argument;
 use super::{depths_arg, pixels_arg};
 use crate::core::noise_meter::PixelNoiseMeter;
 use crate::core::uncertainty::{ImageNoise, MAX_PIXEL_SIGMA, PoseUncertainty};
@@ -64,7 +64,7 @@ fn check_sigmas(sigmas: f64) -> PyResult<()> {
     if sigmas.is_finite() && sigmas > 0.0 {
         Ok(())
     } else {
-        Err(invalid_input(format!("sigmas: must be finite and > 0, got {sigmas:.4e}")))
+        Err(invalid_argument("sigmas", format!("sigmas: must be finite and > 0, got {sigmas:.4e}")))
     }
 }
 
@@ -93,11 +93,14 @@ impl<'py> UncertaintyArgs<'py> {
         let reference = reference_sigma.unwrap_or(pixel_sigma);
         for (what, value) in [("pixel_sigma", pixel_sigma), ("reference_sigma", reference)] {
             if !(value.is_finite() && (0.0..=MAX_PIXEL_SIGMA).contains(&value)) {
-                return Err(invalid_input(format!("{what}: a pixel standard deviation in [0, 1e6], got {value:.4e}")));
+                return Err(invalid_argument(
+                    what,
+                    format!("{what}: a pixel standard deviation in [0, 1e6], got {value:.4e}"),
+                ));
             }
         }
         if averaged_images == 0 {
-            return Err(invalid_input("averaged_images: must be >= 1".into()));
+            return Err(invalid_argument("averaged_images", "averaged_images: must be >= 1".into()));
         }
         let noise = ImageNoise { current: pixel_sigma, reference, averaged_images };
         Ok(Self { pixels, depths, visible, noise })
@@ -109,7 +112,7 @@ impl<'py> UncertaintyArgs<'py> {
         f: impl FnOnce(&[[f64; 2]], &[f64], Option<&[bool]>, ImageNoise) -> crate::Result<PoseUncertainty>,
     ) -> PyResult<PyPoseUncertainty> {
         let visible = self.visible.as_ref().map(|v| v.as_slice()).transpose()?;
-        let inner = f(points2(&self.pixels)?, self.depths.as_slice()?, visible, self.noise).map_err(to_py)?;
+        let inner = f(points2(&self.pixels)?, self.depths.as_slice()?, visible, self.noise)?;
         Ok(PyPoseUncertainty { inner })
     }
 }
@@ -128,7 +131,7 @@ impl PyPixelNoiseMeter {
     #[new]
     #[pyo3(signature = (capacity = 32))]
     fn new(#[pyo3(from_py_with = super::args::capacity)] capacity: usize) -> PyResult<Self> {
-        Ok(Self { inner: PixelNoiseMeter::new(capacity).map_err(to_py)? })
+        Ok(Self { inner: PixelNoiseMeter::new(capacity)? })
     }
     /// Adds an image's pixels (n, 2); `visible` (n,) bool marks the points found. Another
     /// number of points than before starts the measurement again.
@@ -138,7 +141,7 @@ impl PyPixelNoiseMeter {
         let px = points2(&a)?;
         let v = visible.map(|v| bool_array(v, "visible", px.len())).transpose()?;
         let flags = v.as_ref().map(|v| v.as_slice()).transpose()?;
-        self.inner.push(px, flags).map_err(to_py)
+        Ok(self.inner.push(px, flags)?)
     }
     /// The standard deviation of a pixel coordinate, pixels; None until a point was seen in
     /// three consecutive images.
@@ -156,4 +159,11 @@ impl PyPixelNoiseMeter {
     fn __repr__(&self) -> String {
         format!("PixelNoiseMeter(images={}, sigma={:?})", self.inner.len(), self.inner.sigma())
     }
+}
+
+/// Adds `PoseUncertainty` and `PixelNoiseMeter`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyPoseUncertainty>()?;
+    m.add_class::<PyPixelNoiseMeter>()?;
+    Ok(())
 }

@@ -7,13 +7,17 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 
 use super::arrays::{f64_array, mat, points2};
-use super::errors::{invalid_input, to_py};
 use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
 use crate::vision::image::{GreyBuffer, GreyImage, load_png, save_png, view};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
+
+/// `InvalidInput("{what}: {reason}")`, the core's `Error::InvalidImage` (kind `invalid_image`).
+fn image_error(what: &str, reason: String) -> PyErr {
+    crate::Error::InvalidImage { what: what.to_string(), reason }.into()
+}
 
 /// `(n, 2)` pixels and `(n,)` flags, as returned to Python.
 type PixelArray<'py> = Bound<'py, PyArray2<f64>>;
@@ -28,10 +32,10 @@ struct ImageArg<'py> {
 impl ImageArg<'_> {
     fn buffer(&self, what: &str) -> PyResult<GreyBuffer<&[u8]>> {
         let shape = self.array.shape();
-        let data = self.array.as_slice().map_err(|e| invalid_input(format!("{what}: {e}")))?;
+        let data = self.array.as_slice().map_err(|e| image_error(what, e.to_string()))?;
         let (h, w) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
-        let (Ok(h), Ok(w)) = (h, w) else { return Err(invalid_input(format!("{what}: image too large {shape:?}"))) };
-        view(what, w, h, data).map_err(to_py)
+        let (Ok(h), Ok(w)) = (h, w) else { return Err(image_error(what, format!("image too large {shape:?}"))) };
+        Ok(view(what, w, h, data)?)
     }
 }
 
@@ -41,13 +45,13 @@ fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>
     let py = obj.py();
     let Ok(any) = obj.cast::<numpy::PyUntypedArray>() else {
         let kind = obj.get_type().name()?.to_string();
-        return Err(invalid_input(format!("{what}: expected a (height, width) uint8 NumPy array, got {kind}")));
+        return Err(image_error(what, format!("expected a (height, width) uint8 NumPy array, got {kind}")));
     };
     let dtype = any.dtype().str()?.to_string();
     if any.ndim() != 2 || dtype != "uint8" {
         let shape = any.shape().to_vec();
         let reason = format!("expected a (height, width) uint8 array, got dtype {dtype} with shape {shape:?}");
-        return Err(invalid_input(format!("{what}: {reason} (convert colour images to grey first)")));
+        return Err(image_error(what, format!("{reason} (convert colour images to grey first)")));
     }
     let mut array = obj.cast::<PyArray2<u8>>()?.clone();
     if !array.is_c_contiguous() {
@@ -56,7 +60,7 @@ fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>
             .get_or_try_init(py, || Ok::<_, PyErr>(py.import("numpy")?.getattr("ascontiguousarray")?.unbind()))?;
         array = f.call1(py, (obj,))?.bind(py).cast::<PyArray2<u8>>()?.clone();
     }
-    let array = array.try_readonly().map_err(|e| invalid_input(format!("{what}: array is being written to ({e})")))?;
+    let array = array.try_readonly().map_err(|e| image_error(what, format!("array is being written to ({e})")))?;
     Ok(ImageArg { array })
 }
 
@@ -74,16 +78,16 @@ fn scenario_view(
     time: f64,
     reference: bool,
 ) -> PyResult<View> {
-    let config = scenario_arg(scenario)?.to_config().map_err(to_py)?;
+    let config = scenario_arg(scenario)?.to_config()?;
     let pose = match pose {
         Some(p) => {
             let a = f64_array(p, "pose", &[Some(4), Some(4)])?;
-            Some(pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?)).map_err(to_py)?)
+            Some(pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?)
         }
         None => None,
     };
     let shot = if reference { Shot::Reference } else { Shot::Servo { time } };
-    py.detach(|| render_scenario_view(&config, shot, pose.as_ref())).map_err(to_py)
+    Ok(py.detach(|| render_scenario_view(&config, shot, pose.as_ref()))?)
 }
 
 /// The image a scenario's camera sees: the servo camera K(time) at `pose` (a 4x4 camera
@@ -166,7 +170,7 @@ pub fn detect_dots(
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
     let config = DetectConfig { threshold, min_area, max_area };
-    let dots = py.detach(|| detect(&buffer, &config)).map_err(to_py)?;
+    let dots = py.detach(|| detect(&buffer, &config))?;
     dots_out(py, &dots)
 }
 
@@ -196,7 +200,7 @@ impl PyDotTracker {
         let clicks = f64_array(initial_pixels, "initial_pixels", &[None, Some(2)])?;
         let clicks = points2(&clicks)?;
         let config = TrackerConfig { search_radius, max_search_radius, min_area, ..TrackerConfig::default() };
-        let inner = py.detach(|| DotTracker::new(&buffer, clicks, config)).map_err(to_py)?;
+        let inner = py.detach(|| DotTracker::new(&buffer, clicks, config))?;
         Ok(Self { inner })
     }
 
@@ -209,7 +213,7 @@ impl PyDotTracker {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
         let tracker = &mut self.inner;
-        let result = py.detach(|| tracker.track(&buffer)).map_err(to_py)?;
+        let result = py.detach(|| tracker.track(&buffer))?;
         let n = result.found.len();
         Ok((mat(py, n, 2, result.pixels.into_flattened())?, PyArray1::from_vec(py, result.found)))
     }
@@ -233,7 +237,7 @@ impl PyDotTracker {
 /// colour images are converted to grey.
 #[pyfunction]
 pub fn load_image<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<ImageArray<'py>> {
-    let image = py.detach(|| load_png(&path)).map_err(to_py)?;
+    let image = py.detach(|| load_png(&path))?;
     image_out(py, image)
 }
 
@@ -243,6 +247,18 @@ pub fn save_image(py: Python<'_>, image: &Bound<'_, PyAny>, path: std::path::Pat
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
     let owned = GreyImage::from_raw(buffer.width(), buffer.height(), buffer.as_raw().to_vec())
-        .ok_or_else(|| invalid_input("image: inconsistent size".into()))?;
-    py.detach(|| save_png(&owned, &path)).map_err(to_py)
+        .ok_or_else(|| image_error("image", "inconsistent size".into()))?;
+    Ok(py.detach(|| save_png(&owned, &path))?)
+}
+
+/// Adds rendering, images and dot tracking.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyDots>()?;
+    m.add_class::<PyDotTracker>()?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(render_view, m)?)?;
+    m.add_function(wrap_pyfunction!(detect_dots, m)?)?;
+    m.add_function(wrap_pyfunction!(load_image, m)?)?;
+    m.add_function(wrap_pyfunction!(save_image, m)?)?;
+    Ok(())
 }
