@@ -163,7 +163,8 @@ impl Renderer {
     }
 
     /// [`Renderer::render`] of [`Dots`] of radius `dot_radius` at `points` (F*), facing the
-    /// reference camera, through a pinhole camera at `pose` (a shorthand of the tests).
+    /// reference camera, through a pinhole camera at `pose`: a shorthand kept for the
+    /// property tests (`tests/robustness.rs`); everything else calls [`Renderer::render`].
     pub fn render_points(
         &self,
         points: &[[f64; 3]],

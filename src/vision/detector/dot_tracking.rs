@@ -57,13 +57,17 @@ mod tests {
 
     use super::*;
     use crate::core::camera::Intrinsics;
-    use crate::vision::render::{RenderConfig, Renderer};
+    use crate::core::distortion::Distortion;
+    use crate::vision::render::{CameraView, RenderConfig, Renderer};
+    use crate::vision::target::dots::Dots;
 
     fn image(shift: f64) -> GreyImage {
         let k = Intrinsics::pinhole(1000.0, 1000.0, 60.0, 40.0).unwrap();
         let points = [[-0.02 + shift, 0.0, 0.5], [0.02 + shift, 0.005, 0.5]];
-        let r = Renderer::new(RenderConfig::default()).unwrap();
-        r.render_points(&points, None, &Isometry3::identity(), &k, (120, 80), 0).unwrap().image
+        let dots = Dots::facing_reference(&points, 0.004).unwrap();
+        let (pose, none) = (Isometry3::identity(), Distortion::none());
+        let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (120, 80) };
+        Renderer::new(RenderConfig::default()).unwrap().render(&dots, None, &view, 0).unwrap().image
     }
 
     #[test]
