@@ -1,7 +1,7 @@
 //! What a [`Target`](crate::vision::target::Target) draws with: a canvas over the noisy
 //! background of one frame, seen by one camera, and its primitives. Today the primitive is a
 //! white [`Disc`] of the object frame; another (a filled polygon, for the cells of a tag)
-//! would be one more method here and one more [`Shape`](super::raster::Shape).
+//! would be one more method here and one more `Shape` (`render/raster.rs`).
 
 use nalgebra::Vector3;
 
