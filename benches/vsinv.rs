@@ -63,7 +63,7 @@ use criterion::{BenchmarkId, Criterion, SamplingMode, Throughput, criterion_grou
 use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
 use vsinv::sim::scene::Observation;
 use vsinv::sim::{SimulationConfig, Status, simulate};
-use vsinv::vision::{DetectConfig, Disc, DotTracker, Renderer, TrackerConfig, detect_dots};
+use vsinv::vision::{CameraView, DetectConfig, Disc, DotTracker, Dots, Renderer, TrackerConfig, detect_dots};
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig, choose_basis};
 
 /// Point counts benchmarked.
@@ -267,7 +267,10 @@ fn vision(c: &mut Criterion) {
     scene.observe(&config.start, &k, config.camera.image, &mut obs);
     assert!(obs.visible.iter().all(|&v| v), "vision-12-6 changed: a dot is not visible at the start");
     // Frame 1: the simulator's first image.
-    let render = || renderer.render(&discs, Some(&obs.visible), &config.start, &k, size, 1).expect("render");
+    let dots = Dots::new(discs);
+    let none = vsinv::Distortion::none();
+    let view = CameraView { pose: &config.start, intrinsics: &k, distortion: &none, size };
+    let render = || renderer.render(&dots, Some(&obs.visible), &view, 1).expect("render");
     let rendered = render();
     assert!(rendered.drawn.iter().all(|&d| d));
     let image = rendered.image;

@@ -2,9 +2,9 @@
 //! two dots crossing without being swapped, and bad inputs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use vsinv::Intrinsics;
 use vsinv::nalgebra::Isometry3;
-use vsinv::vision::{Disc, DotTracker, GreyImage, RenderConfig, Renderer, TrackerConfig};
+use vsinv::vision::{CameraView, Disc, DotTracker, Dots, GreyImage, RenderConfig, Renderer, TrackerConfig};
+use vsinv::{Distortion, Intrinsics};
 
 /// Fronto-parallel discs of radius 5 px at the given pixel centres (1000 px focal, 0.5 m).
 fn frame(centres: &[[f64; 2]], index: u64) -> GreyImage {
@@ -13,11 +13,9 @@ fn frame(centres: &[[f64; 2]], index: u64) -> GreyImage {
         .iter()
         .map(|c| Disc::new([c[0] * 0.5e-3, c[1] * 0.5e-3, 0.5], [0.0, 0.0, -1.0], 2.5e-3).unwrap())
         .collect();
-    Renderer::new(RenderConfig::default())
-        .unwrap()
-        .render(&discs, None, &Isometry3::identity(), &k, (240, 160), index)
-        .unwrap()
-        .image
+    let (pose, none) = (Isometry3::identity(), Distortion::none());
+    let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (240, 160) };
+    Renderer::new(RenderConfig::default()).unwrap().render(&Dots::new(discs), None, &view, index).unwrap().image
 }
 
 fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {

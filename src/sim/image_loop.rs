@@ -1,8 +1,9 @@
 //! Images in the loop (a scenario's `[vision]` table): the simulator renders what each camera
-//! sees, detects the reference dots, initialises a tracker from the start image (the user's
-//! clicks, seeded with the projected points) and feeds the tracked centroids, with `found`
-//! as visibility, to the control law. Detection errors are measured against the true
-//! projections of the dots' centres.
+//! sees of the scenario's target, starts the detector on the start image (the user's clicks,
+//! seeded with the projected points) and feeds the detected pixels, with `found` as
+//! visibility, to the control law. Detection errors are measured against the true
+//! projections of the points. Which target and detector a scenario uses is decided in one
+//! place, [`scene_vision`].
 
 use nalgebra::Isometry3;
 
@@ -11,8 +12,12 @@ use crate::core::distortion::Distortion;
 use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
+use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
-use crate::vision::tracker::{DotTracker, TrackerConfig};
+use crate::vision::target::dots::Dots;
+use crate::vision::target::{Target, TargetPoint};
+use crate::vision::tracker::TrackerConfig;
 
 /// The image size of a camera, which vision needs.
 pub(crate) fn pixel_size(image: Option<ImageSize>, key: &'static str) -> Result<(u32, u32)> {
@@ -30,6 +35,36 @@ pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
     }
 }
 
+/// The kinds of target a scenario can show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TargetKind {
+    /// A white disc per point ([`Dots`]), found by the dot tracker.
+    Dots,
+}
+
+impl TargetKind {
+    /// The kind a scene shows (today always dots; a scenario key naming the target is read here).
+    pub(crate) fn of(_scene: &Scene) -> Self {
+        TargetKind::Dots
+    }
+}
+
+/// What a scenario's camera looks at and what finds it in its images.
+pub(crate) struct SceneVision {
+    pub(crate) target: Box<dyn Target>,
+    pub(crate) detector: Box<dyn Detector>,
+}
+
+/// The target of a scene and a fresh detector for it: the one place a target type is picked.
+pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<SceneVision> {
+    match TargetKind::of(scene) {
+        TargetKind::Dots => Ok(SceneVision {
+            target: Box::new(Dots::new(scene_discs(scene, config.dot_radius)?)),
+            detector: Box::new(DotTracking::new(TrackerConfig::default())),
+        }),
+    }
+}
+
 /// What tracking gives the run, per point.
 pub(crate) struct Tracked<'a> {
     pub(crate) pixels: &'a mut [[f64; 2]],
@@ -37,12 +72,13 @@ pub(crate) struct Tracked<'a> {
     pub(crate) detection: &'a mut [f64],
 }
 
-/// Rendering and tracking through a run.
+/// Rendering and detection through a run.
 pub(crate) struct ImageLoop {
     renderer: Renderer,
-    discs: Vec<Disc>,
+    target: Box<dyn Target>,
+    detector: Box<dyn Detector>,
+    started: bool,
     size: (u32, u32),
-    tracker: Option<DotTracker>,
     frame: u64,
     /// Every detection error of a found point, pixels.
     pub(crate) errors: Vec<f64>,
@@ -50,18 +86,18 @@ pub(crate) struct ImageLoop {
 
 impl ImageLoop {
     pub(crate) fn new(config: RenderConfig, scene: &Scene, size: (u32, u32)) -> Result<Self> {
-        Ok(Self {
-            discs: scene_discs(scene, config.dot_radius)?,
-            renderer: Renderer::new(config)?,
-            size,
-            tracker: None,
-            frame: 0,
-            errors: Vec::new(),
-        })
+        let vision = scene_vision(scene, &config)?;
+        Ok(Self::with(Renderer::new(config)?, vision, size))
     }
 
-    /// The reference image rendered with K* at F*, its dots detected around their projected
-    /// positions: the reference pixels become the detected centroids.
+    /// A loop over any target and detector.
+    pub(crate) fn with(renderer: Renderer, vision: SceneVision, size: (u32, u32)) -> Self {
+        let SceneVision { target, detector } = vision;
+        Self { renderer, target, detector, started: false, size, frame: 0, errors: Vec::new() }
+    }
+
+    /// The reference image rendered with K* at F*, its points detected around their
+    /// projected positions: the reference pixels become the detected ones.
     pub(crate) fn reference(
         config: RenderConfig,
         scene: &Scene,
@@ -71,17 +107,25 @@ impl ImageLoop {
         obs: &mut Observation,
     ) -> Result<GreyImage> {
         let renderer = Renderer::new(config)?;
+        let SceneVision { target, mut detector } = scene_vision(scene, &config)?;
         let view = CameraView { pose: &Isometry3::identity(), intrinsics: k_star, distortion, size };
-        let rendered =
-            renderer.render_through(&scene_discs(scene, config.dot_radius)?, Some(&obs.visible), &view, 0)?;
-        let tracker =
-            DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default()).map_err(|e| reference_error(&e))?;
-        obs.pixels.copy_from_slice(tracker.positions());
+        let rendered = renderer.render(&*target, Some(&obs.visible), &view, 0)?;
+        let points = target.points();
+        let found = detector.start(&rendered.image, &expected(points, &obs.pixels)).map_err(|e| reference_error(&e))?;
+        for (i, hit) in per_point(points, &found).into_iter().enumerate() {
+            match (hit, obs.pixels.get_mut(i)) {
+                (Some(d), Some(pixel)) if d.found => *pixel = d.pixel,
+                _ => {
+                    let e = Error::InvalidImage { what: "reference".into(), reason: format!("point {i} not found") };
+                    return Err(reference_error(&e));
+                }
+            }
+        }
         Ok(rendered.image)
     }
 
-    /// Renders the current image with K(t) at `pose` and tracks the dots (initialising the
-    /// tracker from the first image); `run` gets the tracked pixels, `found && visible` as
+    /// Renders the current image with K(t) at `pose` and detects the points (starting the
+    /// detector on the first image); `run` gets the detected pixels, `found && visible` as
     /// visibility and each point's detection error (NaN if not found).
     pub(crate) fn observe(
         &mut self,
@@ -93,15 +137,19 @@ impl ImageLoop {
     ) -> Result<()> {
         self.frame += 1;
         let view = CameraView { pose, intrinsics: k, distortion, size: self.size };
-        let rendered = self.renderer.render_through(&self.discs, Some(&obs.visible), &view, self.frame)?;
-        let tracker = match self.tracker.as_mut() {
-            Some(t) => t,
-            None => self.tracker.insert(DotTracker::new(&rendered.image, &obs.pixels, TrackerConfig::default())?),
-        };
-        let tracked = tracker.track(&rendered.image)?;
+        let rendered = self.renderer.render(&*self.target, Some(&obs.visible), &view, self.frame)?;
+        if !self.started {
+            self.detector.start(&rendered.image, &expected(self.target.points(), &obs.pixels))?;
+            self.started = true;
+        }
+        let detections = self.detector.detect(&rendered.image)?;
+        let hits = per_point(self.target.points(), &detections);
         for i in 0..run.pixels.len() {
-            run.visible[i] = obs.visible[i] && tracked.found[i];
-            run.pixels[i] = tracked.pixels[i];
+            let hit = hits.get(i).copied().flatten();
+            run.visible[i] = obs.visible[i] && hit.is_some_and(|d| d.found);
+            if let Some(d) = hit {
+                run.pixels[i] = d.pixel;
+            }
             run.detection[i] = if run.visible[i] {
                 let e = (run.pixels[i][0] - obs.pixels[i][0]).hypot(run.pixels[i][1] - obs.pixels[i][1]);
                 self.errors.push(e);
@@ -126,6 +174,134 @@ impl ImageLoop {
     }
 }
 
+/// The target's points expected at `pixels` (one per point, in order).
+fn expected(points: &[TargetPoint], pixels: &[[f64; 2]]) -> Vec<Expected> {
+    points.iter().zip(pixels).map(|(p, &pixel)| Expected { id: p.id, pixel }).collect()
+}
+
+/// The detection of each point of the target, by identity (None: not reported).
+fn per_point<'a>(points: &[TargetPoint], detections: &'a [Detection]) -> Vec<Option<&'a Detection>> {
+    let by_id: std::collections::HashMap<u32, &Detection> = detections.iter().map(|d| (d.id, d)).collect();
+    points.iter().map(|p| by_id.get(&p.id).copied()).collect()
+}
+
 fn reference_error(e: &Error) -> Error {
     Error::InvalidParameter { name: "vision", reason: format!("the reference image's dots cannot be detected: {e}") }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use std::sync::{Arc, Mutex};
+
+    use super::*;
+    use crate::vision::render::Canvas;
+
+    fn scene() -> Scene {
+        Scene::new(vec![[-0.03, -0.02, 0.5], [0.03, -0.02, 0.5], [0.03, 0.02, 0.5], [-0.03, 0.02, 0.5]], vec![])
+            .unwrap()
+    }
+
+    /// The servo camera at F* and what it sees of the scene.
+    fn camera() -> (Isometry3<f64>, Intrinsics, Observation) {
+        let (pose, k) = (Isometry3::identity(), Intrinsics::pinhole(800.0, 800.0, 160.0, 120.0).unwrap());
+        let mut obs = Observation::default();
+        scene().observe(&pose, &k, Some(ImageSize { width: 320.0, height: 240.0 }), &mut obs);
+        assert!(obs.visible.iter().all(|&v| v));
+        (pose, k, obs)
+    }
+
+    /// Runs `frames` images through a loop; the run's pixels, visibility and errors.
+    fn run(mut images: ImageLoop, frames: usize) -> (Vec<[f64; 2]>, Vec<bool>, Vec<f64>, ImageLoop) {
+        let (pose, k, obs) = camera();
+        let n = obs.pixels.len();
+        let (mut pixels, mut visible, mut detection) = (vec![[0.0; 2]; n], vec![false; n], vec![0.0; n]);
+        for _ in 0..frames {
+            let tracked = Tracked { pixels: &mut pixels, visible: &mut visible, detection: &mut detection };
+            images.observe(&pose, &k, &Distortion::none(), &obs, tracked).unwrap();
+        }
+        (pixels, visible, detection, images)
+    }
+
+    /// A test detector: reports, in reverse order, each expected point moved by (0.3, 0.4),
+    /// the point of identity 1 as not found, and a point of an identity the target lacks.
+    struct Scripted {
+        expected: Vec<Expected>,
+        calls: Arc<Mutex<(usize, usize)>>,
+    }
+
+    impl Detector for Scripted {
+        fn start(&mut self, _: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>> {
+            self.calls.lock().unwrap().0 += 1;
+            self.expected = expected.to_vec();
+            self.detect_all()
+        }
+
+        fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>> {
+            assert_eq!(image.dimensions(), (320, 240));
+            self.calls.lock().unwrap().1 += 1;
+            self.detect_all()
+        }
+    }
+
+    impl Scripted {
+        fn detect_all(&self) -> Result<Vec<Detection>> {
+            let moved =
+                |e: &Expected| Detection { id: e.id, pixel: [e.pixel[0] + 0.3, e.pixel[1] + 0.4], found: e.id != 1 };
+            let mut out: Vec<Detection> = self.expected.iter().rev().map(moved).collect();
+            out.push(Detection { id: 99, pixel: [0.0, 0.0], found: true });
+            Ok(out)
+        }
+    }
+
+    #[test]
+    fn the_loop_feeds_the_run_from_any_detector_by_identity() {
+        let config = RenderConfig::default();
+        let calls = Arc::new(Mutex::new((0, 0)));
+        let detector = Box::new(Scripted { expected: Vec::new(), calls: Arc::clone(&calls) });
+        let vision = SceneVision { target: Box::new(Dots::new(scene_discs(&scene(), 0.004).unwrap())), detector };
+        let (pixels, visible, detection, images) =
+            run(ImageLoop::with(Renderer::new(config).unwrap(), vision, (320, 240)), 3);
+        let obs = camera().2;
+        assert_eq!(*calls.lock().unwrap(), (1, 3), "started once, then one detection per image");
+        assert_eq!(visible, [true, false, true, true]);
+        for i in [0, 2, 3] {
+            assert_eq!(pixels[i], [obs.pixels[i][0] + 0.3, obs.pixels[i][1] + 0.4]);
+            assert!((detection[i] - 0.5).abs() < 1e-12);
+        }
+        assert!(detection[1].is_nan());
+        let (median, max) = images.error_summary();
+        assert!((median - 0.5).abs() < 1e-12 && (max - 0.5).abs() < 1e-12);
+    }
+
+    /// A test target: the scene's dots under identities 30, 20, 10, 0, each drawn twice as
+    /// large as the scene's dots.
+    struct Renamed(Vec<TargetPoint>, Dots);
+
+    impl Target for Renamed {
+        fn points(&self) -> &[TargetPoint] {
+            &self.0
+        }
+
+        fn draw(&self, canvas: &mut Canvas<'_>, visible: Option<&[bool]>) -> Vec<bool> {
+            self.1.draw(canvas, visible)
+        }
+    }
+
+    #[test]
+    fn the_loop_renders_any_target_for_the_dot_tracker() {
+        let discs: Vec<Disc> = scene_discs(&scene(), 0.008).unwrap();
+        let ids = [30, 20, 10, 0];
+        let points = ids.iter().zip(&discs).map(|(&id, d)| TargetPoint { id, position: d.center.into() }).collect();
+        let target = Box::new(Renamed(points, Dots::new(discs)));
+        let vision = SceneVision { target, detector: Box::new(DotTracking::new(TrackerConfig::default())) };
+        let renderer = Renderer::new(RenderConfig::default()).unwrap();
+        let (pixels, visible, detection, _) = run(ImageLoop::with(renderer, vision, (320, 240)), 2);
+        let obs = camera().2;
+        assert_eq!(visible, [true; 4]);
+        for i in 0..4 {
+            assert!(detection[i] < 0.1, "point {i}: {} px", detection[i]);
+            assert!((pixels[i][0] - obs.pixels[i][0]).abs() < 0.1, "point {i}");
+        }
+    }
 }

@@ -1,6 +1,6 @@
 //! A scenario's views as images: what the reference camera sees at F*, or the servo camera at
 //! a pose and time, rendered with the scenario's `[vision]` settings (the defaults of
-//! [`RenderConfig`](crate::vision::render::RenderConfig) without that table), with the true projections of the dots' centres.
+//! [`RenderConfig`](crate::vision::render::RenderConfig) without that table), with the true projections of the target's points.
 //! The image of the servo camera at `time` carries the sensor noise of the simulator's
 //! image at that iteration, so a view can be compared with a run.
 
@@ -8,7 +8,7 @@ use nalgebra::Isometry3;
 
 use crate::error::{Error, Result, Short};
 use crate::sim::config::SimulationConfig;
-use crate::sim::image_loop::{pixel_size, scene_discs};
+use crate::sim::image_loop::{pixel_size, scene_vision};
 use crate::sim::scene::Observation;
 use crate::vision::{CameraView, GreyImage, Renderer};
 
@@ -58,9 +58,9 @@ pub fn render_view(config: &SimulationConfig, shot: Shot, pose: Option<&Isometry
     let mut obs = Observation::default();
     config.scene.observe_through(&pose, &k, &camera.distortion, camera.image, &mut obs);
     let vision = config.vision.unwrap_or_default();
-    let discs = scene_discs(&config.scene, vision.dot_radius)?;
+    let target = scene_vision(&config.scene, &vision)?.target;
     let view = CameraView { pose: &pose, intrinsics: &k, distortion: &camera.distortion, size };
-    let rendered = Renderer::new(vision)?.render_through(&discs, Some(&obs.visible), &view, frame)?;
+    let rendered = Renderer::new(vision)?.render(&*target, Some(&obs.visible), &view, frame)?;
     let visible = obs.visible.iter().zip(&rendered.drawn).map(|(&v, &d)| v && d).collect();
     Ok(View { image: rendered.image, pixels: obs.pixels, visible })
 }

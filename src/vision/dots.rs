@@ -244,7 +244,9 @@ fn ring_median(patch: &GreyImage, [u0, v0, u1, v1]: [u32; 4]) -> f64 {
 mod tests {
     use super::*;
     use crate::core::camera::Intrinsics;
-    use crate::vision::render::{Disc, RenderConfig, Renderer};
+    use crate::core::distortion::Distortion;
+    use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
+    use crate::vision::target::dots::Dots;
     use nalgebra::Isometry3;
 
     /// Fronto-parallel discs of `radius_px` at subpixel centres (known exactly: the centroid
@@ -265,8 +267,9 @@ mod tests {
                 centres.push([u, v]);
             }
         }
-        let img =
-            Renderer::new(config).unwrap().render(&discs, None, &Isometry3::identity(), &k, (320, 260), 1).unwrap();
+        let (pose, none) = (Isometry3::identity(), Distortion::none());
+        let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (320, 260) };
+        let img = Renderer::new(config).unwrap().render(&Dots::new(discs), None, &view, 1).unwrap();
         (img.image, centres)
     }
 

@@ -1,21 +1,49 @@
-//! Images in the loop (feature `vision`): what the camera sees and what a dot tracker
-//! extracts from it.
+//! Images in the loop (feature `vision`): what the camera sees and what a detector finds
+//! in it, behind two seams: a [`Target`] (points with identities, drawn by the renderer's
+//! primitives) and a [`Detector`] (image in, identities, pixels and found flags out).
 //!
 //! | concept | module |
 //! |---|---|
 //! | 8-bit grey images, PNG files | [`image`](mod@image) |
+//! | what is drawn: the [`Target`] trait | [`target`] |
+//! | today's target: white discs ([`Dots`]) | [`target::dots`] |
+//! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
+//! | what is detected: the [`Detector`] trait | [`detector`] |
+//! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
 //! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
-//! | rendering the white discs of the feature points (perspective ellipses, anti-aliasing, blur, noise) | [`render`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
 //!
 //! Images are row-major `(height, width)` 8-bit grey levels ([`GreyImage`]).
+//!
+//! # Adding a target type
+//!
+//! A new target (an AprilTag, say) touches:
+//!
+//! 1. one new file, `src/vision/target/<name>.rs` (declared in `target.rs`), with a type
+//!    implementing [`Target`]: its points with identities in the object frame, and `draw`
+//!    with the [`Canvas`] primitives (a primitive the canvas lacks, such as a filled polygon,
+//!    is one method in `render/canvas.rs` and one `Shape` implementation next to
+//!    `render/conic.rs`);
+//! 2. one match arm in `scene_vision` (`src/sim/image_loop.rs`), where a scenario's target is
+//!    picked together with the detector that finds it; the image loop, the views and the
+//!    Python `render` functions go through that function and need no change.
+//!
+//! If no existing detector finds the new target, its detector is one more file,
+//! `src/vision/detector/<name>.rs`, implementing [`Detector`] and reporting the target's
+//! point identities.
 
+pub mod detector;
 pub mod dots;
 pub mod image;
 pub mod render;
+pub mod target;
 pub mod tracker;
 
+pub use self::detector::dot_tracking::DotTracking;
+pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_png, save_png};
-pub use self::render::{CameraView, Disc, RenderConfig, Rendered, Renderer};
+pub use self::render::{CameraView, Canvas, Disc, RenderConfig, Rendered, Renderer};
+pub use self::target::dots::Dots;
+pub use self::target::{Target, TargetPoint};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

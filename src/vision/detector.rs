@@ -1,0 +1,42 @@
+//! What is found in an image, in the spirit of ViSP's `vpDetectorBase`: a detector takes an
+//! image and reports the target's points it finds, by identity, with their pixels and a
+//! found flag. A tracker is a detector that is started once on a first image with where each
+//! point is expected (the user's clicks, or the projections); a detector that needs no help
+//! (a tag detector) ignores those hints. [`DotTracking`](dot_tracking::DotTracking), the dot
+//! tracker, is today's detector.
+
+pub mod dot_tracking;
+
+use crate::error::Result;
+use crate::vision::image::GreyImage;
+
+/// Where a point is expected in the first image: its identity and a pixel near it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Expected {
+    /// The point's identity ([`TargetPoint::id`](crate::vision::target::TargetPoint::id)).
+    pub id: u32,
+    /// A pixel `(u, v)` near it.
+    pub pixel: [f64; 2],
+}
+
+/// A point as a detector reports it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Detection {
+    /// The point's identity.
+    pub id: u32,
+    /// Its pixel `(u, v)`: where it was found, or its last known position when not found.
+    pub pixel: [f64; 2],
+    /// Found in this image.
+    pub found: bool,
+}
+
+/// Finds a target's points in images.
+pub trait Detector: Send {
+    /// Starts on the first image, given where each point is expected; returns the points
+    /// found in it. An error when the detector cannot start (a point it needs is not there).
+    fn start(&mut self, image: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>>;
+
+    /// The points in the next image (after [`Detector::start`]); a point may be missing from
+    /// the list or reported with `found` false.
+    fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>>;
+}

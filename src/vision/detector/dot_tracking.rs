@@ -1,0 +1,95 @@
+//! Today's detector: the [`DotTracker`], started on the expected pixels (its clicks), each
+//! dot reported under the identity it was expected with.
+
+use crate::error::{Error, Result};
+use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::image::GreyImage;
+use crate::vision::tracker::{DotTracker, TrackerConfig};
+
+/// Dots tracked from image to image.
+#[derive(Debug, Clone)]
+pub struct DotTracking {
+    config: TrackerConfig,
+    ids: Vec<u32>,
+    tracker: Option<DotTracker>,
+}
+
+impl DotTracking {
+    /// A detector that will track with `config` once started.
+    pub fn new(config: TrackerConfig) -> Self {
+        Self { config, ids: Vec::new(), tracker: None }
+    }
+
+    fn detections(&self, pixels: &[[f64; 2]], found: impl Fn(usize) -> bool) -> Vec<Detection> {
+        self.ids
+            .iter()
+            .zip(pixels)
+            .enumerate()
+            .map(|(i, (&id, &pixel))| Detection { id, pixel, found: found(i) })
+            .collect()
+    }
+}
+
+impl Detector for DotTracking {
+    /// Finds each dot near its expected pixel (every dot must be there).
+    fn start(&mut self, image: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>> {
+        let clicks: Vec<[f64; 2]> = expected.iter().map(|e| e.pixel).collect();
+        let tracker = DotTracker::new(image, &clicks, self.config)?;
+        self.ids = expected.iter().map(|e| e.id).collect();
+        let out = self.detections(tracker.positions(), |_| true);
+        self.tracker = Some(tracker);
+        Ok(out)
+    }
+
+    fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>> {
+        let Some(tracker) = self.tracker.as_mut() else {
+            return Err(Error::InvalidParameter { name: "detector", reason: "detect before start".into() });
+        };
+        let tracked = tracker.track(image)?;
+        Ok(self.detections(&tracked.pixels, |i| tracked.found[i]))
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use nalgebra::Isometry3;
+
+    use super::*;
+    use crate::core::camera::Intrinsics;
+    use crate::core::distortion::Distortion;
+    use crate::vision::render::{CameraView, RenderConfig, Renderer};
+    use crate::vision::target::dots::Dots;
+
+    fn image(shift: f64) -> GreyImage {
+        let k = Intrinsics::pinhole(1000.0, 1000.0, 60.0, 40.0).unwrap();
+        let points = [[-0.02 + shift, 0.0, 0.5], [0.02 + shift, 0.005, 0.5]];
+        let dots = Dots::facing_reference(&points, 0.004).unwrap();
+        let (pose, none) = (Isometry3::identity(), Distortion::none());
+        let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (120, 80) };
+        Renderer::new(RenderConfig::default()).unwrap().render(&dots, None, &view, 0).unwrap().image
+    }
+
+    #[test]
+    fn reports_the_tracker_under_the_expected_identities() {
+        let expected = [Expected { id: 9, pixel: [21.0, 40.0] }, Expected { id: 4, pixel: [99.0, 50.0] }];
+        let mut detector = DotTracking::new(TrackerConfig::default());
+        assert!(detector.detect(&image(0.0)).is_err(), "detect before start");
+        let first = image(0.0);
+        let started = detector.start(&first, &expected).unwrap();
+        let mut tracker = DotTracker::new(&first, &[[21.0, 40.0], [99.0, 50.0]], TrackerConfig::default()).unwrap();
+        assert_eq!(started.iter().map(|d| (d.id, d.found)).collect::<Vec<_>>(), [(9, true), (4, true)]);
+        assert_eq!(started.iter().map(|d| d.pixel).collect::<Vec<_>>(), tracker.positions());
+        for shift in [0.0, 0.001, 0.002] {
+            let next = image(shift);
+            let got = detector.detect(&next).unwrap();
+            let want = tracker.track(&next).unwrap();
+            assert_eq!(got.iter().map(|d| d.pixel).collect::<Vec<_>>(), want.pixels);
+            assert_eq!(got.iter().map(|d| d.found).collect::<Vec<_>>(), want.found);
+            assert_eq!(got.iter().map(|d| d.id).collect::<Vec<_>>(), [9, 4]);
+        }
+        // A dot not in the first image: the tracker cannot start.
+        let missing = [Expected { id: 0, pixel: [60.0, 10.0] }];
+        assert!(DotTracking::new(TrackerConfig::default()).start(&first, &missing).is_err());
+    }
+}

@@ -1,0 +1,86 @@
+//! What a [`Target`](crate::vision::target::Target) draws with: a canvas over the noisy
+//! background of one frame, seen by one camera, and its primitives. Today the primitive is a
+//! white [`Disc`] of the object frame; another (a filled polygon, for the cells of a tag)
+//! would be one more method here and one more `Shape` (`render/raster.rs`).
+
+use nalgebra::Vector3;
+
+use super::CameraView;
+use super::conic::ImageEllipse;
+use super::lens::Warp;
+use super::raster::{Paint, paint};
+use crate::error::{Error, Result, Short};
+use crate::vision::image::GreyImage;
+
+/// A white disc in the object frame (F*).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Disc {
+    /// Centre, metres.
+    pub center: Vector3<f64>,
+    /// Unit normal of the disc's plane.
+    pub normal: Vector3<f64>,
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+impl Disc {
+    /// A disc facing the reference camera: its normal points from the centre to the origin
+    /// of F* (the default of scenario files).
+    pub fn facing_reference(center: [f64; 3], radius: f64) -> Result<Self> {
+        Self::new(center, [-center[0], -center[1], -center[2]], radius)
+    }
+
+    /// A disc with a given normal (normalised here).
+    pub fn new(center: [f64; 3], normal: [f64; 3], radius: f64) -> Result<Self> {
+        crate::error::check_finite("disc", &[center, normal].concat())?;
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "dot_radius",
+                reason: format!("must be > 0, got {}", Short(radius)),
+            });
+        }
+        let normal = Vector3::from(normal);
+        let largest = normal.amax();
+        if !(largest > 1e-12) {
+            return Err(Error::InvalidParameter { name: "normal", reason: "must not be zero".into() });
+        }
+        // Scaled first: the norm of a normal of 1e300 overflows.
+        let normal = normal / largest;
+        Ok(Self { center: Vector3::from(center), normal: normal / normal.norm(), radius })
+    }
+}
+
+/// The image being drawn: one frame's noisy background, the camera that sees it, and the
+/// primitives that draw on it (anti-aliased, blurred, with the frame's noise; overlapping
+/// primitives take the brighter level).
+pub struct Canvas<'a> {
+    image: GreyImage,
+    view: CameraView<'a>,
+    warp: Warp,
+    paint: Paint<'a>,
+}
+
+impl<'a> Canvas<'a> {
+    pub(super) fn new(image: GreyImage, view: CameraView<'a>, paint: Paint<'a>) -> Self {
+        let warp = Warp::new(view.intrinsics, view.distortion);
+        Self { image, view, warp, paint }
+    }
+
+    /// The camera: pose in F*, intrinsics, distortion and image size.
+    pub fn view(&self) -> &CameraView<'a> {
+        &self.view
+    }
+
+    /// Fills a white disc; false when it is not drawn: not entirely in front of the camera,
+    /// seen (nearly) edge-on, outside the image, or reaching beyond the lens model's fold.
+    pub fn fill_disc(&mut self, disc: &Disc) -> bool {
+        match ImageEllipse::of(disc, self.view.pose, self.view.intrinsics, &self.warp) {
+            Some(ellipse) => paint(&mut self.image, &ellipse, &self.warp, &self.paint),
+            None => false,
+        }
+    }
+
+    pub(super) fn into_image(self) -> GreyImage {
+        self.image
+    }
+}
