@@ -109,7 +109,7 @@ class NumpyLoop:
         unsupported = [
             d["robot"]["kind"] != "free",
             d["control"]["law"] != "invariant",
-            d["control"]["depths"] != "reference",
+            d["control"].get("depths", "reference") != "reference",
             d["noise"]["pixel_sigma"] != 0.0,
             d["stop"]["window"] != 1,
             "zoom" in d["camera"] and d["camera"]["zoom"] is not None,
@@ -128,7 +128,7 @@ class NumpyLoop:
         self.k_hat = intrinsics_matrix(d["estimate"])
         self.basis = np.array(basis)
         c = d["control"]
-        self.gain, self.gain_rz, self.dt = c["gain"], c["gain_rz"], c["dt"]
+        self.gain, self.gain_rz, self.dt = c.get("gain", 1.0), c.get("gain_rz", 1.0), c["dt"]  # defaults when not given
         self.start = np.eye(4)
         self.start[:3, :3] = exp_rotation(np.radians(d["start"]["rotation_deg"]))
         self.start[:3, 3] = d["start"]["position"]

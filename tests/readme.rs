@@ -50,3 +50,17 @@ fn readme_scenario_block_names_every_key() {
     let missing: Vec<_> = schema.difference(&documented).collect();
     assert!(missing.is_empty(), "keys of the schema missing from the README's block: {missing:?}");
 }
+
+/// The block is one scenario with one law, so the keys of the other laws are shown commented
+/// out: every `[control]` key of every law must still be described there.
+#[test]
+fn readme_scenario_block_describes_every_law_key() {
+    use vsinv::sim::scenario::{COMMON_CONTROL_KEYS, LAW_KEYS};
+    let text = readme_scenario_block();
+    let control = text.split("\n[control]").nth(1).and_then(|s| s.split("\n[").next()).expect("a [control] table");
+    let keys = COMMON_CONTROL_KEYS.iter().chain(LAW_KEYS.iter().flat_map(|(_, keys)| keys.iter()));
+    for key in keys {
+        let described = control.lines().any(|l| l.trim_start_matches(['#', ' ']).starts_with(&format!("{key} =")));
+        assert!(described, "control.{key} is not described in the README's [control] table");
+    }
+}

@@ -111,3 +111,65 @@ def test_every_builtin_runs_from_the_command_line(name, capsys):
     assert summary["status"] in statuses
     # 0 for converged, 1 for every other status.
     assert code == (0 if summary["status"] == "converged" else 1)
+
+
+# ---------------------------------------------------------------------------------------------
+# [control] read per law (issue 17)
+
+#: The [control] keys each law reads besides law and dt (src/sim/scenario/law_keys.rs).
+LAW_KEYS = {
+    "invariant": ["gain", "gain_rz", "depths", "feedforward", "rz_task", "max_linear_speed",
+                  "max_angular_speed_deg", "adaptive_gain"],
+    "ibvs": ["gain", "depths", "interaction", "max_linear_speed", "max_angular_speed_deg", "adaptive_gain"],
+    "none": [],
+}
+#: A valid value of each.
+CONTROL_SAMPLES = {
+    "gain": 0.8, "gain_rz": 0.9, "depths": "true", "feedforward": False, "interaction": "mean",
+    "rz_task": "tau21", "max_linear_speed": 0.25, "max_angular_speed_deg": 60.0,
+    "adaptive_gain": {"at_zero": 4.0, "at_infinity": 0.4, "slope_at_zero": 30.0},
+}
+OWN_KEYS = [(law, key) for law, keys in LAW_KEYS.items() for key in keys]
+FOREIGN_KEYS = [(law, key) for law, keys in LAW_KEYS.items() for key in CONTROL_SAMPLES if key not in keys]
+
+
+def with_control(law: str, **keys) -> dict:
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["control"] = {"law": law, "dt": 0.04, **keys}
+    return d
+
+
+@pytest.mark.parametrize("law, key", OWN_KEYS)
+def test_each_law_reads_its_own_control_keys(law, key):
+    s = vsinv.load_scenario(with_control(law, **{key: CONTROL_SAMPLES[key]}))
+    assert s.to_dict()["control"][key] == CONTROL_SAMPLES[key]
+
+
+@pytest.mark.parametrize("law, key", FOREIGN_KEYS)
+def test_a_control_key_of_another_law_is_refused_by_name(law, key):
+    with pytest.raises(vsinv.InvalidInput) as info:
+        vsinv.load_scenario(with_control(law, **{key: CONTROL_SAMPLES[key]}))
+    msg = str(info.value)
+    assert f"control.{key}: belongs to the" in msg and f"this scenario's law (control.law) is {law}" in msg, msg
+    for owner in (other for other, keys in LAW_KEYS.items() if key in keys):
+        assert owner in msg.split("belongs to", 1)[1], msg
+
+
+def test_control_keys_of_another_law_from_files_and_in_runs():
+    assert len(FOREIGN_KEYS) == 1 + 3 + 9  # invariant: interaction; ibvs: gain_rz, feedforward, rz_task; none: all
+    text = vsinv.load_scenario("vision-12-6").to_toml().replace('law = "invariant"', 'law = "ibvs"')
+    with pytest.raises(vsinv.InvalidInput, match=r"control\.gain_rz: belongs to the invariant law"):
+        vsinv.Scenario.from_toml(text)
+    with pytest.raises(vsinv.InvalidInput, match=r"control\.interaction: belongs to the ibvs law"):
+        vsinv.run_scenario(with_control("invariant", interaction="current"))
+    # lens-12-6 gives only keys both laws read: switching its law needs nothing else.
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["control"]["law"] = "ibvs"
+    assert vsinv.load_scenario(d).to_dict()["control"]["law"] == "ibvs"
+
+
+@pytest.mark.parametrize("name", [n for n, _ in vsinv.list_scenarios()])
+def test_every_builtin_parses_and_round_trips(name):
+    s = vsinv.load_scenario(name)
+    assert vsinv.Scenario.from_dict(s.to_dict()).to_dict() == s.to_dict()
+    assert vsinv.Scenario.from_toml(s.to_toml()).to_dict() == s.to_dict()

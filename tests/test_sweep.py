@@ -241,6 +241,75 @@ def test_bad_keys_and_values_raise_before_running(monkeypatch, key, values, matc
     assert issubclass(vsinv.InvalidInput, ValueError)
 
 
+#: A representative key of every table, with a base scenario that has it (or an optional table
+#: the base lacks, created by the sweep) and a valid value.
+TABLE_KEYS = [
+    ("lens-12-6", "name", "renamed"),
+    ("lens-12-6", "description", "varied"),
+    ("lens-12-6", "object.points.0.2", 0.61),
+    ("occlusion", "object.bodies.0.position.0", 0.001),
+    ("lens-12-6", "reference_camera.fku", 1150.0),
+    ("lens-12-6", "camera.u0", 410.0),
+    ("lens-12-6", "estimate.skew_deg", 89.5),
+    ("zoom-servo", "camera.zoom.fku.1", 750.0),
+    ("lens-12-6", "start.rotation_deg.2", 70.0),
+    ("lens-12-6", "control.max_linear_speed", 0.2),
+    ("ibvs-12-6", "control.interaction", "mean"),
+    ("vision-12-6", "control.rz_task", "angle"),
+    ("lens-12-6", "control.law", "ibvs"),
+    ("cartesian-12-6", "robot.joint_velocity.0", 0.2),
+    ("arm-ur5-12-6", "robot.damping", 0.03),
+    ("arm-panda-12-6", "robot.min_manipulability", 1e-5),
+    ("noise-12-6", "noise.pixel_sigma", 0.3),
+    ("lens-12-6", "stop.window", 3),
+    ("path-500", "path.samples", 400),
+    ("lens-12-6", "path.samples", 400),  # [path] the base lacks
+    ("path-500", "depth_estimation.reference_mean_depth", 0.8),
+    ("vision-12-6", "vision.blur_sigma", 1.0),
+    ("lens-12-6", "vision.blur_sigma", 1.0),  # [vision] the base lacks
+]
+
+
+@pytest.mark.parametrize("base, key, value", TABLE_KEYS)
+def test_a_key_of_every_table_is_accepted(base, key, value):
+    (d,) = build_scenarios(base, {key: [value]})
+    node = d
+    for seg in key.split("."):
+        node = node[int(seg)] if seg.isdigit() else node[seg]
+    assert node == value
+    vsinv.load_scenario(d)
+
+
+@pytest.mark.parametrize(
+    "base, key, match",
+    [
+        ("vision-12-6", "vision.blur", "blur"),
+        ("lens-12-6", "visoin.blur_sigma", "visoin"),
+        ("path-500", "path.sample", "sample"),
+        ("arm-ur5-12-6", "robot.wheels", "wheels"),
+        ("lens-12-6", "directory", "directory"),  # not a key of the files, though a field in Rust
+        ("lens-12-6", "control.interaction", r"control\.interaction: belongs to the ibvs law"),
+        ("lens-12-6", "0.gain", "0.gain"),
+    ],
+)
+def test_unknown_keys_are_refused_by_name(base, key, match):
+    with pytest.raises(vsinv.InvalidInput, match=match) as info:
+        build_scenarios(base, {key: ["current"]})
+    assert f"vary key {key!r}" in str(info.value)
+
+
+def test_roll_uses_the_package_rotations():
+    (d,) = build_scenarios(BASE, {"roll_deg": [30.0]})
+    before = vsinv.load_scenario(BASE).to_dict()["start"]["rotation_deg"]
+    r0 = vsinv.sweep.rotation_from_thetau(np.radians(before))
+    r1 = vsinv.sweep.rotation_from_thetau(np.radians(d["start"]["rotation_deg"]))
+    np.testing.assert_allclose(r1, r0 @ rotation([0.0, 0.0, np.radians(30.0)]), atol=1e-12)
+    tu = np.array([0.3, -0.4, 2.9])
+    np.testing.assert_allclose(vsinv.sweep.thetau_from_rotation(vsinv.sweep.rotation_from_thetau(tu)), tu, atol=1e-12)
+    with pytest.raises(vsinv.InvalidInput, match="rot: not a rotation"):
+        vsinv.sweep.thetau_from_rotation(2.0 * np.eye(3))
+
+
 # ---------------------------------------------------------------------------------------------
 # Props. 1 and 2
 
@@ -430,6 +499,26 @@ def test_cli_sweep_random_with_workers(capsys):
     out, err = capsys.readouterr()
     assert code == 0, err
     assert "8 runs" in out.splitlines()[0]
+
+
+def test_cli_sweep_varies_a_key_of_an_optional_table(capsys):
+    # Issue 17: vision.blur_sigma was refused as "unknown key 'vision'"; a few short runs.
+    code = main(
+        ["sweep", "vision-12-6", "--vary", "vision.blur_sigma=0.5,1.0", "--vary", "stop.window=1",
+         "--vary", "stop.max_iterations=3", "--no-progress"]
+    )
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    lines = out.splitlines()
+    assert lines[0].startswith("sweep vision-12-6: 2 runs"), out
+    assert lines[1].split()[0] == "vision.blur_sigma"
+    assert [line.split()[0] for line in lines[2:4]] == ["0.5", "1"]
+
+
+def test_cli_sweep_unknown_key_exits_2(capsys):
+    code = main(["sweep", "vision-12-6", "--vary", "vision.blur_sigmaa=0.5", "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and "vision.blur_sigmaa" in err and "blur_sigmaa" in err
 
 
 def _has(module: str) -> bool:

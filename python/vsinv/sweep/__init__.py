@@ -15,7 +15,9 @@ a one-value axis. Every point is run ``repeats`` times with different noise seed
 
 **Keys.** Any dotted scenario key (README, "Scenario files"): ``"noise.pixel_sigma"``,
 ``"control.gain"``, ``"estimate.skew_deg"``, ``"stop.max_iterations"``, ``"start.position.2"``
-(an integer segment indexes a list). A ``camera`` or ``estimate`` section the base does not
+(an integer segment indexes a list), ``"vision.blur_sigma"``, ``"robot.damping"``. The
+scenario schema decides which keys exist: each key is applied to the base scenario and the
+result parsed, so an unknown key is refused with the schema's own message. A ``camera`` or ``estimate`` section the base does not
 have is filled with its default first (camera = reference camera, estimate = the servo camera
 at t = 0), other missing sections are created empty. Derived keys:
 

@@ -4,40 +4,25 @@ principal_point_error, roll_deg), applied to a copy of the base scenario."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any, Callable, Union
 
 import numpy as np
 import numpy.typing as npt
 
-from .._core import InvalidInput
+from .._core import InvalidInput, pose_from_position_thetau, thetau_from_pose
 
 #: Keys computed from the scenario rather than set verbatim, in the order they are applied.
 DERIVED_KEYS = ("lens_ratio", "focal_error", "principal_point_error", "roll_deg")
-
-#: Top-level sections of a scenario (a dotted key must start with one of them).
-SECTIONS = (
-    "name",
-    "description",
-    "object",
-    "reference_camera",
-    "camera",
-    "estimate",
-    "start",
-    "control",
-    "robot",
-    "noise",
-    "stop",
-    "path",
-    "depth_estimation",
-)
 
 #: The fields of an estimate (K_hat) section.
 _ESTIMATE_FIELDS = ("fku", "fkv", "u0", "v0", "skew_deg")
 
 
 def _split(key: str) -> list[Union[str, int]]:
-    """``"start.position.2"`` -> ``["start", "position", 2]``; raises on a malformed key."""
+    """``"start.position.2"`` -> ``["start", "position", 2]``; raises on a malformed key.
+    Whether the key exists is the Rust schema's to say: :func:`._plan` applies it to the base
+    scenario and parses the result, which names an unknown key (the schema has no copy here)."""
     if not isinstance(key, str) or not key:
         raise InvalidInput(f"vary key {key!r}: expected a non-empty string")
     if key in DERIVED_KEYS:
@@ -45,11 +30,8 @@ def _split(key: str) -> list[Union[str, int]]:
     parts = key.split(".")
     if any(p == "" for p in parts):
         raise InvalidInput(f"vary key {key!r}: empty segment")
-    if parts[0] not in SECTIONS:
-        raise InvalidInput(
-            f"vary key {key!r}: unknown key {parts[0]!r}; expected a derived key "
-            f"({', '.join(DERIVED_KEYS)}) or a dotted scenario key starting with one of {', '.join(SECTIONS)}"
-        )
+    if parts[0].isdigit():
+        raise InvalidInput(f"vary key {key!r}: expected a derived key ({', '.join(DERIVED_KEYS)}) or a dotted scenario key")
     return [int(p) if p.isdigit() else p for p in parts]
 
 
@@ -133,11 +115,7 @@ def _child(node: Any, seg: Union[str, int], key: str, upto: list[Union[str, int]
     raise InvalidInput(f"vary key {key!r}: {where}: not a table or a list")
 
 
-# rotations (theta-u vectors, radians) ---------------------------------------------------------
-
-
-def _skew(w: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+# arrays, and rotations (theta-u vectors, radians) by the package's SE(3) functions -------------
 
 
 def _numeric_array(value: npt.ArrayLike, name: str, expected: str) -> npt.NDArray[Any]:
@@ -166,46 +144,27 @@ def _real_array(value: npt.ArrayLike, name: str, shape: tuple[int, ...]) -> npt.
     return a
 
 
+#: The origin, for rotations as poses.
+_ORIGIN = np.zeros(3)
+
+
 def rotation_from_thetau(thetau: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    """Rodrigues' formula: the rotation matrix of a theta-u vector (radians)."""
+    """The rotation matrix of a theta-u vector (radians): the rotation block of
+    :func:`vsinv.pose_from_position_thetau`."""
     r = _real_array(thetau, "thetau", (3,))
-    if np.abs(r).max() > 1e150 or not math.isfinite(float(np.linalg.norm(r))):
-        raise InvalidInput(f"thetau: rotation angle too large, got {r.tolist()}")
-    th = float(np.linalg.norm(r))
-    if th < 1e-12:
-        return np.eye(3) + _skew(r)
-    k = _skew(r / th)
-    return np.eye(3) + math.sin(th) * k + (1.0 - math.cos(th)) * (k @ k)
+    return np.ascontiguousarray(pose_from_position_thetau(_ORIGIN, r)[:3, :3])
 
 
 def thetau_from_rotation(rot: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    """The theta-u vector (radians, angle in [0, pi]) of a rotation matrix; accurate near
-    0 and near pi (where the axis comes from the symmetric part)."""
+    """The theta-u vector (radians, angle in [0, pi]) of a rotation matrix (orthonormal with
+    determinant +1 within 1e-6): :func:`vsinv.thetau_from_pose` of that rotation."""
     r = _real_array(rot, "rot", (3, 3))
-    if np.abs(r).max() > 1e6:
-        raise InvalidInput(f"rot: not a rotation matrix (entries up to {np.abs(r).max():.3g})")
-    v = 0.5 * np.array([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]])
-    s = float(np.linalg.norm(v))
-    c = 0.5 * (float(np.trace(r)) - 1.0)
-    th = math.atan2(s, c)
-    if th < 1e-12:
-        return v
-    if th < 0.5 * math.pi:
-        return v * (th / s)
-    # Near pi: R + R^T = 2 cos I + 2 (1 - cos) k k^T; take the best conditioned column.
-    b = (0.5 * (r + r.T) - c * np.eye(3)) / (1.0 - c)
-    i = int(np.argmax(np.diag(b)))
-    k = b[:, i] / math.sqrt(max(b[i, i], 1e-300))
-    k /= np.linalg.norm(k)
-    if float(k @ v) < 0.0:
-        k = -k
-    return k * th
-
-
-def _rz(deg: float) -> npt.NDArray[np.float64]:
-    a = math.radians(deg)
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    pose = np.eye(4)
+    pose[:3, :3] = r
+    try:
+        return thetau_from_pose(pose)[1]
+    except InvalidInput as exc:
+        raise InvalidInput("rot: not a rotation matrix (orthonormal with determinant +1, within 1e-6)") from exc
 
 
 # derived keys ---------------------------------------------------------------------------------
@@ -252,35 +211,14 @@ def _apply_principal_point_error(d: dict[str, Any], px: float) -> None:
     d["estimate"] = est
 
 
-def _quaternion_from_thetau_deg(tu_deg: Sequence[float]) -> tuple[float, float, float, float]:
-    """Unit quaternion (w, x, y, z) of a theta-u vector in degrees (pure Python: this runs
-    once per sweep run, where NumPy's per-call overhead on 3x3 arrays would dominate)."""
-    x, y, z = (math.radians(float(v)) for v in tu_deg)
-    th = math.sqrt(x * x + y * y + z * z)
-    if th < 1e-15:
-        return (1.0, 0.5 * x, 0.5 * y, 0.5 * z)
-    s = math.sin(0.5 * th) / th
-    return (math.cos(0.5 * th), x * s, y * s, z * s)
-
-
 def _apply_roll(d: dict[str, Any], deg: float) -> None:
-    # R' = R Rz(roll) as quaternions: q' = q (cos(a/2), 0, 0, sin(a/2)); back to theta-u
-    # with the angle in [0, pi] (w >= 0).
+    """R' = R Rz(roll), written back as theta-u degrees (angle in [0, 180])."""
     start = dict(d["start"])
     # rotation_deg (older files: rotation, read as degrees too)
     thetau_deg = start.pop("rotation", None) or start.get("rotation_deg", [0.0, 0.0, 0.0])
-    w, x, y, z = _quaternion_from_thetau_deg(thetau_deg)
-    h = 0.5 * math.radians(deg)
-    c, s = math.cos(h), math.sin(h)
-    w, x, y, z = w * c - z * s, x * c + y * s, y * c - x * s, z * c + w * s
-    if w < 0.0:
-        w, x, y, z = -w, -x, -y, -z
-    n = math.sqrt(x * x + y * y + z * z)
-    if n < 1e-15:
-        start["rotation_deg"] = [0.0, 0.0, 0.0]
-    else:
-        scale = math.degrees(2.0 * math.atan2(n, w)) / n
-        start["rotation_deg"] = [x * scale, y * scale, z * scale]
+    rotation = pose_from_position_thetau(_ORIGIN, np.radians(np.asarray(thetau_deg, dtype=np.float64)))
+    roll = pose_from_position_thetau(_ORIGIN, [0.0, 0.0, math.radians(deg)])
+    start["rotation_deg"] = np.degrees(thetau_from_pose(rotation @ roll)[1]).tolist()
     d["start"] = start
 
 

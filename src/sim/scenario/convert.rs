@@ -75,6 +75,8 @@ impl Scenario {
 
     /// The simulation this scenario describes.
     pub fn to_config(&self) -> Result<SimulationConfig> {
+        // The law first: it decides which `[control]` keys are read, and how many points.
+        super::law_keys::check_law_keys(&self.control)?;
         let scene = self.scene()?;
         let (reference_camera, camera, estimate, estimate_distortion) = self.cameras()?;
         let robot = self.robot()?;
@@ -198,7 +200,7 @@ impl Scenario {
     /// `[control]` gains and period, `[noise]` and `[stop]`.
     fn check_numbers(&self) -> Result<()> {
         let c = &self.control;
-        for (key, v) in [("control.gain", c.gain), ("control.gain_rz", c.gain_rz), ("control.dt", c.dt)] {
+        for (key, v) in [("control.gain", c.gain()), ("control.gain_rz", c.gain_rz()), ("control.dt", c.dt)] {
             check_positive(key, v)?;
         }
         if c.dt > 1.0 {
@@ -239,7 +241,7 @@ impl Scenario {
 
     /// `control.depths` and `[depth_estimation]`.
     fn depth_source(&self) -> Result<DepthSource> {
-        let depths = self.control.depths;
+        let depths = self.control.depths();
         if self.depth_estimation.is_some() && depths != DepthsName::Estimated {
             return Err(scenario_error("depth_estimation", "is used only with control.depths = \"estimated\""));
         }
@@ -377,16 +379,16 @@ fn law_of(c: &ControlSpec) -> Result<Law> {
     let (adaptive_gain, twist_limits) = (adaptive_gain_of(c)?, twist_limits_of(c)?);
     Ok(match c.law {
         LawName::Invariant => Law::Invariant(InvariantControllerConfig {
-            gain: c.gain,
-            gain_rz: c.gain_rz,
-            feedforward: c.feedforward,
-            rz_task: c.rz_task,
+            gain: c.gain(),
+            gain_rz: c.gain_rz(),
+            feedforward: c.feedforward(),
+            rz_task: c.rz_task(),
             adaptive_gain,
             twist_limits,
             ..Default::default()
         }),
         LawName::None => Law::Observe,
-        LawName::Ibvs => Law::Ibvs { gain: c.gain, interaction: c.interaction, adaptive_gain, twist_limits },
+        LawName::Ibvs => Law::Ibvs { gain: c.gain(), interaction: c.interaction(), adaptive_gain, twist_limits },
     })
 }
 

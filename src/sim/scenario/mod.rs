@@ -7,11 +7,13 @@
 mod builtin;
 mod convert;
 mod files;
+mod law_keys;
 pub mod schema;
 
 pub use builtin::{BUILTIN, builtin};
 pub use files::FileAccess;
 pub(crate) use files::FileScope;
+pub use law_keys::{COMMON_CONTROL_KEYS, LAW_KEYS, law_keys};
 pub use schema::*;
 
 use crate::error::{Error, Result};

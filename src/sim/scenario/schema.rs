@@ -21,9 +21,6 @@ fn one() -> f64 {
 fn default_dt() -> f64 {
     0.04
 }
-fn yes() -> bool {
-    true
-}
 
 /// `[object]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -152,6 +149,17 @@ pub enum LawName {
     None,
 }
 
+impl LawName {
+    /// The name a scenario file gives the law.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Invariant => "invariant",
+            Self::Ibvs => "ibvs",
+            Self::None => "none",
+        }
+    }
+}
+
 /// Depth source name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -164,34 +172,36 @@ pub enum DepthsName {
     Estimated,
 }
 
-/// `[control]`.
+/// `[control]`. Each law reads its own keys ([`LAW_KEYS`](super::LAW_KEYS)): they are
+/// optional, `None` when not given (the accessors give the defaults), and a key of another
+/// law is refused.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ControlSpec {
     /// Which law.
     #[serde(default = "default_law")]
     pub law: LawName,
-    /// lambda, 1/s.
-    #[serde(default = "one")]
-    pub gain: f64,
-    /// eta, 1/s.
-    #[serde(default = "one")]
-    pub gain_rz: f64,
+    /// lambda, 1/s (default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain: Option<f64>,
+    /// eta, 1/s (default 1; invariant law).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gain_rz: Option<f64>,
     /// Control period, s.
     #[serde(default = "default_dt")]
     pub dt: f64,
-    /// Depths given to the law.
-    #[serde(default = "default_depths")]
-    pub depths: DepthsName,
-    /// Feed-forward term of eq. (17).
-    #[serde(default = "yes")]
-    pub feedforward: bool,
-    /// IBVS interaction matrix.
-    #[serde(default)]
-    pub interaction: Interaction,
-    /// The invariant law's task on the rotation about the optical axis.
-    #[serde(default)]
-    pub rz_task: RzTask,
+    /// Depths given to the law (default: the reference depths).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depths: Option<DepthsName>,
+    /// Feed-forward term of eq. (17) (default on; invariant law).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedforward: Option<bool>,
+    /// IBVS interaction matrix (default: the current one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interaction: Option<Interaction>,
+    /// The invariant law's task on the rotation about the optical axis (default: the angle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rz_task: Option<RzTask>,
     /// Largest commanded linear speed, m/s (the twist is scaled as a whole).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_linear_speed: Option<f64>,
@@ -206,25 +216,50 @@ pub struct ControlSpec {
 fn default_law() -> LawName {
     LawName::Invariant
 }
-fn default_depths() -> DepthsName {
-    DepthsName::Reference
-}
 
 impl Default for ControlSpec {
     fn default() -> Self {
         Self {
             law: default_law(),
-            gain: 1.0,
-            gain_rz: 1.0,
+            gain: None,
+            gain_rz: None,
             dt: default_dt(),
-            depths: default_depths(),
-            feedforward: true,
-            interaction: Interaction::Current,
-            rz_task: RzTask::Angle,
+            depths: None,
+            feedforward: None,
+            interaction: None,
+            rz_task: None,
             max_linear_speed: None,
             max_angular_speed_deg: None,
             adaptive_gain: None,
         }
+    }
+}
+
+/// The values the laws use: a key's value, or its default when not given.
+impl ControlSpec {
+    /// lambda, 1/s.
+    pub fn gain(&self) -> f64 {
+        self.gain.unwrap_or(1.0)
+    }
+    /// eta, 1/s.
+    pub fn gain_rz(&self) -> f64 {
+        self.gain_rz.unwrap_or(1.0)
+    }
+    /// The depths given to the law.
+    pub fn depths(&self) -> DepthsName {
+        self.depths.unwrap_or(DepthsName::Reference)
+    }
+    /// Whether the feed-forward term of eq. (17) is on.
+    pub fn feedforward(&self) -> bool {
+        self.feedforward.unwrap_or(true)
+    }
+    /// The IBVS interaction matrix.
+    pub fn interaction(&self) -> Interaction {
+        self.interaction.unwrap_or_default()
+    }
+    /// The invariant law's task on the rotation about the optical axis.
+    pub fn rz_task(&self) -> RzTask {
+        self.rz_task.unwrap_or_default()
     }
 }
 
