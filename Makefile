@@ -53,7 +53,7 @@ bench: install
 # and the property tests on new random examples (CI runs a fixed sequence).
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
-	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness.py tests/test_api.py tests/test_se3.py
+	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness_*.py tests/test_api.py tests/test_se3.py
 	VSINV_PROPTEST_RANDOM=1 cargo test --release $(addprefix --test ,$(ROBUSTNESS_TESTS)) --test invariance
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
