@@ -3,6 +3,9 @@
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 RUST_EXAMPLES := control_loop servo_loop simulation batch
+# The property tests of tests/robustness_*.rs (the census, a report, is left out).
+ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
+	robustness_vision robustness_regressions
 
 .PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
@@ -50,8 +53,8 @@ bench: install
 # and the property tests on new random examples (CI runs a fixed sequence).
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
-	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness.py tests/test_api.py tests/test_se3.py
-	VSINV_PROPTEST_RANDOM=1 cargo test --release --test robustness --test invariance
+	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness_*.py tests/test_api.py tests/test_se3.py
+	VSINV_PROPTEST_RANDOM=1 cargo test --release $(addprefix --test ,$(ROBUSTNESS_TESTS)) --test invariance
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run

@@ -65,18 +65,30 @@ def scene():
     return {"object": obj, "k_star": k_star, "k": k, "ref": ref, "z_star": z_star, "cur": cur, "z": z}
 
 
+@pytest.fixture(scope="session", autouse=True)
+def _robustness_census_dump():
+    """With VSINV_CENSUS=path, merges the robustness census of this session (the
+    tests/test_robustness_*.py modules) into the JSON file path."""
+    yield
+    import sys
+
+    module = sys.modules.get("robustness_harness")
+    if module is not None:
+        module.dump_census()
+
+
 def pytest_terminal_summary(terminalreporter):
     """With VSINV_CENSUS=path, the robustness census (calls tried, returned, raised by class,
-    per API) of this session, as written by tests/test_robustness.py."""
+    per API) of this session, as written by tests/robustness_harness.py."""
     import json
     import os
     import sys
 
     path = os.environ.get("VSINV_CENSUS")
-    module = sys.modules.get("test_robustness")
+    module = sys.modules.get("robustness_harness")
     if not path or module is None or not module.CENSUS:
         return
     terminalreporter.section("vsinv robustness census (this session)")
     terminalreporter.write_line(module.census_table({k: dict(v) for k, v in module.CENSUS.items()}))
-    terminalreporter.write_line(f"(merged into {path}; print it with: python tests/test_robustness.py {path})")
+    terminalreporter.write_line(f"(merged into {path}; print it with: python tests/robustness_harness.py {path})")
     del json

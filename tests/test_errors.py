@@ -216,7 +216,7 @@ def test_equal_depths_are_refused_with_what_to_do_instead(scene):
     assert "estimated" in str(info.value)
 
 
-# Regressions found by tests/test_robustness.py ------------------------------------------------
+# Regressions found by tests/test_robustness_*.py ----------------------------------------------
 
 
 def test_non_finite_entries_of_2d_arrays_are_reported_by_row_and_column(scene):

@@ -1,0 +1,30 @@
+//! Robustness of the public Rust API, text inputs: calibration files and scenarios, mutated:
+//! proptest over every fallible function.
+//!
+//! For arbitrary inputs (NaN, +-inf, zero, negative, 1e300, 1e-300, wrong lengths, degenerate
+//! geometry) every fallible function returns a finite `Ok` or an `Err` whose message names the
+//! argument and, for a fault in an array, its row (and column). No panic: proptest reports one
+//! as a failure. Iterative methods are bounded by their iteration caps, not by the clock. The
+//! harness is tests/common/robustness/mod.rs, the properties of this file are in
+//! tests/common/robustness/files.rs.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+#[path = "common/robustness/files.rs"]
+mod files;
+#[path = "common/robustness/mod.rs"]
+mod robustness;
+
+use files::{prop_calibration, prop_scenario};
+
+// ---------------------------------------------------------------------------------------------
+// The tests: cases per API group.
+
+#[test]
+fn calibration_files() {
+    prop_calibration(384);
+}
+#[test]
+fn scenario_files() {
+    prop_scenario(96);
+}

@@ -1,0 +1,29 @@
+//! Robustness of the public Rust API, depths and planning: proptest over every fallible function.
+//!
+//! For arbitrary inputs (NaN, +-inf, zero, negative, 1e300, 1e-300, wrong lengths, degenerate
+//! geometry) every fallible function returns a finite `Ok` or an `Err` whose message names the
+//! argument and, for a fault in an array, its row (and column). No panic: proptest reports one
+//! as a failure. Iterative methods are bounded by their iteration caps, not by the clock. The
+//! harness is tests/common/robustness/mod.rs, the properties of this file are in
+//! tests/common/robustness/planning.rs.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod common;
+#[path = "common/robustness/planning.rs"]
+mod planning;
+#[path = "common/robustness/mod.rs"]
+mod robustness;
+
+use planning::{prop_depths, prop_planning};
+
+// ---------------------------------------------------------------------------------------------
+// The tests: cases per API group.
+
+#[test]
+fn depths() {
+    prop_depths(256);
+}
+#[test]
+fn planning() {
+    prop_planning(256);
+}

@@ -1,0 +1,72 @@
+"""Robustness of the public Python API under hypothesis, the exception classes, the version, and
+the registry: every public name is covered by a robustness test of one of the
+tests/test_robustness_*.py modules.
+
+The promise and the harness are described in tests/robustness_harness.py.
+"""
+
+from __future__ import annotations
+
+import importlib
+import re
+import sys
+
+import vsinv
+import vsinv.sweep
+from robustness_harness import REGISTRY, covers
+
+
+# The modules whose tests fill the registry (@covers), imported here so that this module alone
+# checks the whole API.
+AREAS = (
+    "test_robustness_geometry",
+    "test_robustness_camera",
+    "test_robustness_se3",
+    "test_robustness_control",
+    "test_robustness_planning",
+    "test_robustness_scenarios",
+    "test_robustness_vision",
+)
+for _name in AREAS:
+    importlib.import_module(_name)
+
+
+# ---------------------------------------------------------------------------------------------
+# exceptions, version, and the registry itself
+
+
+@covers("VsinvError", "InvalidInput", "DegenerateGeometry", "NotReady", "__version__")
+def test_exception_classes_and_version() -> None:
+    for cls in (vsinv.InvalidInput, vsinv.DegenerateGeometry, vsinv.NotReady):
+        assert issubclass(cls, vsinv.VsinvError) and cls.__module__ == "vsinv"
+        e = cls("msg")
+        assert str(e) == "msg" and isinstance(e, Exception)
+    assert isinstance(vsinv.__version__, str) and re.fullmatch(r"\d+\.\d+\.\d+.*", vsinv.__version__)
+
+
+def public_members(cls: type) -> list[str]:
+    out = []
+    for name in dir(cls):
+        if name.startswith("_"):
+            continue
+        attr = getattr(cls, name)
+        if isinstance(attr, type) and issubclass(attr, BaseException):
+            continue
+        out.append(f"{cls.__name__}.{name}")
+    return out
+
+
+def test_every_public_name_has_a_robustness_test() -> None:
+    """New API cannot slip through: every name of vsinv.__all__ and vsinv.sweep.__all__, and
+    every public method and property of the public classes, is covered by a test above."""
+    names = set(vsinv.__all__) | {f"sweep.{n}" for n in vsinv.sweep.__all__}
+    classes = [getattr(vsinv, n) for n in vsinv.__all__ if isinstance(getattr(vsinv, n), type)]
+    for cls in classes:
+        if issubclass(cls, BaseException) or cls.__module__.startswith("vsinv.sweep"):
+            continue
+        names.update(public_members(cls))
+    missing = sorted(n for n in names if not REGISTRY.get(n))
+    assert not missing, f"public names without a robustness test: {missing}"
+    tests = {t for ts in REGISTRY.values() for t in ts}
+    modules = [sys.modules[name] for name in (*AREAS, __name__)]
+    assert all(any(callable(getattr(module, t, None)) for module in modules) for t in tests)

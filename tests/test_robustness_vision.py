@@ -1,0 +1,197 @@
+"""Robustness of the public Python API under hypothesis, images: rendering, dot detection and
+tracking, image files.
+
+The promise and the harness are described in tests/robustness_harness.py.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+import vsinv
+from robustness_harness import (
+    ANY, INVALID, RAISE, RETURN, SAME, TYPE, V, VISION, arrays, call, choices, covers, cv2, floats, fuzz,
+    fuzz_settings, ints, returned,
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# images
+
+
+def image_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
+    h, w = valid.shape
+    return st.sampled_from([
+        V(valid, SAME, "valid"),
+        V(np.asfortranarray(valid), SAME, "fortran"),
+        V(np.repeat(valid, 2, axis=1)[:, ::2], SAME, "strided"),
+        V(valid.astype(np.int64), INVALID, "int64"),
+        V(valid.astype(np.float64), INVALID, "float64"),
+        V(valid.astype(np.uint16), INVALID, "uint16"),
+        V(np.stack([valid] * 3, axis=-1), INVALID, "colour"),
+        V(valid.ravel(), INVALID, "1-d"),
+        V(valid.tolist(), INVALID, "list"),
+        V(None, INVALID, "none"),
+        V("abc", INVALID, "str"),
+        V(np.zeros((0, w), np.uint8), INVALID, "empty"),
+        V(np.zeros((h, 0), np.uint8), INVALID, "no columns"),
+        V(np.zeros((1, 1), np.uint8), ANY, "1x1"),
+        V(np.zeros_like(valid), ANY, "black"),
+        V(np.full_like(valid, 255), ANY, "white"),
+        V(valid[: h // 2], ANY, "half"),
+        V(valid.astype(object), INVALID, "object"),
+        V(valid.view(np.int8), INVALID, "int8"),
+    ])
+
+
+IMG_LOCK: dict[str, Any] = {}
+
+
+def rendered() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if "view" not in IMG_LOCK:
+        IMG_LOCK["view"] = vsinv.render_view(VISION)
+    return IMG_LOCK["view"]
+
+
+@covers("render", "render_view")
+@fuzz_settings(40)
+@given(st.data())
+def test_render(data: Any) -> None:
+    fn = data.draw(st.sampled_from([vsinv.render, vsinv.render_view]))
+    p0 = vsinv.pose_from_position_thetau([0.02, -0.01, -0.05], [0.05, -0.02, 0.1])
+    scen = dict(VISION)
+    size = data.draw(st.sampled_from([None, (64, 48), (1, 1), (0, 48), (-5, 48), (70000, 10), (12.5, 48), ("a", 48)]))
+    if size is not None:
+        scen = json.loads(json.dumps(VISION))
+        for cam in ("reference_camera", "camera"):
+            if scen.get(cam):
+                scen[cam]["width"], scen[cam]["height"] = size
+    valid_size = size is None or (isinstance(size[0], (int, float)) and 1 <= size[0] <= 65536)  # sizes are real numbers
+    args = {"scenario": scen, "pose": p0, "time": 0.0, "reference": False}
+    pose_over = {"zero": INVALID, "negative": INVALID, "fewer": INVALID, "empty": INVALID, "flat": INVALID, "huge": INVALID,
+                 "bool": INVALID, "tiny": INVALID, "none": ANY, "float32": ANY}  # None: the start pose
+    strategies = {"pose": arrays(p0, overrides=pose_over),
+                  "time": floats(0.0, overrides={"negative": INVALID, "neghuge": INVALID, "neginf": INVALID, "posinf": INVALID}),
+                  "reference": choices([True, False, np.bool_(True)], ["yes", None, 0], TYPE),
+                  "scenario": st.sampled_from([V(scen, SAME, "dict"), V("vision-12-12", ANY, "name"), V("lens-12-12", ANY, "no vision"),
+                                               V("nope", INVALID, "unknown"), V(None, INVALID, "none"), V(3, INVALID, "int")])}
+
+    def check(out: Any) -> None:
+        image = out[0] if isinstance(out, tuple) else out
+        assert image.dtype == np.uint8 and image.ndim == 2 and image.flags.c_contiguous
+        if isinstance(out, tuple):
+            _, px, vis = out
+            assert px.shape == (len(vis), 2) and vis.dtype == np.bool_
+
+    if not valid_size:
+        call(fn, **args, _expect=INVALID, _names=("width", "height", "camera"))
+        return
+    ref = fn(**args)
+    fuzz(data, fn, args, strategies, ref=ref, check=check, finite=False,
+         digest=lambda o: o if isinstance(o, np.ndarray) else o[0])
+    if size is None and fn is vsinv.render_view:
+        image, px, vis = ref
+        h, w = image.shape
+        inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
+        assert (vis <= inside).all()
+
+
+@covers("detect_dots", "Dots", "Dots.centroids", "Dots.areas", "Dots.bboxes")
+@fuzz_settings(100)
+@given(st.data())
+def test_detect_dots(data: Any) -> None:
+    image, px, vis = rendered()
+    ref = vsinv.detect_dots(image)
+    assert len(ref) == int(vis.sum())
+    args = {"image": image, "threshold": None, "min_area": 4, "max_area": None}
+    digest = lambda d: (d.centroids, d.areas, d.bboxes)  # noqa: E731
+    name, v, out = fuzz(data, vsinv.detect_dots, args,
+                        {"image": image_variants(image),
+                         "threshold": ints(128, overrides={"huge": INVALID, "none": SAME, "valid": ANY, "npint": ANY}),
+                         "min_area": ints(4),
+                         "max_area": ints(10_000, overrides={"none": SAME})},
+                        digest=digest, ref=ref)
+    if returned(out):
+        c = call(getattr, out, "centroids", _api="Dots.centroids")
+        a = call(getattr, out, "areas", _api="Dots.areas")
+        b = call(getattr, out, "bboxes", _api="Dots.bboxes")
+        m = len(out)
+        assert c.shape == (m, 2) and a.shape == (m,) and b.shape == (m, 4) and b.dtype == np.int64
+        assert (b[:, 0] <= c[:, 0]).all() and (c[:, 0] <= b[:, 2]).all()
+
+
+@covers("DotTracker", "DotTracker.track", "DotTracker.positions")
+@fuzz_settings(100)
+@given(st.data())
+def test_dot_tracker(data: Any) -> None:
+    image, px, vis = rendered()
+    clicks = px[vis] + 1.0
+    args = {"image": image, "initial_pixels": clicks, "search_radius": 20.0, "max_search_radius": 80.0, "min_area": 4}
+    ref = vsinv.DotTracker(**args)
+    digest = lambda t: t.positions  # noqa: E731
+    over = {"fewer": ANY, "empty": ANY, "huge": ANY, "zero": ANY}
+    name, v, out = fuzz(data, vsinv.DotTracker, args,
+                        {"image": image_variants(image), "initial_pixels": arrays(clicks, overrides=over),
+                         "search_radius": floats(20.0, overrides={"nan": INVALID}),
+                         "max_search_radius": floats(80.0, overrides={"nan": INVALID}), "min_area": ints(4)},
+                        api="DotTracker", digest=digest, ref=ref)
+    tracker = out if returned(out) else ref
+    pos = call(getattr, tracker, "positions", _api="DotTracker.positions")
+    assert pos.shape == (len(tracker), 2)
+    nxt = data.draw(image_variants(image), label="track image")
+    res = call(tracker.track, nxt.value, _expect=nxt.expect if nxt.expect != SAME else RETURN, _names=("image",))
+    if returned(res):
+        p, found = res
+        assert p.shape == (len(tracker), 2) and found.shape == (len(tracker),) and found.dtype == np.bool_
+        if nxt.expect == SAME and tracker is ref:
+            np.testing.assert_allclose(p[found], px[vis][found], atol=0.5)
+
+
+@covers("load_image", "save_image")
+@fuzz_settings(60)
+@given(data=st.data())
+def test_images_on_disk(tmp_path_factory: Any, data: Any) -> None:
+    image = rendered()[0][:40, :50].copy()
+    folder = tmp_path_factory.mktemp("img")
+    v = data.draw(image_variants(image), label="image")
+    target = data.draw(st.sampled_from(["ok.png", "dir", "missing/x.png", "noext", "ok.gif"]), label="path")
+    path = folder / target if target != "dir" else folder
+    expect = v.expect
+    if expect in (SAME, ANY) and target in ("dir", "missing/x.png"):
+        expect = RAISE
+    out = call(vsinv.save_image, v.value, path, _expect=expect, _names=("image", str(path), "path"))
+    if returned(out) and v.expect == SAME and target == "ok.png":
+        back = call(vsinv.load_image, path, _expect=RETURN)
+        assert np.array_equal(back, image)
+        assert np.array_equal(cv2.imread(str(path), cv2.IMREAD_UNCHANGED), image)
+    # bad files
+    garbage = folder / "bad.png"
+    kind = data.draw(st.sampled_from(["truncated", "text", "empty", "colour", "gif"]), label="file")
+    if kind == "truncated":
+        cv2.imwrite(str(garbage), image)
+        blob = garbage.read_bytes()
+        garbage.write_bytes(blob[: data.draw(st.integers(0, len(blob) - 1))])
+        expect = ANY  # a PNG cut after its image data still decodes
+    elif kind == "text":
+        garbage.write_text("not a png")
+        expect = RAISE
+    elif kind == "empty":
+        garbage.write_bytes(b"")
+        expect = RAISE
+    elif kind == "colour":
+        cv2.imwrite(str(garbage), np.stack([image, image // 2, image // 3], axis=-1))
+        expect = RETURN
+    else:
+        garbage = folder / "bad.gif"
+        garbage.write_bytes(b"GIF89a" + bytes(20))
+        expect = RAISE
+    out = call(vsinv.load_image, garbage, _expect=expect, _names=(str(garbage), "image"))
+    if returned(out):
+        assert out.dtype == np.uint8 and out.shape == image.shape
+    for bad, e in ((folder / "nothing.png", RAISE), (folder, RAISE), (None, TYPE), (3, TYPE)):
+        call(vsinv.load_image, bad, _expect=e, _names=(str(bad), "path", "image"))
