@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 import vsinv
 from conftest import lens
 from robustness_harness import (
-    ANY, CUR_PX, CUR_Z, INVALID, K, KSTAR, N, RAISE, REF_PX, REF_Z, RETURN, SAME, TYPE, V, arrays, assert_same,
+    ANY, CUR_PX, CUR_Z, FIRST_PX, FIRST_Z, INVALID, K, KSTAR, N, RAISE, REF_PX, REF_Z, RETURN, SAME, TYPE, V, arrays, assert_same,
     basis_variants, call, choices, covers, depth_variants, floats, fuzz, fuzz_settings, ints, k_variants,
     manual_invariants, pixel_variants, returned,
 )
@@ -325,3 +325,87 @@ def test_pixel_noise_meter(data: Any) -> None:
     d = frames[0] - 2 * frames[1] + frames[2]
     sigma = call(getattr, meter, "sigma", _api="PixelNoiseMeter.sigma")
     assert sigma == pytest.approx(np.sqrt(np.mean(d**2) / 6), rel=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# servo sessions
+
+SERVO_ARGS: dict[str, Any] = {"reference_pixels": REF_PX, "K_hat": K, "law": "invariant", "reference_depths": REF_Z,
+                              "depths": "reference", "gain": 1.0, "dt": 0.04, "stop": None, "stop_rule": None}
+
+
+def servo_strategies() -> dict[str, st.SearchStrategy[V]]:
+    positive = {"zero": INVALID, "negative": INVALID, "neghuge": INVALID, "neginf": INVALID}
+    return {
+        # basis "auto": a collinear or duplicated point 0, 1, 2 need not be refused
+        "reference_pixels": pixel_variants(REF_PX, ANY, overrides={"fewer": ANY, "empty": RAISE, "negative": ANY}),
+        "K_hat": k_variants(K),
+        "law": choices(["invariant", "ibvs", "none"], ["pbvs", "", "Invariant"]),
+        "reference_depths": depth_variants(REF_Z, {"none": INVALID}),
+        "depths": choices(["reference", "per_step", 0.6, vsinv.ResectionDepths(FIRST_PX, FIRST_Z, REF_PX, 0.6)],
+                          ["ref", "", -1.0, math.nan, math.inf, 0.0]),
+        "gain": floats(1.0, overrides=positive),
+        "dt": floats(0.04, overrides=positive),
+        "stop": choices([None, {"window": 3}, {"max_iterations": 10, "pixel_error": 1.0}, {"reference_pixel_sigma": 0.1}],
+                        [{"windw": 1}, {"window": 0}, {"window": -1}, {"pixel_error": "a"}, {1: 2}]),
+        "stop_rule": choices([None, "pixel", "invariant"], ["Pixel", ""]),
+    }
+
+
+@covers("Servo", "ServoStep", "Servo.step", "ServoStep.twist", "ServoStep.verdict", "ServoStep.reason",
+        "ServoStep.running", "ServoStep.telemetry")
+@fuzz_settings(200)
+@given(st.data())
+def test_servo_constructor(data: Any) -> None:
+    names = {"K_hat": ("K_hat", "intrinsics"), "reference_depths": ("reference_depths", "depths"),
+             "stop": ("stop", "window", "max_iterations")}
+    name, v, servo = fuzz(data, vsinv.Servo, SERVO_ARGS, servo_strategies(), api="Servo", names=names)
+    if not returned(servo):
+        return
+    per_step = CUR_Z if name == "depths" and isinstance(v.value, str) and v.value == "per_step" else None
+    step = call(servo.step, CUR_PX, None, per_step, _api="Servo.step", _finite=False)
+    if returned(step):
+        assert step.twist.shape == (6,) and isinstance(step.verdict, str)
+        assert step.running == (step.reason is None) and set(step.telemetry) >= {"iteration", "eps", "tau"}
+
+
+@covers("Servo.step")
+@fuzz_settings(200)
+@given(st.data())
+def test_servo_steps(data: Any) -> None:
+    per_step = data.draw(st.booleans(), label="per_step")
+    servo = vsinv.Servo(REF_PX, K, reference_depths=REF_Z, depths="per_step" if per_step else "reference")
+    args: dict[str, Any] = {"pixels": CUR_PX, "visible": None, "depths": CUR_Z if per_step else None}
+    ones = np.ones(N, bool)
+    strategies: dict[str, Any] = {
+        "pixels": pixel_variants(CUR_PX, ANY, overrides={"fewer": INVALID, "empty": INVALID, "zero": ANY, "bool": ANY}),
+        "visible": st.one_of(
+            st.sampled_from([V(None, RETURN, "none"), V(ones, RETURN, "all"), V(ones.tolist(), RETURN, "list")]),
+            st.sampled_from([V(np.ones(N, int), INVALID, "int"), V(np.ones(N - 1, bool), INVALID, "short"),
+                             V("abc", INVALID, "str"), V(np.zeros(N, bool), RETURN, "none visible: lost_features")]),
+        ),
+    }
+    if per_step:
+        strategies["depths"] = depth_variants(CUR_Z, {"zero": RAISE, "negative": RAISE, "none": INVALID})
+    _, _, step = fuzz(data, servo.step, args, strategies, api="Servo.step", finite=False,
+                      names={"pixels": ("pixels", "points", "visible")})
+    if returned(step):
+        assert step.twist.shape == (6,) and np.all(np.isfinite(step.twist))
+
+
+@covers("Servo.basis", "Servo.certainty", "Servo.iterations", "Servo.law", "Servo.pixel_sigma",
+        "Servo.reference_pixels", "Servo.stop_rule")
+@fuzz_settings(20)
+@given(st.data())
+def test_servo_state(data: Any) -> None:
+    law = data.draw(st.sampled_from(["invariant", "ibvs", "none"]))
+    servo = vsinv.Servo(REF_PX, K, law, reference_depths=REF_Z)
+    steps = data.draw(st.integers(0, 4))
+    for _ in range(steps):
+        servo.step(CUR_PX)
+    assert servo.law == law and len(servo.basis) == 3 and servo.reference_pixels.shape == (N, 2)
+    assert servo.iterations == steps
+    assert (servo.pixel_sigma is None) == (steps < 3)
+    c = servo.certainty()
+    assert c is None or all(math.isfinite(v) for v in c.values())
+    assert servo.stop_rule in ("pixel", "invariant")

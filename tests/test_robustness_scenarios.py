@@ -193,6 +193,15 @@ def test_run_batch(data: Any) -> None:
     call(vsinv.run_batch, 3, _expect=TYPE, _names=("scenarios", "iterable"))
 
 
+# The sweep's table converts to pandas and writes parquet with pyarrow when they are installed:
+# import them once here, so that the timed calls measure the conversion, not a first import
+# (seconds on a loaded machine).
+for _module in ("pandas", "pyarrow", "pyarrow.parquet"):
+    try:
+        __import__(_module)
+    except ImportError:
+        pass
+
 # ---------------------------------------------------------------------------------------------
 # sweeps (vsinv.sweep and its names in vsinv)
 

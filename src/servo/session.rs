@@ -12,7 +12,7 @@ use crate::core::distortion::{Distortion, undistort_point};
 use crate::core::invariant::{choose_basis, validate_basis};
 use crate::core::noise_meter::PixelNoiseMeter;
 use crate::core::uncertainty::Measurement;
-use crate::error::{Error, Result, check_positive};
+use crate::error::{Error, Result, check_finite_points, check_positive};
 use crate::servo::certainty::Certainty;
 use crate::servo::depths::ServoDepths;
 use crate::servo::law::{Law, ServoLaw};
@@ -109,20 +109,15 @@ impl Servo {
         config.stop.validate()?;
         let ServoReference { pixels, depths: reference_depths } = reference;
         let n = pixels.len();
-        if let Some(z) = &reference_depths
-            && z.len() != n
-        {
-            return Err(Error::Shape {
-                what: "reference depths",
-                expected: format!("{n} depths"),
-                got: z.len().to_string(),
-            });
-        }
+        check_finite_points("reference_pixels", &pixels)?;
         let basis = match config.basis {
             Some(b) => validate_basis(b, n)?,
             None => choose_basis(&pixels)?,
         };
         let reference_image = ReferenceImage::new(pixels, basis)?;
+        if let Some(z) = &reference_depths {
+            check_depths("reference_depths", z, None, n)?;
+        }
         let law = config.law.build(&reference_image.pixels, basis, reference_depths.as_deref(), config.k_hat)?;
         if config.path.is_some() && law.invariant().is_none() {
             return Err(Error::InvalidParameter {
@@ -205,8 +200,10 @@ impl Servo {
             None => self.visible.fill(true),
         }
         match (&self.depth_source, depths) {
-            (ServoDepths::PerStep, Some(z)) if z.len() == n => self.depths.copy_from_slice(z),
-            (ServoDepths::PerStep, Some(z)) => return Err(shape("depths", z.len())),
+            (ServoDepths::PerStep, Some(z)) => {
+                check_depths("depths", z, visible, n)?;
+                self.depths.copy_from_slice(z);
+            }
             (ServoDepths::PerStep, None) => {
                 return Err(Error::InvalidParameter {
                     name: "depths",
@@ -450,5 +447,20 @@ impl Servo {
             None if !self.law.moves() => None,
             None => self.certainty_of(&self.pixels, 1),
         }
+    }
+}
+
+/// Depths for `n` points: finite and positive where the point is in use.
+fn check_depths(what: &'static str, depths: &[f64], visible: Option<&[bool]>, n: usize) -> Result<()> {
+    if depths.len() != n {
+        return Err(Error::Shape { what, expected: format!("{n} depths"), got: depths.len().to_string() });
+    }
+    let in_use = |i: usize| visible.is_none_or(|v| v[i]);
+    if let Some(index) = (0..n).find(|&i| in_use(i) && !depths[i].is_finite()) {
+        return Err(Error::NonFinite { what, index });
+    }
+    match (0..n).find(|&i| in_use(i) && depths[i] <= 0.0) {
+        Some(index) => Err(Error::PointBehindCamera { index, depth: depths[index] }),
+        None => Ok(()),
     }
 }
