@@ -28,7 +28,6 @@ use crate::core::distortion::Distortion;
 use crate::error::{Error, Result, Short};
 use crate::vision::image::GreyImage;
 use crate::vision::target::Target;
-use crate::vision::target::dots::Dots;
 
 /// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
 /// sizes are refused with `InvalidParameter("image size")` before any allocation.
@@ -161,23 +160,6 @@ impl Renderer {
         check_flags("drawn", drawn.len(), n)?;
         Ok(Rendered { image: canvas.into_image(), drawn })
     }
-
-    /// [`Renderer::render`] of [`Dots`] of radius `dot_radius` at `points` (F*), facing the
-    /// reference camera, through a pinhole camera at `pose`: a shorthand kept for the
-    /// property tests (`tests/robustness.rs`); everything else calls [`Renderer::render`].
-    pub fn render_points(
-        &self,
-        points: &[[f64; 3]],
-        visible: Option<&[bool]>,
-        pose: &Isometry3<f64>,
-        k: &Intrinsics,
-        size: (u32, u32),
-        frame: u64,
-    ) -> Result<Rendered> {
-        let dots = Dots::facing_reference(points, self.config.dot_radius)?;
-        let view = CameraView { pose, intrinsics: k, distortion: &Distortion::none(), size };
-        self.render(&dots, visible, &view, frame)
-    }
 }
 
 /// `got` flags where the target has `expected` points.
@@ -192,6 +174,7 @@ fn check_flags(what: &'static str, got: usize, expected: usize) -> Result<()> {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
+    use crate::vision::target::dots::Dots;
 
     /// A pinhole camera at F*.
     fn pinhole(k: &Intrinsics, size: (u32, u32)) -> CameraView<'_> {

@@ -112,10 +112,13 @@ pub fn prop_render(cases: u32) {
         check("se3::pose_from_position_thetau", &pose, |p| finite(p.to_homogeneous().iter()))?;
         let Ok(pose) = pose else { return Ok(()) };
         let k = random_intrinsics(&mut Lcg(seed));
-        let out = renderer.render_points(&points, vis.as_deref(), &pose, &k, size, seed);
-        check("vision::Renderer::render_points", &out, |o| {
-            o.image.dimensions() == size && o.drawn.len() == points.len()
-        })?;
+        let dots = vsinv::vision::Dots::facing_reference(&points, renderer.config().dot_radius);
+        check("vision::Dots::facing_reference", &dots, |_| true)?;
+        let Ok(dots) = dots else { return Ok(()) };
+        let distortion = vsinv::Distortion::none();
+        let view = vsinv::vision::CameraView { pose: &pose, intrinsics: &k, distortion: &distortion, size };
+        let out = renderer.render(&dots, vis.as_deref(), &view, seed);
+        check("vision::Renderer::render", &out, |o| o.image.dimensions() == size && o.drawn.len() == points.len())?;
         let disc = vsinv::vision::Disc::new(points.first().copied().unwrap_or([0.0; 3]), t, c.0);
         check("vision::Disc::new", &disc, |d| finite(d.center.iter()) && (d.normal.norm() - 1.0).abs() < 1e-9)
     });
