@@ -8,9 +8,9 @@ use pyo3::types::{PyDict, PyString, PyTuple};
 
 use super::errors::{PyError, invalid_argument, reraise};
 use crate::sim::arm::ArmRobot;
+use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
 use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin};
-use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).

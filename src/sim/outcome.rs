@@ -206,20 +206,51 @@ use Axis::{Fixed, Joints, Points, Rows};
 pub const COLUMNS: [Column; 16] = [
     column("time", "s", &[Rows], "time"),
     column("pose", "m", &[Rows, Fixed(4), Fixed(4)], "camera pose in F* (4x4, translation in metres)"),
-    column("twist", "m/s, rad/s", &[Rows, Fixed(6)], "twist sent to the robot (vx, vy, vz, wx, wy, wz; NaN on the last row when no step followed)"),
+    column(
+        "twist",
+        "m/s, rad/s",
+        &[Rows, Fixed(6)],
+        "twist sent to the robot (vx, vy, vz, wx, wy, wz; NaN on the last row when no step followed)",
+    ),
     column("joints", "m, rad", &[Rows, Joints], "joint positions (x, y, z, theta-u for the free-flying camera)"),
     column("pixels", "px", &[Rows, Points, Fixed(2)], "measured pixels (NaN where not visible)"),
     Column { boolean: true, ..column("visible", "bool", &[Rows, Points], "visibility of each point") },
     column("invariant_error", "1", &[Rows], "||s - s*||, to the reference image"),
-    column("tracking_error", "1", &[Rows], "||s - s*(t)||, to the moving reference of a planned path (NaN outside the invariant law)"),
+    column(
+        "tracking_error",
+        "1",
+        &[Rows],
+        "||s - s*(t)||, to the moving reference of a planned path (NaN outside the invariant law)",
+    ),
     column("eps", "m, rad", &[Rows, Fixed(5)], "task function eps (NaN for IBVS)"),
     column("eps_z", "px^2", &[Rows], "eps_z = det(Q*) tau_21"),
     column("image_error", "px", &[Rows], "largest distance of a visible point from its reference pixel"),
     column("translation_error", "m", &[Rows], "distance of the camera centre from the reference pose"),
     column("rotation_error", "rad", &[Rows], "rotation angle from the reference pose"),
-    column("reference_pixels", "px", &[Points, Fixed(2)], "reference pixels (with their noise, if any); one row per point, not per iteration"),
-    Column { recorded: Recorded::Vision, ..column("detection_error", "px", &[Rows, Points], "distance of each tracked centroid from the true projection of its dot's centre (NaN where not found)") },
-    Column { recorded: Recorded::Arm, ..column("joint_velocities", "m/s, rad/s", &[Rows, Joints], "an arm's joint velocities after saturation (NaN on the last row)") },
+    column(
+        "reference_pixels",
+        "px",
+        &[Points, Fixed(2)],
+        "reference pixels (with their noise, if any); one row per point, not per iteration",
+    ),
+    Column {
+        recorded: Recorded::Vision,
+        ..column(
+            "detection_error",
+            "px",
+            &[Rows, Points],
+            "distance of each tracked centroid from the true projection of its dot's centre (NaN where not found)",
+        )
+    },
+    Column {
+        recorded: Recorded::Arm,
+        ..column(
+            "joint_velocities",
+            "m/s, rad/s",
+            &[Rows, Joints],
+            "an arm's joint velocities after saturation (NaN on the last row)",
+        )
+    },
 ];
 
 /// A recorded buffer, flat and row-major.
@@ -308,34 +339,166 @@ use Legacy::{Degrees, Milli, Same};
 
 /// The numbers of the summary: the one declaration of their names and units.
 pub const SUMMARY_FIELDS: [SummaryField; 28] = [
-    field("final_translation_error", "m", |s| Some(s.final_translation_error), Some(Milli("final_translation_error_mm")), "final distance of the camera centre from the reference pose"),
-    field("final_rotation_error", "rad", |s| Some(s.final_rotation_error), Some(Degrees("final_rotation_error_deg")), "final rotation angle from the reference pose"),
-    field("final_image_error", "px", |s| Some(s.final_image_error), Some(Same("final_image_error_px")), "final largest distance of a visible point from its reference pixel"),
+    field(
+        "final_translation_error",
+        "m",
+        |s| Some(s.final_translation_error),
+        Some(Milli("final_translation_error_mm")),
+        "final distance of the camera centre from the reference pose",
+    ),
+    field(
+        "final_rotation_error",
+        "rad",
+        |s| Some(s.final_rotation_error),
+        Some(Degrees("final_rotation_error_deg")),
+        "final rotation angle from the reference pose",
+    ),
+    field(
+        "final_image_error",
+        "px",
+        |s| Some(s.final_image_error),
+        Some(Same("final_image_error_px")),
+        "final largest distance of a visible point from its reference pixel",
+    ),
     field("final_invariant_error", "1", |s| Some(s.final_invariant_error), None, "final ||s - s*||"),
     field("final_tau_11", "1", |s| Some(s.final_tau[0]), None, "final tau_11"),
     field("final_tau_21", "1", |s| Some(s.final_tau[1]), None, "final tau_21"),
     field("final_tau_22", "1", |s| Some(s.final_tau[2]), None, "final tau_22"),
-    field("start_translation_error", "m", |s| Some(s.start_error.0), Some(Milli("start_translation_error_mm")), "start distance from the reference pose"),
-    field("start_rotation_error", "rad", |s| Some(s.start_error.1), Some(Degrees("start_rotation_error_deg")), "start rotation angle from the reference pose"),
-    field("max_line_deviation", "m", |s| Some(s.max_line_deviation), Some(Milli("max_line_deviation_mm")), "largest distance of the camera centre from the segment between start and goal"),
-    field("peak_linear_speed", "m/s", |s| Some(s.peak_speeds.0), Some(Same("peak_linear_speed_m_s")), "largest commanded linear speed (after the law's twist limits)"),
-    field("peak_angular_speed", "rad/s", |s| Some(s.peak_speeds.1), Some(Degrees("peak_angular_speed_deg_s")), "largest commanded angular speed (after the law's twist limits)"),
-    field("path_duration", "s", |s| s.tracking.map(|t| t.duration), Some(Same("path_duration_s")), "duration of the planned path (None without a path)"),
-    field("plane_parallax_residual", "1", |s| s.tracking.map(|t| t.plane_parallax_residual), None, "RMS residual of the plane + parallax estimate"),
-    field("tracking_sigma", "1", |s| s.tracking.map(|t| t.sigma), None, "Prop. 3: smallest eigenvalue of A(t) + A(t)^T along the path"),
+    field(
+        "start_translation_error",
+        "m",
+        |s| Some(s.start_error.0),
+        Some(Milli("start_translation_error_mm")),
+        "start distance from the reference pose",
+    ),
+    field(
+        "start_rotation_error",
+        "rad",
+        |s| Some(s.start_error.1),
+        Some(Degrees("start_rotation_error_deg")),
+        "start rotation angle from the reference pose",
+    ),
+    field(
+        "max_line_deviation",
+        "m",
+        |s| Some(s.max_line_deviation),
+        Some(Milli("max_line_deviation_mm")),
+        "largest distance of the camera centre from the segment between start and goal",
+    ),
+    field(
+        "peak_linear_speed",
+        "m/s",
+        |s| Some(s.peak_speeds.0),
+        Some(Same("peak_linear_speed_m_s")),
+        "largest commanded linear speed (after the law's twist limits)",
+    ),
+    field(
+        "peak_angular_speed",
+        "rad/s",
+        |s| Some(s.peak_speeds.1),
+        Some(Degrees("peak_angular_speed_deg_s")),
+        "largest commanded angular speed (after the law's twist limits)",
+    ),
+    field(
+        "path_duration",
+        "s",
+        |s| s.tracking.map(|t| t.duration),
+        Some(Same("path_duration_s")),
+        "duration of the planned path (None without a path)",
+    ),
+    field(
+        "plane_parallax_residual",
+        "1",
+        |s| s.tracking.map(|t| t.plane_parallax_residual),
+        None,
+        "RMS residual of the plane + parallax estimate",
+    ),
+    field(
+        "tracking_sigma",
+        "1",
+        |s| s.tracking.map(|t| t.sigma),
+        None,
+        "Prop. 3: smallest eigenvalue of A(t) + A(t)^T along the path",
+    ),
     field("tracking_psi", "m/s, rad/s", |s| s.tracking.map(|t| t.psi), None, "Prop. 3: psi = 2 max ||b(t)||"),
     field("tracking_phi", "1/s", |s| s.tracking.map(|t| t.phi), None, "Prop. 3: phi = lambda sigma"),
-    field("tracking_bound", "m, rad", |s| s.tracking.map(|t| t.bound), None, "Prop. 3: the bound psi / phi on ||eps(t)||"),
-    field("observed_max_eps", "m, rad", |s| s.tracking.map(|t| t.max_eps), None, "largest ||eps(t)|| observed while the reference moved"),
-    field("detection_error_median", "px", |s| s.detection_error.map(|e| e.0), Some(Same("detection_error_median_px")), "median distance of a tracked centroid from its dot's true projection (None without [vision])"),
-    field("detection_error_max", "px", |s| s.detection_error.map(|e| e.1), Some(Same("detection_error_max_px")), "largest distance of a tracked centroid from its dot's true projection (None without [vision])"),
-    field("min_manipulability", "1", |s| s.min_manipulability, None, "smallest manipulability of the arm (None for other robots)"),
-    field("pixel_sigma", "px", |s| s.certainty.map(|c| c.pixel_sigma), Some(Same("pixel_sigma_px")), "pixel noise measured on the final images"),
-    field("reference_pixel_sigma", "px", |s| s.certainty.map(|c| c.reference_pixel_sigma), Some(Same("reference_pixel_sigma_px")), "the reference image's pixel noise"),
-    field("translation_sigma", "m", |s| s.certainty.map(|c| c.sigma.0), Some(Milli("translation_sigma_mm")), "one sigma of the final position the images allow"),
-    field("rotation_sigma", "rad", |s| s.certainty.map(|c| c.sigma.1), Some(Degrees("rotation_sigma_deg")), "one sigma of the final orientation the images allow"),
-    field("translation_uncertainty", "m", |s| s.certainty.map(|c| c.bound.0), Some(Milli("translation_uncertainty_mm")), "3 sigma plus the offset the mean error implies, position"),
-    field("rotation_uncertainty", "rad", |s| s.certainty.map(|c| c.bound.1), Some(Degrees("rotation_uncertainty_deg")), "3 sigma plus the offset the mean error implies, orientation"),
+    field(
+        "tracking_bound",
+        "m, rad",
+        |s| s.tracking.map(|t| t.bound),
+        None,
+        "Prop. 3: the bound psi / phi on ||eps(t)||",
+    ),
+    field(
+        "observed_max_eps",
+        "m, rad",
+        |s| s.tracking.map(|t| t.max_eps),
+        None,
+        "largest ||eps(t)|| observed while the reference moved",
+    ),
+    field(
+        "detection_error_median",
+        "px",
+        |s| s.detection_error.map(|e| e.0),
+        Some(Same("detection_error_median_px")),
+        "median distance of a tracked centroid from its dot's true projection (None without [vision])",
+    ),
+    field(
+        "detection_error_max",
+        "px",
+        |s| s.detection_error.map(|e| e.1),
+        Some(Same("detection_error_max_px")),
+        "largest distance of a tracked centroid from its dot's true projection (None without [vision])",
+    ),
+    field(
+        "min_manipulability",
+        "1",
+        |s| s.min_manipulability,
+        None,
+        "smallest manipulability of the arm (None for other robots)",
+    ),
+    field(
+        "pixel_sigma",
+        "px",
+        |s| s.certainty.map(|c| c.pixel_sigma),
+        Some(Same("pixel_sigma_px")),
+        "pixel noise measured on the final images",
+    ),
+    field(
+        "reference_pixel_sigma",
+        "px",
+        |s| s.certainty.map(|c| c.reference_pixel_sigma),
+        Some(Same("reference_pixel_sigma_px")),
+        "the reference image's pixel noise",
+    ),
+    field(
+        "translation_sigma",
+        "m",
+        |s| s.certainty.map(|c| c.sigma.0),
+        Some(Milli("translation_sigma_mm")),
+        "one sigma of the final position the images allow",
+    ),
+    field(
+        "rotation_sigma",
+        "rad",
+        |s| s.certainty.map(|c| c.sigma.1),
+        Some(Degrees("rotation_sigma_deg")),
+        "one sigma of the final orientation the images allow",
+    ),
+    field(
+        "translation_uncertainty",
+        "m",
+        |s| s.certainty.map(|c| c.bound.0),
+        Some(Milli("translation_uncertainty_mm")),
+        "3 sigma plus the offset the mean error implies, position",
+    ),
+    field(
+        "rotation_uncertainty",
+        "rad",
+        |s| s.certainty.map(|c| c.bound.1),
+        Some(Degrees("rotation_uncertainty_deg")),
+        "3 sigma plus the offset the mean error implies, orientation",
+    ),
 ];
 
 /// A summary field by name.
@@ -355,6 +518,7 @@ pub struct Outcome {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
 
@@ -373,7 +537,9 @@ mod tests {
     fn buffers_follow_the_declaration() {
         // Each buffer gets a length of its own: the declared order must match.
         let (rows, points, joints) = (3, 7, 5);
-        let f = |c: &str| vec![0.0; COLUMNS.iter().find(|k| k.name == c).unwrap().dims(rows, points, joints).iter().product()];
+        let f = |c: &str| {
+            vec![0.0; COLUMNS.iter().find(|k| k.name == c).unwrap().dims(rows, points, joints).iter().product()]
+        };
         let r = Recording {
             n_points: points,
             time: f("time"),
@@ -409,7 +575,9 @@ mod tests {
         for rule in [StopRule::Pixel, StopRule::Invariant] {
             assert_eq!(serde_json::to_string(&rule).unwrap(), format!("\"{}\"", rule.as_str()));
         }
-        for status in [Status::Converged, Status::MaxIterations, Status::LostFeatures, Status::RzTrap, Status::JointLimit] {
+        for status in
+            [Status::Converged, Status::MaxIterations, Status::LostFeatures, Status::RzTrap, Status::JointLimit]
+        {
             assert_eq!(serde_json::to_string(&status).unwrap(), format!("\"{}\"", status.as_str()));
         }
     }
