@@ -144,7 +144,11 @@ def _panels(
             kw["subplot_kw"] = {"projection": projection}
         fig, grid = plt.subplots(rows, cols, **kw)
         return fig, list(grid.ravel()), True
+    from matplotlib.axes import Axes as _Axes
+
     given = list(np.ravel(np.asarray(ax, dtype=object))) if isinstance(ax, (Sequence, np.ndarray)) else [ax]
+    if not given or not all(isinstance(a, _Axes) for a in given):
+        raise TypeError(f"ax: expected a matplotlib Axes, a sequence of them, or None, got {type(ax).__name__}")
     if len(given) == n and (projection is None or all(getattr(a, "name", "") == projection for a in given)):
         return cast("Figure", given[0].figure), given, False
     if len(given) != 1:

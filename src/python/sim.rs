@@ -246,7 +246,8 @@ fn add_column_properties(py: Python<'_>) -> PyResult<()> {
             Recorded::Vision => "; None without [vision]",
             Recorded::Arm => "; None for robots other than an arm",
         };
-        let doc = format!("{} ({}, shape ({}){only}).", c.description, c.unit, shape.join(", "));
+        let comma = if shape.len() == 1 { "," } else { "" };
+        let doc = format!("{} ({}, shape ({}{comma}){only}).", c.description, c.unit, shape.join(", "));
         ty.setattr(c.name, property.call1((get, py.None(), py.None(), doc))?)?;
     }
     Ok(())
