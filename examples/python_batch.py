@@ -22,8 +22,8 @@ def main() -> int:
         scenarios.append(d)
     table = vsinv.run_batch(scenarios)
     print("focal error | status    | iterations | final error (mm)")
-    for e, status, it, err in zip(errors, table["status"], table["iterations"], table["final_translation_error_mm"]):
-        print(f"{e:+10.0%} | {status:9} | {it:10d} | {err:.3f}")
+    for e, status, it, err in zip(errors, table["status"], table["iterations"], table["final_translation_error"]):
+        print(f"{e:+10.0%} | {status:9} | {it:10d} | {err * 1e3:.3f}")
     return 0 if all(s == "converged" for s in table["status"]) else 1
 
 

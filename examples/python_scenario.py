@@ -7,6 +7,7 @@ classic IBVS. Exits non-zero unless the invariant law converged.
 
 from __future__ import annotations
 
+import math
 import sys
 import tempfile
 from pathlib import Path
@@ -20,7 +21,7 @@ def main(out_dir: Path) -> int:
     s = result.summary
     print(
         f"lens-12-6: {s['status']} after {s['iterations']} iterations, "
-        f"{s['final_translation_error_mm']:.3f} mm, {s['final_rotation_error_deg']:.4f} deg"
+        f"{s['final_translation_error'] * 1e3:.3f} mm, {math.degrees(s['final_rotation_error']):.4f} deg"
     )
     written = save_figures(result, out_dir)
     print(f"{len(written)} figures in {out_dir}")
@@ -28,7 +29,7 @@ def main(out_dir: Path) -> int:
     d = vsinv.load_scenario("lens-12-6").to_dict()
     d["control"]["law"] = "ibvs"
     ibvs = vsinv.run_scenario(d, record=False).summary
-    print(f"classic IBVS: {ibvs['status']}, {ibvs['final_translation_error_mm']:.1f} mm from the goal")
+    print(f"classic IBVS: {ibvs['status']}, {ibvs['final_translation_error'] * 1e3:.1f} mm from the goal")
     return 0 if s["status"] == "converged" and written else 1
 
 

@@ -27,6 +27,9 @@ FIGURES = [
 REQUIRED = [
     "status",
     "iterations",
+    "final_translation_error",
+    "final_rotation_error",
+    "final_image_error",
     "final_translation_error_mm",
     "final_rotation_error_deg",
     "final_image_error_px",

@@ -6,6 +6,7 @@ The promise and the harness are described in tests/robustness_harness.py.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import os
@@ -17,6 +18,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import vsinv
+import vsinv.plots
 import vsinv.sweep
 from robustness_harness import (
     ANY, INVALID, RETURN, SAME, TYPE, VISION, arrays, call, choices, covers, floats, fuzz, fuzz_settings, ints,
@@ -115,8 +117,8 @@ def test_scenarios(data: Any) -> None:
         assert again == dd, [(k, dd[k], again.get(k)) for k in dd if dd[k] != again.get(k)]
 
 
-RUN_ARRAYS = ("time", "pose", "twist", "joints", "pixels", "visible", "invariant_error", "tracking_error", "eps", "eps_z",
-              "image_error", "translation_error", "rotation_error", "reference_pixels")
+# The columns every run records, from their declaration.
+RUN_ARRAYS = tuple(c["name"] for c in vsinv.recorded_columns() if c["recorded"] == "always")
 
 
 @covers("run_scenario", "RunResult", "RunResult.summary", "RunResult.scenario", "RunResult.arrays", "RunResult.time",
@@ -158,6 +160,39 @@ def test_run_scenario(data: Any) -> None:
     for name in ("detection_error", "joint_velocities", "joint_limits"):
         call(getattr, r, name, _api=f"RunResult.{name}", _finite=False)
     assert (r.detection_error is None) == ("vision" not in r.scenario.to_dict() or r.scenario.to_dict().get("vision") is None)
+
+
+@covers("recorded_columns", "summary_fields", "RunResult.columns", "RunResult.plot")
+@fuzz_settings(10)
+@given(kind=st.sampled_from([*vsinv.plots.PLOTS, "nope", "", None, 3, b"errors"]),
+       ax=st.sampled_from([None, "axes", "two", "three", 3]))
+def test_run_result_schema_and_plot(kind: Any, ax: Any) -> None:
+    vsinv.plots._use_agg()
+    import matplotlib.pyplot as plt
+
+    run = lens_run()
+    columns = call(vsinv.recorded_columns, _finite=False)
+    assert tuple(columns) == call(getattr, vsinv.RunResult, "columns", _api="RunResult.columns", _finite=False)
+    assert {f["name"] for f in call(vsinv.summary_fields, _finite=False)} <= set(run.summary)
+    fig, axes = plt.subplots(1, 3)
+    where = {"axes": axes[0], "two": [axes[0], axes[1]], "three": list(axes)}.get(ax, ax) if isinstance(ax, str) else ax
+    if not isinstance(kind, str):
+        expect = TYPE
+    elif kind not in vsinv.plots.PLOTS or kind in ("joints", "joint_velocities"):  # not an arm
+        expect = INVALID
+    else:
+        expect = TYPE if ax == 3 else ANY
+    try:
+        out = call(run.plot, kind, ax=where, _api="RunResult.plot", _expect=expect, _names=("kind", "ax"), _finite=False)
+        if returned(out) and where is None:
+            plt.close(out)
+    finally:
+        plt.close(fig)
+
+
+@functools.cache
+def lens_run() -> vsinv.RunResult:
+    return vsinv.run_scenario("lens-12-6")
 
 
 @covers("run_batch")

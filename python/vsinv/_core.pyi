@@ -1,7 +1,7 @@
 """Type stubs for the compiled core (Rust, PyO3)."""
 
 import os
-from typing import Any, Callable, Iterable, Literal, Sequence, Union, final
+from typing import Any, Callable, Iterable, Literal, Sequence, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -32,6 +32,8 @@ __all__ = [
     "tracking_bound",
     "Scenario",
     "RunResult",
+    "recorded_columns",
+    "summary_fields",
     "load_scenario",
     "list_scenarios",
     "run_scenario",
@@ -416,18 +418,49 @@ class Scenario:
 
 _ScenarioLike = Union[Scenario, dict[str, Any], str, os.PathLike[str]]
 
+class _Column(TypedDict):
+    name: str
+    unit: str
+    shape: tuple[int | str, ...]
+    dtype: Literal["float64", "bool"]
+    recorded: Literal["always", "vision", "arm"]
+    description: str
+
+class _SummaryField(TypedDict):
+    name: str
+    unit: str
+    legacy: str | None
+    description: str
+
+def recorded_columns() -> list[_Column]:
+    """The recorded columns (each a ``RunResult`` attribute and an ``.npz`` entry): name, unit
+    (SI, ``px``, ``1`` dimensionless, ``bool``), shape (axis lengths, or ``"N"`` rows, ``"n"``
+    points, ``"n_joints"`` joints), dtype, which runs record it, description."""
+
+def summary_fields() -> list[_SummaryField]:
+    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, the older name in
+    millimetres / degrees / with a unit suffix that the summary also has, description."""
+
+_PlotKind = Literal[
+    "image_trajectories", "errors", "task_functions", "velocities", "pose_errors", "path3d", "joints", "joint_velocities"
+]
+
 @final
 class RunResult:
-    """A finished run: `.summary` and the recorded arrays (time, pose, twist, joints, pixels,
-    visible, invariant_error, eps, eps_z, image_error, translation_error, rotation_error,
-    reference_pixels, and an arm's joint_velocities)."""
+    """A finished run: `.summary` (numbers in SI, see `summary_fields()`), the scenario, and
+    the recorded columns (see `recorded_columns()`), one attribute each."""
 
+    columns: tuple[dict[str, Any], ...]
+    """The declaration of the recorded columns (as `recorded_columns()`)."""
     @property
     def summary(self) -> dict[str, Any]: ...
     @property
     def scenario(self) -> Scenario: ...
     @property
     def arrays(self) -> dict[str, npt.NDArray[Any]]: ...
+    def plot(self, kind: _PlotKind, ax: Any = None) -> Any:
+        """The figure `kind` (`vsinv.plots.PLOTS`) drawn into `ax` (a matplotlib Axes, or one
+        per panel) or a new figure; returns the matplotlib Figure."""
     @property
     def time(self) -> _F64Array: ...
     @property
@@ -457,13 +490,9 @@ class RunResult:
     @property
     def reference_pixels(self) -> _F64Array: ...
     @property
-    def detection_error(self) -> _F64Array | None:
-        """Per iteration and point, the tracked centroid's distance to the true projection
-        of the dot's centre (pixels, NaN where not found); None without `[vision]`."""
+    def detection_error(self) -> _F64Array | None: ...
     @property
-    def joint_velocities(self) -> _F64Array | None:
-        """An arm's joint velocities after saturation (rad/s or m/s, NaN on the last row);
-        None for the other robots."""
+    def joint_velocities(self) -> _F64Array | None: ...
     @property
     def joint_limits(self) -> dict[str, Any] | None:
         """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`

@@ -59,6 +59,18 @@ def _fmt(value: Any, spec: str = ".4g", unit: str = "") -> str:
     return f"{value}{unit}"
 
 
+def _mm(s: dict[str, Any], key: str, spec: str = ".4g") -> str:
+    """A summary length (metres) in millimetres."""
+    v = s.get(key)
+    return _fmt(v * 1e3 if isinstance(v, (int, float)) else v, spec, " mm")
+
+
+def _deg(s: dict[str, Any], key: str, spec: str = ".4g") -> str:
+    """A summary angle (radians) in degrees."""
+    v = s.get(key)
+    return _fmt(math.degrees(v) if isinstance(v, (int, float)) and math.isfinite(v) else v, spec, " deg")
+
+
 def _verdict(value: Any) -> str:
     if value is None:
         return "n/a"
@@ -72,12 +84,12 @@ def format_summary(summary: dict[str, Any]) -> str:
         ("status", f"{s.get('status', '?')} after {s.get('iterations', '?')} iterations"),
         (
             "final pose error",
-            f"{_fmt(s.get('final_translation_error_mm'), '.4g', ' mm')} translation, "
-            f"{_fmt(s.get('final_rotation_error_deg'), '.4g', ' deg')} rotation",
+            f"{_mm(s, 'final_translation_error')} translation, "
+            f"{_deg(s, 'final_rotation_error')} rotation",
         ),
         (
             "final image error",
-            f"{_fmt(s.get('final_image_error_px'), '.4g', ' px')} (largest distance to p*), "
+            f"{_fmt(s.get('final_image_error'), '.4g', ' px')} (largest distance to p*), "
             f"invariant error {_fmt(s.get('final_invariant_error'), '.3e')}",
         ),
         (
@@ -89,17 +101,17 @@ def format_summary(summary: dict[str, Any]) -> str:
         ("stability", f"Prop. 1 {_verdict(s.get('prop1'))}, Prop. 2 {_verdict(s.get('prop2'))}"),
         (
             "start error",
-            f"{_fmt(s.get('start_translation_error_mm'), '.4g', ' mm')}, "
-            f"{_fmt(s.get('start_rotation_error_deg'), '.4g', ' deg')}",
+            f"{_mm(s, 'start_translation_error')}, "
+            f"{_deg(s, 'start_rotation_error')}",
         ),
         ("basis", _fmt_basis(s.get("basis"))),
-        ("line deviation", f"{_fmt(s.get('max_line_deviation_mm'), '.4g', ' mm')} (largest, camera centre path)"),
+        ("line deviation", f"{_mm(s, 'max_line_deviation')} (largest, camera centre path)"),
     ]
-    if s.get("path_duration_s") is not None:
+    if s.get("path_duration") is not None:
         rows += [
             (
                 "path (sec. 3)",
-                f"T = {_fmt(s.get('path_duration_s'), '.4g', ' s')}, plane + parallax residual "
+                f"T = {_fmt(s.get('path_duration'), '.4g', ' s')}, plane + parallax residual "
                 f"{_fmt(s.get('plane_parallax_residual'), '.2e')}",
             ),
             (
@@ -129,12 +141,12 @@ def _compare(a: Any, b: Any) -> str:
 def _uncertainty(s: dict[str, Any]) -> str:
     """What the final images allow about the pose, and the ground truth against the tolerance."""
     truth = "final pose within the tolerance" if s.get("within_tolerance") else "final pose NOT within the tolerance"
-    if s.get("translation_uncertainty_mm") is None:
+    if s.get("translation_uncertainty") is None:
         return f"not measured (too few points in view or too few images); {truth} (ground truth)"
     return (
-        f"{_fmt(s.get('translation_uncertainty_mm'), '.3g', ' mm')}, {_fmt(s.get('rotation_uncertainty_deg'), '.3g', ' deg')} "
-        f"(3 sigma + offset; pixel noise {_fmt(s.get('pixel_sigma_px'), '.3g', ' px')} measured, reference "
-        f"{_fmt(s.get('reference_pixel_sigma_px'), '.3g', ' px')}); {truth} (ground truth)"
+        f"{_mm(s, 'translation_uncertainty', '.3g')}, {_deg(s, 'rotation_uncertainty', '.3g')} "
+        f"(3 sigma + offset; pixel noise {_fmt(s.get('pixel_sigma'), '.3g', ' px')} measured, reference "
+        f"{_fmt(s.get('reference_pixel_sigma'), '.3g', ' px')}); {truth} (ground truth)"
     )
 
 
@@ -369,8 +381,8 @@ def format_sweep_table(result: Any, keys: Sequence[str], bins: Optional[int] = N
                 *(_fmt(_native_value(s[k][i]), ".6g") for k in keys),
                 str(int(s["runs"][i])),
                 f"{100 * float(s['convergence_rate'][i]):.0f}%",
-                _fmt(float(s["median_translation_error_mm"][i]), ".3g"),
-                _fmt(float(s["median_rotation_error_deg"][i]), ".3g"),
+                _fmt(1e3 * float(s["median_translation_error"][i]), ".3g"),
+                _fmt(math.degrees(float(s["median_rotation_error"][i])), ".3g"),
                 f"{100 * float(s['prop1_rate'][i]):.0f}%",
                 f"{100 * float(s['prop2_rate'][i]):.0f}%",
             ]

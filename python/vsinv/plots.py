@@ -6,6 +6,12 @@ matplotlib is imported inside the functions (with the non-interactive Agg backen
 >>> result = vsinv.run_scenario("lens-12-6")
 >>> save_figures(result, "out")      # six PNGs
 >>> save_npz(result, "out/trajectory.npz")
+>>> fig, axes = plt.subplots(1, 2); result.plot("errors", ax=axes[0]); result.plot("path3d", ax=axes[1])
+
+Every figure function takes ``ax``: None for a figure of its own, or a matplotlib Axes whose
+place is divided into the figure's panels (or a sequence of Axes, one per panel), so that
+figures compose; and ``scenario``, the run's scenario as a dict, to convert it once for many
+figures.
 """
 
 from __future__ import annotations
@@ -15,11 +21,13 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Optional, Union
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any, Callable, Optional, Union, cast
 
 import numpy as np
 import numpy.typing as npt
 
+from ._core import InvalidInput, recorded_columns
 from .safe_files import replace_file
 
 if TYPE_CHECKING:
@@ -28,9 +36,12 @@ if TYPE_CHECKING:
 
     from ._core import RunResult
 
-__all__ = ["ARM_FIGURES", "FIGURES", "save_figures", "save_npz", "summary_json"]
+__all__ = ["ARM_FIGURES", "FIGURES", "PLOTS", "plot", "save_figures", "save_npz", "summary_json"]
 
 _PathLike = Union[str, "os.PathLike[str]"]
+#: Where a figure is drawn: None (a figure of its own), an Axes, or one Axes per panel.
+AxesArg = Union["Axes", Sequence["Axes"], None]
+_Scenario = Optional[dict[str, Any]]
 
 #: File names written by :func:`save_figures`, in order.
 FIGURES = (
@@ -69,13 +80,16 @@ def summary_json(summary: dict[str, Any], indent: Optional[int] = None) -> str:
 
 
 def save_npz(result: RunResult, path: _PathLike) -> Path:
-    """Write every recorded array and the summary (entry ``summary_json``, a JSON string)
-    to a compressed ``.npz`` archive; returns the path written."""
+    """Write every recorded column (:func:`vsinv.recorded_columns`), the summary (entry
+    ``summary_json``, a JSON string) and the columns' declaration (entry ``columns_json``:
+    name, unit, shape, ...) to a compressed ``.npz`` archive; returns the path written."""
     out = Path(path)
     if out.suffix != ".npz":
         out = out.with_name(out.name + ".npz")  # what numpy would write anyway
-    arrays: dict[str, Any] = dict(result.arrays)
+    columns = [c for c in recorded_columns() if getattr(result, c["name"]) is not None]
+    arrays: dict[str, Any] = {c["name"]: getattr(result, c["name"]) for c in columns}
     arrays["summary_json"] = np.array(summary_json(result.summary))
+    arrays["columns_json"] = np.array(json.dumps(columns))
     return replace_file(out, lambda f: np.savez_compressed(f, **arrays))
 
 
@@ -93,11 +107,69 @@ def _use_agg() -> None:
     matplotlib.use("Agg")
 
 
-def _title(fig: Figure, result: RunResult, what: str) -> None:
+def _title(fig: Figure, result: RunResult, what: str, own: bool = True) -> None:
+    """The figure's title, on a figure of its own only (a given Axes' figure is the caller's)."""
+    if not own:
+        return
     s = result.summary
     status = s.get("status", "?")
     iters = s.get("iterations", "?")
     fig.suptitle(f"{s.get('name', result.scenario.name)}: {what}\n({status} after {iters} iterations)", fontsize=11)
+
+
+def _scenario_dict(result: RunResult) -> dict[str, Any]:
+    """The run's scenario as a dict (one conversion; :func:`save_figures` shares it)."""
+    return result.scenario.to_dict()
+
+
+def _panels(
+    ax: AxesArg,
+    rows: int,
+    cols: int = 1,
+    *,
+    figsize: tuple[float, float],
+    sharex: bool = False,
+    projection: Optional[str] = None,
+) -> tuple[Figure, list[Axes], bool]:
+    """The figure, its ``rows`` x ``cols`` panels (row-major) and whether the figure is ours:
+    a new figure when ``ax`` is None; the given Axes when there is one per panel; else the
+    place of the one given Axes divided into the panels."""
+    _use_agg()
+    import matplotlib.pyplot as plt
+
+    n = rows * cols
+    if ax is None:
+        kw: dict[str, Any] = {"figsize": figsize, "sharex": sharex, "constrained_layout": True, "squeeze": False}
+        if projection:
+            kw["subplot_kw"] = {"projection": projection}
+        fig, grid = plt.subplots(rows, cols, **kw)
+        return fig, list(grid.ravel()), True
+    from matplotlib.axes import Axes as _Axes
+
+    given = list(np.ravel(np.asarray(ax, dtype=object))) if isinstance(ax, (Sequence, np.ndarray)) else [ax]
+    if not given or not all(isinstance(a, _Axes) for a in given):
+        raise TypeError(f"ax: expected a matplotlib Axes, a sequence of them, or None, got {type(ax).__name__}")
+    if len(given) == n and (projection is None or all(getattr(a, "name", "") == projection for a in given)):
+        return cast("Figure", given[0].figure), given, False
+    if len(given) != 1:
+        raise InvalidInput(f"ax: expected one Axes or {n} (one per panel), got {len(given)}")
+    one = given[0]
+    fig = one.figure
+    spec = one.get_subplotspec()
+    box = one.get_position().bounds
+    one.remove()
+    grid = spec.subgridspec(rows, cols) if spec is not None else None
+    axes: list[Any] = []
+    for k in range(n):
+        i, j = divmod(k, cols)
+        share = axes[0] if sharex and axes else None
+        if grid is not None:
+            axes.append(fig.add_subplot(grid[i, j], projection=projection, sharex=share))
+        else:
+            x0, y0, w, h = box
+            rect = (x0 + j * w / cols, y0 + (rows - 1 - i) * h / rows, w / cols, h / rows)
+            axes.append(fig.add_axes(rect, projection=projection, sharex=share))
+    return cast("Figure", fig), axes, False
 
 
 def _all_nan(a: npt.NDArray[Any]) -> bool:
@@ -151,19 +223,18 @@ def _finish_time_axis(ax: Axes, t: npt.NDArray[np.float64]) -> None:
 # the figures
 
 
-def plot_image_trajectories(result: RunResult) -> Figure:
+def plot_image_trajectories(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """Image trajectories of the points (current camera), start and reference pixels."""
-    _use_agg()
+    fig, (ax,), own = _panels(ax, 1, figsize=(7.6, 6.6))
     import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    scen = result.scenario.to_dict()
+    scen = scenario if scenario is not None else _scenario_dict(result)
     px = np.asarray(result.pixels, dtype=float)
     ref = np.asarray(result.reference_pixels, dtype=float)
     size = _image_size(scen.get("camera")) or _image_size(scen.get("reference_camera"))
     ref_size = _image_size(scen.get("reference_camera"))
 
-    fig, ax = plt.subplots(figsize=(7.6, 6.6), constrained_layout=True)
     if size is not None:
         w, h = size
         ax.add_patch(
@@ -212,32 +283,32 @@ def plot_image_trajectories(result: RunResult) -> Figure:
     ax.grid(True, alpha=0.25)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=5, fontsize=9, frameon=False)
     s = result.summary
-    fig.suptitle(f"{s.get('name', result.scenario.name)}: image trajectories ({s.get('status', '?')})", fontsize=11)
+    if own:
+        fig.suptitle(f"{s.get('name', result.scenario.name)}: image trajectories ({s.get('status', '?')})", fontsize=11)
     return fig
 
 
-def plot_errors(result: RunResult) -> Figure:
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """The invariant-space error (and the path tracking error) and the image error."""
     t = np.asarray(result.time, dtype=float)
     inv = np.asarray(result.invariant_error, dtype=float)
     img = np.asarray(result.image_error, dtype=float)
     s = result.summary
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    stop = (scenario if scenario is not None else _scenario_dict(result)).get("stop") or {}
+    fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
     if _all_nan(inv):
         _no_data(a1, "no invariant error recorded")
     else:
         pos = np.where(inv > 0, inv, np.nan)
         a1.semilogy(t, pos, color="tab:blue", label="||s - s*||")
-        if s.get("path_duration_s") is not None:
+        if s.get("path_duration") is not None:
             track = np.asarray(result.tracking_error, dtype=float)
             a1.semilogy(t, np.where(track > 0, track, np.nan), color="tab:green", label="||s - s*(t)|| (path tracking)")
-            a1.axvline(float(s["path_duration_s"]), color="0.5", linestyle="--", linewidth=1.0, label="end of the path")
+            a1.axvline(float(s["path_duration"]), color="0.5", linestyle="--", linewidth=1.0, label="end of the path")
             # The path starts exactly at the current image (error ~1e-15): keep the axis readable.
             top = float(np.nanmax(np.concatenate([pos, np.where(track > 0, track, np.nan)])))
             a1.set_ylim(bottom=top * 1e-5)
-        tol = (result.scenario.to_dict().get("stop") or {}).get("invariant_error")
+        tol = stop.get("invariant_error")
         if tol is not None and tol > 0 and s.get("stop_rule") == "invariant":
             a1.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g}")
         a1.legend(loc="upper right", fontsize=9)
@@ -248,7 +319,7 @@ def plot_errors(result: RunResult) -> Figure:
         _no_data(a2, "no image error recorded")
     else:
         a2.plot(t, img, color="tab:orange", label="max_i ||p_i - p_i*||")
-        tol = (result.scenario.to_dict().get("stop") or {}).get("pixel_error")
+        tol = stop.get("pixel_error")
         if tol is not None and tol > 0 and s.get("stop_rule") == "pixel":
             a2.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g} px")
         a2.set_ylim(bottom=0.0)
@@ -257,29 +328,27 @@ def plot_errors(result: RunResult) -> Figure:
     a2.set_ylabel("image error (px)")
     a2.set_title("largest distance to the reference pixel", fontsize=10)
     a2.set_xlabel("time (s)")
-    _title(fig, result, "errors")
+    _title(fig, result, "errors", own)
     return fig
 
 
-def plot_task_functions(result: RunResult) -> Figure:
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+def plot_task_functions(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """The task functions eps (eq. 14) and eps_z (sec. 4.2)."""
     t = np.asarray(result.time, dtype=float)
     eps = np.asarray(result.eps, dtype=float).reshape(len(t), -1)
     eps_z = np.asarray(result.eps_z, dtype=float)
     has_eps, has_z = not _all_nan(eps), not _all_nan(eps_z)
     if not has_eps and not has_z:
-        fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
-        law = (result.scenario.to_dict().get("control") or {}).get("law", "?")
-        _no_data(ax, f"no task function for the '{law}' law")
-        _title(fig, result, "task functions")
+        fig, (one,), own = _panels(ax, 1, figsize=(8, 3.5))
+        law = ((scenario if scenario is not None else _scenario_dict(result)).get("control") or {}).get("law", "?")
+        _no_data(one, f"no task function for the '{law}' law")
+        _title(fig, result, "task functions", own)
         return fig
     panels = int(has_eps) + int(has_z)
-    fig, axes = plt.subplots(panels, 1, figsize=(8, 3.1 * panels + 0.6), sharex=True, constrained_layout=True, squeeze=False)
+    fig, axes, own = _panels(ax, panels, figsize=(8, 3.1 * panels + 0.6), sharex=True)
     k = 0
     if has_eps:
-        ax = axes[k, 0]
+        ax = axes[k]
         labels = ["ε₁ (v_x, m)", "ε₂ (v_y, m)", "ε₃ (v_z, m)", "ε₄ (ω_x, rad)", "ε₅ (ω_y, rad)"]
         for j in range(eps.shape[1]):
             ax.plot(t, eps[:, j], label=labels[j] if j < len(labels) else f"ε{j + 1}")
@@ -290,25 +359,23 @@ def plot_task_functions(result: RunResult) -> Figure:
         _finish_time_axis(ax, t)
         k += 1
     if has_z:
-        ax = axes[k, 0]
+        ax = axes[k]
         ax.plot(t, eps_z, color="tab:purple", label="ε_z = det(Q*) τ₂₁")
         ax.axhline(0.0, color="0.5", linewidth=0.8)
         ax.set_ylabel("ε_z (px²)")
         ax.set_title("task function for the rotation about the optical axis (sec. 4.2)", fontsize=10)
         ax.legend(loc="best", fontsize=9)
         _finish_time_axis(ax, t)
-    axes[-1, 0].set_xlabel("time (s)")
-    _title(fig, result, "task functions" + ("" if has_eps else " (ε not defined for this law)"))
+    axes[-1].set_xlabel("time (s)")
+    _title(fig, result, "task functions" + ("" if has_eps else " (ε not defined for this law)"), own)
     return fig
 
 
-def plot_velocities(result: RunResult) -> Figure:
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+def plot_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """The camera twist: translational (m/s) and rotational (deg/s) velocity."""
     t = np.asarray(result.time, dtype=float)
     tw = np.asarray(result.twist, dtype=float).reshape(len(t), 6)
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
     for j, name in enumerate(("v_x", "v_y", "v_z")):
         a1.plot(t, tw[:, j], label=f"${name}$")
     for j, name in enumerate(("\\omega_x", "\\omega_y", "\\omega_z")):
@@ -322,18 +389,16 @@ def plot_velocities(result: RunResult) -> Figure:
     a2.set_ylabel("rotation (deg/s)")
     a2.set_title("rotational velocity (camera frame)", fontsize=10)
     a2.set_xlabel("time (s)")
-    _title(fig, result, "camera velocity")
+    _title(fig, result, "camera velocity", own)
     return fig
 
 
-def plot_pose_errors(result: RunResult) -> Figure:
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+def plot_pose_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """Distance (mm) and angle (deg) of the camera from the goal."""
     t = np.asarray(result.time, dtype=float)
     te = np.asarray(result.translation_error, dtype=float) * 1e3
     re = np.degrees(np.asarray(result.rotation_error, dtype=float))
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(8, 6.2), sharex=True, constrained_layout=True)
+    fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
     a1.plot(t, te, color="tab:blue", label="||t||")
     a1.set_ylabel("translation error (mm)")
     a1.set_title("distance of the camera centre to the goal", fontsize=10)
@@ -345,13 +410,20 @@ def plot_pose_errors(result: RunResult) -> Figure:
         ax.set_ylim(bottom=0.0)
         _finish_time_axis(ax, t)
     s = result.summary
-    ft, fr = s.get("final_translation_error_mm"), s.get("final_rotation_error_deg")
-    if isinstance(ft, (int, float)) and math.isfinite(ft):
+    ft, fr = _scaled(s.get("final_translation_error"), 1e3), _scaled(s.get("final_rotation_error"), 180 / math.pi)
+    if ft is not None:
         a1.text(0.99, 0.9, f"final {ft:.3g} mm", ha="right", va="top", transform=a1.transAxes, fontsize=9)
-    if isinstance(fr, (int, float)) and math.isfinite(fr):
+    if fr is not None:
         a2.text(0.99, 0.9, f"final {fr:.3g} deg", ha="right", va="top", transform=a2.transAxes, fontsize=9)
-    _title(fig, result, "pose errors")
+    _title(fig, result, "pose errors", own)
     return fig
+
+
+def _scaled(value: Any, factor: float) -> Optional[float]:
+    """A finite summary number in display units (mm, deg), None otherwise."""
+    if isinstance(value, (int, float)) and math.isfinite(value):
+        return float(value) * factor
+    return None
 
 
 def _set_3d_limits(ax: Any, pts: npt.NDArray[np.float64], zoom: float, min_span: float = 10.0) -> None:
@@ -375,60 +447,66 @@ def _set_3d_limits(ax: Any, pts: npt.NDArray[np.float64], zoom: float, min_span:
     ax.set_zlabel("y (mm, down)", labelpad=4)
 
 
-def plot_path3d(result: RunResult) -> Figure:
+def plot_path3d(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """The camera centre's path in F* (mm) against the straight line to the goal: the whole
     scene with the object (left) and a close-up of the path (right)."""
     _use_agg()
     import matplotlib.pyplot as plt
 
-    scen = result.scenario.to_dict()
+    scen = scenario if scenario is not None else _scenario_dict(result)
     pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
     c = pose[:, :3, 3] * 1e3
     c = c[np.isfinite(c).all(axis=1)]
     obj = _object_points(scen) * 1e3
-    fig = plt.figure(figsize=(12.0, 6.2))
-    left: Any = fig.add_axes((0.0, 0.1, 0.5, 0.76), projection="3d")
-    right: Any = fig.add_axes((0.5, 0.1, 0.5, 0.76), projection="3d")
+    own = ax is None
+    if own:
+        fig = plt.figure(figsize=(12.0, 6.2))
+        left: Any = fig.add_axes((0.0, 0.1, 0.5, 0.76), projection="3d")
+        right: Any = fig.add_axes((0.5, 0.1, 0.5, 0.76), projection="3d")
+    else:
+        fig, (left, right), _ = _panels(ax, 1, 2, figsize=(12.0, 6.2), projection="3d")
     origin = np.zeros((1, 3))
 
     # F* has x right, y down, z along the optical axis: draw z as depth and y downwards.
-    for ax in (left, right):
+    for a3 in (left, right):
         if len(c):
-            ax.plot(c[:, 0], c[:, 2], c[:, 1], color="tab:blue", linewidth=2.0, label="camera centre path")
-            ax.plot([c[0, 0], 0.0], [c[0, 2], 0.0], [c[0, 1], 0.0], "--", color="0.35", linewidth=1.2,
+            a3.plot(c[:, 0], c[:, 2], c[:, 1], color="tab:blue", linewidth=2.0, label="camera centre path")
+            a3.plot([c[0, 0], 0.0], [c[0, 2], 0.0], [c[0, 1], 0.0], "--", color="0.35", linewidth=1.2,
                     label="straight line to the goal")
-            ax.scatter(c[:1, 0], c[:1, 2], c[:1, 1], color="tab:green", edgecolors="darkgreen", s=55,
+            a3.scatter(c[:1, 0], c[:1, 2], c[:1, 1], color="tab:green", edgecolors="darkgreen", s=55,
                        depthshade=False, label="start")
             if np.linalg.norm(c[-1]) > 1.0:
-                ax.scatter(c[-1:, 0], c[-1:, 2], c[-1:, 1], color="tab:red", marker="x", s=50,
+                a3.scatter(c[-1:, 0], c[-1:, 2], c[-1:, 1], color="tab:red", marker="x", s=50,
                            depthshade=False, label="final")
-        ax.scatter([0.0], [0.0], [0.0], color="gold", edgecolors="saddlebrown", s=130, marker="*",
+        a3.scatter([0.0], [0.0], [0.0], color="gold", edgecolors="saddlebrown", s=130, marker="*",
                    depthshade=False, label="goal (origin of F*)")
-        ax.view_init(elev=22, azim=-58)
+        a3.view_init(elev=22, azim=-58)
     if len(obj):
         left.scatter(obj[:, 0], obj[:, 2], obj[:, 1], color="k", s=14, depthshade=False, label="object points")
     _set_3d_limits(left, np.concatenate([origin, c, obj]), zoom=1.1)
     _set_3d_limits(right, np.concatenate([origin, c]), zoom=1.0)
     left.set_title("scene", fontsize=10)
     right.set_title("close-up of the path", fontsize=10)
-    fig.legend(*left.get_legend_handles_labels(), loc="lower center", ncol=6, fontsize=9, frameon=False)
-    dev = result.summary.get("max_line_deviation_mm")
+    if own:
+        fig.legend(*left.get_legend_handles_labels(), loc="lower center", ncol=6, fontsize=9, frameon=False)
+    else:
+        left.legend(loc="upper left", fontsize=7)
+    dev = _scaled(result.summary.get("max_line_deviation"), 1e3)
     what = "camera path in F*"
-    if isinstance(dev, (int, float)) and math.isfinite(dev):
+    if dev is not None:
         what += f" (largest deviation from the line {dev:.1f} mm)"
-    _title(fig, result, what)
+    _title(fig, result, what, own)
     return fig
 
 
-def _plot_normalised_joints(result: RunResult, values: npt.NDArray[np.float64], what: str, ylabel: str) -> Figure:
+def _plot_normalised_joints(
+    result: RunResult, values: npt.NDArray[np.float64], what: str, ylabel: str, ax: AxesArg
+) -> Figure:
     """One line per joint against the band of its limits, both normalised to [-1, 1]."""
-    _use_agg()
-    import matplotlib.pyplot as plt
-
     t = np.asarray(result.time, dtype=float)
     limits = result.joint_limits or {}
     names = list(limits.get("names", []))
-    fig, ax = plt.subplots(figsize=(8, 4.8), constrained_layout=True)
+    fig, (ax,), own = _panels(ax, 1, figsize=(8, 4.8))
     ax.axhspan(1.0, 1.2, color="tab:red", alpha=0.12, linewidth=0)
     ax.axhspan(-1.2, -1.0, color="tab:red", alpha=0.12, linewidth=0)
     for y in (-1.0, 1.0):
@@ -444,11 +522,13 @@ def _plot_normalised_joints(result: RunResult, values: npt.NDArray[np.float64], 
     ax.text(0.99, 0.97, f"largest |value| {peak:.2f} (limits at ±1)", ha="right", va="top", transform=ax.transAxes,
             fontsize=9)
     _finish_time_axis(ax, t)
-    _title(fig, result, what)
+    _title(fig, result, what, own)
+    if not own:
+        ax.set_title(what, fontsize=10)
     return fig
 
 
-def plot_joints(result: RunResult) -> Figure:
+def plot_joints(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """An arm's joint positions, ``(q - mid) / half`` of each joint's range: the limits at ±1."""
     limits = result.joint_limits or {}
     q = np.asarray(result.joints, dtype=float)
@@ -457,36 +537,53 @@ def plot_joints(result: RunResult) -> Figure:
     with np.errstate(invalid="ignore", divide="ignore"):
         normalised = (q - (upper + lower) / 2.0) / ((upper - lower) / 2.0)
     return _plot_normalised_joints(result, normalised, "joint positions within their limits",
-                                   "position, normalised to the range")
+                                   "position, normalised to the range", ax)
 
 
-def plot_joint_velocities(result: RunResult) -> Figure:
+def plot_joint_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """An arm's joint velocities over their speed limits: the limits at ±1."""
     limits = result.joint_limits or {}
     dq = np.asarray(result.joint_velocities, dtype=float)
     velocity = np.asarray(limits.get("velocity", []), dtype=float)
     return _plot_normalised_joints(result, dq / velocity, "joint velocities within their limits",
-                                   "velocity / speed limit")
+                                   "velocity / speed limit", ax)
+
+
+#: The figures of a run by kind (``RunResult.plot(kind)``), in the order of :data:`FIGURES`
+#: then :data:`ARM_FIGURES` (file name ``<kind>.png``; the arm's only for an arm).
+PLOTS: dict[str, Callable[..., Figure]] = {
+    "image_trajectories": plot_image_trajectories,
+    "errors": plot_errors,
+    "task_functions": plot_task_functions,
+    "velocities": plot_velocities,
+    "pose_errors": plot_pose_errors,
+    "path3d": plot_path3d,
+    "joints": plot_joints,
+    "joint_velocities": plot_joint_velocities,
+}
+
+
+def plot(result: RunResult, kind: str, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """The figure ``kind`` (a key of :data:`PLOTS`) of a recorded run, drawn into ``ax`` or a
+    new figure; returns the figure (``RunResult.plot`` calls this)."""
+    make = PLOTS.get(kind) if isinstance(kind, str) else None
+    if make is None:
+        raise InvalidInput(f"kind: expected one of {', '.join(PLOTS)}, got {kind!r}")
+    if kind in ("joints", "joint_velocities") and result.joint_limits is None:
+        raise InvalidInput(f"kind: {kind!r} is drawn for an arm only ([robot] kind = \"urdf\")")
+    return make(result, ax, scenario=scenario)
 
 
 def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
     """Write the six figures of a recorded run to ``out_dir`` (created if needed), and
     :data:`ARM_FIGURES` for an arm; returns the paths written, in the order of
-    :data:`FIGURES` then :data:`ARM_FIGURES`."""
+    :data:`FIGURES` then :data:`ARM_FIGURES`. The scenario is converted to a dict once."""
     if len(result.time) == 0:
         raise ValueError("the run was not recorded (run_scenario(..., record=False)): nothing to plot")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    makers = (
-        plot_image_trajectories,
-        plot_errors,
-        plot_task_functions,
-        plot_velocities,
-        plot_pose_errors,
-        plot_path3d,
-    )
-    paths = [_save(make(result), out, name) for make, name in zip(makers, FIGURES)]
+    scenario = _scenario_dict(result)
+    names: tuple[str, ...] = FIGURES
     if result.joint_limits is not None and result.joint_velocities is not None:
-        arm = (plot_joints, plot_joint_velocities)
-        paths.extend(_save(make(result), out, name) for make, name in zip(arm, ARM_FIGURES))
-    return paths
+        names = FIGURES + ARM_FIGURES
+    return [_save(make(result, scenario=scenario), out, name) for make, name in zip(PLOTS.values(), names)]

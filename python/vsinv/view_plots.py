@@ -16,7 +16,7 @@ import numpy as np
 import numpy.typing as npt
 
 from ._core import render
-from .plots import _save, _use_agg
+from .plots import AxesArg, _panels, _save
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -40,13 +40,12 @@ def plot_view(
     tracked: npt.NDArray[np.float64],
     reference: npt.NDArray[np.float64],
     title: str,
+    ax: AxesArg = None,
 ) -> Figure:
-    """A camera view with the tracked centroids (red +) and the reference positions (green o)."""
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+    """A camera view with the tracked centroids (red +) and the reference positions (green o),
+    drawn into ``ax`` or a new figure."""
     h, w = image.shape
-    fig, ax = plt.subplots(figsize=(8, 8 * h / w + 0.6))
+    fig, (ax,), own = _panels(ax, 1, figsize=(8, 8 * h / w + 0.6))
     ax.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
     ax.plot(reference[:, 0], reference[:, 1], "o", mfc="none", mec="tab:green", ms=10, label="reference image p* (K*)")
     ax.plot(tracked[:, 0], tracked[:, 1], "+", color="tab:red", ms=10, mew=1.5, label="tracked centroid")
@@ -57,7 +56,6 @@ def plot_view(
     ax.set_ylim(h - 0.5, -0.5)
     ax.set_title(title, fontsize=10)
     ax.legend(loc="lower right", fontsize=8)
-    fig.tight_layout()
     return fig
 
 
@@ -123,14 +121,11 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
     return paths
 
 
-def plot_invariance(result: InvarianceResult) -> Figure:
+def plot_invariance(result: InvarianceResult, ax: AxesArg = None) -> Figure:
     """The paper's Fig. 3: per image, the image error ||p - p*|| and the invariant error
-    ||q - q*|| of every point."""
-    _use_agg()
-    import matplotlib.pyplot as plt
-
+    ||q - q*|| of every point, drawn into ``ax`` (divided in two, or two Axes) or a new figure."""
     x = np.arange(1, len(result.names) + 1)
-    fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, (a, b), own = _panels(ax, 1, 2, figsize=(11, 4.2))
     for i in range(result.image_error.shape[1]):
         a.plot(x, result.image_error[:, i], "o-", ms=3, lw=1)
         b.plot(x, result.invariant_error[:, i], "o-", ms=3, lw=1)
@@ -141,8 +136,8 @@ def plot_invariance(result: InvarianceResult) -> Figure:
         ax.set_xticks(x)
         ax.grid(True, alpha=0.3)
     b.set_ylim(bottom=0.0)
-    fig.suptitle(f"{len(x)} images, basis {list(result.basis)}", fontsize=11)
-    fig.tight_layout()
+    if own:
+        fig.suptitle(f"{len(x)} images, basis {list(result.basis)}", fontsize=11)
     return fig
 
 

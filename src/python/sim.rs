@@ -2,11 +2,13 @@
 //! runs with the GIL released, and recordings handed to NumPy without copying.
 
 use numpy::{PyArray1, PyArrayMethods};
+use pyo3::IntoPyObjectExt;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::{PyDict, PyString, PyTuple};
 
 use super::errors::{PyError, invalid_argument, reraise};
 use crate::sim::arm::ArmRobot;
+use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
 use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin};
 use crate::sim::{Outcome, simulate};
@@ -128,8 +130,9 @@ pub fn list_scenarios() -> PyResult<Vec<(String, String)>> {
     BUILTIN.iter().map(|(n, _)| builtin(n).map(|s| (s.name, s.description)).map_err(PyErr::from)).collect()
 }
 
-/// The result of a run: `.summary` (a dict) and the recorded arrays, NumPy views of the
-/// simulator's buffers (one row per iteration).
+/// The result of a run: `.summary` (a dict), the scenario, and the recorded columns (NumPy
+/// views of the simulator's buffers, one row per iteration), one attribute each as declared in
+/// `vsinv::sim::outcome::COLUMNS` (see `recorded_columns()`).
 #[pyclass(name = "RunResult", module = "vsinv._core", frozen)]
 pub struct PyRunResult {
     /// The run's summary (status, iterations, final errors, ...), a dict.
@@ -138,57 +141,8 @@ pub struct PyRunResult {
     /// The scenario that was run.
     #[pyo3(get)]
     scenario: Py<PyScenario>,
-    /// Time, s, (N,).
-    #[pyo3(get)]
-    time: Py<PyAny>,
-    /// Camera pose in F*, (N, 4, 4).
-    #[pyo3(get)]
-    pose: Py<PyAny>,
-    /// Twist sent to the robot (NaN on the last row when no step followed), (N, 6).
-    #[pyo3(get)]
-    twist: Py<PyAny>,
-    /// Joint positions, (N, 6).
-    #[pyo3(get)]
-    joints: Py<PyAny>,
-    /// Measured pixels (NaN where not visible), (N, n, 2).
-    #[pyo3(get)]
-    pixels: Py<PyAny>,
-    /// Visibility, bool (N, n).
-    #[pyo3(get)]
-    visible: Py<PyAny>,
-    /// ||s - s*|| (to the reference image), (N,).
-    #[pyo3(get)]
-    invariant_error: Py<PyAny>,
-    /// ||s - s*(t)|| (to the moving reference of a planned path; NaN outside the invariant
-    /// law), (N,).
-    #[pyo3(get)]
-    tracking_error: Py<PyAny>,
-    /// Task function eps (NaN for IBVS), (N, 5).
-    #[pyo3(get)]
-    eps: Py<PyAny>,
-    /// eps_z = det(Q*) tau_21, (N,).
-    #[pyo3(get)]
-    eps_z: Py<PyAny>,
-    /// Largest pixel error of a visible point, (N,).
-    #[pyo3(get)]
-    image_error: Py<PyAny>,
-    /// Distance from the reference pose, metres, (N,).
-    #[pyo3(get)]
-    translation_error: Py<PyAny>,
-    /// Angle from the reference pose, radians, (N,).
-    #[pyo3(get)]
-    rotation_error: Py<PyAny>,
-    /// Reference pixels (with their noise, if any), (n, 2).
-    #[pyo3(get)]
-    reference_pixels: Py<PyAny>,
-    /// Per iteration and point, the tracked centroid's distance to the true projection of
-    /// the dot's centre (pixels, NaN where not found), (N, n); None without `[vision]`.
-    #[pyo3(get)]
-    detection_error: Option<Py<PyAny>>,
-    /// Per iteration, the commanded joint velocities of an arm (rad/s or m/s), (N, n_joints);
-    /// None for other robots.
-    #[pyo3(get)]
-    joint_velocities: Option<Py<PyAny>>,
+    /// The recorded arrays in the order of `COLUMNS` (None where the run does not record one).
+    columns: Vec<Option<Py<PyAny>>>,
     /// An arm's joint names and position and velocity limits (a dict); None for other robots.
     #[pyo3(get)]
     joint_limits: Option<Py<PyDict>>,
@@ -196,31 +150,27 @@ pub struct PyRunResult {
 
 #[pymethods]
 impl PyRunResult {
-    /// The recorded arrays by name.
+    /// The recorded arrays by name (those this run recorded).
     #[getter]
     fn arrays<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
-        d.set_item("time", self.time.bind(py))?;
-        d.set_item("pose", self.pose.bind(py))?;
-        d.set_item("twist", self.twist.bind(py))?;
-        d.set_item("joints", self.joints.bind(py))?;
-        d.set_item("pixels", self.pixels.bind(py))?;
-        d.set_item("visible", self.visible.bind(py))?;
-        d.set_item("invariant_error", self.invariant_error.bind(py))?;
-        d.set_item("tracking_error", self.tracking_error.bind(py))?;
-        d.set_item("eps", self.eps.bind(py))?;
-        d.set_item("eps_z", self.eps_z.bind(py))?;
-        d.set_item("image_error", self.image_error.bind(py))?;
-        d.set_item("translation_error", self.translation_error.bind(py))?;
-        d.set_item("rotation_error", self.rotation_error.bind(py))?;
-        d.set_item("reference_pixels", self.reference_pixels.bind(py))?;
-        if let Some(e) = &self.detection_error {
-            d.set_item("detection_error", e.bind(py))?;
-        }
-        if let Some(v) = &self.joint_velocities {
-            d.set_item("joint_velocities", v.bind(py))?;
+        for (c, a) in COLUMNS.iter().zip(&self.columns) {
+            if let Some(a) = a {
+                d.set_item(c.name, a.bind(py))?;
+            }
         }
         Ok(d)
+    }
+    /// The declaration of the recorded columns (as `recorded_columns()`).
+    #[classattr]
+    fn columns(py: Python<'_>) -> PyResult<Py<PyTuple>> {
+        Ok(PyTuple::new(py, recorded_columns(py)?)?.unbind())
+    }
+    /// A figure of the run, `kind` one of `vsinv.plots.PLOTS`, drawn into `ax` (a matplotlib
+    /// Axes) or a new figure; returns the figure.
+    #[pyo3(signature = (kind, ax = None))]
+    fn plot<'py>(slf: &Bound<'py, Self>, kind: &str, ax: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
+        slf.py().import("vsinv.plots")?.call_method1("plot", (slf, kind, ax))
     }
     fn __repr__(&self, py: Python<'_>) -> String {
         let s = self.summary.bind(py);
@@ -229,12 +179,87 @@ impl PyRunResult {
     }
 }
 
+/// The recorded columns as dicts: name, unit, shape (axis lengths, or `"N"` rows, `"n"` points,
+/// `"n_joints"` joints), dtype, recorded (`"always"`, `"vision"` or `"arm"`), description.
+#[pyfunction]
+pub fn recorded_columns(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    COLUMNS
+        .iter()
+        .map(|c| {
+            let d = PyDict::new(py);
+            d.set_item("name", c.name)?;
+            d.set_item("unit", c.unit)?;
+            let shape: Vec<Bound<'_, PyAny>> = c
+                .shape
+                .iter()
+                .map(|a| match a.symbol() {
+                    Some(s) => s.into_bound_py_any(py),
+                    None => a.len(0, 0, 0).into_bound_py_any(py),
+                })
+                .collect::<PyResult<_>>()?;
+            d.set_item("shape", PyTuple::new(py, shape)?)?;
+            d.set_item("dtype", if c.boolean { "bool" } else { "float64" })?;
+            let recorded = match c.recorded {
+                Recorded::Always => "always",
+                Recorded::Vision => "vision",
+                Recorded::Arm => "arm",
+            };
+            d.set_item("recorded", recorded)?;
+            d.set_item("description", c.description)?;
+            Ok(d)
+        })
+        .collect()
+}
+
+/// The summary's numbers as dicts: name, unit, legacy (the older name in millimetres, degrees
+/// or with a unit suffix, also in the summary; None), description.
+#[pyfunction]
+pub fn summary_fields(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
+    SUMMARY_FIELDS
+        .iter()
+        .map(|f| {
+            let d = PyDict::new(py);
+            d.set_item("name", f.name)?;
+            d.set_item("unit", f.unit)?;
+            d.set_item("legacy", f.legacy.map(|l| l.apply(0.0).0))?;
+            d.set_item("description", f.description)?;
+            Ok(d)
+        })
+        .collect()
+}
+
+/// Adds one property per recorded column to `RunResult`, documented from the declaration.
+fn add_column_properties(py: Python<'_>) -> PyResult<()> {
+    let ty = py.get_type::<PyRunResult>();
+    let property = py.import("builtins")?.getattr("property")?;
+    for (i, c) in COLUMNS.iter().enumerate() {
+        let get = pyo3::types::PyCFunction::new_closure(py, Some(c"column"), None, move |args, _kwargs| {
+            let py = args.py();
+            let result = args.get_item(0)?;
+            let result = result.cast::<PyRunResult>()?;
+            Ok::<_, PyErr>(result.get().columns[i].as_ref().map(|a| a.clone_ref(py)))
+        })?;
+        let shape: Vec<String> =
+            c.shape.iter().map(|a| a.symbol().map_or_else(|| a.len(0, 0, 0).to_string(), str::to_string)).collect();
+        let only = match c.recorded {
+            Recorded::Always => "",
+            Recorded::Vision => "; None without [vision]",
+            Recorded::Arm => "; None for robots other than an arm",
+        };
+        let comma = if shape.len() == 1 { "," } else { "" };
+        let doc = format!("{} ({}, shape ({}{comma}){only}).", c.description, c.unit, shape.join(", "));
+        ty.setattr(c.name, property.call1((get, py.None(), py.None(), doc))?)?;
+    }
+    Ok(())
+}
+
 /// Moves a buffer into NumPy (no copy) and views it with `shape`.
 fn array<T: numpy::Element>(py: Python<'_>, data: Vec<T>, shape: &[usize]) -> PyResult<Py<PyAny>> {
     Ok(PyArray1::from_vec(py, data).reshape(shape)?.into_any().unbind())
 }
 
-/// The summary as a dictionary (millimetres and degrees for the pose errors).
+/// The summary as a dictionary: SI numbers (units in `SUMMARY_FIELDS`), each with its older
+/// millimetre / degree / suffixed name too.
 pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<Bound<'py, PyDict>> {
     let s = &o.summary;
     let d = PyDict::new(py);
@@ -242,41 +267,18 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("status", s.status.as_str())?;
     d.set_item("message", &s.message)?;
     d.set_item("iterations", s.iterations)?;
-    d.set_item("final_translation_error_mm", s.final_translation_error * 1e3)?;
-    d.set_item("final_rotation_error_deg", s.final_rotation_error.to_degrees())?;
-    d.set_item("final_image_error_px", s.final_image_error)?;
-    d.set_item("final_invariant_error", s.final_invariant_error)?;
-    d.set_item("final_tau_11", s.final_tau[0])?;
-    d.set_item("final_tau_21", s.final_tau[1])?;
-    d.set_item("final_tau_22", s.final_tau[2])?;
+    d.set_item("stop_rule", s.stop_rule.as_str())?;
     d.set_item("prop1", s.prop1)?;
     d.set_item("prop2", s.prop2)?;
-    d.set_item("stop_rule", format!("{:?}", s.stop_rule).to_lowercase())?;
-    d.set_item("start_translation_error_mm", s.start_error.0 * 1e3)?;
-    d.set_item("start_rotation_error_deg", s.start_error.1.to_degrees())?;
-    d.set_item("basis", s.basis.to_vec())?;
-    d.set_item("max_line_deviation_mm", s.max_line_deviation * 1e3)?;
-    d.set_item("peak_linear_speed_m_s", s.peak_speeds.0)?;
-    d.set_item("peak_angular_speed_deg_s", s.peak_speeds.1.to_degrees())?;
-    let t = s.tracking.as_ref();
-    d.set_item("path_duration_s", t.map(|t| t.duration))?;
-    d.set_item("plane_parallax_residual", t.map(|t| t.plane_parallax_residual))?;
-    d.set_item("tracking_sigma", t.map(|t| t.sigma))?;
-    d.set_item("tracking_psi", t.map(|t| t.psi))?;
-    d.set_item("tracking_phi", t.map(|t| t.phi))?;
-    d.set_item("tracking_bound", t.map(|t| t.bound))?;
-    d.set_item("observed_max_eps", t.map(|t| t.max_eps))?;
-    d.set_item("detection_error_median_px", s.detection_error.map(|e| e.0))?;
-    d.set_item("detection_error_max_px", s.detection_error.map(|e| e.1))?;
-    d.set_item("min_manipulability", s.min_manipulability)?;
-    let c = s.certainty.as_ref();
-    d.set_item("pixel_sigma_px", c.map(|c| c.pixel_sigma))?;
-    d.set_item("reference_pixel_sigma_px", c.map(|c| c.reference_pixel_sigma))?;
-    d.set_item("translation_sigma_mm", c.map(|c| c.sigma.0 * 1e3))?;
-    d.set_item("rotation_sigma_deg", c.map(|c| c.sigma.1.to_degrees()))?;
-    d.set_item("translation_uncertainty_mm", c.map(|c| c.bound.0 * 1e3))?;
-    d.set_item("rotation_uncertainty_deg", c.map(|c| c.bound.1.to_degrees()))?;
     d.set_item("within_tolerance", s.within_tolerance)?;
+    d.set_item("basis", s.basis.to_vec())?;
+    for f in &SUMMARY_FIELDS {
+        let v = (f.value)(s);
+        d.set_item(f.name, v)?;
+        if let Some(l) = f.legacy {
+            d.set_item(l.apply(0.0).0, v.map(|v| l.apply(v).1))?;
+        }
+    }
     Ok(d)
 }
 
@@ -328,39 +330,35 @@ pub fn run_scenario(
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
     let (rows, n) = (r.len(), scenario.object.points.len());
-    let n_joints = if let Robot::Arm(arm) = &config.robot { arm.dof() } else { 6 };
-    let joint_limits = match &config.robot {
-        Robot::Arm(arm) => Some(arm_limits(py, arm)?.unbind()),
+    let arm = match &config.robot {
+        Robot::Arm(arm) => Some(arm),
         _ => None,
     };
-    let joint_velocities = match joint_limits {
-        Some(_) => Some(array(py, r.joint_velocities, &[rows, n_joints])?),
-        None => None,
-    };
-    let reference = std::mem::take(&mut outcome.reference_pixels);
+    let n_joints = arm.map_or(6, |a| a.dof());
+    let vision = outcome.summary.detection_error.is_some();
+    let buffers = r.into_buffers(std::mem::take(&mut outcome.reference_pixels));
+    let columns = COLUMNS
+        .iter()
+        .zip(buffers)
+        .map(|(c, b)| {
+            let present = match c.recorded {
+                Recorded::Always => true,
+                Recorded::Vision => vision,
+                Recorded::Arm => arm.is_some(),
+            };
+            let dims = c.dims(rows, n, n_joints);
+            match (present, b) {
+                (false, _) => Ok(None),
+                (true, Buffer::F64(v)) => array(py, v, &dims).map(Some),
+                (true, Buffer::Bool(v)) => array(py, v, &dims).map(Some),
+            }
+        })
+        .collect::<PyResult<_>>()?;
     Ok(PyRunResult {
         summary: summary.unbind(),
         scenario: Py::new(py, PyScenario { inner: scenario })?,
-        time: array(py, r.time, &[rows])?,
-        pose: array(py, r.pose, &[rows, 4, 4])?,
-        twist: array(py, r.twist, &[rows, 6])?,
-        joints: array(py, r.joints, &[rows, n_joints])?,
-        pixels: array(py, r.pixels, &[rows, n, 2])?,
-        visible: array(py, r.visible, &[rows, n])?,
-        invariant_error: array(py, r.invariant_error, &[rows])?,
-        tracking_error: array(py, r.tracking_error, &[rows])?,
-        eps: array(py, r.eps, &[rows, 5])?,
-        eps_z: array(py, r.eps_z, &[rows])?,
-        image_error: array(py, r.image_error, &[rows])?,
-        translation_error: array(py, r.translation_error, &[rows])?,
-        rotation_error: array(py, r.rotation_error, &[rows])?,
-        reference_pixels: array(py, reference.into_flattened(), &[n, 2])?,
-        detection_error: match outcome.summary.detection_error {
-            Some(_) => Some(array(py, r.detection_error, &[rows, n])?),
-            None => None,
-        },
-        joint_velocities,
-        joint_limits,
+        columns,
+        joint_limits: arm.map(|a| arm_limits(py, a).map(Bound::unbind)).transpose()?,
     })
 }
 
@@ -375,14 +373,13 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 }
 
 /// Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths)
-/// in parallel with the GIL released (recording off) and returns the
-/// table as a dict of NumPy arrays, one row per scenario: status (str), iterations,
-/// final_translation_error_mm, final_rotation_error_deg, final_image_error_px,
-/// final_invariant_error, prop1, prop2, max_line_deviation_mm, observed_max_eps,
-/// pixel_sigma_px, translation_uncertainty_mm, rotation_uncertainty_deg (NaN where not
-/// measured), within_tolerance, message (str). A scenario
-/// whose configuration is invalid raises before anything runs; a run that fails on the way
-/// has status "error" and its message.
+/// in parallel with the GIL released (recording off) and returns the table as a dict of NumPy
+/// arrays, one row per scenario: status (str), iterations, the summary fields final_translation_error,
+/// final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
+/// observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where
+/// not measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2,
+/// within_tolerance, message (str). A scenario whose configuration is invalid raises before
+/// anything runs; a run that fails on the way has status "error" and its message.
 #[pyfunction]
 #[pyo3(signature = (scenarios, threads = None, allow_outside_files = false))]
 pub fn run_batch<'py>(
@@ -433,17 +430,17 @@ fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec
     Ok(texts)
 }
 
-/// The float columns of `run_batch`'s table, in the order of [`BatchTable::floats`].
-const BATCH_FLOAT_COLUMNS: [&str; 9] = [
-    "final_translation_error_mm",
-    "final_rotation_error_deg",
-    "final_image_error_px",
+/// The numbers of `run_batch`'s table (summary fields, SI; each also under its older name).
+const BATCH_FIELDS: [&str; 9] = [
+    "final_translation_error",
+    "final_rotation_error",
+    "final_image_error",
     "final_invariant_error",
-    "max_line_deviation_mm",
+    "max_line_deviation",
     "observed_max_eps",
-    "pixel_sigma_px",
-    "translation_uncertainty_mm",
-    "rotation_uncertainty_deg",
+    "pixel_sigma",
+    "translation_uncertainty",
+    "rotation_uncertainty",
 ];
 
 /// `run_batch`'s table, one row per run.
@@ -479,18 +476,9 @@ impl BatchTable {
         self.status.push(s.status.as_str().to_string());
         self.message.push(s.message.clone());
         self.iterations.push(s.iterations as i64);
-        let values = [
-            s.final_translation_error * 1e3,
-            s.final_rotation_error.to_degrees(),
-            s.final_image_error,
-            s.final_invariant_error,
-            s.max_line_deviation * 1e3,
-            s.tracking.map_or(f64::NAN, |t| t.max_eps),
-            s.certainty.map_or(f64::NAN, |c| c.pixel_sigma),
-            s.certainty.map_or(f64::NAN, |c| c.bound.0 * 1e3),
-            s.certainty.map_or(f64::NAN, |c| c.bound.1.to_degrees()),
-        ];
-        self.floats.iter_mut().zip(values).for_each(|(c, v)| c.push(v));
+        for (column, name) in self.floats.iter_mut().zip(BATCH_FIELDS) {
+            column.push(summary_field(name).and_then(|f| (f.value)(s)).unwrap_or(f64::NAN));
+        }
         self.prop1.push(s.prop1);
         self.prop2.push(s.prop2);
         self.within.push(s.within_tolerance);
@@ -518,7 +506,11 @@ impl BatchTable {
         };
         d.set_item("status", str_array(self.status)?)?;
         d.set_item("iterations", PyArray1::from_vec(py, self.iterations))?;
-        for (name, c) in BATCH_FLOAT_COLUMNS.iter().zip(self.floats) {
+        for (name, c) in BATCH_FIELDS.iter().zip(self.floats) {
+            if let Some(l) = summary_field(name).and_then(|f| f.legacy) {
+                let old: Vec<f64> = c.iter().map(|&v| l.apply(v).1).collect();
+                d.set_item(l.apply(0.0).0, PyArray1::from_vec(py, old))?;
+            }
             d.set_item(*name, PyArray1::from_vec(py, c))?;
         }
         d.set_item("prop1", PyArray1::from_vec(py, self.prop1))?;
@@ -533,6 +525,9 @@ impl BatchTable {
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyScenario>()?;
     m.add_class::<PyRunResult>()?;
+    add_column_properties(m.py())?;
+    m.add_function(wrap_pyfunction!(recorded_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(summary_fields, m)?)?;
     m.add_function(wrap_pyfunction!(load_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(list_scenarios, m)?)?;
     m.add_function(wrap_pyfunction!(run_scenario, m)?)?;

@@ -66,11 +66,22 @@ impl StopRules {
 
 /// Which image rule decides convergence.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize), serde(rename_all = "snake_case"))]
 pub enum StopRule {
     /// Image error (same camera, or IBVS).
     Pixel,
     /// Invariant error with tau_21 and the signs of tau_11, tau_22 (different cameras).
     Invariant,
+}
+
+impl StopRule {
+    /// The name used in summaries and JSON (the serde name).
+    pub fn as_str(&self) -> &'static str {
+        match self {
+            StopRule::Pixel => "pixel",
+            StopRule::Invariant => "invariant",
+        }
+    }
 }
 
 /// Whether the window-averaged errors (`mean`, laid out as [`super::measure::measure`] writes

@@ -4,6 +4,7 @@ use crate::error::Error;
 
 /// How a servo session (or a simulated run) ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize), serde(rename_all = "snake_case"))]
 pub enum Status {
     /// The stop rule was met.
     Converged,

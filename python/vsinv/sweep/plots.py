@@ -156,7 +156,7 @@ def _plot_1d(result: SweepResult, key: str) -> Figure:
     log = ticks is None and _is_log(x)
     edges = _edges(x, log) if ticks is None else np.arange(len(x) + 1, dtype=float) - 0.5
     rate = s["convergence_rate"].astype(float)
-    err = s["median_translation_error_mm"].astype(float)
+    err = 1e3 * s["median_translation_error"].astype(float)  # drawn in mm
     p1 = s["prop1_rate"].astype(float)
     p2 = s["prop2_rate"].astype(float)
 

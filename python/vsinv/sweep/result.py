@@ -23,6 +23,8 @@ _PathLike = Union[str, "os.PathLike[str]"]
 
 _RATE_COLUMNS = ("runs", "converged", "convergence_rate", "prop1_rate", "prop2_rate")
 _MEDIANS = (
+    ("final_translation_error", "median_translation_error"),
+    ("final_rotation_error", "median_rotation_error"),
     ("final_translation_error_mm", "median_translation_error_mm"),
     ("final_rotation_error_deg", "median_rotation_error_deg"),
     ("final_invariant_error", "median_invariant_error"),
@@ -104,9 +106,9 @@ class SweepResult:
         """Per group of runs with equal ``keys`` (default: the grid keys, else every varied
         key): ``runs``, ``converged`` (count), ``convergence_rate``, ``prop1_rate``,
         ``prop2_rate`` (fractions of runs where Prop. 1 / Prop. 2 holds) and the medians
-        ``median_translation_error_mm``, ``median_rotation_error_deg``,
+        ``median_translation_error`` (m), ``median_rotation_error`` (rad),
         ``median_invariant_error``, ``median_iterations`` (over every run of the group, NaN
-        ignored). With ``bins``, a numeric key with more distinct values than ``bins`` is
+        ignored; also ``median_translation_error_mm`` and ``median_rotation_error_deg``). With ``bins``, a numeric key with more distinct values than ``bins`` is
         grouped into ``bins`` equal-width bins labelled by their centres (for random keys).
         Groups of grid keys come in the grid's order, others sorted by value. ``keys=()``
         gives one row for all runs."""
@@ -141,6 +143,6 @@ class SweepResult:
             out["prop1_rate"].append(float(np.mean(self.columns["prop1"][idx])))
             out["prop2_rate"].append(float(np.mean(self.columns["prop2"][idx])))
             for src, name in _MEDIANS:
-                vals = np.asarray(self.columns[src][idx], dtype=float)
+                vals = np.asarray(self.columns[src][idx], dtype=float) if src in self.columns else np.full(0, math.nan)
                 out[name].append(float(np.median(vals[np.isfinite(vals)])) if np.isfinite(vals).any() else math.nan)
         return {k: _column(v) if k in key_list else np.asarray(v) for k, v in out.items()}
