@@ -372,3 +372,20 @@ fn rotation_deg_is_the_key_and_the_older_rotation_is_read_as_degrees() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The law owns what it can do: a planned path (invariant space) under IBVS, or too few
+/// points for the invariant law, is refused when the servo session starts, by name.
+#[test]
+fn the_law_refuses_what_it_cannot_do() {
+    use vsinv::core::ibvs::Interaction;
+    let mut config = builtin("path-500").unwrap().to_config().unwrap();
+    config.law =
+        vsinv::sim::Law::Ibvs { gain: 1.0, interaction: Interaction::Current, adaptive_gain: None, twist_limits: None };
+    let err = simulate(&config, &mut |_, _| true).unwrap_err();
+    assert!(matches!(err, Error::InvalidParameter { name: "path", .. }), "{err}");
+    let mut config = builtin("lens-12-6").unwrap().to_config().unwrap();
+    let points: Vec<[f64; 3]> = config.scene.points().iter().take(5).copied().collect();
+    config.scene = vsinv::sim::scene::Scene::new(points, Vec::new()).unwrap();
+    let err = simulate(&config, &mut |_, _| true).unwrap_err();
+    assert!(matches!(err, Error::TooFewPoints { needed: 6, got: 5, .. }), "{err}");
+}

@@ -11,11 +11,10 @@ mod run;
 use nalgebra::Isometry3;
 
 use crate::core::distortion::undistort_point;
-use crate::core::jacobian::MIN_POINTS;
 use crate::error::{Error, Result, check_positive};
 use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, StopRule};
 use crate::sim::camera_model::CameraModel;
-use crate::sim::config::{Law, SimulationConfig};
+use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::image_loop::{ImageLoop, pixel_size};
 use crate::sim::outcome::Outcome;
@@ -48,10 +47,7 @@ fn validate(config: &SimulationConfig) -> Result<()> {
     }
     config.stop.validate()?;
     config.robot.check_reachable(&config.start)?;
-    let n = config.scene.points().len();
-    if n < MIN_POINTS && matches!(config.law, Law::Invariant(_)) {
-        return Err(Error::TooFewPoints { needed: MIN_POINTS, got: n, why: "the invariant law needs six points" });
-    }
+    // The points the law needs are the law's to check (when the servo session starts).
     Ok(())
 }
 
@@ -116,7 +112,7 @@ fn start_servo(config: &SimulationConfig, pixels: Vec<[f64; 2]>, reference_depth
         basis: config.basis,
         stop: config.stop,
         stop_rule: same_camera.then_some(StopRule::Pixel),
-        path: if matches!(config.law, Law::Invariant(_)) { config.path } else { None },
+        path: config.path,
         dt: config.dt,
     };
     let depths = match &config.depths {
