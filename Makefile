@@ -39,6 +39,7 @@ lint:
 	cargo fmt --all --check
 	cargo clippy --workspace --all-targets -- -D warnings
 	cargo clippy --no-default-features -- -D warnings
+	cargo clippy --no-default-features --features servo -- -D warnings
 	cargo clippy --features python -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -q
 

@@ -39,7 +39,7 @@ pub const MAX_RENDER_PIXELS: u64 = 1 << 28;
 #[cfg_attr(feature = "serde", serde(deny_unknown_fields, default))]
 pub struct RenderConfig {
     /// Radius of the white discs drawn at the feature points, metres
-    /// ([`Dots`] of a scene).
+    /// ([`Dots`](crate::vision::Dots) of a scene).
     pub dot_radius: f64,
     /// Gaussian blur (optical PSF), standard deviation in pixels (0: none).
     pub blur_sigma: f64,
