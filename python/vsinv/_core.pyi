@@ -625,7 +625,8 @@ class DotTracker:
     def __len__(self) -> int: ...
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
-    """Reads an image file (PNG, or a GIF's first frame) as (height, width) uint8 grey."""
+    """Reads an image file (PNG, PGM/PPM, JPEG, or a GIF's first frame) as (height, width) uint8
+    grey; colour is converted with the Rec. 601 luma weights (as OpenCV), 16-bit images are refused."""
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes a (height, width) uint8 array as a PNG file."""

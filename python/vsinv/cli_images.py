@@ -47,8 +47,8 @@ def add_image_commands(sub: Any) -> None:
         "images in order, and print per image and point the image error ||p - p*|| (pixels) and the invariant "
         "error ||q - q*||.",
     )
-    inv.add_argument("reference", metavar="REF.png", type=Path, help="the reference image")
-    inv.add_argument("images", metavar="IMG.png", type=Path, nargs="+", help="the images, in tracking order")
+    inv.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
+    inv.add_argument("images", metavar="IMG", type=Path, nargs="+", help="the images, in tracking order (PNG, PGM/PPM or JPEG)")
     inv.add_argument("--points", metavar="CSV", type=Path, required=True, help="approximate dot positions (u, v columns)")
     inv.add_argument("--basis", metavar="I,J,K", help="the three basis points (default: the widest triangle)")
     inv.add_argument("--search-radius", metavar="PX", type=float, default=20.0, help="tracker window half-side (20)")

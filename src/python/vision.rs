@@ -11,7 +11,7 @@ use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
-use crate::vision::image::{GreyBuffer, GreyImage, load_png, save_png, view};
+use crate::vision::image::{GreyBuffer, GreyImage, load_image as load_image_file, save_png, view};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// `InvalidInput("{what}: {reason}")`, the core's `Error::InvalidImage` (kind `invalid_image`).
@@ -233,11 +233,12 @@ impl PyDotTracker {
     }
 }
 
-/// Reads an image file (PNG, or GIF's first frame) as a `(height, width)` uint8 array;
-/// colour images are converted to grey.
+/// Reads an image file (PNG, PGM/PPM, JPEG, or GIF's first frame) as a `(height, width)`
+/// uint8 array; colour images are converted to grey with the Rec. 601 luma weights (0.299,
+/// 0.587, 0.114, as OpenCV), 16-bit images are refused.
 #[pyfunction]
 pub fn load_image<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<ImageArray<'py>> {
-    let image = py.detach(|| load_png(&path))?;
+    let image = py.detach(|| load_image_file(&path))?;
     image_out(py, image)
 }
 

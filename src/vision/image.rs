@@ -1,5 +1,5 @@
 //! 8-bit grey images: the `image` crate's `GrayImage` (row-major, `(height, width)`), its
-//! checks and PNG files.
+//! checks and image files (PNG, PGM/PPM, JPEG).
 
 use std::path::Path;
 
@@ -79,26 +79,87 @@ pub fn save_png(image: &GreyImage, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Reads a PNG (or any format the `image` crate was built with) as 8-bit grey; colour
-/// images are converted to luma. The file must be a regular file of at most
+/// Reads an image file as 8-bit grey: PNG, PGM/PPM (binary P5/P6 and ASCII P2/P3, and PAM),
+/// JPEG, or GIF's first frame, recognised by its first bytes (not its name). Colour images are
+/// converted to grey with the Rec. 601 luma weights `0.299 R + 0.587 G + 0.114 B`, rounded
+/// (as OpenCV and ViSP do); an alpha channel is ignored. A truncated JPEG is refused. Images of more than 8 bits a sample
+/// (16-bit PGM or PNG) are refused: scaling them down would hide a choice (which bits matter)
+/// that belongs to the caller. The file must be a regular file of at most
 /// [`MAX_IMAGE_BYTES`](crate::input_file::MAX_IMAGE_BYTES); decoding is bounded by
 /// [`MAX_IMAGE_SIDE`] and [`MAX_IMAGE_ALLOC`] (a small file declaring a huge image is refused).
-pub fn load_png(path: &Path) -> Result<GreyImage> {
+/// Errors name the file and never quote its contents.
+pub fn load_image(path: &Path) -> Result<GreyImage> {
     let what = path.display().to_string();
     let bytes = crate::input_file::read_bytes(path, crate::input_file::MAX_IMAGE_BYTES)
         .map_err(|reason| image_error(&what, reason))?;
-    let mut reader = ::image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .map_err(|e| image_error(&what, e.to_string()))?;
+    let format = ::image::guess_format(&bytes)
+        .map_err(|_| image_error(&what, "not a PNG, PGM/PPM, JPEG or GIF image (unknown signature)"))?;
+    if format == ::image::ImageFormat::Jpeg && !jpeg_is_whole(&bytes) {
+        return Err(image_error(&what, "not a valid JPEG image (truncated: no end of image after the last scan)"));
+    }
+    let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
     let mut limits = ::image::Limits::default();
     limits.max_image_width = Some(MAX_IMAGE_SIDE);
     limits.max_image_height = Some(MAX_IMAGE_SIDE);
     limits.max_alloc = Some(MAX_IMAGE_ALLOC);
     reader.limits(limits);
-    let img = reader.decode().map_err(|e| image_error(&what, e.to_string()))?;
-    let grey = img.into_luma8();
+    let name = format!("{format:?}").to_uppercase();
+    let img =
+        reader.decode().map_err(|e| image_error(&what, format!("not a valid {name} image ({})", decode_reason(&e))))?;
+    let grey = to_grey(&what, img)?;
     check_image(&what, &grey)?;
     Ok(grey)
+}
+
+/// Reads an image file as 8-bit grey: the same as [`load_image`] (kept for its name).
+pub fn load_png(path: &Path) -> Result<GreyImage> {
+    load_image(path)
+}
+
+/// What went wrong while decoding, in the decoder's words for limits and unsupported
+/// features, and as a category otherwise (a malformed file's details may quote its bytes).
+fn decode_reason(e: &::image::ImageError) -> String {
+    match e {
+        ::image::ImageError::Limits(l) => l.to_string(),
+        ::image::ImageError::Unsupported(u) => u.to_string(),
+        ::image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => "truncated".into(),
+        ::image::ImageError::IoError(_) => "read error".into(),
+        _ => "corrupt or truncated".into(),
+    }
+}
+
+/// 8-bit grey from a decoded image: grey as is, colour by Rec. 601 luma, more than 8 bits
+/// refused.
+fn to_grey(what: &str, img: ::image::DynamicImage) -> Result<GreyImage> {
+    use ::image::DynamicImage as D;
+    match img {
+        D::ImageLuma8(grey) => Ok(grey),
+        D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
+            let rgb = img.into_rgb8();
+            let (width, height) = rgb.dimensions();
+            let data = rgb.pixels().map(|p| luma_601(p.0)).collect();
+            from_raw(what, width, height, data)
+        }
+        other => Err(image_error(
+            what,
+            format!("{:?} samples: only 8-bit images are read (convert 16-bit images to 8 bits first)", other.color()),
+        )),
+    }
+}
+
+/// Rec. 601 luma of an 8-bit RGB pixel, in fixed point with rounding: weights 9798, 19235
+/// and 3735 over 2^15, OpenCV's `COLOR_RGB2GRAY` to the bit.
+fn luma_601([r, g, b]: [u8; 3]) -> u8 {
+    let l = 9798 * u32::from(r) + 19235 * u32::from(g) + 3735 * u32::from(b);
+    ((l + (1 << 14)) >> 15).min(255) as u8
+}
+
+/// Whether a JPEG file is whole: its last scan (marker `FF DA`) is followed by the end of
+/// image (`FF D9`); neither can occur inside entropy-coded data. The decoder itself fills a
+/// truncated image with grey without a word.
+fn jpeg_is_whole(bytes: &[u8]) -> bool {
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    last_scan.is_some_and(|start| bytes[start..].windows(2).any(|w| w == [0xFF, 0xD9]))
 }
 
 #[cfg(test)]
@@ -112,6 +173,26 @@ mod tests {
         assert_eq!(img.get_pixel(2, 1)[0], 5);
         assert!(from_raw("image", 3, 2, vec![0; 5]).is_err());
         assert!(from_raw("image", 0, 2, vec![]).is_err());
+    }
+
+    #[test]
+    fn pgm_ppm_and_refusals() {
+        let dir = std::env::temp_dir().join(format!("vsinv-pnm-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let pgm = dir.join("a.pgm");
+        std::fs::write(&pgm, [b"P5\n3 2\n255\n".as_slice(), &[0, 1, 2, 3, 4, 250]].concat()).unwrap();
+        assert_eq!(load_image(&pgm).unwrap(), from_raw("image", 3, 2, vec![0, 1, 2, 3, 4, 250]).unwrap());
+        let ppm = dir.join("a.ppm");
+        std::fs::write(&ppm, "P3\n2 1\n255\n255 0 0  10 200 30\n").unwrap();
+        assert_eq!(load_image(&ppm).unwrap().into_raw(), vec![76, 124]);
+        let deep = dir.join("deep.pgm");
+        std::fs::write(&deep, [b"P5\n1 1\n65535\n".as_slice(), &[1, 2]].concat()).unwrap();
+        assert!(load_image(&deep).unwrap_err().to_string().contains("16-bit"));
+        let magic = dir.join("magic.pgm");
+        std::fs::write(&magic, "Q5\n1 1\n255\nA").unwrap();
+        assert!(load_image(&magic).unwrap_err().to_string().contains("magic.pgm"));
+        assert!(!jpeg_is_whole(&[0xFF, 0xD8, 0xFF, 0xDA, 1, 2]) && jpeg_is_whole(&[0xFF, 0xDA, 1, 0xFF, 0xD9]));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -42,7 +42,7 @@ pub mod tracker;
 pub use self::detector::dot_tracking::DotTracking;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
-pub use self::image::{GreyBuffer, GreyImage, load_png, save_png};
+pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
 pub use self::render::{CameraView, Canvas, Disc, RenderConfig, Rendered, Renderer};
 pub use self::target::dots::Dots;
 pub use self::target::{Target, TargetPoint};
