@@ -602,8 +602,11 @@ def detect_dots(
     threshold: int | None = None,
     min_area: int = 4,
     max_area: int | None = None,
+    polarity: Literal["light", "dark", "auto"] = "light",
 ) -> Dots:
-    """Bright dots on a dark background, with subpixel intensity-weighted centroids."""
+    """Bright dots on a dark background ("light"), dark dots on a bright one ("dark": the bright
+    dots of 255 - image, a threshold t standing for 255 - t) or as the image shows ("auto"),
+    with subpixel intensity-weighted centroids."""
 
 @final
 class DotTracker:
@@ -616,6 +619,7 @@ class DotTracker:
         search_radius: float = 20.0,
         max_search_radius: float = 80.0,
         min_area: int = 4,
+        polarity: Literal["light", "dark", "auto"] = "light",
     ) -> DotTracker: ...
     def track(self, image: _U8Image) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
         """Finds the dots in the next image: (pixels (n, 2), found (n,))."""

@@ -12,6 +12,7 @@ use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
 use crate::vision::image::{GreyBuffer, GreyImage, load_image as load_image_file, save_png, view};
+use crate::vision::polarity::Polarity;
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// `InvalidInput("{what}: {reason}")`, the core's `Error::InvalidImage` (kind `invalid_image`).
@@ -155,27 +156,39 @@ fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
     Ok(PyDots { centroids: centroids.unbind(), areas: areas.unbind(), bboxes: bboxes.unbind(), count: m })
 }
 
-/// Bright dots on a dark background: threshold (Otsu's, kept above the background's noise,
-/// unless given), 8-connected components with `min_area <= area <= max_area` (pixels),
+/// Bright dots on a dark background (`polarity="light"`), dark dots on a bright one
+/// (`"dark"`: the bright dots of `255 - image`, threshold `t` standing for `255 - t`) or as the
+/// image shows (`"auto"`): threshold (Otsu's, kept above the background's noise, unless
+/// given), 8-connected components with `min_area <= area <= max_area` (pixels),
 /// intensity-weighted subpixel centroids. A uniform image raises `InvalidInput`.
 #[pyfunction]
-#[pyo3(signature = (image, threshold = None, min_area = 4, max_area = None))]
+#[pyo3(signature = (image, threshold = None, min_area = 4, max_area = None, polarity = "light"))]
 pub fn detect_dots(
     py: Python<'_>,
     image: &Bound<'_, PyAny>,
     #[pyo3(from_py_with = super::args::threshold)] threshold: Option<u8>,
     #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
     #[pyo3(from_py_with = super::args::max_area)] max_area: Option<usize>,
+    polarity: &str,
 ) -> PyResult<PyDots> {
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
-    let config = DetectConfig { threshold, min_area, max_area };
+    let config = DetectConfig { threshold, min_area, max_area, polarity: polarity_arg(polarity)? };
     let dots = py.detach(|| detect(&buffer, &config))?;
     dots_out(py, &dots)
 }
 
+/// `"light"`, `"dark"` or `"auto"`; anything else raises `InvalidInput` naming `polarity`.
+fn polarity_arg(name: &str) -> PyResult<Polarity> {
+    Polarity::from_name(name).ok_or_else(|| {
+        let names = Polarity::NAMES.map(|n| format!("{n:?}")).join(", ");
+        super::errors::invalid_argument("polarity", format!("polarity: expected one of {names}, got {name:?}"))
+    })
+}
+
 /// Tracks dots through images: `DotTracker(image, initial_pixels (n, 2), search_radius=20.0,
-/// max_search_radius=80.0, min_area=4)` finds each dot near its click in the first image;
+/// max_search_radius=80.0, min_area=4, polarity="light")` finds each dot near its click in the
+/// first image (`"dark"`: dark dots, `"auto"`: decided on the first image);
 /// `track(image)` returns `(pixels (n, 2), found (n,) bool)`. A dot not found keeps its last
 /// position with `found` false; two dots are never swapped.
 #[pyclass(name = "DotTracker", module = "vsinv._core")]
@@ -186,7 +199,7 @@ pub struct PyDotTracker {
 #[pymethods]
 impl PyDotTracker {
     #[new]
-    #[pyo3(signature = (image, initial_pixels, search_radius = 20.0, max_search_radius = 80.0, min_area = 4))]
+    #[pyo3(signature = (image, initial_pixels, search_radius = 20.0, max_search_radius = 80.0, min_area = 4, polarity = "light"))]
     fn new(
         py: Python<'_>,
         image: &Bound<'_, PyAny>,
@@ -194,12 +207,14 @@ impl PyDotTracker {
         search_radius: f64,
         max_search_radius: f64,
         #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
+        polarity: &str,
     ) -> PyResult<Self> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
         let clicks = f64_array(initial_pixels, "initial_pixels", &[None, Some(2)])?;
         let clicks = points2(&clicks)?;
-        let config = TrackerConfig { search_radius, max_search_radius, min_area, ..TrackerConfig::default() };
+        let polarity = polarity_arg(polarity)?;
+        let config = TrackerConfig { search_radius, max_search_radius, min_area, polarity, ..TrackerConfig::default() };
         let inner = py.detach(|| DotTracker::new(&buffer, clicks, config))?;
         Ok(Self { inner })
     }

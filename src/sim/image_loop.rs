@@ -60,7 +60,10 @@ pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<Scene
     match TargetKind::of(scene) {
         TargetKind::Dots => Ok(SceneVision {
             target: Box::new(Dots::new(scene_discs(scene, config.dot_radius)?)),
-            detector: Box::new(DotTracking::new(TrackerConfig::default())),
+            detector: Box::new(DotTracking::new(TrackerConfig {
+                polarity: config.polarity,
+                ..TrackerConfig::default()
+            })),
         }),
     }
 }

@@ -1,4 +1,5 @@
-//! Dot detection: bright dots on a dark background. A threshold (Otsu's by default) and
+//! Dot detection: bright dots on a dark background, or dark dots on a bright one (found as
+//! the bright dots of the negative image: see [`Polarity`]). A threshold (Otsu's by default) and
 //! 8-connected components (imageproc) find the dots; each centroid is the intensity-weighted
 //! mean of its bounding box grown by two pixels, weighted by the grey level above the local
 //! background, so that the anti-aliased edge pixels under the threshold still count. Pixel
@@ -9,6 +10,7 @@ use imageproc::region_labelling::{Connectivity, connected_components};
 
 use crate::error::{Error, Result};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
+use crate::vision::polarity::Polarity;
 
 /// Pixels added around a component's bounding box for its centroid.
 const MARGIN: u32 = 2;
@@ -16,17 +18,21 @@ const MARGIN: u32 = 2;
 /// What [`detect_dots`] keeps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectConfig {
-    /// Grey level above which a pixel belongs to a dot (None: Otsu's threshold).
+    /// Grey level above which (light dots) or below which (dark dots) a pixel belongs to a
+    /// dot (None: Otsu's threshold). Dark dots with threshold `t` are the light dots of the
+    /// negative image with threshold `255 - t`.
     pub threshold: Option<u8>,
     /// Smallest dot, pixels above the threshold.
     pub min_area: usize,
     /// Largest dot (None: no limit).
     pub max_area: Option<usize>,
+    /// Light dots (the default), dark dots, or decided by the image.
+    pub polarity: Polarity,
 }
 
 impl Default for DetectConfig {
     fn default() -> Self {
-        Self { threshold: None, min_area: 4, max_area: None }
+        Self { threshold: None, min_area: 4, max_area: None, polarity: Polarity::Light }
     }
 }
 
@@ -93,23 +99,30 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
         });
     }
     let whole = Window::full(image);
-    let threshold = config.threshold.unwrap_or_else(|| automatic_threshold(&crop(image, whole)));
-    let mut dots = detect_in(image, whole, threshold, config.min_area, config.max_area);
+    let dark = config.polarity.dark_dots(image);
+    let threshold = match config.threshold {
+        Some(t) if dark => 255 - t,
+        Some(t) => t,
+        None => automatic_threshold(&crop(image, whole, dark)),
+    };
+    let mut dots = detect_in(image, whole, threshold, dark, config.min_area, config.max_area);
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
     Ok(dots)
 }
 
 /// The dots of a window with a given threshold. Components that touch the window's border
 /// (the image's border included) are dropped: they may not be whole, and the centroid of a
-/// cut dot is not its centre.
+/// cut dot is not its centre. `dark`: the dots are dark, found in the negative image (grey
+/// level `255 - g`), to which `threshold` then applies.
 pub fn detect_in<C: Pixels>(
     image: &GreyBuffer<C>,
     window: Window,
     threshold: u8,
+    dark: bool,
     min_area: usize,
     max_area: Option<usize>,
 ) -> Vec<Dot> {
-    let patch = crop(image, window);
+    let patch = crop(image, window, dark);
     let binary = GreyImage::from_fn(patch.width(), patch.height(), |u, v| {
         image::Luma([u8::from(patch.get_pixel(u, v)[0] > threshold)])
     });
@@ -156,8 +169,10 @@ fn histogram_median(histogram: &[usize; 256]) -> usize {
         .unwrap_or(0)
 }
 
-fn crop<C: Pixels>(image: &GreyBuffer<C>, w: Window) -> GreyImage {
-    GreyImage::from_fn(w.width(), w.height(), |u, v| *image.get_pixel(u + w.u0, v + w.v0))
+/// A window of the image, or of its negative (`dark`).
+fn crop<C: Pixels>(image: &GreyBuffer<C>, w: Window, dark: bool) -> GreyImage {
+    let flip = if dark { 255 } else { 0 };
+    GreyImage::from_fn(w.width(), w.height(), |u, v| image::Luma([flip ^ image.get_pixel(u + w.u0, v + w.v0)[0]]))
 }
 
 /// Area and bounding box of one label, in window coordinates.
@@ -285,6 +300,23 @@ mod tests {
             .collect();
         errs.sort_by(f64::total_cmp);
         errs
+    }
+
+    #[test]
+    fn dark_dots_are_the_light_dots_of_the_negative() {
+        let (img, centres) = scene(4.0, RenderConfig::default());
+        let negative =
+            GreyImage::from_fn(img.width(), img.height(), |u, v| image::Luma([255 - img.get_pixel(u, v)[0]]));
+        let light = detect_dots(&img, &DetectConfig::default()).unwrap();
+        assert_eq!(light.len(), centres.len());
+        let dark = DetectConfig { polarity: Polarity::Dark, ..Default::default() };
+        assert_eq!(detect_dots(&negative, &dark).unwrap(), light);
+        let auto = DetectConfig { polarity: Polarity::Auto, ..Default::default() };
+        assert_eq!(detect_dots(&negative, &auto).unwrap(), light);
+        assert_eq!(detect_dots(&img, &auto).unwrap(), light);
+        let fixed = DetectConfig { threshold: Some(100), ..dark };
+        let light_fixed = DetectConfig { threshold: Some(155), ..Default::default() };
+        assert_eq!(detect_dots(&negative, &fixed).unwrap(), detect_dots(&img, &light_fixed).unwrap());
     }
 
     #[test]

@@ -4,13 +4,14 @@
 //!
 //! | concept | module |
 //! |---|---|
-//! | 8-bit grey images, PNG files | [`image`](mod@image) |
+//! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | today's target: white discs ([`Dots`]) | [`target::dots`] |
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
 //! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
+//! | bright or dark dots, or decided by the image | [`polarity`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
 //!
 //! Images are row-major `(height, width)` 8-bit grey levels ([`GreyImage`]).
@@ -35,6 +36,7 @@
 pub mod detector;
 pub mod dots;
 pub mod image;
+pub mod polarity;
 pub mod render;
 pub mod target;
 pub mod tracker;
@@ -43,6 +45,7 @@ pub use self::detector::dot_tracking::DotTracking;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
+pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, RenderConfig, Rendered, Renderer};
 pub use self::target::dots::Dots;
 pub use self::target::{Target, TargetPoint};

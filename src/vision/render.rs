@@ -27,6 +27,7 @@ use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::{Error, Result, Short};
 use crate::vision::image::GreyImage;
+use crate::vision::polarity::Polarity;
 use crate::vision::target::Target;
 
 /// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
@@ -51,11 +52,24 @@ pub struct RenderConfig {
     pub foreground: u8,
     /// Seed of the noise; each frame number gives another draw.
     pub seed: u64,
+    /// The dots the images show and the tracker looks for: `light` (discs of `foreground` on
+    /// `background`, the default), `dark` (the negative image: every grey level `g` drawn as
+    /// `255 - g`, dark discs on a light background) or `auto` (drawn light, the tracker
+    /// decides from the reference image).
+    pub polarity: Polarity,
 }
 
 impl Default for RenderConfig {
     fn default() -> Self {
-        Self { dot_radius: 0.004, blur_sigma: 0.8, noise_sigma: 2.0, background: 30, foreground: 220, seed: 0 }
+        Self {
+            dot_radius: 0.004,
+            blur_sigma: 0.8,
+            noise_sigma: 2.0,
+            background: 30,
+            foreground: 220,
+            seed: 0,
+            polarity: Polarity::Light,
+        }
     }
 }
 
@@ -158,7 +172,11 @@ impl Renderer {
         let mut canvas = Canvas::new(noise.background_frame(width, height), *view, paint);
         let drawn = target.draw(&mut canvas, visible);
         check_flags("drawn", drawn.len(), n)?;
-        Ok(Rendered { image: canvas.into_image(), drawn })
+        let mut image = canvas.into_image();
+        if self.config.polarity == Polarity::Dark {
+            image.iter_mut().for_each(|g| *g = 255 - *g);
+        }
+        Ok(Rendered { image, drawn })
     }
 }
 

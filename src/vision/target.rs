@@ -80,6 +80,7 @@ mod tests {
             foreground: 210,
             seed: 0,
             dot_radius: 0.001,
+            polarity: crate::vision::Polarity::Light,
         };
         let renderer = Renderer::new(config).unwrap();
         let k = Intrinsics::pinhole(1000.0, 1000.0, 50.0, 40.0).unwrap();

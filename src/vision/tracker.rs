@@ -9,6 +9,7 @@
 use crate::error::{Error, Result, Short, fixed_or_short};
 use crate::vision::dots::{Dot, Window, detect_in};
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
+use crate::vision::polarity::Polarity;
 
 /// How the tracker searches.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -22,11 +23,20 @@ pub struct TrackerConfig {
     /// A component whose area differs from the dot's last area by more than this factor is
     /// not that dot.
     pub max_area_ratio: f64,
+    /// Light dots (the default), dark dots, or decided by the first image (the whole image,
+    /// by [`Polarity::dark_dots`]'s rule).
+    pub polarity: Polarity,
 }
 
 impl Default for TrackerConfig {
     fn default() -> Self {
-        Self { search_radius: 20.0, max_search_radius: 80.0, min_area: 4, max_area_ratio: 2.5 }
+        Self {
+            search_radius: 20.0,
+            max_search_radius: 80.0,
+            min_area: 4,
+            max_area_ratio: 2.5,
+            polarity: Polarity::Light,
+        }
     }
 }
 
@@ -73,6 +83,8 @@ struct TrackedDot {
 pub struct DotTracker {
     size: (u32, u32),
     config: TrackerConfig,
+    /// The dots are dark (the polarity, decided on the first image for `Auto`).
+    dark: bool,
     dots: Vec<TrackedDot>,
     positions: Vec<[f64; 2]>,
 }
@@ -85,13 +97,19 @@ impl DotTracker {
         if initial_pixels.is_empty() {
             return Err(Error::TooFewPoints { needed: 1, got: 0, why: "the tracker needs one pixel per dot" });
         }
+        let dark = config.polarity.dark_dots(image);
         let mut dots = Vec::with_capacity(initial_pixels.len());
         for (i, &click) in initial_pixels.iter().enumerate() {
-            dots.push(initial_dot(image, i, click, &config)?);
+            dots.push(initial_dot(image, i, click, &config, dark)?);
         }
         check_distinct(&dots)?;
         let positions = dots.iter().map(|d| d.position).collect();
-        Ok(Self { size: image.dimensions(), config, dots, positions })
+        Ok(Self { size: image.dimensions(), config, dark, dots, positions })
+    }
+
+    /// Whether the tracked dots are dark (for `Auto`: as decided on the first image).
+    pub fn dark(&self) -> bool {
+        self.dark
     }
 
     /// Number of dots.
@@ -137,7 +155,7 @@ impl DotTracker {
         let mut radius = if dot.lost_for > 0 { self.config.max_search_radius } else { self.config.search_radius };
         loop {
             let window = Window::around(image, dot.predicted, radius)?;
-            let candidates = detect_in(image, window, dot.threshold, self.config.min_area, None);
+            let candidates = detect_in(image, window, dot.threshold, self.dark, self.config.min_area, None);
             let ratio = self.config.max_area_ratio;
             let best = candidates
                 .into_iter()
@@ -182,12 +200,14 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
-/// The dot around a click: Otsu's threshold of the window, the component nearest the click.
+/// The dot around a click: a threshold midway between the window's background and its
+/// peak (in the negative image for dark dots), the component nearest the click.
 fn initial_dot<C: Pixels>(
     image: &GreyBuffer<C>,
     i: usize,
     click: [f64; 2],
     config: &TrackerConfig,
+    dark: bool,
 ) -> Result<TrackedDot> {
     if !(click[0].is_finite() && click[1].is_finite()) {
         return Err(Error::NonFinitePoint {
@@ -207,12 +227,12 @@ fn initial_dot<C: Pixels>(
     let window = Window::around(image, click, config.search_radius).ok_or_else(|| not_found("outside the image"))?;
     // The threshold is midway between the window's background (its median) and the dot's
     // peak; a window without contrast has no dot.
-    let (background, peak) = window_levels(image, window);
+    let (background, peak) = window_levels(image, window, dark);
     if peak.saturating_sub(background) < MIN_CONTRAST {
         return Err(not_found(&format!("no dot within {} px (no contrast)", Short(config.search_radius))));
     }
     let threshold = background + (peak - background) / 2;
-    let best = detect_in(image, window, threshold, config.min_area, None)
+    let best = detect_in(image, window, threshold, dark, config.min_area, None)
         .into_iter()
         .min_by(|a, b| distance(a.centroid, click).total_cmp(&distance(b.centroid, click)))
         .ok_or_else(|| not_found(&format!("no dot within {} px", Short(config.search_radius))))?;
@@ -229,10 +249,11 @@ fn initial_dot<C: Pixels>(
 /// Grey levels by which a dot must stand out from its background.
 const MIN_CONTRAST: u8 = 24;
 
-/// The median and the largest grey level of a window.
-fn window_levels<C: Pixels>(image: &GreyBuffer<C>, w: Window) -> (u8, u8) {
+/// The median and the largest grey level of a window (of its negative for dark dots).
+fn window_levels<C: Pixels>(image: &GreyBuffer<C>, w: Window, dark: bool) -> (u8, u8) {
+    let flip = if dark { 255 } else { 0 };
     let mut values: Vec<u8> =
-        (w.v0..=w.v1).flat_map(|v| (w.u0..=w.u1).map(move |u| image.get_pixel(u, v)[0])).collect();
+        (w.v0..=w.v1).flat_map(|v| (w.u0..=w.u1).map(move |u| flip ^ image.get_pixel(u, v)[0])).collect();
     values.sort_unstable();
     (values[values.len() / 2], values[values.len() - 1])
 }

@@ -39,7 +39,7 @@ pub fn prop_detect_and_track(cases: u32) {
         cases,
         (small_image(), small_image(), detect, clicks, tracker, on_dots),
         |(a, b, (threshold, min_area, max_area), clicks, t, (on_dots, offset))| {
-            let cfg = vsinv::vision::DetectConfig { threshold, min_area, max_area };
+            let cfg = vsinv::vision::DetectConfig { threshold, min_area, max_area, ..Default::default() };
             let dots = vsinv::vision::detect_dots(&a, &cfg);
             let clicks = match (&dots, on_dots) {
                 (Ok(found), true) if !found.is_empty() => {
@@ -60,6 +60,7 @@ pub fn prop_detect_and_track(cases: u32) {
                     max_search_radius: t.1,
                     max_area_ratio: t.2,
                     min_area: t.3,
+                    ..default
                 },
             ];
             for config in configs {
@@ -104,6 +105,7 @@ pub fn prop_render(cases: u32) {
             background: c.3,
             foreground: c.4,
             seed: c.5,
+            polarity: vsinv::vision::Polarity::Light,
         };
         let renderer = vsinv::vision::Renderer::new(config);
         check("vision::Renderer::new", &renderer, |_| true)?;
