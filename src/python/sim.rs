@@ -411,23 +411,31 @@ fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec
             texts.push(text.clone());
             continue;
         }
-        let text = if item.cast::<PyDict>().is_ok() {
-            dumps.call1((&item,)).and_then(|t| t.extract::<String>())
-        } else if let Ok(s) = item.cast::<PyString>()
-            && s.to_str()?.trim_start().starts_with('{')
-        {
-            // A scenario already written as JSON (sweeps serialise while the previous chunk runs).
-            s.extract::<String>()
-        } else {
-            scenario_arg_with(&item, access).and_then(|s| Ok(s.to_json()?))
-        };
-        let text = text.map_err(|e| reraise(&e, format!("scenario {i}: {}", e.value(py)), None))?;
+        let text = batch_text(&item, &dumps, access)
+            .map_err(|e| reraise(&e, format!("scenario {i}: {}", e.value(py)), None))?;
         if let Some(k) = key {
             loaded.insert(k, text.clone());
         }
         texts.push(text);
     }
     Ok(texts)
+}
+
+/// Opens a JSON object (written as an escape so that the braces of this file stay balanced).
+const JSON_OBJECT_START: char = '\u{7b}';
+
+/// One batch item as JSON: a dictionary dumped, a JSON text as it is (sweeps serialise while
+/// the previous chunk runs), anything else loaded as a scenario (name, file, Scenario).
+fn batch_text(item: &Bound<'_, PyAny>, dumps: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<String> {
+    if item.cast::<PyDict>().is_ok() {
+        return dumps.call1((item,))?.extract::<String>();
+    }
+    if let Ok(s) = item.cast::<PyString>()
+        && s.to_str()?.trim_start().starts_with(JSON_OBJECT_START)
+    {
+        return s.extract::<String>();
+    }
+    Ok(scenario_arg_with(item, access)?.to_json()?)
 }
 
 /// The numbers of `run_batch`'s table (summary fields, SI; each also under its older name).
