@@ -13,6 +13,7 @@
 //! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
 //! | bright or dark dots, or decided by the image | [`polarity`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
+//! | one pipeline from image to twist: detect, match by identity, step the servo session | [`image_servo`] |
 //!
 //! Images are row-major `(height, width)` 8-bit grey levels ([`GreyImage`]).
 //!
@@ -36,6 +37,7 @@
 pub mod detector;
 pub mod dots;
 pub mod image;
+pub mod image_servo;
 pub mod polarity;
 pub mod render;
 pub mod target;
@@ -45,6 +47,7 @@ pub use self::detector::dot_tracking::DotTracking;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
+pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, RenderConfig, Rendered, Renderer};
 pub use self::target::dots::Dots;

@@ -1,0 +1,368 @@
+//! [`ImageServo`]: one pipeline from image to twist. The reference image (taken with any
+//! camera: no K* is needed, sec. 2) is searched once for the target's points; then every
+//! frame of the servo camera is searched by a [`Detector`], its points are matched to the
+//! reference by identity, and the [`Servo`] session (which undistorts them with K_hat and the
+//! believed lens) steps the law. A point the detector does not report, or reports lost, is
+//! not visible for that step: the session never receives a wrong position.
+
+use crate::core::camera::Intrinsics;
+use crate::core::distortion::{Distortion, undistort_point};
+use crate::error::{Error, Result};
+use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, ServoStep};
+use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::image::GreyImage;
+use crate::vision::tracker::TrackerConfig;
+
+/// What the pipeline looks for in the images, and how it is found.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ImageTarget {
+    /// Dots, tracked from frame to frame: approximate pixels of each dot (clicks) in the
+    /// reference image, and in the first frame (None: near the reference's, which suits a
+    /// first view close to the reference one). Dot `i` has identity `i`.
+    Dots {
+        /// One approximate pixel per dot in the reference image.
+        reference_points: Vec<[f64; 2]>,
+        /// One approximate pixel per dot in the first frame (None: the reference's).
+        first_points: Option<Vec<[f64; 2]>>,
+        /// The tracker's settings, for the reference image and for the frames.
+        tracker: TrackerConfig,
+    },
+}
+
+impl ImageTarget {
+    /// A detector of this target, not started.
+    fn detector(&self) -> Box<dyn Detector> {
+        match self {
+            ImageTarget::Dots { tracker, .. } => Box::new(DotTracking::new(*tracker)),
+        }
+    }
+
+    /// The hints for the reference image: every dot's click, identities `0, 1, ...`.
+    fn reference_hints(&self) -> Vec<Expected> {
+        match self {
+            ImageTarget::Dots { reference_points, .. } => hints(reference_points),
+        }
+    }
+
+    /// The hints for the first frame, given the reference points found.
+    fn first_hints(&self, reference: &[Detection]) -> Vec<Expected> {
+        match self {
+            ImageTarget::Dots { first_points: Some(points), .. } => hints(points),
+            ImageTarget::Dots { first_points: None, .. } => {
+                reference.iter().map(|d| Expected { id: d.id, pixel: d.pixel }).collect()
+            }
+        }
+    }
+
+    /// Checks the hints' lengths: the reference's and the first frame's must match.
+    fn validate(&self) -> Result<()> {
+        match self {
+            ImageTarget::Dots { first_points: Some(first), reference_points, .. }
+                if first.len() != reference_points.len() =>
+            {
+                Err(Error::Shape {
+                    what: "first_points",
+                    expected: format!("{} points (one per reference point)", reference_points.len()),
+                    got: format!("{} points", first.len()),
+                })
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+fn hints(points: &[[f64; 2]]) -> Vec<Expected> {
+    (0u32..).zip(points).map(|(id, &pixel)| Expected { id, pixel }).collect()
+}
+
+/// How the pipeline is set up besides its target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImageServoConfig {
+    /// The servo session: the law, K_hat and the servo camera's believed lens, stop rules.
+    pub servo: ServoConfig,
+    /// The reference camera's own intrinsics and lens, to undistort the reference points
+    /// (None: its pixels are taken as they are, a pinhole camera).
+    pub reference_lens: Option<(Intrinsics, Distortion)>,
+    /// Depths of the points at the reference pose, when known (IBVS and the reference depth
+    /// source need them).
+    pub reference_depths: Option<Vec<f64>>,
+}
+
+impl ImageServoConfig {
+    /// A pipeline over `servo` with a pinhole reference camera and no reference depths.
+    pub fn new(servo: ServoConfig) -> Self {
+        Self { servo, reference_lens: None, reference_depths: None }
+    }
+}
+
+/// The pipeline from image to twist. See the module documentation.
+pub struct ImageServo {
+    servo: Servo,
+    detector: Box<dyn Detector>,
+    ids: Vec<u32>,
+    first: Vec<Expected>,
+    started: bool,
+    pixels: Vec<[f64; 2]>,
+    found: Vec<bool>,
+}
+
+impl std::fmt::Debug for ImageServo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ImageServo").field("ids", &self.ids).field("started", &self.started).finish_non_exhaustive()
+    }
+}
+
+impl ImageServo {
+    /// Finds `target` in the reference image (every point must be found there) and sets up
+    /// the session servoing to it.
+    pub fn new(
+        reference: &GreyImage,
+        target: &ImageTarget,
+        config: ImageServoConfig,
+        depths: ServoDepths,
+    ) -> Result<Self> {
+        target.validate()?;
+        let found = reference_points(reference, target.detector().as_mut(), &target.reference_hints())?;
+        let first = target.first_hints(&found);
+        Self::with_detector(&found, target.detector(), first, config, depths)
+    }
+
+    /// The pipeline over any detector: `reference` holds the reference image's points (their
+    /// identities and pixels; all found), `first` the hints the detector is started with on
+    /// the first frame.
+    pub fn with_detector(
+        reference: &[Detection],
+        detector: Box<dyn Detector>,
+        first: Vec<Expected>,
+        config: ImageServoConfig,
+        depths: ServoDepths,
+    ) -> Result<Self> {
+        let ids = distinct_ids(reference)?;
+        let mut pixels: Vec<[f64; 2]> = reference.iter().map(|d| d.pixel).collect();
+        if let Some((k, distortion)) = &config.reference_lens {
+            for p in &mut pixels {
+                *p = undistort_point(*p, k, distortion)?;
+            }
+        }
+        let n = pixels.len();
+        let servo_reference = ServoReference { pixels, depths: config.reference_depths };
+        let servo = Servo::new(config.servo, servo_reference, depths)?;
+        Ok(Self { servo, detector, ids, first, started: false, pixels: vec![[0.0; 2]; n], found: vec![false; n] })
+    }
+
+    /// One frame: detect (the first frame starts the detector on its hints), match by
+    /// identity, step the session. A frame in which the detector cannot start is an error
+    /// and the next frame starts it again.
+    pub fn step(&mut self, image: &GreyImage) -> Result<ServoStep> {
+        let detections = if self.started {
+            self.detector.detect(image)?
+        } else {
+            let d = self.detector.start(image, &self.first)?;
+            self.started = true;
+            d
+        };
+        self.found.fill(false);
+        for d in detections.iter().filter(|d| d.found) {
+            if let Some(i) = self.ids.iter().position(|&id| id == d.id) {
+                self.pixels[i] = d.pixel;
+                self.found[i] = true;
+            }
+        }
+        self.servo.step(&self.pixels, Some(&self.found), None)
+    }
+
+    /// The points' identities, in the session's order.
+    pub fn ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// The last frame's pixels (distorted, as detected; the last known where not found).
+    pub fn pixels(&self) -> &[[f64; 2]] {
+        &self.pixels
+    }
+
+    /// Per point: found in the last frame.
+    pub fn found(&self) -> &[bool] {
+        &self.found
+    }
+
+    /// The servo session (its reference pixels, basis, telemetry, certainty).
+    pub fn servo(&self) -> &Servo {
+        &self.servo
+    }
+}
+
+/// The points of the reference image: each hint's point must be found.
+fn reference_points(image: &GreyImage, detector: &mut dyn Detector, hints: &[Expected]) -> Result<Vec<Detection>> {
+    let found: Vec<Detection> = detector.start(image, hints)?.into_iter().filter(|d| d.found).collect();
+    if found.is_empty() {
+        return Err(Error::InvalidImage {
+            what: "reference_image".into(),
+            reason: "the target was not found in it".into(),
+        });
+    }
+    Ok(found)
+}
+
+/// The identities of the reference points; two points under one identity are an error.
+fn distinct_ids(reference: &[Detection]) -> Result<Vec<u32>> {
+    let ids: Vec<u32> = reference.iter().map(|d| d.id).collect();
+    for (i, id) in ids.iter().enumerate() {
+        if ids[..i].contains(id) {
+            return Err(Error::InvalidImage {
+                what: "reference_image".into(),
+                reason: format!("point identity {id} found twice (point {i} and an earlier one)"),
+            });
+        }
+    }
+    Ok(ids)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+    use super::*;
+    use crate::core::camera::project_points;
+    use crate::servo::{Law, Status, Verdict};
+    use crate::vision::render::{CameraView, RenderConfig, Renderer};
+    use crate::vision::target::dots::Dots;
+
+    /// Eight dots on two planes (a non-planar object), 0.5 m in front of the reference camera.
+    fn object() -> Vec<[f64; 3]> {
+        vec![
+            [-0.06, -0.05, 0.5],
+            [0.06, -0.05, 0.5],
+            [0.06, 0.05, 0.5],
+            [-0.06, 0.05, 0.5],
+            [-0.03, -0.02, 0.44],
+            [0.03, -0.02, 0.44],
+            [0.03, 0.03, 0.46],
+            [-0.02, 0.03, 0.46],
+        ]
+    }
+
+    fn render(pose: &Isometry3<f64>, k: &Intrinsics) -> GreyImage {
+        let dots = Dots::facing_reference(&object(), 0.004).unwrap();
+        let none = Distortion::none();
+        let view = CameraView { pose, intrinsics: k, distortion: &none, size: (640, 480) };
+        let config = RenderConfig { noise_sigma: 0.0, ..RenderConfig::default() };
+        Renderer::new(config).unwrap().render(&dots, None, &view, 0).unwrap().image
+    }
+
+    fn clicks(pose: &Isometry3<f64>, k: &Intrinsics) -> Vec<[f64; 2]> {
+        let camera: Vec<[f64; 3]> = object()
+            .iter()
+            .map(|p| {
+                let c = pose.inverse_transform_point(&nalgebra::Point3::new(p[0], p[1], p[2]));
+                [c.x, c.y, c.z]
+            })
+            .collect();
+        project_points(&camera, k).unwrap().0.iter().map(|p| [p[0] + 1.5, p[1] - 1.0]).collect()
+    }
+
+    /// A reference through a 12 mm lens, frames through a 6 mm lens (the paper's zoom): the
+    /// pipeline's twists, integrated, bring the camera back to the reference pose.
+    #[test]
+    fn servoes_through_images_of_another_lens() {
+        let k_ref = Intrinsics::pinhole(1600.0, 1600.0, 320.0, 240.0).unwrap();
+        let k = Intrinsics::pinhole(800.0, 800.0, 320.0, 240.0).unwrap();
+        let start = Isometry3::from_parts(
+            Translation3::new(0.02, -0.01, -0.05),
+            UnitQuaternion::from_euler_angles(0.05, -0.04, 0.1),
+        );
+        let target = ImageTarget::Dots {
+            reference_points: clicks(&Isometry3::identity(), &k_ref),
+            first_points: Some(clicks(&start, &k)),
+            tracker: TrackerConfig::default(),
+        };
+        let mut servo_config = ServoConfig::new(Law::Invariant(Default::default()), k);
+        servo_config.stop.max_iterations = 600;
+        let config = ImageServoConfig {
+            reference_depths: Some(object().iter().map(|p| p[2]).collect()),
+            ..ImageServoConfig::new(servo_config)
+        };
+        let mut pipeline =
+            ImageServo::new(&render(&Isometry3::identity(), &k_ref), &target, config, ServoDepths::Reference).unwrap();
+        let mut pose = start;
+        let status = loop {
+            let step = pipeline.step(&render(&pose, &k)).unwrap();
+            if let Verdict::Stop { status, reason } = step.verdict {
+                assert_eq!(status, Status::Converged, "{reason} after {} steps", pipeline.servo().iterations());
+                break status;
+            }
+            assert!(pipeline.found().iter().all(|&f| f));
+            let (v, w) = (step.twist.fixed_rows::<3>(0), step.twist.fixed_rows::<3>(3));
+            let motion = Isometry3::new(Vector3::from(v) * 0.04, Vector3::from(w) * 0.04);
+            pose *= motion;
+        };
+        assert_eq!(status, Status::Converged);
+        assert!(pose.translation.vector.norm() < 1e-3, "{:?}", pose.translation);
+        assert!(pose.rotation.angle() < 0.1f64.to_radians(), "{}", pose.rotation.angle());
+    }
+
+    /// A detector that reports fixed detections, to check matching by identity.
+    struct Scripted(Vec<Vec<Detection>>);
+
+    impl Detector for Scripted {
+        fn start(&mut self, _: &GreyImage, _: &[Expected]) -> Result<Vec<Detection>> {
+            Ok(self.0.remove(0))
+        }
+        fn detect(&mut self, _: &GreyImage) -> Result<Vec<Detection>> {
+            Ok(self.0.remove(0))
+        }
+    }
+
+    #[test]
+    fn points_are_matched_by_identity_and_missing_ones_are_not_visible() {
+        let d = |id, u: f64, v: f64, found| Detection { id, pixel: [u, v], found };
+        let reference =
+            [d(7, 100.0, 100.0, true), d(3, 300.0, 120.0, true), d(9, 200.0, 300.0, true), d(4, 150.0, 250.0, true)];
+        let frames = vec![
+            // Reordered, one extra identity (ignored).
+            vec![
+                d(9, 201.0, 301.0, true),
+                d(42, 5.0, 5.0, true),
+                d(7, 101.0, 101.0, true),
+                d(4, 151.0, 251.0, true),
+                d(3, 301.0, 121.0, true),
+            ],
+            // 3 missing, 4 reported lost.
+            vec![d(7, 102.0, 102.0, true), d(9, 202.0, 302.0, true), d(4, 999.0, 999.0, false)],
+        ];
+        let k = Intrinsics::pinhole(800.0, 800.0, 320.0, 240.0).unwrap();
+        let config = ImageServoConfig::new(ServoConfig::new(Law::Observe, k));
+        let mut pipeline = ImageServo::with_detector(
+            &reference,
+            Box::new(Scripted(frames)),
+            Vec::new(),
+            config,
+            ServoDepths::Constant(0.5),
+        )
+        .unwrap();
+        let image = GreyImage::new(4, 4);
+        pipeline.step(&image).unwrap();
+        assert_eq!(pipeline.ids(), [7, 3, 9, 4]);
+        assert_eq!(pipeline.pixels(), [[101.0, 101.0], [301.0, 121.0], [201.0, 301.0], [151.0, 251.0]]);
+        assert_eq!(pipeline.found(), [true; 4]);
+        pipeline.step(&image).unwrap();
+        assert_eq!(pipeline.found(), [true, false, true, false]);
+        assert_eq!(
+            pipeline.pixels()[3],
+            [151.0, 251.0],
+            "a lost point keeps its last position, never the reported one"
+        );
+        let twice = [d(7, 1.0, 1.0, true), d(7, 2.0, 2.0, true), d(1, 3.0, 9.0, true)];
+        let config = ImageServoConfig::new(ServoConfig::new(Law::Observe, k));
+        let err = ImageServo::with_detector(
+            &twice,
+            Box::new(Scripted(vec![])),
+            Vec::new(),
+            config,
+            ServoDepths::Constant(0.5),
+        );
+        assert!(matches!(err, Err(Error::InvalidImage { .. })));
+    }
+}
