@@ -195,3 +195,90 @@ def test_images_on_disk(tmp_path_factory: Any, data: Any) -> None:
         assert out.dtype == np.uint8 and out.shape == image.shape
     for bad, e in ((folder / "nothing.png", RAISE), (folder, RAISE), (None, TYPE), (3, TYPE)):
         call(vsinv.load_image, bad, _expect=e, _names=(str(bad), "path", "image"))
+
+
+# ---------------------------------------------------------------------------------------------
+# the pipeline from image to twist, frame sources, replay
+
+
+def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    if "reference" not in IMG_LOCK:
+        IMG_LOCK["reference"] = vsinv.render_view(VISION, reference=True)
+    return IMG_LOCK["reference"]
+
+
+@covers("ImageServo", "ImageServo.step", "ImageServo.ids", "ImageServo.reference_pixels", "ImageServo.iterations",
+        "ImageServo.basis", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.twist",
+        "ImageStep.verdict", "ImageStep.reason", "ImageStep.running", "ImageStep.telemetry")
+@fuzz_settings(60)
+@given(st.data())
+def test_image_servo(data: Any) -> None:
+    ref, ref_px, _ = reference_view()
+    image, px, vis = rendered()
+    assert vis.all()
+    args = {"reference_image": ref, "target": "dots", "K_hat": np.diag([600.0, 600.0, 1.0]), "reference_points": ref_px + 1.0,
+            "first_points": px + 1.0, "law": "ibvs", "depths": 0.6, "gain": 0.5}
+    ref_pipeline = vsinv.ImageServo(**args)
+    digest = lambda p: p.reference_pixels  # noqa: E731
+    over = {"fewer": ANY, "empty": ANY, "huge": ANY, "zero": ANY, "negative": ANY}
+    name, v, out = fuzz(data, vsinv.ImageServo, args,
+                        {"reference_image": image_variants(ref), "reference_points": arrays(ref_px + 1.0, overrides=over),
+                         "first_points": arrays(px + 1.0, overrides={**over, "fewer": INVALID, "empty": INVALID}),
+                         "target": choices(["dots"], ["tags?", "", 3], bad_expect=TYPE),
+                         "gain": floats(0.5, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID}),
+                         "depths": floats(0.6, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID})},
+                        api="ImageServo", digest=digest, ref=ref_pipeline,
+                        names={"first_points": ("first_points",), "reference_image": ("reference_image", "reference_points")})
+    pipeline = out if returned(out) else ref_pipeline
+    n = len(call(getattr, pipeline, "ids", _api="ImageServo.ids"))
+    assert call(getattr, pipeline, "reference_pixels", _api="ImageServo.reference_pixels").shape == (n, 2)
+    assert call(getattr, pipeline, "iterations", _api="ImageServo.iterations") == 0
+    assert len(call(getattr, pipeline, "basis", _api="ImageServo.basis")) == 3
+    nxt = data.draw(image_variants(image), label="step image")
+    step = call(pipeline.step, nxt.value, _api="ImageServo.step", _expect=ANY, _names=("image", "first_points"))
+    if returned(step):
+        assert isinstance(step, vsinv.ImageStep)
+        found = call(getattr, step, "found", _api="ImageStep.found")
+        assert found.shape == (n,) and found.dtype == np.bool_
+        assert call(getattr, step, "pixels", _api="ImageStep.pixels").shape == (n, 2)
+        assert call(getattr, step, "twist", _api="ImageStep.twist").shape == (6,)
+        verdict = call(getattr, step, "verdict", _api="ImageStep.verdict")
+        running = call(getattr, step, "running", _api="ImageStep.running")
+        assert running == (verdict == "running")
+        assert (call(getattr, step, "reason", _api="ImageStep.reason", _finite=False) is None) == running
+        assert "image_error" in call(getattr, step, "telemetry", _api="ImageStep.telemetry", _finite=False)
+        if nxt.expect == SAME and pipeline is ref_pipeline:
+            assert found.all()
+
+
+@covers("frames", "replay", "ReplayResult", "ReplayResult.table", "ReplayResult.write_csv", "ReplayResult.plot")
+@fuzz_settings(30)
+@given(st.data())
+def test_frames_and_replay(tmp_path_factory: Any, data: Any) -> None:
+    ref, ref_px, _ = reference_view()
+    image, px, _ = rendered()
+    source = data.draw(st.sampled_from([
+        V(np.stack([image, image]), RETURN, "stack"),
+        V([image], RETURN, "list"),
+        V(image, RETURN, "one image"),
+        V(np.zeros((2, 2, 2, 2), np.uint8), INVALID, "4-d"),
+        V(3.5, INVALID, "number"),
+        V("/nonexistent/folder", INVALID, "missing path"),
+        V([image.astype(np.float32)], INVALID, "float frames"),
+    ]), label="source")
+    frames = call(lambda s: list(vsinv.frames(s)), source.value, _api="frames",
+                  _expect=RETURN if source.label == "float frames" else source.expect, _names=("source",), _finite=False)
+    result = call(vsinv.replay, ref, source.value, np.diag([600.0, 600.0, 1.0]), "dots", _api="replay", _expect=source.expect,
+                  _names=("source", "image"), _finite=False, reference_points=ref_px, first_points=px, law="ibvs", depths=0.6)
+    if source.expect == RETURN:
+        assert isinstance(result, vsinv.ReplayResult) and len(result.names) == len(frames)
+        assert result.found.all() and result.twists.shape == (len(frames), 6)
+        text = call(result.table, _api="ReplayResult.table", _finite=False)
+        assert len(text.splitlines()) == len(frames) + 1
+        path = tmp_path_factory.mktemp("replay") / "replay.csv"
+        call(result.write_csv, path, _api="ReplayResult.write_csv", _finite=False)
+        assert len(path.read_text().splitlines()) == len(frames) + 1
+        import matplotlib.pyplot as plt
+
+        fig = call(result.plot, _api="ReplayResult.plot", _finite=False)
+        plt.close(fig)

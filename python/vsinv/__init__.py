@@ -16,6 +16,8 @@ from ._core import (
     DotTracker,
     Dots,
     IbvsController,
+    ImageServo,
+    ImageStep,
     Servo,
     ServoStep,
     Intrinsics,
@@ -62,6 +64,8 @@ from ._core import (
     undistort_points,
 )
 from . import sweep
+from .replaying import ReplayResult, replay
+from .sources import frames
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
 __all__ = [
@@ -72,6 +76,11 @@ __all__ = [
     "DotTracker",
     "Dots",
     "IbvsController",
+    "ImageServo",
+    "ImageStep",
+    "ReplayResult",
+    "frames",
+    "replay",
     "Servo",
     "ServoStep",
     "Intrinsics",

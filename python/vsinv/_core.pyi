@@ -5,9 +5,12 @@ from typing import Any, Callable, Iterable, Literal, Sequence, TypedDict, Union,
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import disjoint_base
 
 __version__: str
 __all__ = [
+    "ImageServo",
+    "ImageStep",
     "VsinvError",
     "InvalidInput",
     "DegenerateGeometry",
@@ -324,7 +327,7 @@ class Servo:
         translation_bound in metres, rotation_sigma, rotation_bound in radians); None when it cannot
         be computed."""
 
-@final
+@disjoint_base
 class ServoStep:
     """What one ``Servo.step`` returns."""
 
@@ -347,6 +350,61 @@ class ServoStep:
     @property
     def telemetry(self) -> dict[str, Any]:
         """iteration, invariant_error, image_error, tau, eps_z, eps (5,), tracking_error, law_ran."""
+
+@final
+class ImageServo:
+    """The pipeline from image to twist: finds the target in the reference image (taken with any
+    camera: no K* needed), then each ``step(image)`` detects or tracks it, matches the points by
+    identity, undistorts them with ``K_hat`` and ``distortion`` and steps a ``Servo`` session.
+
+    ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
+    ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
+    ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
+    ``reference_K`` and ``reference_distortion`` undistort the reference points. Every other keyword
+    argument is the ``Servo`` session's (law, reference_depths, depths, basis, gain, ..., dt) and an
+    unknown one is refused by name. A point not found in a frame is not visible for that step.
+    """
+
+    def __new__(
+        cls,
+        reference_image: npt.NDArray[np.uint8],
+        target: Literal["dots"],
+        K_hat: _IntrinsicsLike,
+        *,
+        reference_points: _ArrayLike | None = None,
+        first_points: _ArrayLike | None = None,
+        tracker: dict[str, float | int | str] | None = None,
+        distortion: Distortion | _ArrayLike | None = None,
+        reference_K: _IntrinsicsLike | None = None,
+        reference_distortion: Distortion | _ArrayLike | None = None,
+        **servo: Any,
+    ) -> ImageServo: ...
+    def step(self, image: npt.NDArray[np.uint8]) -> ImageStep:
+        """One frame: the twist to send (zero when stopping), the verdict, the telemetry, and per
+        point the pixel and whether it was found."""
+    @property
+    def ids(self) -> npt.NDArray[np.uint32]:
+        """The points' identities, in the session's order (n,)."""
+    @property
+    def reference_pixels(self) -> _F64Array:
+        """The reference pixels (n, 2), undistorted with reference_K when given."""
+    @property
+    def iterations(self) -> int:
+        """Control steps applied."""
+    @property
+    def basis(self) -> tuple[int, int, int]:
+        """The basis in use."""
+
+@final
+class ImageStep(ServoStep):
+    """What one ``ImageServo.step`` returns: a ``ServoStep`` with the points found."""
+
+    @property
+    def found(self) -> npt.NDArray[np.bool_]:
+        """Per point: found in this frame (n,)."""
+    @property
+    def pixels(self) -> _F64Array:
+        """Per point: the pixel found (distorted, as detected), or its last known pixel (n, 2)."""
 
 @final
 class PoseUncertainty:

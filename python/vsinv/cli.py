@@ -1,13 +1,15 @@
 """Command-line interface: ``vsinv list``, ``vsinv run NAME|FILE [--json] [--out DIR]``,
 ``vsinv sweep NAME|FILE --vary KEY=START:STOP:COUNT [...] [--out DIR]``,
-``vsinv render NAME|FILE --out DIR`` and ``vsinv invariance REF.png IMG.png ... --points CSV``
-(the image commands, in :mod:`vsinv.cli_images`).
+``vsinv render NAME|FILE --out DIR``, ``vsinv invariance REF.png IMG.png ... --points CSV``
+(the image commands, in :mod:`vsinv.cli_images`) and ``vsinv replay REF FRAMES --target dots``
+(:mod:`vsinv.cli_replay`).
 
 Exit codes: ``vsinv run`` returns 0 when the run's status is ``converged`` and 1 for every
 other status (``max_iterations``, ``lost_features``, ``diverged``, ``degenerate``, ``rz_trap``,
 ``observed``, ``joint_limit``, ``singular``, ``settled``), which it reports; ``sweep`` and ``render``
 return 0 when they finish (a sweep's statuses are in its table); ``invariance`` returns 0 when
-every dot was found in every image and 1 when a measurement is missing; every command
+every dot was found in every image and 1 when a measurement is missing, and so does ``replay``
+(1 when a point was not found in some frame); every command
 returns 2 for bad input (unknown scenario, invalid scenario file, bad --vary/--random,
 unwritable output directory) and 130 on Ctrl-C.
 """
@@ -27,6 +29,7 @@ import numpy as np
 
 from . import VsinvError, __version__, list_scenarios, load_scenario, run_scenario
 from .cli_images import add_allow_outside_files, add_image_commands, cmd_invariance, cmd_render
+from .cli_replay import add_replay_command, cmd_replay
 
 __all__ = ["main"]
 
@@ -213,6 +216,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sw.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     add_allow_outside_files(sw)
     add_image_commands(sub)
+    add_replay_command(sub)
     return parser
 
 
@@ -492,6 +496,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             return cmd_render(args)
         if args.command == "invariance":
             return cmd_invariance(args)
+        if args.command == "replay":
+            return cmd_replay(args)
         return _cmd_run(args)
     except (VsinvError, ValueError, OSError) as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

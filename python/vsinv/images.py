@@ -32,7 +32,7 @@ from ._core import (
 )
 from .safe_files import MAX_CSV_BYTES, read_text, replace_text_file
 
-__all__ = ["InvarianceResult", "read_points", "track_invariance", "write_points", "write_scenario_images"]
+__all__ = ["InvarianceResult", "read_columns", "read_points", "track_invariance", "write_points", "write_scenario_images"]
 
 _PathLike = Union[str, Path]
 
@@ -50,7 +50,12 @@ def write_points(path: Path, pixels: npt.NDArray[np.float64], visible: npt.NDArr
 
 
 def read_points(path: _PathLike) -> npt.NDArray[np.float64]:
-    """The ``u`` and ``v`` columns of a points CSV as an (n, 2) array; a missing column or a
+    """The ``u`` and ``v`` columns of a points CSV as an (n, 2) array (see :func:`read_columns`)."""
+    return read_columns(path, ("u", "v"))
+
+
+def read_columns(path: _PathLike, columns: Sequence[str]) -> npt.NDArray[np.float64]:
+    """Some columns of a CSV with a header as an (n, len(columns)) array; a missing column or a
     value that is not a finite number raises ``InvalidInput`` naming the file, row and column.
     The file must be a regular UTF-8 file of at most :data:`vsinv.safe_files.MAX_CSV_BYTES`;
     a value is quoted in an error only as a short excerpt."""
@@ -59,11 +64,11 @@ def read_points(path: _PathLike) -> npt.NDArray[np.float64]:
         rows = list(csv.DictReader(io.StringIO(text, newline="")))
     except csv.Error as e:
         raise InvalidInput(f"{path}: not a points CSV ({e})") from None
-    if not rows or any(c not in rows[0] for c in ("u", "v")):
-        raise InvalidInput(f"{path}: expected a header with columns u and v and one row per dot")
-    out = np.empty((len(rows), 2))
+    if not rows or any(c not in rows[0] for c in columns):
+        raise InvalidInput(f"{path}: expected a header with columns {', '.join(columns)} and one row per point")
+    out = np.empty((len(rows), len(columns)))
     for r, row in enumerate(rows):
-        for c, key in enumerate(("u", "v")):
+        for c, key in enumerate(columns):
             try:
                 out[r, c] = float(row[key])
             except (TypeError, ValueError):

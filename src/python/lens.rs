@@ -65,7 +65,7 @@ impl PyDistortion {
 }
 
 /// A `Distortion` or an array of 4, 5 or 8 coefficients.
-fn distortion_arg(obj: &Bound<'_, PyAny>) -> PyResult<Distortion> {
+pub(super) fn distortion_arg(obj: &Bound<'_, PyAny>) -> PyResult<Distortion> {
     if let Ok(d) = obj.cast::<PyDistortion>() {
         return Ok(d.get().inner);
     }

@@ -10,6 +10,7 @@ mod arrays;
 mod camera;
 mod control;
 mod errors;
+mod image_servo;
 mod invariant;
 mod lens;
 mod planning;
@@ -38,6 +39,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planning::register(m)?;
     sim::register(m)?;
     vision::register(m)?;
+    image_servo::register(m)?;
     se3::register(m)?;
     lens::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

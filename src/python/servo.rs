@@ -8,6 +8,7 @@ use super::arrays::{bool_array, mat, points2, vec1};
 use super::errors::invalid_argument;
 use super::{BasisArg, depths_arg, intrinsics, pixels_arg};
 use crate::core::adaptive_gain::AdaptiveGain;
+use crate::core::camera::Intrinsics;
 use crate::core::control::InvariantControllerConfig;
 use crate::core::ibvs::Interaction;
 use crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO;
@@ -137,6 +138,151 @@ fn parse_stop_rule(name: Option<&str>) -> PyResult<Option<StopRule>> {
     }
 }
 
+/// Every keyword argument of `Servo` but the reference pixels and K_hat: what `ImageServo`
+/// passes on to its session.
+pub(super) struct ServoOptions<'py> {
+    law: String,
+    reference_depths: Option<Bound<'py, PyAny>>,
+    depths: Option<Bound<'py, PyAny>>,
+    basis: BasisArg,
+    gain: f64,
+    gain_rz: Option<f64>,
+    rz_task: Option<String>,
+    feedforward: Option<bool>,
+    min_structure_ratio: Option<f64>,
+    interaction: Option<String>,
+    adaptive_gain: Option<(f64, f64, f64)>,
+    max_linear_speed: Option<f64>,
+    max_angular_speed: Option<f64>,
+    stop: Option<Bound<'py, PyDict>>,
+    stop_rule: Option<String>,
+    path_samples: Option<usize>,
+    dt: f64,
+}
+
+/// The keyword arguments `ServoOptions::from_kwargs` knows, in `Servo`'s order.
+pub(super) const SERVO_OPTIONS: [&str; 17] = [
+    "law",
+    "reference_depths",
+    "depths",
+    "basis",
+    "gain",
+    "gain_rz",
+    "rz_task",
+    "feedforward",
+    "min_structure_ratio",
+    "interaction",
+    "adaptive_gain",
+    "max_linear_speed",
+    "max_angular_speed",
+    "stop",
+    "stop_rule",
+    "path_samples",
+    "dt",
+];
+
+impl<'py> ServoOptions<'py> {
+    /// The options in a `**kwargs` dictionary (None: the defaults); a key `Servo` does not
+    /// take is refused by name.
+    pub(super) fn from_kwargs(kwargs: Option<&Bound<'py, PyDict>>) -> PyResult<Self> {
+        let mut o = Self {
+            law: "invariant".into(),
+            reference_depths: None,
+            depths: None,
+            basis: BasisArg::Auto,
+            gain: 1.0,
+            gain_rz: None,
+            rz_task: None,
+            feedforward: None,
+            min_structure_ratio: None,
+            interaction: None,
+            adaptive_gain: None,
+            max_linear_speed: None,
+            max_angular_speed: None,
+            stop: None,
+            stop_rule: None,
+            path_samples: None,
+            dt: 0.04,
+        };
+        let Some(kwargs) = kwargs else { return Ok(o) };
+        for (key, value) in kwargs.iter() {
+            let key: String = key.extract()?;
+            o.set(&key, value)?;
+        }
+        Ok(o)
+    }
+
+    fn set(&mut self, key: &str, value: Bound<'py, PyAny>) -> PyResult<()> {
+        let py = value.py();
+        let bad = |e: PyErr| invalid_argument(key, format!("{key}: {}", e.value(py)));
+        let given = !value.is_none();
+        match key {
+            "law" => self.law = value.extract().map_err(bad)?,
+            "reference_depths" => self.reference_depths = given.then_some(value),
+            "depths" => self.depths = given.then_some(value),
+            "basis" => self.basis = value.extract()?,
+            "gain" => self.gain = value.extract().map_err(bad)?,
+            "gain_rz" => self.gain_rz = value.extract().map_err(bad)?,
+            "rz_task" => self.rz_task = value.extract().map_err(bad)?,
+            "feedforward" => self.feedforward = value.extract().map_err(bad)?,
+            "min_structure_ratio" => self.min_structure_ratio = value.extract().map_err(bad)?,
+            "interaction" => self.interaction = value.extract().map_err(bad)?,
+            "adaptive_gain" => self.adaptive_gain = super::args::adaptive_gain(&value)?,
+            "max_linear_speed" => self.max_linear_speed = value.extract().map_err(bad)?,
+            "max_angular_speed" => self.max_angular_speed = value.extract().map_err(bad)?,
+            "stop" => {
+                self.stop = if given { Some(value.cast_into::<PyDict>().map_err(|e| bad(e.into()))?) } else { None }
+            }
+            "stop_rule" => self.stop_rule = value.extract().map_err(bad)?,
+            "path_samples" => self.path_samples = value.extract().map_err(bad)?,
+            "dt" => self.dt = value.extract().map_err(bad)?,
+            _ => {
+                let known = SERVO_OPTIONS.join(", ");
+                return Err(invalid_argument(
+                    key,
+                    format!("{key}: not an argument of the servo session; known: {known}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The session's configuration, the reference depths and the depth source.
+    pub(super) fn session(self, k_hat: Intrinsics) -> PyResult<(ServoConfig, Option<Vec<f64>>, ServoDepths)> {
+        let (adaptive_gain, twist_limits) =
+            super::control::command_options(self.adaptive_gain, self.max_linear_speed, self.max_angular_speed)?;
+        let args = LawArgs {
+            law: &self.law,
+            gain: self.gain,
+            gain_rz: self.gain_rz,
+            rz_task: self.rz_task.as_deref(),
+            feedforward: self.feedforward,
+            min_structure_ratio: self.min_structure_ratio,
+            interaction: self.interaction.as_deref(),
+            adaptive_gain,
+            twist_limits,
+        };
+        let law = args.law()?;
+        let reference_depths = match &self.reference_depths {
+            Some(z) => Some(depths_arg(z)?.as_slice()?.to_vec()),
+            None => None,
+        };
+        let source = match &self.depths {
+            Some(d) => depth_source(d)?,
+            None => ServoDepths::Reference,
+        };
+        let mut config = ServoConfig::new(law, k_hat);
+        config.stop = stop_rules(self.stop.as_ref())?;
+        (config.stop_rule, config.dt) = (parse_stop_rule(self.stop_rule.as_deref())?, self.dt);
+        config.path = self.path_samples.map(|samples| PathPlan { samples });
+        config.basis = match self.basis {
+            BasisArg::Fixed(b) => Some(b),
+            BasisArg::Auto => None,
+        };
+        Ok((config, reference_depths, source))
+    }
+}
+
 /// A servo session: the reference image, the law, the depth source and the stop rules; each
 /// `step(pixels, visible, depths)` returns the twist to send and the verdict.
 #[pyclass(name = "Servo", module = "vsinv._core")]
@@ -177,35 +323,26 @@ impl PyServo {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let pixels = points2(&a)?.to_vec();
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let (adaptive_gain, twist_limits) =
-            super::control::command_options(adaptive_gain, max_linear_speed, max_angular_speed)?;
-        let args = LawArgs {
-            law,
+        let options = ServoOptions {
+            law: law.to_string(),
+            reference_depths: reference_depths.cloned(),
+            depths: depths.cloned(),
+            basis,
             gain,
             gain_rz,
-            rz_task,
+            rz_task: rz_task.map(str::to_string),
             feedforward,
             min_structure_ratio,
-            interaction,
+            interaction: interaction.map(str::to_string),
             adaptive_gain,
-            twist_limits,
+            max_linear_speed,
+            max_angular_speed,
+            stop: stop.cloned(),
+            stop_rule: stop_rule.map(str::to_string),
+            path_samples,
+            dt,
         };
-        let law = args.law()?;
-        let reference_depths = match reference_depths {
-            Some(z) => Some(depths_arg(z)?.as_slice()?.to_vec()),
-            None => None,
-        };
-        let source = match depths {
-            Some(d) => depth_source(d)?,
-            None => ServoDepths::Reference,
-        };
-        let mut config = ServoConfig::new(law, k_hat);
-        (config.stop, config.stop_rule, config.dt) = (stop_rules(stop)?, parse_stop_rule(stop_rule)?, dt);
-        config.path = path_samples.map(|samples| PathPlan { samples });
-        config.basis = match basis {
-            BasisArg::Fixed(b) => Some(b),
-            BasisArg::Auto => None,
-        };
+        let (config, reference_depths, source) = options.session(k_hat)?;
         let reference = ServoReference { pixels, depths: reference_depths };
         let inner = py.detach(|| Servo::new(config, reference, source))?;
         Ok(Self { inner })
@@ -296,7 +433,7 @@ impl PyServo {
 }
 
 /// What one step returns.
-#[pyclass(name = "ServoStep", module = "vsinv._core", frozen)]
+#[pyclass(name = "ServoStep", module = "vsinv._core", frozen, subclass)]
 pub(super) struct PyServoStep {
     twist: [f64; 6],
     verdict: &'static str,

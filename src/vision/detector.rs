@@ -31,7 +31,7 @@ pub struct Detection {
 }
 
 /// Finds a target's points in images.
-pub trait Detector: Send {
+pub trait Detector: Send + Sync {
     /// Starts on the first image, given where each point is expected; returns the points
     /// found in it. An error when the detector cannot start (a point it needs is not there).
     fn start(&mut self, image: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>>;

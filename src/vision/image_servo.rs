@@ -123,7 +123,8 @@ impl ImageServo {
         depths: ServoDepths,
     ) -> Result<Self> {
         target.validate()?;
-        let found = reference_points(reference, target.detector().as_mut(), &target.reference_hints())?;
+        let found = reference_points(reference, target.detector().as_mut(), &target.reference_hints())
+            .map_err(|e| hints_named(e, "reference_points"))?;
         let first = target.first_hints(&found);
         Self::with_detector(&found, target.detector(), first, config, depths)
     }
@@ -158,7 +159,7 @@ impl ImageServo {
         let detections = if self.started {
             self.detector.detect(image)?
         } else {
-            let d = self.detector.start(image, &self.first)?;
+            let d = self.detector.start(image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
             self.started = true;
             d
         };
@@ -190,6 +191,20 @@ impl ImageServo {
     /// The servo session (its reference pixels, basis, telemetry, certainty).
     pub fn servo(&self) -> &Servo {
         &self.servo
+    }
+}
+
+/// A detector's error about its hints (the tracker's `initial_pixels`) under the name the
+/// pipeline's caller gave them.
+fn hints_named(error: Error, name: &'static str) -> Error {
+    match error {
+        Error::InvalidImage { what, reason } if what == "initial_pixels" => {
+            Error::InvalidImage { what: name.into(), reason }
+        }
+        Error::NonFinitePoint { what: "initial_pixels", row, column } => {
+            Error::NonFinitePoint { what: name, row, column }
+        }
+        other => other,
     }
 }
 

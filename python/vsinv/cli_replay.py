@@ -1,0 +1,106 @@
+"""``vsinv replay REF FRAMES``: what the servo would command, frame by frame, on recorded
+images (a folder or a video file), with the reference image taken by any camera."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from ._core import Intrinsics, load_calibration
+from .images import read_points
+from .replaying import read_depths, replay
+
+__all__ = ["add_replay_command", "cmd_replay"]
+
+#: The targets the command can follow.
+TARGETS = ("dots",)
+
+
+def add_replay_command(sub: Any) -> None:
+    """Adds ``replay`` to the subcommand parsers."""
+    p = sub.add_parser(
+        "replay",
+        help="print (and plot) what the servo would command on each recorded frame",
+        description="Find the target in the reference image (any camera), then in every frame of FRAMES (a folder "
+        "of images in name order, or a video file with the extra vsinv[video]), and print per frame the points "
+        "found, the image and invariant errors, the verdict and the twist the servo session would command. "
+        "Nothing moves: each frame is what the camera saw.",
+    )
+    p.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
+    p.add_argument("frames", metavar="FRAMES", type=Path, help="a folder of images or a video file")
+    p.add_argument("--target", choices=TARGETS, default="dots", help="what to follow (dots)")
+    p.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate positions in REF (u, v columns)")
+    p.add_argument("--first-points", metavar="CSV", type=Path, help="dots: approximate positions in the first frame (default: those found in REF)")
+    camera = p.add_mutually_exclusive_group(required=True)
+    camera.add_argument("--calibration", metavar="FILE", type=Path, help="the servo camera's calibration (K_hat and lens): ROS or OpenCV YAML/XML")
+    camera.add_argument("--K-hat", metavar="FX,FY,U0,V0", help="the servo camera's intrinsics K_hat, pixels (no lens distortion)")
+    p.add_argument("--reference-calibration", metavar="FILE", type=Path, help="the reference camera's calibration, to undistort REF's points")
+    p.add_argument("--law", choices=("invariant", "ibvs", "none"), default="invariant", help="the control law (invariant)")
+    p.add_argument("--reference-depths", metavar="CSV", type=Path, help="depths of the points at the reference pose, metres (z column)")
+    p.add_argument("--depth", metavar="Z", type=float, help="one depth for every point, metres (IBVS; the invariant law needs --reference-depths)")
+    p.add_argument("--gain", type=float, default=0.5, help="the law's gain (0.5)")
+    p.add_argument("--search-radius", metavar="PX", type=float, default=20.0, help="dots: tracker window half-side (20)")
+    p.add_argument("--max-search-radius", metavar="PX", type=float, default=80.0, help="dots: largest window while a dot is lost (80)")
+    p.add_argument("--polarity", choices=("light", "dark", "auto"), default="light", help="dots: light dots, dark dots, or decided by REF (light)")
+    p.add_argument("--out", metavar="DIR", type=Path, help="write replay.csv and replay.png to DIR")
+
+
+def _intrinsics(text: str) -> Intrinsics:
+    try:
+        fx, fy, u0, v0 = (float(x) for x in text.split(","))
+    except ValueError:
+        raise ValueError(f"--K-hat: expected four numbers FX,FY,U0,V0, got {text!r}") from None
+    return Intrinsics(fx, fy, u0, v0)
+
+
+def _options(args: argparse.Namespace) -> dict[str, Any]:
+    """The ImageServo keyword arguments the command's options give."""
+    options: dict[str, Any] = {"law": args.law}
+    if args.law != "none":
+        options["gain"] = args.gain
+    if args.calibration is not None:
+        calibration = load_calibration(args.calibration)
+        options["distortion"] = calibration.distortion
+    if args.reference_calibration is not None:
+        ref = load_calibration(args.reference_calibration)
+        options["reference_K"], options["reference_distortion"] = ref.intrinsics, ref.distortion
+    depths = read_depths(args.reference_depths)
+    if depths is not None:
+        options["reference_depths"] = depths
+    elif args.depth is not None:
+        options["depths"] = args.depth
+    if args.target == "dots":
+        if args.points is None:
+            raise ValueError("--points: --target dots needs the dots' approximate positions in REF")
+        options["reference_points"] = read_points(args.points)
+        if args.first_points is not None:
+            options["first_points"] = read_points(args.first_points)
+        options["tracker"] = {
+            "search_radius": args.search_radius,
+            "max_search_radius": args.max_search_radius,
+            "polarity": args.polarity,
+        }
+    return options
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    k_hat = load_calibration(args.calibration).intrinsics if args.calibration is not None else _intrinsics(args.K_hat)
+    result = replay(args.reference, args.frames, k_hat, args.target, **_options(args))
+    print(result.table())
+    lost = int((~result.found).sum())
+    print(f"{len(result.names)} frames, {result.found.shape[1]} points; {lost} point-frames not found")
+    if args.out is not None:
+        from .plots import _save
+
+        args.out.mkdir(parents=True, exist_ok=True)
+        paths = [result.write_csv(args.out / "replay.csv"), _save(result.plot(), args.out, "replay.png")]
+        print(f"wrote {len(paths)} files to {args.out}:")
+        for path in paths:
+            print(f"  {path}")
+    if lost:
+        print("vsinv replay: some points were not found in some frames (not visible to the servo there)", file=sys.stderr)
+        return 1
+    return 0
+

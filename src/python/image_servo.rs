@@ -1,0 +1,204 @@
+//! `vsinv.ImageServo`: the pipeline from image to twist (the `vision` layer's `ImageServo`)
+//! stepped with NumPy images; each step runs with the GIL released.
+
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::arrays::{f64_array, mat, points2};
+use super::errors::invalid_argument;
+use super::intrinsics;
+use super::lens::distortion_arg;
+use super::servo::{PyServoStep, ServoOptions};
+use super::vision::{image_arg, polarity_arg};
+use crate::vision::image::GreyImage;
+use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+use crate::vision::tracker::TrackerConfig;
+
+/// The `tracker` dictionary over the default tracker settings; an unknown key is refused by
+/// name.
+fn tracker_config(tracker: Option<&Bound<'_, PyDict>>) -> PyResult<TrackerConfig> {
+    let mut config = TrackerConfig::default();
+    let Some(tracker) = tracker else { return Ok(config) };
+    for (key, value) in tracker.iter() {
+        let key: String =
+            key.extract().map_err(|_| invalid_argument("tracker", "tracker: keys must be strings".into()))?;
+        let name = format!("tracker.{key}");
+        let bad = |_| invalid_argument(&name, format!("{name}: expected a number"));
+        match key.as_str() {
+            "search_radius" => config.search_radius = value.extract().map_err(bad)?,
+            "max_search_radius" => config.max_search_radius = value.extract().map_err(bad)?,
+            "min_area" => config.min_area = super::args::min_area(&value)?,
+            "max_area_ratio" => config.max_area_ratio = value.extract().map_err(bad)?,
+            "polarity" => {
+                let p: String =
+                    value.extract().map_err(|_| invalid_argument(&name, format!("{name}: expected a string")))?;
+                config.polarity = polarity_arg(&p)?;
+            }
+            _ => {
+                let known = "search_radius, max_search_radius, min_area, max_area_ratio, polarity";
+                return Err(invalid_argument(&name, format!("{name}: unknown key; known: {known}")));
+            }
+        }
+    }
+    Ok(config)
+}
+
+/// `(n, 2)` approximate pixels, or None.
+fn points_arg(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<Vec<[f64; 2]>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
+    let a = f64_array(obj, what, &[None, Some(2)])?;
+    Ok(Some(points2(&a)?.to_vec()))
+}
+
+/// An owned copy of a `(height, width)` uint8 array (the detectors take owned images).
+fn owned_image(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<GreyImage> {
+    let arg = image_arg(obj, what)?;
+    let b = arg.buffer(what)?;
+    GreyImage::from_raw(b.width(), b.height(), b.as_raw().to_vec())
+        .ok_or_else(|| crate::Error::InvalidImage { what: what.into(), reason: "inconsistent size".into() }.into())
+}
+
+/// The target of `target="dots"` from its keyword arguments.
+fn dots_target(
+    reference_points: Option<&Bound<'_, PyAny>>,
+    first_points: Option<&Bound<'_, PyAny>>,
+    tracker: Option<&Bound<'_, PyDict>>,
+) -> PyResult<ImageTarget> {
+    let reference_points = points_arg(reference_points, "reference_points")?.ok_or_else(|| {
+        let reason =
+            "reference_points: target \"dots\" needs the dots' approximate pixels (n, 2) in the reference image";
+        invalid_argument("reference_points", reason.into())
+    })?;
+    let first_points = points_arg(first_points, "first_points")?;
+    Ok(ImageTarget::Dots { reference_points, first_points, tracker: tracker_config(tracker)? })
+}
+
+/// The pipeline from image to twist: finds the target in the reference image (taken with any
+/// camera), then each `step(image)` detects or tracks it, matches the points by identity,
+/// undistorts them with K_hat and `distortion`, and steps the servo session. Keyword
+/// arguments after the target's are the `Servo` session's (law, depths, gain, stop, ...).
+#[pyclass(name = "ImageServo", module = "vsinv._core")]
+pub(super) struct PyImageServo {
+    inner: ImageServo,
+}
+
+#[pymethods]
+impl PyImageServo {
+    #[new]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
+    fn new(
+        py: Python<'_>,
+        reference_image: &Bound<'_, PyAny>,
+        target: &str,
+        K_hat: &Bound<'_, PyAny>,
+        reference_points: Option<&Bound<'_, PyAny>>,
+        first_points: Option<&Bound<'_, PyAny>>,
+        tracker: Option<&Bound<'_, PyDict>>,
+        distortion: Option<&Bound<'_, PyAny>>,
+        reference_K: Option<&Bound<'_, PyAny>>,
+        reference_distortion: Option<&Bound<'_, PyAny>>,
+        servo: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let image = owned_image(reference_image, "reference_image")?;
+        let target = match target {
+            "dots" => dots_target(reference_points, first_points, tracker)?,
+            other => return Err(invalid_argument("target", format!("target: expected \"dots\", got {other:?}"))),
+        };
+        let k_hat = intrinsics(K_hat, "K_hat")?;
+        let (mut servo_config, reference_depths, depths) = ServoOptions::from_kwargs(servo)?.session(k_hat)?;
+        if let Some(d) = distortion.filter(|d| !d.is_none()) {
+            servo_config.distortion = distortion_arg(d)?;
+        }
+        let reference_lens = match (reference_K.filter(|k| !k.is_none()), reference_distortion.filter(|d| !d.is_none()))
+        {
+            (Some(k), d) => {
+                Some((intrinsics(k, "reference_K")?, d.map(distortion_arg).transpose()?.unwrap_or_default()))
+            }
+            (None, Some(_)) => {
+                return Err(invalid_argument(
+                    "reference_distortion",
+                    "reference_distortion: needs reference_K (the reference camera's intrinsics) to undistort with"
+                        .into(),
+                ));
+            }
+            (None, None) => None,
+        };
+        let config = ImageServoConfig { servo: servo_config, reference_lens, reference_depths };
+        let inner = py.detach(|| ImageServo::new(&image, &target, config, depths))?;
+        Ok(Self { inner })
+    }
+
+    /// One frame (a `(height, width)` uint8 array): the twist to send, the verdict, the
+    /// telemetry, and per point the pixel found and whether it was found.
+    fn step(&mut self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
+        let image = owned_image(image, "image")?;
+        let pipeline = &mut self.inner;
+        let step = py.detach(|| pipeline.step(&image))?;
+        let found = self.inner.found().to_vec();
+        let pixels = self.inner.pixels().to_vec();
+        let init = PyClassInitializer::from(PyServoStep::from(step)).add_subclass(PyImageStep { found, pixels });
+        Py::new(py, init)
+    }
+
+    /// The points' identities, in the session's order (n,).
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
+        PyArray1::from_slice(py, self.inner.ids())
+    }
+    /// The reference pixels (n, 2), undistorted with reference_K when given.
+    #[getter]
+    fn reference_pixels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let px = self.inner.servo().reference_pixels();
+        mat(py, px.len(), 2, px.as_flattened().to_vec())
+    }
+    /// Control steps applied.
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.servo().iterations()
+    }
+    /// The basis in use (three point indices).
+    #[getter]
+    fn basis(&self) -> (usize, usize, usize) {
+        let [a, b, c] = self.inner.servo().basis();
+        (a, b, c)
+    }
+    fn __repr__(&self) -> String {
+        let s = self.inner.servo();
+        format!(
+            "ImageServo(law={:?}, points={}, iterations={})",
+            s.law().name(),
+            self.inner.ids().len(),
+            s.iterations()
+        )
+    }
+}
+
+/// What one `ImageServo.step` returns: a `ServoStep` with the points found.
+#[pyclass(name = "ImageStep", module = "vsinv._core", frozen, extends = PyServoStep)]
+pub(super) struct PyImageStep {
+    found: Vec<bool>,
+    pixels: Vec<[f64; 2]>,
+}
+
+#[pymethods]
+impl PyImageStep {
+    /// Per point: found in this frame (n,).
+    #[getter]
+    fn found<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<bool>> {
+        PyArray1::from_slice(py, &self.found)
+    }
+    /// Per point: the pixel found (distorted, as detected), or its last known pixel (n, 2).
+    #[getter]
+    fn pixels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        mat(py, self.pixels.len(), 2, self.pixels.as_flattened().to_vec())
+    }
+}
+
+/// Adds the image pipeline's classes to the module.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyImageServo>()?;
+    m.add_class::<PyImageStep>()?;
+    Ok(())
+}
