@@ -219,3 +219,59 @@ def test_replay_command_prints_what_the_servo_would_command(scenario: vsinv.Scen
     assert bad.returncode == 2 and "--K-hat" in bad.stderr
     no_points = subprocess.run(cmd[:6] + ["--K-hat", "648,570,427,304"], capture_output=True, text=True, timeout=60)
     assert no_points.returncode == 2 and "--points" in no_points.stderr
+
+
+def _tag_canvas(cv2: Any, placements: list[tuple[int, int, int, int]]) -> np.ndarray:
+    """A white 480 x 640 image with OpenCV's tag36h11 markers (id, left, top, side in px)."""
+    dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
+    image = np.full((480, 640), 255, np.uint8)
+    for tag, left, top, side in placements:
+        image[top : top + side, left : left + side] = cv2.aruco.generateImageMarker(dictionary, tag, side)
+    return image
+
+
+def test_tags_match_by_identity_across_images() -> None:
+    """Tags printed by OpenCV: the pipeline's corners by identity 4 id + c are the printed
+    markers' corners in OpenCV's order (within 0.5 px), no clicks; a tag missing from a frame is not visible; tags of other ids are ignored."""
+    cv2 = pytest.importorskip("cv2")
+    reference = _tag_canvas(cv2, [(1, 60, 60, 120), (2, 300, 80, 120), (3, 180, 280, 120)])
+    frame = _tag_canvas(cv2, [(1, 70, 70, 100), (2, 310, 90, 110), (3, 190, 270, 100), (9, 480, 300, 100)])
+    pipeline = vsinv.ImageServo(reference, "tags", K_HAT, law="none", depths=0.5)
+    np.testing.assert_array_equal(pipeline.ids, [4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15])
+
+    def truth(placements: list[tuple[int, int, int, int]]) -> np.ndarray:
+        """The corners of printed markers (OpenCV's order, pixel centres at integers)."""
+        return np.concatenate([
+            np.array([[l, t], [l + s, t], [l + s, t + s], [l, t + s]], float) - 0.5 for _, l, t, s in placements
+        ])
+
+    np.testing.assert_allclose(pipeline.reference_pixels, truth([(1, 60, 60, 120), (2, 300, 80, 120), (3, 180, 280, 120)]), atol=0.5)
+    step = pipeline.step(frame)
+    assert step.found.all() and step.verdict == "running"
+    np.testing.assert_allclose(step.pixels, truth([(1, 70, 70, 100), (2, 310, 90, 110), (3, 190, 270, 100)]), atol=0.5)
+    without_2 = _tag_canvas(cv2, [(1, 70, 70, 100), (3, 190, 270, 100)])
+    step = pipeline.step(without_2)
+    np.testing.assert_array_equal(step.found, np.repeat([True, False, True], 4))
+    some = vsinv.ImageServo(reference, "tags", K_HAT, tag_ids=[3, 1], law="none", depths=0.5)
+    np.testing.assert_array_equal(some.ids, [4, 5, 6, 7, 12, 13, 14, 15])
+    for kwargs, name in [({"tag_ids": [1, 5]}, "tag 5"), ({"family": "tag99"}, "family"), ({"tag_ids": []}, "tag_ids"),
+                         ({"reference_points": np.zeros((3, 2))}, "reference_points"), ({"tag_ids": "abc"}, "tag_ids")]:
+        with pytest.raises(vsinv.InvalidInput, match=name):
+            vsinv.ImageServo(reference, "tags", K_HAT, law="none", depths=0.5, **kwargs)
+    with pytest.raises(vsinv.InvalidInput, match="tag_ids"):
+        vsinv.ImageServo(reference, "dots", K_HAT, reference_points=np.zeros((3, 2)), tag_ids=[1], law="none", depths=0.5)
+
+
+def test_replay_follows_tags(tmp_path: Path) -> None:
+    cv2 = pytest.importorskip("cv2")
+    vsinv.save_image(_tag_canvas(cv2, [(1, 60, 60, 120), (2, 300, 80, 120), (3, 180, 280, 120)]), tmp_path / "ref.png")
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    for k in range(3):
+        image = _tag_canvas(cv2, [(1, 60 + 5 * k, 60, 110), (2, 300 + 5 * k, 80, 110), (3, 180 + 5 * k, 280, 110)])
+        vsinv.save_image(image, frames / f"{k}.png")
+    cmd = [sys.executable, "-m", "vsinv", "replay", str(tmp_path / "ref.png"), str(frames), "--target", "tags",
+           "--K-hat", "600,600,320,240", "--law", "ibvs", "--depth", "0.5", "--tag-ids", "1,2,3"]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "3 frames, 12 points; 0 point-frames not found" in done.stdout

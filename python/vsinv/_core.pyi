@@ -360,6 +360,9 @@ class ImageServo:
     ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
     ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
     ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
+    ``target="tags"``: AprilTags of ``family``, decoded afresh in every frame, the corners of the tags
+    ``tag_ids`` (None: every tag decoded in the reference image), corner c of tag t under identity
+    4 t + c: no clicks, correspondences by identity between any two cameras.
     ``reference_K`` and ``reference_distortion`` undistort the reference points. Every other keyword
     argument is the ``Servo`` session's (law, reference_depths, depths, basis, gain, ..., dt) and an
     unknown one is refused by name. A point not found in a frame is not visible for that step.
@@ -368,12 +371,14 @@ class ImageServo:
     def __new__(
         cls,
         reference_image: npt.NDArray[np.uint8],
-        target: Literal["dots"],
+        target: Literal["dots", "tags"],
         K_hat: _IntrinsicsLike,
         *,
         reference_points: _ArrayLike | None = None,
         first_points: _ArrayLike | None = None,
         tracker: dict[str, float | int | str] | None = None,
+        family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+        tag_ids: Sequence[int] | None = None,
         distortion: Distortion | _ArrayLike | None = None,
         reference_K: _IntrinsicsLike | None = None,
         reference_distortion: Distortion | _ArrayLike | None = None,

@@ -15,7 +15,7 @@ from .replaying import read_depths, replay
 __all__ = ["add_replay_command", "cmd_replay"]
 
 #: The targets the command can follow.
-TARGETS = ("dots",)
+TARGETS = ("dots", "tags")
 
 
 def add_replay_command(sub: Any) -> None:
@@ -30,9 +30,11 @@ def add_replay_command(sub: Any) -> None:
     )
     p.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
     p.add_argument("frames", metavar="FRAMES", type=Path, help="a folder of images or a video file")
-    p.add_argument("--target", choices=TARGETS, default="dots", help="what to follow (dots)")
+    p.add_argument("--target", choices=TARGETS, default="dots", help="what to follow: dots (tracked from clicks) or tags (AprilTags, by identity) (dots)")
     p.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate positions in REF (u, v columns)")
     p.add_argument("--first-points", metavar="CSV", type=Path, help="dots: approximate positions in the first frame (default: those found in REF)")
+    p.add_argument("--family", default="tag36h11", help="tags: the AprilTag family (tag36h11)")
+    p.add_argument("--tag-ids", metavar="I,J,...", help="tags: the tags to servo on (default: every tag decoded in REF)")
     camera = p.add_mutually_exclusive_group(required=True)
     camera.add_argument("--calibration", metavar="FILE", type=Path, help="the servo camera's calibration (K_hat and lens): ROS or OpenCV YAML/XML")
     camera.add_argument("--K-hat", metavar="FX,FY,U0,V0", help="the servo camera's intrinsics K_hat, pixels (no lens distortion)")
@@ -82,6 +84,13 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
             "max_search_radius": args.max_search_radius,
             "polarity": args.polarity,
         }
+    else:
+        options["family"] = args.family
+        if args.tag_ids is not None:
+            try:
+                options["tag_ids"] = [int(t) for t in args.tag_ids.split(",")]
+            except ValueError:
+                raise ValueError(f"--tag-ids: expected tag ids I,J,..., got {args.tag_ids!r}") from None
     return options
 
 

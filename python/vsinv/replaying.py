@@ -99,7 +99,7 @@ def replay(
     reference: Union[str, Path, npt.NDArray[np.uint8]],
     source: Any,
     K_hat: Any,
-    target: Literal["dots"] = "dots",
+    target: Literal["dots", "tags"] = "dots",
     **options: Any,
 ) -> ReplayResult:
     """Runs :class:`vsinv.ImageServo` (``target`` and ``options`` as its own) on every frame of

@@ -13,6 +13,7 @@ use super::servo::{PyServoStep, ServoOptions};
 use super::vision::{image_arg, polarity_arg};
 use crate::vision::image::GreyImage;
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+use crate::vision::tags::TagFamily;
 use crate::vision::tracker::TrackerConfig;
 
 /// The `tracker` dictionary over the default tracker settings; an unknown key is refused by
@@ -74,6 +75,38 @@ fn dots_target(
     Ok(ImageTarget::Dots { reference_points, first_points, tracker: tracker_config(tracker)? })
 }
 
+/// The target of `target="tags"` from its keyword arguments.
+fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>) -> PyResult<ImageTarget> {
+    let family = TagFamily::from_name(family).ok_or_else(|| {
+        let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
+        invalid_argument("family", format!("family: expected one of {names}, got {family:?}"))
+    })?;
+    let ids = match tag_ids.filter(|t| !t.is_none()) {
+        None => None,
+        Some(t) => {
+            let ids: Vec<u32> = t.extract().map_err(|_| {
+                invalid_argument("tag_ids", "tag_ids: expected a sequence of tag ids (non-negative integers)".into())
+            })?;
+            if ids.is_empty() {
+                return Err(invalid_argument(
+                    "tag_ids",
+                    "tag_ids: empty (None: every tag in the reference image)".into(),
+                ));
+            }
+            Some(ids)
+        }
+    };
+    Ok(ImageTarget::Tags { family, ids })
+}
+
+/// Keyword arguments given that the target does not take, refused by name.
+fn refuse_foreign(target: &str, given: &[(&str, bool)]) -> PyResult<()> {
+    match given.iter().find(|(_, g)| *g) {
+        Some((name, _)) => Err(invalid_argument(name, format!("{name}: not an argument of target {target:?}"))),
+        None => Ok(()),
+    }
+}
+
 /// The pipeline from image to twist: finds the target in the reference image (taken with any
 /// camera), then each `step(image)` detects or tracks it, matches the points by identity,
 /// undistorts them with K_hat and `distortion`, and steps the servo session. Keyword
@@ -87,7 +120,7 @@ pub(super) struct PyImageServo {
 impl PyImageServo {
     #[new]
     #[allow(non_snake_case, clippy::too_many_arguments)]
-    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
+    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, family = "tag36h11", tag_ids = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
     fn new(
         py: Python<'_>,
         reference_image: &Bound<'_, PyAny>,
@@ -96,15 +129,35 @@ impl PyImageServo {
         reference_points: Option<&Bound<'_, PyAny>>,
         first_points: Option<&Bound<'_, PyAny>>,
         tracker: Option<&Bound<'_, PyDict>>,
+        family: &str,
+        tag_ids: Option<&Bound<'_, PyAny>>,
         distortion: Option<&Bound<'_, PyAny>>,
         reference_K: Option<&Bound<'_, PyAny>>,
         reference_distortion: Option<&Bound<'_, PyAny>>,
         servo: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let image = owned_image(reference_image, "reference_image")?;
+        let given = |o: Option<&Bound<'_, PyAny>>| o.is_some_and(|o| !o.is_none());
         let target = match target {
-            "dots" => dots_target(reference_points, first_points, tracker)?,
-            other => return Err(invalid_argument("target", format!("target: expected \"dots\", got {other:?}"))),
+            "dots" => {
+                refuse_foreign(target, &[("tag_ids", given(tag_ids)), ("family", family != "tag36h11")])?;
+                dots_target(reference_points, first_points, tracker)?
+            }
+            "tags" => {
+                let dot_args = [
+                    ("reference_points", given(reference_points)),
+                    ("first_points", given(first_points)),
+                    ("tracker", tracker.is_some()),
+                ];
+                refuse_foreign(target, &dot_args)?;
+                tags_target(family, tag_ids)?
+            }
+            other => {
+                return Err(invalid_argument(
+                    "target",
+                    format!("target: expected \"dots\" or \"tags\", got {other:?}"),
+                ));
+            }
         };
         let k_hat = intrinsics(K_hat, "K_hat")?;
         let (mut servo_config, reference_depths, depths) = ServoOptions::from_kwargs(servo)?.session(k_hat)?;

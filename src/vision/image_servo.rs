@@ -10,8 +10,10 @@ use crate::core::distortion::{Distortion, undistort_point};
 use crate::error::{Error, Result};
 use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, ServoStep};
 use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::GreyImage;
+use crate::vision::tags::TagFamily;
 use crate::vision::tracker::TrackerConfig;
 
 /// What the pipeline looks for in the images, and how it is found.
@@ -28,6 +30,15 @@ pub enum ImageTarget {
         /// The tracker's settings, for the reference image and for the frames.
         tracker: TrackerConfig,
     },
+    /// AprilTags of one family, decoded afresh in every image: the corners of the tags
+    /// `ids` (None: of every tag decoded in the reference image), corner `c` of tag `t`
+    /// under identity `4 t + c`. No clicks: tags match by identity between any two cameras.
+    Tags {
+        /// The tag family.
+        family: TagFamily,
+        /// The tags to servo on (each must be decoded in the reference image).
+        ids: Option<Vec<u32>>,
+    },
 }
 
 impl ImageTarget {
@@ -35,6 +46,7 @@ impl ImageTarget {
     fn detector(&self) -> Box<dyn Detector> {
         match self {
             ImageTarget::Dots { tracker, .. } => Box::new(DotTracking::new(*tracker)),
+            ImageTarget::Tags { family, .. } => Box::new(TagDetector::new(*family)),
         }
     }
 
@@ -42,6 +54,7 @@ impl ImageTarget {
     fn reference_hints(&self) -> Vec<Expected> {
         match self {
             ImageTarget::Dots { reference_points, .. } => hints(reference_points),
+            ImageTarget::Tags { .. } => Vec::new(),
         }
     }
 
@@ -52,7 +65,21 @@ impl ImageTarget {
             ImageTarget::Dots { first_points: None, .. } => {
                 reference.iter().map(|d| Expected { id: d.id, pixel: d.pixel }).collect()
             }
+            ImageTarget::Tags { .. } => Vec::new(),
         }
+    }
+
+    /// The reference points the target keeps: for tags with `ids`, the corners of those tags,
+    /// each of which must be there.
+    fn select(&self, found: Vec<Detection>) -> Result<Vec<Detection>> {
+        let ImageTarget::Tags { ids: Some(ids), .. } = self else { return Ok(found) };
+        if let Some(missing) = ids.iter().find(|&&t| !found.iter().any(|d| d.id / 4 == t)) {
+            return Err(Error::InvalidImage {
+                what: "reference_image".into(),
+                reason: format!("tag {missing} (of the target's ids) is not decoded in it"),
+            });
+        }
+        Ok(found.into_iter().filter(|d| ids.contains(&(d.id / 4))).collect())
     }
 
     /// Checks the hints' lengths: the reference's and the first frame's must match.
@@ -125,6 +152,7 @@ impl ImageServo {
         target.validate()?;
         let found = reference_points(reference, target.detector().as_mut(), &target.reference_hints())
             .map_err(|e| hints_named(e, "reference_points"))?;
+        let found = target.select(found)?;
         let first = target.first_hints(&found);
         Self::with_detector(&found, target.detector(), first, config, depths)
     }
@@ -379,5 +407,43 @@ mod tests {
             ServoDepths::Constant(0.5),
         );
         assert!(matches!(err, Err(Error::InvalidImage { .. })));
+    }
+
+    /// Tags: the reference's corners by identity, no clicks; a tag left out of a frame drops
+    /// its four corners; `ids` keeps the tags asked for, and one missing from the reference
+    /// image is an error.
+    #[test]
+    fn tags_match_by_identity_and_a_missing_tag_drops_its_corners() {
+        use crate::vision::tags::synthetic::{Placement, corners, draw};
+        let family = TagFamily::Tag36h11;
+        let place = |id, u, v, cell| Placement { id, centre: [u, v], cell, quarter_turns: 0 };
+        let reference_tags = [place(3, 90.0, 80.0, 8.0), place(7, 230.0, 90.0, 8.0), place(12, 150.0, 190.0, 8.0)];
+        let frame_tags = [place(3, 95.0, 84.0, 7.0), place(7, 228.0, 95.0, 7.0), place(12, 148.0, 185.0, 7.0)];
+        let reference = draw(family, 320, 260, &reference_tags);
+        let k = Intrinsics::pinhole(800.0, 800.0, 160.0, 130.0).unwrap();
+        let config = || ImageServoConfig::new(ServoConfig::new(Law::Observe, k));
+        let target = ImageTarget::Tags { family, ids: None };
+        let mut pipeline = ImageServo::new(&reference, &target, config(), ServoDepths::Constant(0.5)).unwrap();
+        assert_eq!(pipeline.ids(), [12, 13, 14, 15, 28, 29, 30, 31, 48, 49, 50, 51]);
+        let want: Vec<[f64; 2]> = reference_tags.iter().flat_map(|p| corners(family, p)).collect();
+        for (got, want) in pipeline.servo().reference_pixels().iter().zip(&want) {
+            assert!((got[0] - want[0]).hypot(got[1] - want[1]) < 0.5, "{got:?} vs {want:?}");
+        }
+        pipeline.step(&draw(family, 320, 260, &frame_tags)).unwrap();
+        assert!(pipeline.found().iter().all(|&f| f));
+        let want: Vec<[f64; 2]> = frame_tags.iter().flat_map(|p| corners(family, p)).collect();
+        for (got, want) in pipeline.pixels().iter().zip(&want) {
+            assert!((got[0] - want[0]).hypot(got[1] - want[1]) < 0.5, "{got:?} vs {want:?}");
+        }
+        let before = pipeline.pixels().to_vec();
+        pipeline.step(&draw(family, 320, 260, &[frame_tags[0], frame_tags[2]])).unwrap();
+        assert_eq!(pipeline.found(), [true, true, true, true, false, false, false, false, true, true, true, true]);
+        assert_eq!(pipeline.pixels()[4..8], before[4..8], "a missing tag keeps its last corners, not visible");
+        let some = ImageTarget::Tags { family, ids: Some(vec![12, 3]) };
+        let pipeline = ImageServo::new(&reference, &some, config(), ServoDepths::Constant(0.5)).unwrap();
+        assert_eq!(pipeline.ids(), [12, 13, 14, 15, 48, 49, 50, 51]);
+        let absent = ImageTarget::Tags { family, ids: Some(vec![3, 5]) };
+        let err = ImageServo::new(&reference, &absent, config(), ServoDepths::Constant(0.5)).unwrap_err();
+        assert!(err.to_string().contains("tag 5"), "{err}");
     }
 }
