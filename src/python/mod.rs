@@ -17,6 +17,7 @@ mod se3;
 mod servo;
 mod sim;
 mod stability;
+mod tags;
 mod uncertainty;
 mod vision;
 
@@ -38,6 +39,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planning::register(m)?;
     sim::register(m)?;
     vision::register(m)?;
+    tags::register(m)?;
     se3::register(m)?;
     lens::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -26,12 +26,12 @@ type FlagArray<'py> = Bound<'py, PyArray1<bool>>;
 type ImageArray<'py> = Bound<'py, PyArray2<u8>>;
 
 /// A `(height, width)` uint8 array borrowed from Python, C-contiguous.
-struct ImageArg<'py> {
+pub(super) struct ImageArg<'py> {
     array: numpy::PyReadonlyArray2<'py, u8>,
 }
 
 impl ImageArg<'_> {
-    fn buffer(&self, what: &str) -> PyResult<GreyBuffer<&[u8]>> {
+    pub(super) fn buffer(&self, what: &str) -> PyResult<GreyBuffer<&[u8]>> {
         let shape = self.array.shape();
         let data = self.array.as_slice().map_err(|e| image_error(what, e.to_string()))?;
         let (h, w) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
@@ -42,7 +42,7 @@ impl ImageArg<'_> {
 
 /// Reads `obj` as an 8-bit grey image: a 2-d uint8 NumPy array (anything else is refused with
 /// `InvalidInput` naming its dtype or shape).
-fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
+pub(super) fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
     let py = obj.py();
     let Ok(any) = obj.cast::<numpy::PyUntypedArray>() else {
         let kind = obj.get_type().name()?.to_string();
