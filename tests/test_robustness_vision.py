@@ -282,3 +282,37 @@ def test_frames_and_replay(tmp_path_factory: Any, data: Any) -> None:
 
         fig = call(result.plot, _api="ReplayResult.plot", _finite=False)
         plt.close(fig)
+def tag_image() -> np.ndarray:
+    """Two tag36h11 markers drawn by OpenCV (ids 0 and 5), 6 pixels a bit."""
+    if "tags" not in IMG_LOCK:
+        dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
+        image = np.full((100, 160), 220, np.uint8)
+        for k, tag in enumerate((0, 5)):
+            marker = cv2.aruco.generateImageMarker(dictionary, tag, 48, borderBits=1)
+            image[26:74, 16 + 80 * k : 64 + 80 * k] = np.where(marker > 0, 220, 30)
+        IMG_LOCK["tags"] = image
+    return IMG_LOCK["tags"]
+
+
+@covers("detect_tags", "Tags", "Tags.ids", "Tags.corners", "Tags.family")
+@fuzz_settings(100)
+@given(st.data())
+def test_detect_tags(data: Any) -> None:
+    image = tag_image()
+    ref = vsinv.detect_tags(image)
+    assert list(ref.ids) == [0, 5]
+    families = st.sampled_from([V("tag36h11", SAME, "default"), V("tag16h5", RETURN, "other family"),
+                                V("tag25h9", RETURN, "other"), V("tag36h10", RETURN, "other"),
+                                V("tag36h12", INVALID, "unknown"), V("TAG36H11", INVALID, "case"),
+                                V("", INVALID, "empty"), V(None, TYPE, "none"), V(36, TYPE, "int")])
+    digest = lambda t: (t.ids, t.corners)  # noqa: E731
+    name, v, out = fuzz(data, vsinv.detect_tags, {"image": image, "family": "tag36h11"},
+                        {"image": image_variants(image), "family": families}, digest=digest, ref=ref)
+    if returned(out):
+        ids = call(getattr, out, "ids", _api="Tags.ids")
+        corners = call(getattr, out, "corners", _api="Tags.corners")
+        family = call(getattr, out, "family", _api="Tags.family")
+        m = len(out)
+        assert ids.shape == (m,) and ids.dtype == np.int64 and corners.shape == (m, 4, 2)
+        assert family in ("tag36h11", "tag36h10", "tag25h9", "tag16h5") and repr(out).startswith("Tags(")
+        assert (np.diff(ids) > 0).all()

@@ -51,6 +51,8 @@ __all__ = [
     "Dots",
     "detect_dots",
     "DotTracker",
+    "Tags",
+    "detect_tags",
     "load_image",
     "save_image",
     "Distortion",
@@ -690,6 +692,32 @@ class DotTracker:
     def positions(self) -> _F64Array:
         """The last known position of every dot, (n, 2)."""
     def __len__(self) -> int: ...
+
+@final
+class Tags:
+    """AprilTags found in an image, sorted by id."""
+
+    @property
+    def ids(self) -> npt.NDArray[np.int64]:
+        """Tag ids, (m,)."""
+    @property
+    def corners(self) -> _F64Array:
+        """Corners (u, v) of each tag's black square, (m, 4, 2): top-left, top-right,
+        bottom-right, bottom-left as OpenCV's aruco module orders them (clockwise in the image),
+        pixel (u, v) centred at integer coordinates (OpenCV's convention)."""
+    @property
+    def family(self) -> str:
+        """The family searched for ("tag36h11", ...)."""
+    def __len__(self) -> int: ...
+
+def detect_tags(
+    image: _U8Image,
+    family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+) -> Tags:
+    """The AprilTags of `family` in a (height, width) uint8 image, sorted by id, with the corners
+    of each black square in OpenCV's aruco order and pixel convention (the same numbers as
+    cv2.aruco.ArucoDetector with DICT_APRILTAG_36h11, within noise). An empty image raises
+    InvalidInput; an image without tags gives an empty result."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
     """Reads an image file (PNG, PGM/PPM, JPEG, or a GIF's first frame) as (height, width) uint8

@@ -18,6 +18,7 @@ mod se3;
 mod servo;
 mod sim;
 mod stability;
+mod tags;
 mod uncertainty;
 mod vision;
 
@@ -40,6 +41,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     sim::register(m)?;
     vision::register(m)?;
     image_servo::register(m)?;
+    tags::register(m)?;
     se3::register(m)?;
     lens::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -181,6 +181,7 @@ impl TagDecoder {
 /// Tags drawn in closed form for the tests: a fronto-parallel tag, turned by quarter turns,
 /// each pixel the exact area average of the cells it overlaps (a perfect box-filter camera).
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 pub(crate) mod synthetic {
     use kornia_apriltag::family::TagFamily as Layout;
 

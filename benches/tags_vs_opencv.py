@@ -1,0 +1,256 @@
+"""AprilTag detection (tag36h11) against OpenCV's aruco detector, side by side on the same images.
+
+How to run (from the repository root, with the package, ``opencv-python-headless`` (with its
+aruco module) and Debian's ``visp-images-data`` installed)::
+
+    python benches/tags_vs_opencv.py                  # about a minute
+    python benches/tags_vs_opencv.py --quick          # 2 rounds instead of 5
+    python benches/tags_vs_opencv.py --threads 1      # both on one thread
+    python benches/tags_vs_opencv.py --json out.json  # also write the numbers as JSON
+
+``make bench`` runs it (it says so and stops when ViSP's images are not installed). The images
+are ViSP's public AprilTag images (read from the package's folder, never copied):
+
+- ``AprilTag.pgm`` (640 x 480, a real camera image of 12 tags) with its published corners
+  (``ground_truth_detection.txt``);
+- ``benchmark/640x480/tag36_11_640x480.png`` (5 tags) with ``corners_tag36_11.txt``;
+- at 1920 x 1080: ``benchmark/1920x1080/tag36_11_1920x1080.png`` (no ground truth: the two
+  detectors' corners are compared with each other) and ``AprilTag.pgm`` enlarged 2.25 times
+  (``cv2.resize``, bilinear, 1440 x 1080) and centred on a 1920 x 1080 grey canvas, its ground
+  truth mapped by the same enlargement (``u' = 2.25 (u + 0.5) - 0.5`` in OpenCV's convention).
+
+ViSP's corner files follow the AprilTag library (pixel centres at +0.5, another corner order);
+they are converted to OpenCV's order and convention as in ``tests/test_tags.py``, in which
+``vsinv.detect_tags`` reports its corners. OpenCV's detector is
+``cv2.aruco.ArucoDetector(DICT_APRILTAG_36h11)`` with subpixel corner refinement
+(``CORNER_REFINE_SUBPIX``, whose corners are in OpenCV's convention; ``CORNER_REFINE_APRILTAG``
+is shown too: its corners are half a pixel off OpenCV's own convention, in the AprilTag
+library's, and are moved back by 0.5 before their errors are taken).
+
+Timing: as ``benches/vision.py``: the number of calls per repeat is the smallest power of two
+taking at least 50 ms; a round is ``Timer.repeat(5, number)`` and gives the median time per
+call; the detectors alternate from round to round and each cell is the minimum over rounds of
+the medians. Both detectors use the machine's cores by default (vsinv's through rayon inside
+kornia-apriltag, OpenCV's through its own threads); ``--threads 1`` sets
+``RAYON_NUM_THREADS=1`` and ``cv2.setNumThreads(1)``. The ratio is vsinv time / OpenCV time
+(below 1: vsinv is faster).
+
+Accuracy: the distance of each published corner to the detector's corner of the same tag and
+index (a wrong order shows as an error of a tag side), median and max over all corners;
+``found`` counts the tags of the ground truth that were detected.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import statistics
+import sys
+import timeit
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+if "--threads" in sys.argv:  # before rayon's pool starts
+    os.environ["RAYON_NUM_THREADS"] = sys.argv[sys.argv.index("--threads") + 1]
+
+import cv2
+import numpy as np
+
+import vsinv
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_step import write_json  # noqa: E402
+
+VISP = Path("/usr/share/visp-images-data/ViSP-images/AprilTag")
+VISP_TO_OPENCV = [1, 0, 3, 2]
+REPEAT = 5
+MIN_REPEAT_S = 0.05
+SCALE = 2.25  # 640 x 480 -> 1440 x 1080
+
+
+# --------------------------------------------------------------------------- images and truth
+
+
+def visp_corners(path: Path, row_column: bool) -> dict[int, np.ndarray]:
+    """A ViSP corners file in OpenCV's order and pixel convention (see tests/test_tags.py)."""
+    lines = [line for line in path.read_text().splitlines() if line.strip()]
+    out = {}
+    for k in range(0, len(lines), 5):
+        tag = int(re.search(r"(\d+)\s*$", lines[k]).group(1))  # type: ignore[union-attr]
+        xy = np.array([[float(x) for x in lines[k + j].split()] for j in range(1, 5)])
+        out[tag] = (xy[:, ::-1] if row_column else xy)[VISP_TO_OPENCV] - 0.5
+    return out
+
+
+def enlarged(image: np.ndarray, truth: dict[int, np.ndarray]) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """`image` enlarged SCALE times (bilinear), centred on a 1920 x 1080 canvas; its truth."""
+    h, w = image.shape
+    big = cv2.resize(image, (round(w * SCALE), round(h * SCALE)), interpolation=cv2.INTER_LINEAR)
+    canvas = np.full((1080, 1920), int(np.median(image)), np.uint8)
+    left, top = (1920 - big.shape[1]) // 2, (1080 - big.shape[0]) // 2
+    canvas[top : top + big.shape[0], left : left + big.shape[1]] = big
+    moved = {t: SCALE * (c + 0.5) - 0.5 + np.array([left, top]) for t, c in truth.items()}
+    return canvas, moved
+
+
+def images() -> list[tuple[str, np.ndarray, dict[int, np.ndarray] | None]]:
+    pgm = cv2.imread(str(VISP / "AprilTag.pgm"), cv2.IMREAD_GRAYSCALE)
+    pgm_truth = visp_corners(VISP / "ground_truth_detection.txt", row_column=True)
+    bench = cv2.imread(str(VISP / "benchmark/640x480/tag36_11_640x480.png"), cv2.IMREAD_GRAYSCALE)
+    bench_truth = visp_corners(VISP / "benchmark/640x480/corners_tag36_11.txt", row_column=False)
+    big_pgm, big_truth = enlarged(pgm, pgm_truth)
+    big_bench = cv2.imread(str(VISP / "benchmark/1920x1080/tag36_11_1920x1080.png"), cv2.IMREAD_GRAYSCALE)
+    return [
+        ("AprilTag.pgm 640x480", pgm, pgm_truth),
+        ("benchmark 640x480", bench, bench_truth),
+        ("AprilTag.pgm x2.25 1920x1080", big_pgm, big_truth),
+        ("benchmark 1920x1080", big_bench, None),
+    ]
+
+
+# --------------------------------------------------------------------------- detectors
+
+
+def opencv_detector(refine: int) -> cv2.aruco.ArucoDetector:
+    params = cv2.aruco.DetectorParameters()
+    params.cornerRefinementMethod = refine
+    return cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11), params)
+
+
+def opencv_tags(detector: cv2.aruco.ArucoDetector, image: np.ndarray, shift: float = 0.0) -> dict[int, np.ndarray]:
+    corners, ids, _ = detector.detectMarkers(image)
+    if ids is None:
+        return {}
+    return {int(i): c.reshape(4, 2).astype(np.float64) - shift for i, c in zip(ids.ravel(), corners)}
+
+
+def vsinv_tags(image: np.ndarray) -> dict[int, np.ndarray]:
+    tags = vsinv.detect_tags(image)
+    return {int(i): c for i, c in zip(tags.ids, tags.corners)}
+
+
+@dataclass
+class Accuracy:
+    found: int
+    of: int
+    median_px: float
+    max_px: float
+
+
+def accuracy(found: dict[int, np.ndarray], truth: dict[int, np.ndarray]) -> Accuracy:
+    errors = [np.linalg.norm(found[t] - c, axis=1) for t, c in truth.items() if t in found]
+    e = np.concatenate(errors) if errors else np.array([np.nan])
+    return Accuracy(len(errors), len(truth), float(np.median(e)), float(np.max(e)))
+
+
+# --------------------------------------------------------------------------- timing
+
+
+def calls_per_repeat(timer: timeit.Timer) -> int:
+    number = 1
+    while timer.timeit(number) < MIN_REPEAT_S:
+        number *= 2
+    return number
+
+
+def timed_min_of_medians(fns: dict[str, object], rounds: int) -> dict[str, float]:
+    timers = {name: timeit.Timer(fn) for name, fn in fns.items()}  # type: ignore[arg-type]
+    numbers = {name: calls_per_repeat(t) for name, t in timers.items()}
+    best = {name: float("inf") for name in fns}
+    for _ in range(rounds):
+        for name, t in timers.items():
+            median = statistics.median(t.repeat(repeat=REPEAT, number=numbers[name])) / numbers[name]
+            best[name] = min(best[name], median)
+    return best
+
+
+@dataclass
+class Row:
+    image: str
+    size: str
+    vsinv_ms: float
+    opencv_ms: float
+    opencv_apriltag_ms: float
+    vsinv: Accuracy
+    opencv: Accuracy
+    opencv_apriltag: Accuracy
+
+    @property
+    def ratio(self) -> float:
+        return self.vsinv_ms / self.opencv_ms
+
+
+def measure(rounds: int) -> list[Row]:
+    subpix = opencv_detector(cv2.aruco.CORNER_REFINE_SUBPIX)
+    april = opencv_detector(cv2.aruco.CORNER_REFINE_APRILTAG)
+    rows = []
+    for name, image, truth in images():
+        ours, theirs = vsinv_tags(image), opencv_tags(subpix, image)
+        theirs_april = opencv_tags(april, image, shift=0.5)
+        # Without ground truth, OpenCV's subpixel corners stand for it (agreement, not accuracy).
+        reference = truth if truth is not None else theirs
+        t = timed_min_of_medians(
+            {
+                "vsinv": lambda: vsinv.detect_tags(image),
+                "opencv": lambda: subpix.detectMarkers(image),
+                "opencv_apriltag": lambda: april.detectMarkers(image),
+            },
+            rounds,
+        )
+        rows.append(
+            Row(
+                image=name if truth is not None else f"{name} (vs OpenCV subpix)",
+                size=f"{image.shape[1]}x{image.shape[0]}",
+                vsinv_ms=t["vsinv"] * 1e3,
+                opencv_ms=t["opencv"] * 1e3,
+                opencv_apriltag_ms=t["opencv_apriltag"] * 1e3,
+                vsinv=accuracy(ours, reference),
+                opencv=accuracy(theirs, reference),
+                opencv_apriltag=accuracy(theirs_april, reference),
+            )
+        )
+    return rows
+
+
+def print_table(rows: list[Row]) -> None:
+    def acc(a: Accuracy) -> str:
+        return f"{a.found}/{a.of} {a.median_px:.3f}/{a.max_px:.3f}"
+
+    head = (
+        f"{'image':<45} {'vsinv (ms)':>10} {'OpenCV (ms)':>11} {'ratio':>6} {'CV april (ms)':>13}  "
+        f"{'vsinv found, median/max px':>27} {'OpenCV subpix':>20} {'OpenCV apriltag':>20}"
+    )
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        print(
+            f"{r.image:<45} {r.vsinv_ms:>10.2f} {r.opencv_ms:>11.2f} {r.ratio:>6.2f} {r.opencv_apriltag_ms:>13.2f}  "
+            f"{acc(r.vsinv):>27} {acc(r.opencv):>20} {acc(r.opencv_apriltag):>20}"
+        )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="2 rounds instead of 5")
+    parser.add_argument("--threads", type=int, default=0, help="threads for both (0: the machine's)")
+    parser.add_argument("--json", help="also write the numbers to this JSON file")
+    args = parser.parse_args()
+    if not VISP.is_dir():
+        print(f"skipped: ViSP's AprilTag images are not installed ({VISP}): apt-get install visp-images-data")
+        return 0
+    if args.threads:
+        cv2.setNumThreads(args.threads)
+    threads = args.threads or os.cpu_count()
+    print(f"tag36h11: vsinv {vsinv.__version__} (kornia-apriltag) vs OpenCV {cv2.__version__} aruco, "
+          f"{threads} thread(s), {platform.processor() or platform.machine()}")
+    rows = measure(2 if args.quick else 5)
+    print_table(rows)
+    if args.json:
+        write_json(args.json, {"threads": threads, "rows": [{**asdict(r), "ratio": r.ratio} for r in rows]})
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,77 @@
+//! AprilTags in Python: `detect_tags(image, family="tag36h11") -> Tags`, ids and corners in
+//! OpenCV's order and pixel convention (see `crate::vision::tags`); the work runs with the
+//! GIL released.
+
+use numpy::{PyArray1, PyArray3, PyArrayMethods};
+use pyo3::prelude::*;
+
+use super::vision::image_arg;
+use crate::vision::tags::{Tag, TagFamily, detect_tags as detect};
+
+/// Tags found in an image, sorted by id.
+#[pyclass(name = "Tags", module = "vsinv._core", frozen)]
+pub struct PyTags {
+    /// Tag ids, `(m,)` int64.
+    #[pyo3(get)]
+    ids: Py<PyArray1<i64>>,
+    /// Corners `(u, v)` of each tag's black square, `(m, 4, 2)` float64: top-left, top-right,
+    /// bottom-right, bottom-left as OpenCV's aruco module orders them.
+    #[pyo3(get)]
+    corners: Py<PyArray3<f64>>,
+    family: TagFamily,
+    count: usize,
+}
+
+#[pymethods]
+impl PyTags {
+    fn __len__(&self) -> usize {
+        self.count
+    }
+    fn __repr__(&self) -> String {
+        format!("Tags({} {} found)", self.count, self.family.name())
+    }
+    /// The family searched for (`"tag36h11"`, ...).
+    #[getter]
+    fn family(&self) -> &'static str {
+        self.family.name()
+    }
+}
+
+fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyResult<PyTags> {
+    let m = tags.len();
+    let ids = PyArray1::from_vec(py, tags.iter().map(|t| i64::from(t.id)).collect());
+    let flat: Vec<f64> = tags.iter().flat_map(|t| t.corners.as_flattened().to_vec()).collect();
+    let corners = PyArray1::from_vec(py, flat).reshape([m, 4, 2])?;
+    Ok(PyTags { ids: ids.unbind(), corners: corners.unbind(), family, count: m })
+}
+
+/// `"tag36h11"`, `"tag36h10"`, `"tag25h9"` or `"tag16h5"`; anything else raises
+/// `InvalidInput` naming `family`.
+fn family_arg(name: &str) -> PyResult<TagFamily> {
+    TagFamily::from_name(name).ok_or_else(|| {
+        let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
+        super::errors::invalid_argument("family", format!("family: expected one of {names}, got {name:?}"))
+    })
+}
+
+/// The AprilTags of `family` in a `(height, width)` uint8 image, sorted by id: their ids and
+/// the four corners of each black square in OpenCV's order (top-left, top-right,
+/// bottom-right, bottom-left of the marker as OpenCV's aruco module draws it, clockwise in
+/// the image) and pixel convention (pixel `(u, v)` centred at integer coordinates). An empty
+/// image raises `InvalidInput`; an image without tags gives an empty result.
+#[pyfunction]
+#[pyo3(signature = (image, family = "tag36h11"))]
+pub fn detect_tags(py: Python<'_>, image: &Bound<'_, PyAny>, family: &str) -> PyResult<PyTags> {
+    let family = family_arg(family)?;
+    let image = image_arg(image, "image")?;
+    let buffer = image.buffer("image")?;
+    let tags = py.detach(|| detect(&buffer, family))?;
+    tags_out(py, &tags, family)
+}
+
+/// Adds tag detection.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyTags>()?;
+    m.add_function(wrap_pyfunction!(detect_tags, m)?)?;
+    Ok(())
+}
