@@ -48,6 +48,7 @@ bench: install
 	$(PYTHON) benches/bench_step.py
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
+	$(PYTHON) benches/dots_vs_opencv.py
 	$(PYTHON) benches/noise_honesty.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),

@@ -10,7 +10,10 @@
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
-//! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
+//! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
+//! | the local threshold: a background model on tiles | [`background`] |
+//! | 8-connected components as runs, with moments | [`runs`] |
+//! | a dot's subpixel centroid over a local background plane | [`centroid`] |
 //! | bright or dark dots, or decided by the image | [`polarity`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
 //!
@@ -33,11 +36,14 @@
 //! `src/vision/detector/<name>.rs`, implementing [`Detector`] and reporting the target's
 //! point identities.
 
+pub mod background;
+pub mod centroid;
 pub mod detector;
 pub mod dots;
 pub mod image;
 pub mod polarity;
 pub mod render;
+pub mod runs;
 pub mod target;
 pub mod tracker;
 
