@@ -160,11 +160,11 @@ fn check_config(config: &DetectConfig) -> Result<()> {
     if !(0.0..=1.0).contains(&config.min_fill) {
         return Err(Error::InvalidParameter {
             name: "min_fill",
-            reason: format!("must be in [0, 1], got {}", config.min_fill),
+            reason: format!("must be in [0, 1], got {:?}", config.min_fill),
         });
     }
     if config.max_ring_residual.is_nan() || config.max_ring_residual < 0.0 {
-        let reason = format!("must be >= 0, got {}", config.max_ring_residual);
+        let reason = format!("must be >= 0, got {:?}", config.max_ring_residual);
         return Err(Error::InvalidParameter { name: "max_ring_residual", reason });
     }
     Ok(())
