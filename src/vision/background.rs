@@ -92,11 +92,8 @@ fn neighbourhood(columns: usize, rows: usize, row: usize, column: usize, reach: 
 /// The lower quartile of the tile medians around a tile.
 fn lower_quartile(stats: &[TileStats], columns: usize, rows: usize, row: usize, column: usize) -> u8 {
     let mut medians = [0u8; (2 * BACKGROUND_REACH + 1) * (2 * BACKGROUND_REACH + 1)];
-    let mut n = 0;
-    for i in neighbourhood(columns, rows, row, column, BACKGROUND_REACH) {
-        medians[n] = stats[i].median;
-        n += 1;
-    }
+    let tiles = neighbourhood(columns, rows, row, column, BACKGROUND_REACH);
+    let n = medians.iter_mut().zip(tiles).map(|(m, i)| *m = stats[i].median).count();
     let medians = &mut medians[..n];
     medians.sort_unstable();
     medians[(n - 1) / 4]
