@@ -616,8 +616,8 @@ def detect_dots(
     the background), or one grey level for the whole image. A dot has min_area <= area <=
     max_area pixels (default 8 and no limit), a fill ratio (area over that of the ellipse of
     its second moments: 1 for a filled ellipse, 0.955 for a square) of at least min_fill in
-    [0, 1] (default 0.95; 0.05 less for dots under 25 px, whose digitised outline moves the
-    ratio that much), a mean contrast over the background plane around it of at least
+    [0, 1] (default 0.95, less 0.2 / sqrt(area): the digitised outline's share of a small
+    dot), a mean contrast over the background plane around it of at least
     min_contrast grey levels in [0, 255] (default 20), and a plain ring around it: the RMS
     residual of that plane on its bounding box's ring (grown by 2 px) at most
     max_ring_residual >= 0 times its contrast (default 0.15; inf: no check)."""

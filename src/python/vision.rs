@@ -162,8 +162,8 @@ fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
 /// background of its neighbourhood by half the contrast of the dots nearby and at least
 /// `min_contrast`; `threshold=` sets one level for the whole image instead), 8-connected
 /// components with `min_area <= area <= max_area` (pixels) and a fill ratio (area over that
-/// of the ellipse of its second moments) of at least `min_fill` (0.05 less under 25 px), a
-/// mean contrast over the
+/// of the ellipse of its second moments) of at least `min_fill` (less `0.2 / sqrt(area)`,
+/// the digitised outline's share), a mean contrast over the
 /// background plane around it of at least `min_contrast` grey levels and a ring around it
 /// that fits that plane (RMS residual at most `max_ring_residual` times the contrast),
 /// intensity-weighted subpixel centroids over that plane. A uniform image raises

@@ -37,9 +37,9 @@ pub struct DetectConfig {
     /// Light dots (the default), dark dots, or decided by the image.
     pub polarity: Polarity,
     /// Smallest fill ratio: the dot's area over that of the ellipse of its second moments
-    /// (1 for a filled ellipse, 0.955 for a square; default 0.95), in `[0, 1]`. Dots under
-    /// [`SMALL_DOT_AREA`] pixels are allowed [`SMALL_DOT_FILL_SLACK`] less: their digitised
-    /// outline alone moves the ratio by that much.
+    /// (1 for a filled ellipse, 0.955 for a square; default 0.95), in `[0, 1]`. A dot of `A`
+    /// pixels is allowed [`DIGITISATION_SLACK`]` / sqrt(A)` less: its digitised outline, about
+    /// `sqrt(A)` pixels of `A`, moves the ratio by that much (0.04 at 25 px, 0.006 at 1000 px).
     pub min_fill: f64,
     /// Smallest contrast, grey levels (default 20): the local threshold is at least this far
     /// above the local background, and a dot's pixels must be this far above the background
@@ -170,18 +170,18 @@ fn check_config(config: &DetectConfig) -> Result<()> {
     Ok(())
 }
 
-/// Below this area (pixels), a dot's fill ratio may be [`SMALL_DOT_FILL_SLACK`] under
-/// `min_fill` (a disc of 5.6 px across or less: a few pixels of its outline are a few percent
-/// of its area).
-pub const SMALL_DOT_AREA: u64 = 25;
-/// How much lower the fill ratio of a small dot may be.
-pub const SMALL_DOT_FILL_SLACK: f64 = 0.05;
+/// How much lower than `min_fill` the fill ratio of a dot of `A` pixels may be, times
+/// `sqrt(A)`: the pixels along a digitised outline are a fraction of order `1 / sqrt(A)` of the
+/// area, and each moves the ratio (rendered discs, blurred, measure about `1 - 0.35 /
+/// sqrt(A)`: 0.931 at 26 px, 0.965 at 100 px; the slack keeps those of `min_fill - 0.02` and
+/// up).
+pub const DIGITISATION_SLACK: f64 = 0.2;
 
 /// Area range, whole (not cut by the image's border) and filled like an ellipse.
 fn keeps_shape(c: &Component, config: &DetectConfig, whole: Window) -> bool {
     let area = c.area as usize;
     let cut = c.bbox[0] == whole.u0 || c.bbox[1] == whole.v0 || c.bbox[2] == whole.u1 || c.bbox[3] == whole.v1;
-    let min_fill = if c.area < SMALL_DOT_AREA { config.min_fill - SMALL_DOT_FILL_SLACK } else { config.min_fill };
+    let min_fill = config.min_fill - DIGITISATION_SLACK / (c.area as f64).sqrt();
     area >= config.min_area && config.max_area.is_none_or(|m| area <= m) && !cut && c.fill_ratio() >= min_fill
 }
 
