@@ -49,6 +49,7 @@ bench: install
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
 	$(PYTHON) benches/tags_vs_opencv.py
+	$(PYTHON) benches/dots_vs_opencv.py
 	$(PYTHON) benches/noise_honesty.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),

@@ -14,8 +14,9 @@ recorded pose and time at a few iterations, so each image carries the sensor noi
 simulator's image at that iteration); ``render_view`` also returns the true projections of
 the dots' centres, the reference of every accuracy figure. On each image the script times:
 
-(a) ``vsinv.detect_dots(image)``: the full frame: automatic threshold (Otsu's, kept above the
-    background noise), 8-connected components, intensity-weighted subpixel centroids;
+(a) ``vsinv.detect_dots(image)``: the full frame: local threshold (per tile, above the
+    background around), 8-connected components, shape filters, intensity-weighted subpixel
+    centroids;
 (b) ``vsinv.DotTracker(image, truth).track(image)``: the 12 dots searched in a 40 x 40 px
     window each around their predicted positions, in steady state (the tracker is started on
     the image from the true projections, as the simulator starts it from the projected
@@ -37,8 +38,8 @@ time / OpenCV time (below 1: vsinv is faster). vsinv's ``detect_dots`` and
 Accuracy: each true projection is matched to the nearest detected centroid (error in
 pixels, median and max over the visible dots); ``found`` counts the dots matched within 1 px
 and ``extra`` the detections farther than 2 px from every dot (noise specks); ``Otsu`` is
-the level OpenCV's threshold chose (vsinv keeps its automatic level at least 6 noise
-deviations above the background). For the tracker, the error is that of each dot's own
+the level OpenCV's threshold chose (vsinv's local threshold stays at least ``min_contrast``
+grey levels above the background around each pixel). For the tracker, the error is that of each dot's own
 result and ``found`` counts its ``found`` flags.
 """
 

@@ -108,13 +108,19 @@ def test_detect_dots(data: Any) -> None:
     image, px, vis = rendered()
     ref = vsinv.detect_dots(image)
     assert len(ref) == int(vis.sum())
-    args = {"image": image, "threshold": None, "min_area": 4, "max_area": None}
+    args = {"image": image, "threshold": None, "min_area": 8, "max_area": None,
+            "min_fill": 0.95, "min_contrast": 20, "max_ring_residual": 0.15}
     digest = lambda d: (d.centroids, d.areas, d.bboxes)  # noqa: E731
+    out_of_unit = {k: INVALID for k in ("negative", "neghuge", "neginf", "posinf", "huge")}
+    negative = {k: INVALID for k in ("negative", "neghuge", "neginf")}
     name, v, out = fuzz(data, vsinv.detect_dots, args,
                         {"image": image_variants(image),
                          "threshold": ints(128, overrides={"huge": INVALID, "none": SAME, "valid": ANY, "npint": ANY}),
-                         "min_area": ints(4),
-                         "max_area": ints(10_000, overrides={"none": SAME})},
+                         "min_area": ints(8),
+                         "max_area": ints(10_000, overrides={"none": SAME}),
+                         "min_fill": floats(0.95, overrides=out_of_unit),
+                         "min_contrast": ints(20, overrides={"huge": INVALID}),
+                         "max_ring_residual": floats(0.15, overrides=negative)},
                         digest=digest, ref=ref)
     if returned(out):
         c = call(getattr, out, "centroids", _api="Dots.centroids")

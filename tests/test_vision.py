@@ -47,15 +47,20 @@ def test_detect_dots_finds_opencv_discs_within_005_px_median(radius: float) -> N
 
 def weighted_moments_centroid(image: np.ndarray, dots: vsinv.Dots, k: int, labels: np.ndarray) -> np.ndarray:
     """cv2.moments of the pixels detect_dots documents for dot k: its bounding box grown by
-    2 px, grey levels above the median of that box's border, other components masked."""
+    2 px, grey levels above the least-squares plane fitted to that box's border ring (NumPy's
+    lstsq), other components masked."""
     u0, v0, u1, v1 = dots.bboxes[k]
     h, w = image.shape
     u0, v0, u1, v1 = max(u0 - 2, 0), max(v0 - 2, 0), min(u1 + 2, w - 1), min(v1 + 2, h - 1)
     box = image[v0 : v1 + 1, u0 : u1 + 1].astype(np.float64)
-    ring = np.concatenate([box[0, :], box[-1, :], box[:, 0], box[:, -1]])
-    background = np.sort(ring)[len(ring) // 2]
-    weights = np.clip(box - background, 0, None)
     box_labels = labels[v0 : v1 + 1, u0 : u1 + 1]
+    ring = np.zeros(box.shape, bool)
+    ring[0, :] = ring[-1, :] = ring[:, 0] = ring[:, -1] = True
+    ring &= box_labels == 0
+    vv, uu = np.mgrid[0 : box.shape[0], 0 : box.shape[1]]
+    design = np.c_[np.ones(ring.sum()), uu[ring], vv[ring]]
+    plane = np.linalg.lstsq(design, box[ring], rcond=None)[0]
+    weights = np.clip(box - (plane[0] + plane[1] * uu + plane[2] * vv), 0, None)
     own = box_labels[box_labels > 0]
     own_label = np.bincount(own).argmax()
     weights[(box_labels != 0) & (box_labels != own_label)] = 0

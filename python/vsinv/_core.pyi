@@ -665,13 +665,27 @@ class Dots:
 def detect_dots(
     image: _U8Image,
     threshold: int | None = None,
-    min_area: int = 4,
+    min_area: int = 8,
     max_area: int | None = None,
     polarity: Literal["light", "dark", "auto"] = "light",
+    min_fill: float = 0.95,
+    min_contrast: int = 20,
+    max_ring_residual: float = 0.15,
 ) -> Dots:
     """Bright dots on a dark background ("light"), dark dots on a bright one ("dark": the bright
     dots of 255 - image, a threshold t standing for 255 - t) or as the image shows ("auto"),
-    with subpixel intensity-weighted centroids."""
+    with subpixel intensity-weighted centroids over a local background plane.
+
+    threshold: None (default) for the local threshold (per 32 px tile: half way between the
+    background of the neighbourhood and the brightest dot nearby, at least min_contrast above
+    the background), or one grey level for the whole image. A dot has min_area <= area <=
+    max_area pixels (default 8 and no limit), a fill ratio (area over that of the ellipse of
+    its second moments: 1 for a filled ellipse, 0.955 for a square) of at least min_fill in
+    [0, 1] (default 0.95, less 0.2 / sqrt(area): the digitised outline's share of a small
+    dot), a mean contrast over the background plane around it of at least
+    min_contrast grey levels in [0, 255] (default 20), and a plain ring around it: the RMS
+    residual of that plane on its bounding box's ring (grown by 2 px) at most
+    max_ring_residual >= 0 times its contrast (default 0.15; inf: no check)."""
 
 @final
 class DotTracker:

@@ -43,6 +43,10 @@ pub fn max_area(obj: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
     opt_count(obj, "max_area")
 }
 
+pub fn min_contrast(obj: &Bound<'_, PyAny>) -> PyResult<u8> {
+    Ok(int_in_range(obj, "min_contrast", 0, 255)? as u8)
+}
+
 pub fn max_iter(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     count(obj, "max_iter")
 }

@@ -158,11 +158,22 @@ fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
 
 /// Bright dots on a dark background (`polarity="light"`), dark dots on a bright one
 /// (`"dark"`: the bright dots of `255 - image`, threshold `t` standing for `255 - t`) or as the
-/// image shows (`"auto"`): threshold (Otsu's, kept above the background's noise, unless
-/// given), 8-connected components with `min_area <= area <= max_area` (pixels),
-/// intensity-weighted subpixel centroids. A uniform image raises `InvalidInput`.
+/// image shows (`"auto"`): a local threshold (a pixel is a dot pixel when it stands out of the
+/// background of its neighbourhood by half the contrast of the dots nearby and at least
+/// `min_contrast`; `threshold=` sets one level for the whole image instead), 8-connected
+/// components with `min_area <= area <= max_area` (pixels) and a fill ratio (area over that
+/// of the ellipse of its second moments) of at least `min_fill` (less `0.2 / sqrt(area)`,
+/// the digitised outline's share), a mean contrast over the
+/// background plane around it of at least `min_contrast` grey levels and a ring around it
+/// that fits that plane (RMS residual at most `max_ring_residual` times the contrast),
+/// intensity-weighted subpixel centroids over that plane. A uniform image raises
+/// `InvalidInput`.
 #[pyfunction]
-#[pyo3(signature = (image, threshold = None, min_area = 4, max_area = None, polarity = "light"))]
+#[pyo3(signature = (
+    image, threshold = None, min_area = 8, max_area = None, polarity = "light",
+    min_fill = 0.95, min_contrast = 20, max_ring_residual = 0.15,
+))]
+#[allow(clippy::too_many_arguments)]
 pub fn detect_dots(
     py: Python<'_>,
     image: &Bound<'_, PyAny>,
@@ -170,10 +181,14 @@ pub fn detect_dots(
     #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
     #[pyo3(from_py_with = super::args::max_area)] max_area: Option<usize>,
     polarity: &str,
+    min_fill: f64,
+    #[pyo3(from_py_with = super::args::min_contrast)] min_contrast: u8,
+    max_ring_residual: f64,
 ) -> PyResult<PyDots> {
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
-    let config = DetectConfig { threshold, min_area, max_area, polarity: polarity_arg(polarity)? };
+    let polarity = polarity_arg(polarity)?;
+    let config = DetectConfig { threshold, min_area, max_area, polarity, min_fill, min_contrast, max_ring_residual };
     let dots = py.detach(|| detect(&buffer, &config))?;
     dots_out(py, &dots)
 }

@@ -1,38 +1,68 @@
 //! Dot detection: bright dots on a dark background, or dark dots on a bright one (found as
-//! the bright dots of the negative image: see [`Polarity`]). A threshold (Otsu's by default) and
-//! 8-connected components (imageproc) find the dots; each centroid is the intensity-weighted
-//! mean of its bounding box grown by two pixels, weighted by the grey level above the local
-//! background, so that the anti-aliased edge pixels under the threshold still count. Pixel
-//! `(u, v)` covers `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]` (OpenCV's convention).
+//! the bright dots of the negative image: see [`Polarity`]).
+//!
+//! [`detect_dots`] (a whole image): a local threshold ([`background`](super::background): a
+//! pixel is a dot pixel when it stands out of the background around it), 8-connected
+//! components as runs ([`runs`](super::runs)), then shape and size filters (area range, fill
+//! ratio: a dot is a filled ellipse; contrast) and the subpixel centroid of each dot over a
+//! local background plane ([`centroid`](super::centroid)).
+//!
+//! [`detect_in`] (a window, a given threshold: the dot tracker): imageproc's components and
+//! the intensity-weighted centroid over the grown bounding box above the median of its border
+//! ring. Pixel `(u, v)` covers `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]` (OpenCV's convention).
 
-use imageproc::contrast::otsu_level;
 use imageproc::region_labelling::{Connectivity, connected_components};
+use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::vision::background::TileThresholds;
+use crate::vision::centroid::{MARGIN, weighted_centroid};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
 use crate::vision::polarity::Polarity;
+use crate::vision::runs::{Component, label};
 
-/// Pixels added around a component's bounding box for its centroid.
-const MARGIN: u32 = 2;
-
-/// What [`detect_dots`] keeps.
+/// What [`detect_dots`] keeps. The defaults find the dots of real camera images (ViSP's
+/// grid36 and mire-2) and of rendered ones.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectConfig {
     /// Grey level above which (light dots) or below which (dark dots) a pixel belongs to a
-    /// dot (None: Otsu's threshold). Dark dots with threshold `t` are the light dots of the
+    /// dot, the same over the whole image (None, the default: the local threshold of
+    /// [`TileThresholds::local`]). Dark dots with threshold `t` are the light dots of the
     /// negative image with threshold `255 - t`.
     pub threshold: Option<u8>,
-    /// Smallest dot, pixels above the threshold.
+    /// Smallest dot, pixels above the threshold (default 8: a disc 3.2 px across).
     pub min_area: usize,
-    /// Largest dot (None: no limit).
+    /// Largest dot (None, the default: no limit).
     pub max_area: Option<usize>,
     /// Light dots (the default), dark dots, or decided by the image.
     pub polarity: Polarity,
+    /// Smallest fill ratio: the dot's area over that of the ellipse of its second moments
+    /// (1 for a filled ellipse, 0.955 for a square; default 0.95), in `[0, 1]`. A dot of `A`
+    /// pixels is allowed [`DIGITISATION_SLACK`]` / sqrt(A)` less: its digitised outline, about
+    /// `sqrt(A)` pixels of `A`, moves the ratio by that much (0.04 at 25 px, 0.006 at 1000 px).
+    pub min_fill: f64,
+    /// Smallest contrast, grey levels (default 20): the local threshold is at least this far
+    /// above the local background, and a dot's pixels must be this far above the background
+    /// plane around it on average.
+    pub min_contrast: u8,
+    /// Largest clutter around a dot (default 0.15): the RMS deviation of the ring around the
+    /// dot (its bounding box grown by 2 px) from the background plane fitted to it, over the
+    /// dot's contrast. A dot stands on a plain background (a printed disc, a marker); a bright
+    /// speck of a textured scene does not. Non-negative (infinity: no check).
+    pub max_ring_residual: f64,
 }
 
 impl Default for DetectConfig {
     fn default() -> Self {
-        Self { threshold: None, min_area: 4, max_area: None, polarity: Polarity::Light }
+        Self {
+            threshold: None,
+            min_area: 8,
+            max_area: None,
+            polarity: Polarity::Light,
+            min_fill: 0.95,
+            min_contrast: 20,
+            max_ring_residual: 0.15,
+        }
     }
 }
 
@@ -88,9 +118,7 @@ impl Window {
 /// (all black, say) is an error: nothing can stand out in it.
 pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Vec<Dot>> {
     check_image("image", image)?;
-    if config.max_area.is_some_and(|m| m < config.min_area) {
-        return Err(Error::InvalidParameter { name: "max_area", reason: "must be >= min_area".into() });
-    }
+    check_config(config)?;
     let (lo, hi) = image.pixels().fold((u8::MAX, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
     if lo == hi {
         return Err(Error::InvalidImage {
@@ -98,16 +126,63 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
             reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
         });
     }
-    let whole = Window::full(image);
     let dark = config.polarity.dark_dots(image);
-    let threshold = match config.threshold {
-        Some(t) if dark => 255 - t,
-        Some(t) => t,
-        None => automatic_threshold(&crop(image, whole, dark)),
+    let thresholds = match config.threshold {
+        Some(t) if dark => TileThresholds::uniform(image, 255 - t),
+        Some(t) => TileThresholds::uniform(image, t),
+        None => TileThresholds::local(image, dark, config.min_contrast),
     };
-    let mut dots = detect_in(image, whole, threshold, dark, config.min_area, config.max_area);
+    let labelling = label(image, &thresholds, dark);
+    let whole = Window::full(image);
+    let mut dots: Vec<Dot> = labelling
+        .components
+        .par_iter()
+        .enumerate()
+        .filter(|(_, c)| keeps_shape(c, config, whole))
+        .filter_map(|(index, c)| {
+            let weighted = weighted_centroid(image, &labelling, index as u32, dark);
+            let plain = weighted.ring_residual <= config.max_ring_residual * weighted.contrast;
+            (weighted.contrast >= f64::from(config.min_contrast).max(f64::MIN_POSITIVE) && plain).then_some(Dot {
+                centroid: weighted.centroid,
+                area: c.area as f64,
+                bbox: c.bbox,
+            })
+        })
+        .collect();
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
     Ok(dots)
+}
+
+fn check_config(config: &DetectConfig) -> Result<()> {
+    if config.max_area.is_some_and(|m| m < config.min_area) {
+        return Err(Error::InvalidParameter { name: "max_area", reason: "must be >= min_area".into() });
+    }
+    if !(0.0..=1.0).contains(&config.min_fill) {
+        return Err(Error::InvalidParameter {
+            name: "min_fill",
+            reason: format!("must be in [0, 1], got {:?}", config.min_fill),
+        });
+    }
+    if config.max_ring_residual.is_nan() || config.max_ring_residual < 0.0 {
+        let reason = format!("must be >= 0, got {:?}", config.max_ring_residual);
+        return Err(Error::InvalidParameter { name: "max_ring_residual", reason });
+    }
+    Ok(())
+}
+
+/// How much lower than `min_fill` the fill ratio of a dot of `A` pixels may be, times
+/// `sqrt(A)`: the pixels along a digitised outline are a fraction of order `1 / sqrt(A)` of the
+/// area, and each moves the ratio (rendered discs, blurred, measure about `1 - 0.35 /
+/// sqrt(A)`: 0.931 at 26 px, 0.965 at 100 px; the slack keeps those of `min_fill - 0.02` and
+/// up).
+pub const DIGITISATION_SLACK: f64 = 0.2;
+
+/// Area range, whole (not cut by the image's border) and filled like an ellipse.
+fn keeps_shape(c: &Component, config: &DetectConfig, whole: Window) -> bool {
+    let area = c.area as usize;
+    let cut = c.bbox[0] == whole.u0 || c.bbox[1] == whole.v0 || c.bbox[2] == whole.u1 || c.bbox[3] == whole.v1;
+    let min_fill = config.min_fill - DIGITISATION_SLACK / (c.area as f64).sqrt();
+    area >= config.min_area && config.max_area.is_none_or(|m| area <= m) && !cut && c.fill_ratio() >= min_fill
 }
 
 /// The dots of a window with a given threshold. Components that touch the window's border
@@ -135,38 +210,6 @@ pub fn detect_in<C: Pixels>(
         .filter(|(_, s)| !cut_by_window(s, window))
         .map(|(label, s)| weighted_dot(&patch, &labels, label as u32 + 1, s, window))
         .collect()
-}
-
-/// Otsu's threshold, raised to at least [`NOISE_SIGMAS`] noise deviations above the median
-/// (the background): when the dots cover little of the image, Otsu's level falls inside the
-/// background's noise and would cut it into specks.
-fn automatic_threshold(image: &GreyImage) -> u8 {
-    let mut histogram = [0usize; 256];
-    image.pixels().for_each(|p| histogram[usize::from(p[0])] += 1);
-    let median = histogram_median(&histogram);
-    let mut deviations = [0usize; 256];
-    for (level, &count) in histogram.iter().enumerate() {
-        deviations[level.abs_diff(median)] += count;
-    }
-    // The median absolute deviation of Gaussian noise is 0.6745 sigma.
-    let sigma = histogram_median(&deviations) as f64 / 0.6745;
-    let floor = (median as f64 + (NOISE_SIGMAS * sigma).max(1.0)).min(254.0) as u8;
-    otsu_level(image).max(floor)
-}
-
-/// Noise deviations between the background and the automatic threshold.
-const NOISE_SIGMAS: f64 = 6.0;
-
-fn histogram_median(histogram: &[usize; 256]) -> usize {
-    let half = histogram.iter().sum::<usize>().div_ceil(2);
-    let mut seen = 0;
-    histogram
-        .iter()
-        .position(|&c| {
-            seen += c;
-            seen >= half
-        })
-        .unwrap_or(0)
 }
 
 /// A window of the image, or of its negative (`dark`).
@@ -342,6 +385,84 @@ mod tests {
         assert!(detect_dots(&GreyImage::new(0, 0), &DetectConfig::default()).is_err());
         let bad = DetectConfig { min_area: 10, max_area: Some(5), ..Default::default() };
         assert!(detect_dots(&black, &bad).is_err());
+    }
+
+    /// A disc of radius `r` and height `a` at `centre` (8 x 8 supersampled coverage) on the
+    /// plane `g0 + gu u + gv v`.
+    fn disc_on_gradient(centre: [f64; 2], r: f64, a: f64, [g0, gu, gv]: [f64; 3]) -> GreyImage {
+        GreyImage::from_fn(64, 64, |u, v| {
+            let mut inside = 0;
+            for i in 0..8 {
+                for j in 0..8 {
+                    let (x, y) =
+                        (f64::from(u) - 0.4375 + f64::from(i) / 8.0, f64::from(v) - 0.4375 + f64::from(j) / 8.0);
+                    inside += i32::from((x - centre[0]).hypot(y - centre[1]) < r);
+                }
+            }
+            let g = g0 + gu * f64::from(u) + gv * f64::from(v) + a * f64::from(inside) / 64.0;
+            image::Luma([g.round().clamp(0.0, 255.0) as u8])
+        })
+    }
+
+    #[test]
+    fn a_lighting_gradient_does_not_pull_the_centroid() {
+        // Closed form: the true centre is where the disc is drawn. The plane fitted to the
+        // ring cancels the gradient; the ring's median (detect_in) leaves the bright side's
+        // background in the weights.
+        let centre = [31.3, 32.6];
+        let image = disc_on_gradient(centre, 6.0, 120.0, [20.0, 1.5, 0.8]);
+        let dots = detect_dots(&image, &DetectConfig::default()).unwrap();
+        assert_eq!(dots.len(), 1);
+        let plane = (dots[0].centroid[0] - centre[0]).hypot(dots[0].centroid[1] - centre[1]);
+        let level = (20.0 + 1.5 * centre[0] + 0.8 * centre[1] + 60.0) as u8;
+        let median = detect_in(&image, Window::full(&image), level, false, 4, None);
+        assert_eq!(median.len(), 1);
+        let median = (median[0].centroid[0] - centre[0]).hypot(median[0].centroid[1] - centre[1]);
+        assert!(plane < 0.03, "plane model: {plane} px");
+        assert!(median > 3.0 * plane && median > 0.05, "median {median} px vs plane {plane} px");
+        // No gradient: both exact.
+        let flat = disc_on_gradient(centre, 6.0, 120.0, [40.0, 0.0, 0.0]);
+        let d = detect_dots(&flat, &DetectConfig::default()).unwrap()[0].centroid;
+        assert!((d[0] - centre[0]).hypot(d[1] - centre[1]) < 0.02, "{d:?}");
+    }
+
+    #[test]
+    fn shape_and_contrast_filters() {
+        // A filled disc, a ring (fill ratio about 0.5), a bar with a bump, and a faint disc.
+        let mut image = GreyImage::from_pixel(160, 64, image::Luma([30]));
+        for v in 0..64u32 {
+            for u in 0..160u32 {
+                let (x, y) = (f64::from(u), f64::from(v));
+                let disc = (x - 20.0).hypot(y - 32.0) < 8.0;
+                let ring = ((x - 60.0).hypot(y - 32.0) - 8.0).abs() < 1.5;
+                let bar = ((80..120).contains(&u) && (30..34).contains(&v))
+                    || ((96..104).contains(&u) && (22..42).contains(&v));
+                let faint = (x - 140.0).hypot(y - 32.0) < 8.0;
+                let g = if disc || ring || bar {
+                    220
+                } else if faint {
+                    45
+                } else {
+                    30
+                };
+                image.put_pixel(u, v, image::Luma([g]));
+            }
+        }
+        let found = |config: DetectConfig| -> Vec<u32> {
+            let mut columns: Vec<u32> =
+                detect_dots(&image, &config).unwrap().iter().map(|d| d.centroid[0].round() as u32).collect();
+            columns.sort_unstable();
+            columns
+        };
+        let fixed = DetectConfig { threshold: Some(40), ..Default::default() };
+        assert_eq!(found(fixed), vec![20], "ring, bar and faint disc rejected");
+        assert_eq!(found(DetectConfig { min_fill: 0.0, ..fixed }), vec![20, 60, 100]);
+        assert_eq!(found(DetectConfig { min_contrast: 5, ..fixed }), vec![20, 140]);
+        assert_eq!(found(DetectConfig::default()), vec![20]);
+        for bad in [-0.1, 1.5, f64::NAN] {
+            let e = detect_dots(&image, &DetectConfig { min_fill: bad, ..Default::default() }).unwrap_err();
+            assert!(matches!(e, Error::InvalidParameter { name: "min_fill", .. }), "{e}");
+        }
     }
 
     #[test]

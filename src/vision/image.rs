@@ -12,9 +12,10 @@ pub type GreyImage = ::image::GrayImage;
 /// (`GreyBuffer<&[u8]>`, e.g. a NumPy array read in place).
 pub type GreyBuffer<C> = ::image::ImageBuffer<::image::Luma<u8>, C>;
 
-/// What the detection and tracking functions read: any grey buffer of bytes.
-pub trait Pixels: std::ops::Deref<Target = [u8]> {}
-impl<C: std::ops::Deref<Target = [u8]>> Pixels for C {}
+/// What the detection and tracking functions read: any grey buffer of bytes (shared between
+/// threads: read in parallel).
+pub trait Pixels: std::ops::Deref<Target = [u8]> + Sync {}
+impl<C: std::ops::Deref<Target = [u8]> + Sync> Pixels for C {}
 
 /// Borrows row-major bytes as an image; `what` names the argument in errors.
 pub fn view<'a>(what: &str, width: u32, height: u32, data: &'a [u8]) -> Result<GreyBuffer<&'a [u8]>> {

@@ -12,7 +12,10 @@
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
 //! | AprilTags as a detector: four corners a tag ([`TagDetector`]) | [`detector::tags`] |
 //! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
-//! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
+//! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
+//! | the local threshold: a background model on tiles | [`background`] |
+//! | 8-connected components as runs, with moments | [`runs`] |
+//! | a dot's subpixel centroid over a local background plane | [`centroid`] |
 //! | bright or dark dots, or decided by the image | [`polarity`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
 //! | one pipeline from image to twist: detect, match by identity, step the servo session | [`image_servo`] |
@@ -36,6 +39,8 @@
 //! `src/vision/detector/<name>.rs`, implementing [`Detector`] and reporting the target's
 //! point identities.
 
+pub mod background;
+pub mod centroid;
 pub mod detector;
 pub mod dots;
 pub mod image;
@@ -43,6 +48,7 @@ pub mod image_servo;
 pub mod polarity;
 pub mod render;
 pub mod tags;
+pub mod runs;
 pub mod target;
 pub mod tracker;
 

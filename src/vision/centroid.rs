@@ -1,0 +1,156 @@
+//! The subpixel centroid of one dot found by [`label`](crate::vision::runs::label): the
+//! intensity-weighted mean over its bounding box grown by [`MARGIN`] pixels, each pixel
+//! weighted by its level above a local background model, so that the anti-aliased edge
+//! pixels under the threshold still count and pixels of other dots do not.
+//!
+//! The background is the least-squares plane `b(u, v) = a + b_u (u - u_c) + b_v (v - v_c)`
+//! fitted to the border ring of the grown box, dot pixels left out: a lighting gradient
+//! across the dot then cancels, where a constant background (the ring's median) leaves
+//! weights `g - b` that lean towards the bright side and pull the centroid by a fraction of a
+//! pixel (the first moment of a linear ramp over the dot's support).
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::vision::image::{GreyBuffer, Pixels};
+use crate::vision::runs::{Component, Labelling, Run};
+
+/// Pixels added around a component's bounding box for its centroid.
+pub const MARGIN: u32 = 2;
+
+/// Which pixels of a row segment: the background, the dot's own, or another dot's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Owner {
+    Background,
+    Own,
+    Other,
+}
+
+/// A dot's centroid `(u, v)`, its contrast (the mean level of its pixels above the
+/// background plane) and how well that plane fits the ring around it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Weighted {
+    /// Subpixel centroid.
+    pub centroid: [f64; 2],
+    /// Mean level of the dot's pixels above the background, grey levels.
+    pub contrast: f64,
+    /// Root mean square deviation of the ring's background pixels from the plane, grey
+    /// levels: the noise of a plain background, more for a dot in clutter.
+    pub ring_residual: f64,
+}
+
+/// The centroid of component `index` of `labelling`.
+pub fn weighted_centroid<C: Pixels>(image: &GreyBuffer<C>, labelling: &Labelling, index: u32, dark: bool) -> Weighted {
+    let c: &Component = &labelling.components[index as usize];
+    let (w, h) = (image.width(), image.height());
+    let bbox = [
+        c.bbox[0].saturating_sub(MARGIN),
+        c.bbox[1].saturating_sub(MARGIN),
+        (c.bbox[2] + MARGIN).min(w - 1),
+        (c.bbox[3] + MARGIN).min(h - 1),
+    ];
+    let flip = if dark { 255u8 } else { 0 };
+    let level = |u: u32, v: u32| f64::from(image.as_raw()[v as usize * w as usize + u as usize] ^ flip);
+    let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
+    let (plane, ring_residual) = ring_plane(labelling, index, bbox, centre, &level);
+    let background =
+        |u: u32, v: u32| plane[0] + plane[1] * (f64::from(u) - centre[0]) + plane[2] * (f64::from(v) - centre[1]);
+    let (mut sum, mut su, mut sv, mut own) = (0.0, 0.0, 0.0, 0.0);
+    for v in bbox[1]..=bbox[3] {
+        visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
+            if owner == Owner::Other {
+                return;
+            }
+            for u in u0..u1 {
+                let above = level(u, v) - background(u, v);
+                if owner == Owner::Own {
+                    own += above;
+                }
+                let weight = above.max(0.0);
+                sum += weight;
+                su += weight * f64::from(u);
+                sv += weight * f64::from(v);
+            }
+        });
+    }
+    let centroid = if sum > 0.0 {
+        [su / sum, sv / sum]
+    } else {
+        [0.5 * f64::from(c.bbox[0] + c.bbox[2]), 0.5 * f64::from(c.bbox[1] + c.bbox[3])]
+    };
+    Weighted { centroid, contrast: own / c.area as f64, ring_residual }
+}
+
+/// Calls `f(u0, u1, owner)` for the segments `u0..u1` of row `v` between columns `first` and
+/// `last` (inclusive), by owner.
+fn visit_row(labelling: &Labelling, index: u32, v: u32, first: u32, last: u32, mut f: impl FnMut(u32, u32, Owner)) {
+    let (runs, components): (&[Run], &[u32]) = labelling.row(v);
+    let start = runs.partition_point(|r| r.u1 <= first);
+    let mut u = first;
+    for (run, &component) in runs[start..].iter().zip(&components[start..]) {
+        if run.u0 > last {
+            break;
+        }
+        let (a, b) = (run.u0.max(first), run.u1.min(last + 1));
+        if a > u {
+            f(u, a, Owner::Background);
+        }
+        f(a, b, if component == index { Owner::Own } else { Owner::Other });
+        u = b;
+    }
+    if u <= last {
+        f(u, last + 1, Owner::Background);
+    }
+}
+
+/// The plane `[a, b_u, b_v]` (about `centre`) fitted by least squares to the background
+/// pixels of the border ring of `bbox`, and the RMS of its residuals; when they do not fix a
+/// plane (fewer than three, or all on one line), their mean (and 0 when there are none).
+fn ring_plane(
+    labelling: &Labelling,
+    index: u32,
+    bbox: [u32; 4],
+    centre: [f64; 2],
+    level: &impl Fn(u32, u32) -> f64,
+) -> ([f64; 3], f64) {
+    let mut normal = Matrix3::<f64>::zeros();
+    let mut rhs = Vector3::<f64>::zeros();
+    let mut squares = 0.0;
+    let mut add = |u: u32, v: u32| {
+        let x = Vector3::new(1.0, f64::from(u) - centre[0], f64::from(v) - centre[1]);
+        let g = level(u, v);
+        normal += x * x.transpose();
+        rhs += x * g;
+        squares += g * g;
+    };
+    for v in bbox[1]..=bbox[3] {
+        let whole_row = v == bbox[1] || v == bbox[3];
+        visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
+            if owner != Owner::Background {
+                return;
+            }
+            if whole_row {
+                (u0..u1).for_each(|u| add(u, v));
+            } else {
+                for u in [bbox[0], bbox[2]] {
+                    if (u0..u1).contains(&u) {
+                        add(u, v);
+                    }
+                }
+            }
+        });
+    }
+    let count = normal[(0, 0)];
+    // Residual sum of squares of a least-squares fit: sum g^2 - p . (X^T g).
+    let rms = |p: Vector3<f64>| ((squares - p.dot(&rhs)).max(0.0) / count).sqrt();
+    match normal.try_inverse() {
+        Some(inverse) if count >= 3.0 && (normal.determinant() / count.powi(3)).abs() > 1e-9 => {
+            let p = inverse * rhs;
+            ([p[0], p[1], p[2]], rms(p))
+        }
+        _ if count > 0.0 => {
+            let mean = rhs[0] / count;
+            ([mean, 0.0, 0.0], rms(Vector3::new(mean, 0.0, 0.0)))
+        }
+        _ => ([0.0; 3], 0.0),
+    }
+}
