@@ -6,6 +6,8 @@
 //!
 //! Usage: `cargo bench --bench tracker_mire2 [-- DIR]`
 
+#![allow(clippy::expect_used)]
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 

@@ -242,9 +242,10 @@ impl DotTracker {
             if let Some(c) = under {
                 let shape = Shape::of(&c);
                 // A speck smaller than the dot may sit on the prediction: look further.
-                let smaller = shape.area < dot.shape.area && !dot.shape.admits(&shape, ratio);
+                let smaller =
+                    c.area < self.config.min_area || (shape.area < dot.shape.area && !dot.shape.admits(&shape, ratio));
                 if !smaller {
-                    let whole = !c.touches_window && !c.touches_image && c.area >= self.config.min_area;
+                    let whole = !c.touches_window && !c.touches_image;
                     return (whole && dot.shape.admits(&shape, ratio)).then(|| self.hit(image, level, &c, shape));
                 }
             }

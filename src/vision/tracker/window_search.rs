@@ -310,3 +310,62 @@ impl WindowSearch {
         255
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use imageproc::region_labelling::{Connectivity, connected_components};
+
+    use super::*;
+    use crate::vision::image::GreyImage;
+
+    /// A pseudo-random image of blobs and specks.
+    fn noisy(width: u32, height: u32) -> GreyImage {
+        let mut state = 987654321u64;
+        GreyImage::from_fn(width, height, |u, v| {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            let blob = ((u as f64 / 7.0).sin() * (v as f64 / 5.0).cos() * 120.0 + 120.0) as u8;
+            ::image::Luma([blob.saturating_add((state >> 60) as u8 * 8)])
+        })
+    }
+
+    #[test]
+    fn components_and_moments_match_imageproc_labelling() {
+        let image = noisy(90, 70);
+        let window = Window { u0: 10, v0: 5, u1: 80, v1: 60 };
+        for (threshold, flip) in [(150u8, 0u8), (100, 255)] {
+            let level = Level { threshold, flip };
+            let mut search = WindowSearch::default();
+            search.begin(window);
+            search.label_all(&image, level);
+            // Independent: imageproc's 8-connected labels of the window's binary image.
+            let binary = GreyImage::from_fn(71, 56, |u, v| {
+                ::image::Luma([u8::from(level.above(image.get_pixel(u + 10, v + 5)[0]))])
+            });
+            let labels = connected_components(&binary, Connectivity::Eight, ::image::Luma([0u8]));
+            let count = labels.pixels().map(|p| p[0]).max().unwrap() as usize;
+            assert_eq!(search.components.len(), count);
+            for c in &search.components {
+                // Its pixels by the search's stamps, and imageproc's label of the first of them.
+                let pixels: Vec<[f64; 2]> = (window.v0..=window.v1)
+                    .flat_map(|v| (window.u0..=window.u1).map(move |u| (u, v)))
+                    .filter(|&(u, v)| search.stamps[search.index(window, u, v)] == c.stamp)
+                    .map(|(u, v)| [f64::from(u), f64::from(v)])
+                    .collect();
+                let label_of = |p: &[f64; 2]| labels.get_pixel(p[0] as u32 - 10, p[1] as u32 - 5)[0];
+                let label = label_of(&pixels[0]);
+                assert!(label != 0 && pixels.iter().all(|p| label_of(p) == label));
+                assert_eq!(labels.pixels().filter(|p| p[0] == label).count(), c.area);
+                assert_eq!(pixels.len(), c.area);
+                let n = c.area as f64;
+                let mean = [pixels.iter().map(|p| p[0]).sum::<f64>() / n, pixels.iter().map(|p| p[1]).sum::<f64>() / n];
+                let [cu, cv] = c.centroid();
+                assert!((cu - mean[0]).abs() < 1e-9 && (cv - mean[1]).abs() < 1e-9);
+                let var_u = pixels.iter().map(|p| (p[0] - mean[0]).powi(2)).sum::<f64>() / n;
+                let cov = pixels.iter().map(|p| (p[0] - mean[0]) * (p[1] - mean[1])).sum::<f64>() / n;
+                let [mu20, _, mu11] = c.covariance();
+                assert!((mu20 - var_u).abs() < 1e-6 && (mu11 - cov).abs() < 1e-6);
+            }
+        }
+    }
+}
