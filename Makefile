@@ -51,6 +51,7 @@ bench: install
 	$(PYTHON) benches/tags_vs_opencv.py
 	$(PYTHON) benches/dots_vs_opencv.py
 	$(PYTHON) benches/noise_honesty.py
+	$(PYTHON) benches/tracker_mire2.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
 # and the property tests on new random examples (CI runs a fixed sequence).

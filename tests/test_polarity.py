@@ -43,8 +43,8 @@ def test_default_is_light_and_auto_follows_the_image() -> None:
 def test_tracker_polarity() -> None:
     image = _scene()
     clicks = vsinv.detect_dots(image).centroids + 1.0
-    light = vsinv.DotTracker(image, clicks)
     for polarity in ("dark", "auto"):
+        light = vsinv.DotTracker(image, clicks)  # the same step as the dark tracker (each learns its threshold)
         tracker = vsinv.DotTracker(255 - image, clicks, polarity=polarity)
         assert np.array_equal(tracker.positions, light.positions)
         pixels, found = tracker.track(255 - image)

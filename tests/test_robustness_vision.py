@@ -131,6 +131,10 @@ def test_detect_dots(data: Any) -> None:
         assert (b[:, 0] <= c[:, 0]).all() and (c[:, 0] <= b[:, 2]).all()
 
 
+# max_area_ratio must be finite and above 1.
+RATIO_ABOVE_ONE = {k: INVALID for k in ("nan", "posinf", "neginf", "zero", "negative", "neghuge", "tiny", "int")}
+
+
 @covers("DotTracker", "DotTracker.track", "DotTracker.positions")
 @fuzz_settings(100)
 @given(st.data())
@@ -144,7 +148,8 @@ def test_dot_tracker(data: Any) -> None:
     name, v, out = fuzz(data, vsinv.DotTracker, args,
                         {"image": image_variants(image), "initial_pixels": arrays(clicks, overrides=over),
                          "search_radius": floats(20.0, overrides={"nan": INVALID}),
-                         "max_search_radius": floats(80.0, overrides={"nan": INVALID}), "min_area": ints(4)},
+                         "max_search_radius": floats(80.0, overrides={"nan": INVALID}), "min_area": ints(4),
+                         "max_area_ratio": floats(1.5, overrides=RATIO_ABOVE_ONE)},
                         api="DotTracker", digest=digest, ref=ref)
     tracker = out if returned(out) else ref
     pos = call(getattr, tracker, "positions", _api="DotTracker.positions")

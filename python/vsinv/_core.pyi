@@ -699,7 +699,13 @@ class DotTracker:
         max_search_radius: float = 80.0,
         min_area: int = 4,
         polarity: Literal["light", "dark", "auto"] = "light",
-    ) -> DotTracker: ...
+        max_area_ratio: float = 1.5,
+    ) -> DotTracker:
+        """Starts on one approximate pixel per dot (a dot larger than search_radius too). The
+        search window follows each dot's size and motion; a component whose area differs from
+        the dot's last area by more than max_area_ratio (beyond the boundary pixels), or whose
+        principal spreads differ by more than its square root, is not that dot: the dot is
+        reported not found and keeps its last position."""
     def track(self, image: _U8Image) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
         """Finds the dots in the next image: (pixels (n, 2), found (n,))."""
     @property

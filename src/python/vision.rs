@@ -202,10 +202,12 @@ pub(super) fn polarity_arg(name: &str) -> PyResult<Polarity> {
 }
 
 /// Tracks dots through images: `DotTracker(image, initial_pixels (n, 2), search_radius=20.0,
-/// max_search_radius=80.0, min_area=4, polarity="light")` finds each dot near its click in the
-/// first image (`"dark"`: dark dots, `"auto"`: decided on the first image);
-/// `track(image)` returns `(pixels (n, 2), found (n,) bool)`. A dot not found keeps its last
-/// position with `found` false; two dots are never swapped.
+/// max_search_radius=80.0, min_area=4, polarity="light", max_area_ratio=1.5)` finds each dot
+/// near its click in the first image (a dot larger than the window too; `"dark"`: dark dots,
+/// `"auto"`: decided on the first image); `track(image)` returns `(pixels (n, 2), found (n,)
+/// bool)`. The window follows each dot's size and motion; a dot whose area or shape changed
+/// too much (merged with another region, say) is not found and keeps its last position with
+/// `found` false; two dots are never swapped.
 #[pyclass(name = "DotTracker", module = "vsinv._core")]
 pub struct PyDotTracker {
     inner: DotTracker,
@@ -214,7 +216,8 @@ pub struct PyDotTracker {
 #[pymethods]
 impl PyDotTracker {
     #[new]
-    #[pyo3(signature = (image, initial_pixels, search_radius = 20.0, max_search_radius = 80.0, min_area = 4, polarity = "light"))]
+    #[pyo3(signature = (image, initial_pixels, search_radius = 20.0, max_search_radius = 80.0, min_area = 4, polarity = "light", max_area_ratio = 1.5))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         image: &Bound<'_, PyAny>,
@@ -223,13 +226,14 @@ impl PyDotTracker {
         max_search_radius: f64,
         #[pyo3(from_py_with = super::args::min_area)] min_area: usize,
         polarity: &str,
+        max_area_ratio: f64,
     ) -> PyResult<Self> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
         let clicks = f64_array(initial_pixels, "initial_pixels", &[None, Some(2)])?;
         let clicks = points2(&clicks)?;
         let polarity = polarity_arg(polarity)?;
-        let config = TrackerConfig { search_radius, max_search_radius, min_area, polarity, ..TrackerConfig::default() };
+        let config = TrackerConfig { search_radius, max_search_radius, min_area, polarity, max_area_ratio };
         let inner = py.detach(|| DotTracker::new(&buffer, clicks, config))?;
         Ok(Self { inner })
     }

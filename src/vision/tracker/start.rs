@@ -1,0 +1,106 @@
+//! Starting a dot from a click in the first image: a threshold midway between the window's
+//! background (its median) and the dot's peak, and the component under the click (or the
+//! nearest one). A dot larger than the search window is still found: while the window has no
+//! contrast (it lies inside the dot) or the component is cut by the window's edge, the window
+//! doubles, and once grown it only accepts the component under the click.
+
+use super::shape::Shape;
+use super::window_search::{Component, Level, WindowSearch};
+use super::{TrackedDot, TrackerConfig, distance};
+use crate::error::{Error, Result, Short, fixed_or_short};
+use crate::vision::dots::Window;
+use crate::vision::image::{GreyBuffer, Pixels};
+
+/// Grey levels by which a dot must stand out from its background.
+pub(super) const MIN_CONTRAST: u8 = 24;
+
+/// The dot around click `i`, or an error naming it.
+pub(super) fn initial_dot<C: Pixels>(
+    image: &GreyBuffer<C>,
+    i: usize,
+    click: [f64; 2],
+    config: &TrackerConfig,
+    dark: bool,
+    search: &mut WindowSearch,
+) -> Result<TrackedDot> {
+    if !(click[0].is_finite() && click[1].is_finite()) {
+        return Err(Error::NonFinitePoint {
+            what: "initial_pixels",
+            row: i,
+            column: usize::from(click[0].is_finite()),
+        });
+    }
+    let not_found = |reason: &str| Error::InvalidImage {
+        what: "initial_pixels".into(),
+        reason: format!("point {i} at ({}, {}): {reason}", fixed_or_short(click[0], 1), fixed_or_short(click[1], 1)),
+    };
+    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+    if click[0] < -0.5 || click[1] < -0.5 || click[0] > w - 0.5 || click[1] > h - 0.5 {
+        return Err(not_found("outside the image"));
+    }
+    let flip = if dark { 255 } else { 0 };
+    let mut radius = config.search_radius;
+    let mut no_contrast = true;
+    loop {
+        let window = Window::around(image, click, radius).ok_or_else(|| not_found("outside the image"))?;
+        let whole =
+            window.u0 == 0 && window.v0 == 0 && window.u1 + 1 >= image.width() && window.v1 + 1 >= image.height();
+        let (background, peak) = window_levels(image, window, flip);
+        if peak.saturating_sub(background) >= MIN_CONTRAST {
+            no_contrast = false;
+            let level = Level { threshold: background + (peak - background) / 2, flip };
+            search.begin(window);
+            search.label_all(image, level);
+            let grown = radius > config.search_radius;
+            match pick(search, click, config.min_area, grown) {
+                Some(c) if !c.touches_window || whole => {
+                    if c.touches_image {
+                        return Err(not_found("the dot is cut by the image's border"));
+                    }
+                    let centroid = search.weighted_centroid(image, level, &c).centroid;
+                    return Ok(TrackedDot::started(centroid, level.threshold, Shape::of(&c)));
+                }
+                // Cut by the window: the dot is larger than it.
+                Some(_) => {}
+                None if !grown => {
+                    return Err(not_found(&format!("no dot within {} px", Short(config.search_radius))));
+                }
+                None => {}
+            }
+        }
+        if whole {
+            let why = if no_contrast { "no contrast" } else { "no whole dot under it" };
+            return Err(not_found(&format!("no dot around it ({why})")));
+        }
+        radius *= 2.0;
+    }
+}
+
+/// The component under the click, or (in the first window only) the nearest to it.
+fn pick(search: &WindowSearch, click: [f64; 2], min_area: usize, grown: bool) -> Option<Component> {
+    let (u, v) = (click[0].round().max(0.0) as u32, click[1].round().max(0.0) as u32);
+    let under = |c: &&Component| c.bbox[0] <= u && u <= c.bbox[2] && c.bbox[1] <= v && v <= c.bbox[3];
+    let large = search.components.iter().filter(|c| c.area >= min_area);
+    let nearest =
+        |a: &&Component, b: &&Component| distance(a.centroid(), click).total_cmp(&distance(b.centroid(), click));
+    let covering = large.clone().filter(under).min_by(nearest);
+    if grown { covering.copied() } else { covering.or_else(|| large.min_by(nearest)).copied() }
+}
+
+/// The median and the largest grey level of a window (of its negative for `flip` 255).
+fn window_levels<C: Pixels>(image: &GreyBuffer<C>, w: Window, flip: u8) -> (u8, u8) {
+    let mut histogram = [0usize; 256];
+    for v in w.v0..=w.v1 {
+        for u in w.u0..=w.u1 {
+            histogram[usize::from(flip ^ image.get_pixel(u, v)[0])] += 1;
+        }
+    }
+    let total: usize = histogram.iter().sum();
+    let mut seen = 0;
+    let median = histogram.iter().position(|&n| {
+        seen += n;
+        seen > total / 2
+    });
+    let peak = histogram.iter().rposition(|&n| n > 0);
+    (median.unwrap_or(0) as u8, peak.unwrap_or(0) as u8)
+}
