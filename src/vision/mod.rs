@@ -7,7 +7,7 @@
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |
-//! | a rig of AprilTags (tag36h11, [`Tags`]) | [`target::tags`] |
+//! | a rig of AprilTags (tag36h11, [`TagRig`]) | [`target::tags`] |
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
@@ -49,6 +49,6 @@ pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
 pub use self::target::dots::Dots;
-pub use self::target::tags::{Tag, Tags};
+pub use self::target::tags::{RigTag, TagRig};
 pub use self::target::{Target, TargetPoint};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

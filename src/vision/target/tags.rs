@@ -29,7 +29,7 @@ const DATA_CELLS: usize = 6;
 
 /// One tag: its id, its size and its pose.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Tag {
+pub struct RigTag {
     /// The tag36h11 id, `0..587`.
     pub id: u32,
     /// Side of the black border's outer square, metres.
@@ -39,7 +39,7 @@ pub struct Tag {
     pub pose: Isometry3<f64>,
 }
 
-impl Tag {
+impl RigTag {
     /// The four corners in F*, in OpenCV's order (top-left, top-right, bottom-right,
     /// bottom-left as printed).
     pub fn corners(&self) -> [[f64; 3]; 4] {
@@ -81,7 +81,7 @@ impl Tag {
                 cells.push(rect(start + 2, column + 2, row + 2, row + 3));
             }
         }
-        // Four finite vertices each (checked in Tags::new): cannot fail.
+        // Four finite vertices each (checked in TagRig::new): cannot fail.
         cells.into_iter().filter_map(|v| Polygon::new(v).ok()).collect()
     }
 }
@@ -114,15 +114,15 @@ fn tag36h11_layout() -> &'static (Vec<i8>, Vec<i8>) {
 
 /// A rig of tags: the target's points are the tags' corners, four per tag in the tags' order.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Tags {
-    tags: Vec<Tag>,
+pub struct TagRig {
+    tags: Vec<RigTag>,
     points: Vec<TargetPoint>,
     cells: Vec<Vec<Polygon>>,
 }
 
-impl Tags {
+impl TagRig {
     /// A rig of tags with distinct ids in `0..587`, finite sizes > 0 and finite poses.
-    pub fn new(tags: Vec<Tag>) -> Result<Self> {
+    pub fn new(tags: Vec<RigTag>) -> Result<Self> {
         let bad = |i: usize, reason: String| {
             Err(Error::InvalidParameter { name: "tags", reason: format!("tag {i}: {reason}") })
         };
@@ -145,17 +145,17 @@ impl Tags {
             .iter()
             .flat_map(|t| (0u32..).zip(t.corners()).map(|(c, position)| TargetPoint { id: 4 * t.id + c, position }))
             .collect();
-        let cells = tags.iter().map(Tag::white_polygons).collect();
+        let cells = tags.iter().map(RigTag::white_polygons).collect();
         Ok(Self { tags, points, cells })
     }
 
     /// The tags.
-    pub fn tags(&self) -> &[Tag] {
+    pub fn tags(&self) -> &[RigTag] {
         &self.tags
     }
 }
 
-impl Target for Tags {
+impl Target for TagRig {
     fn points(&self) -> &[TargetPoint] {
         &self.points
     }
@@ -186,12 +186,12 @@ mod tests {
     use crate::vision::render::{CameraView, RenderConfig, Renderer};
 
     /// A tag facing the camera at F* (x right, y up as printed: image u right, v up).
-    fn facing(id: u32, size: f64, center: [f64; 3]) -> Tag {
+    fn facing(id: u32, size: f64, center: [f64; 3]) -> RigTag {
         let rotation = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI);
-        Tag { id, size, pose: Isometry3::from_parts(Translation3::new(center[0], center[1], center[2]), rotation) }
+        RigTag { id, size, pose: Isometry3::from_parts(Translation3::new(center[0], center[1], center[2]), rotation) }
     }
 
-    fn render(tags: &Tags, pose: &Isometry3<f64>, config: RenderConfig) -> crate::vision::render::Rendered {
+    fn render(tags: &TagRig, pose: &Isometry3<f64>, config: RenderConfig) -> crate::vision::render::Rendered {
         let k = Intrinsics::pinhole(1000.0, 1000.0, 200.0, 150.0).unwrap();
         let view = CameraView { pose, intrinsics: &k, distortion: &Distortion::none(), size: (400, 300) };
         Renderer::new(config).unwrap().render(tags, None, &view, 0).unwrap()
@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn corners_have_opencv_order_and_identities() {
-        let tags = Tags::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(10, 0.04, [0.1, 0.0, 0.5])]).unwrap();
+        let tags = TagRig::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(10, 0.04, [0.1, 0.0, 0.5])]).unwrap();
         let ids: Vec<u32> = tags.points().iter().map(|p| p.id).collect();
         assert_eq!(ids, [12, 13, 14, 15, 40, 41, 42, 43]);
         // Top-left as printed is at image left (x < 0) and top (y < 0 in F*, v down).
@@ -212,10 +212,10 @@ mod tests {
         assert!((p(1)[0] - 0.04).abs() < 1e-15 && (p(1)[1] + 0.04).abs() < 1e-15);
         assert!((p(2)[0] - 0.04).abs() < 1e-15 && (p(2)[1] - 0.04).abs() < 1e-15);
         assert!((p(3)[0] + 0.04).abs() < 1e-15 && (p(3)[1] - 0.04).abs() < 1e-15);
-        assert!(Tags::new(vec![facing(587, 0.08, [0.0, 0.0, 0.5])]).is_err());
-        assert!(Tags::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(3, 0.08, [0.1, 0.0, 0.5])]).is_err());
-        assert!(Tags::new(vec![facing(3, -0.08, [0.0, 0.0, 0.5])]).is_err());
-        assert!(Tags::new(vec![facing(3, 0.08, [0.0, f64::NAN, 0.5])]).is_err());
+        assert!(TagRig::new(vec![facing(587, 0.08, [0.0, 0.0, 0.5])]).is_err());
+        assert!(TagRig::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(3, 0.08, [0.1, 0.0, 0.5])]).is_err());
+        assert!(TagRig::new(vec![facing(3, -0.08, [0.0, 0.0, 0.5])]).is_err());
+        assert!(TagRig::new(vec![facing(3, 0.08, [0.0, f64::NAN, 0.5])]).is_err());
     }
 
     #[test]
@@ -230,7 +230,7 @@ mod tests {
     }
 
     /// Reads a fronto-parallel tag's 10 x 10 cells back at their centres.
-    fn read_cells(image: &crate::vision::GreyImage, tag: &Tag, k: [f64; 4]) -> [[bool; 10]; 10] {
+    fn read_cells(image: &crate::vision::GreyImage, tag: &RigTag, k: [f64; 4]) -> [[bool; 10]; 10] {
         let cell = tag.size / 8.0;
         let mut out = [[false; 10]; 10];
         for (r, row) in out.iter_mut().enumerate() {
@@ -248,7 +248,7 @@ mod tests {
     fn a_rendered_tag_reads_back_its_code() {
         for id in [0, 1, 42, 586] {
             let tag = facing(id, 0.1, [0.01, -0.005, 0.5]);
-            let tags = Tags::new(vec![tag.clone()]).unwrap();
+            let tags = TagRig::new(vec![tag.clone()]).unwrap();
             let config = RenderConfig { noise_sigma: 3.0, ..Default::default() };
             let out = render(&tags, &Isometry3::identity(), config);
             assert_eq!(out.drawn, [true; 4]);
@@ -270,7 +270,7 @@ mod tests {
     #[test]
     fn the_white_area_is_the_white_cells_area() {
         let tag = facing(7, 0.08, [0.0, 0.0, 0.5]);
-        let out = render(&Tags::new(vec![tag]).unwrap(), &Isometry3::identity(), sharp());
+        let out = render(&TagRig::new(vec![tag]).unwrap(), &Isometry3::identity(), sharp());
         let sum: f64 = out.image.pixels().map(|p| (f64::from(p[0]) - 20.0) / 200.0).sum();
         // A cell is 0.01 m at 0.5 m: 20 px, 400 px^2; the quiet zone has 36 cells.
         let white = 36 + tag36h11_bits(7).iter().flatten().filter(|&&b| b).count();
@@ -280,7 +280,7 @@ mod tests {
 
     #[test]
     fn a_tag_seen_from_behind_or_hidden_is_not_drawn() {
-        let tags = Tags::new(vec![facing(1, 0.05, [0.0, 0.0, 0.5]), facing(2, 0.05, [0.0, 0.0, -0.5])]).unwrap();
+        let tags = TagRig::new(vec![facing(1, 0.05, [0.0, 0.0, 0.5]), facing(2, 0.05, [0.0, 0.0, -0.5])]).unwrap();
         let out = render(&tags, &Isometry3::identity(), sharp());
         assert_eq!(out.drawn, [true, true, true, true, false, false, false, false]);
         // From behind the first tag (turned round about y, beyond it): its back.
