@@ -39,6 +39,22 @@ fn lens_change_through_images_ends_within_2mm_and_0_2_degree() {
 }
 
 #[test]
+fn tag_rig_same_lens_through_images_ends_within_1mm_and_0_1_degree() {
+    // Sec. 5.2 through an AprilTag rig: corners matched by tag identity, no clicks.
+    let (s, rec) = run("tags-12-12");
+    assert_eq!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.final_translation_error < 1e-3 && s.final_rotation_error.to_degrees() < 0.1);
+    assert_eq!(rec.n_points, 12);
+}
+
+#[test]
+fn tag_rig_lens_change_through_images_ends_within_2mm_and_0_2_degree() {
+    let (s, _) = run("tags-12-6");
+    assert_eq!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.final_translation_error < 2e-3 && s.final_rotation_error.to_degrees() < 0.2);
+}
+
+#[test]
 fn zoomed_reference_through_images_converges() {
     // Sec. 5.2: the reference image is taken with a 25 mm lens, the servo uses 12 mm.
     let (s, _) = run("vision-25-12");

@@ -16,6 +16,7 @@ use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
 use crate::vision::target::dots::Dots;
+use crate::vision::target::tags::TagRig;
 use crate::vision::target::{Target, TargetPoint};
 use crate::vision::tracker::TrackerConfig;
 
@@ -40,12 +41,15 @@ pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
 pub(crate) enum TargetKind {
     /// A white disc per point ([`Dots`]), found by the dot tracker.
     Dots,
+    /// A rig of AprilTags ([`TagRig`], `[[object.tags]]`), found by the tag detector: four
+    /// corners a tag, by identity.
+    Tags,
 }
 
 impl TargetKind {
-    /// The kind a scene shows (today always dots; a scenario key naming the target is read here).
-    pub(crate) fn of(_scene: &Scene) -> Self {
-        TargetKind::Dots
+    /// The kind a scene shows: tags when it has a tag rig, else dots.
+    pub(crate) fn of(scene: &Scene) -> Self {
+        if scene.tags().is_some() { TargetKind::Tags } else { TargetKind::Dots }
     }
 }
 
@@ -65,6 +69,13 @@ pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<Scene
                 ..TrackerConfig::default()
             })),
         }),
+        TargetKind::Tags => {
+            let tags = scene
+                .tags()
+                .cloned()
+                .ok_or(Error::InvalidParameter { name: "object.tags", reason: "the scene has no tag rig".into() })?;
+            Ok(SceneVision { target: Box::new(tags), detector: Box::new(DotTracking::new(TrackerConfig::default())) })
+        }
     }
 }
 

@@ -6,11 +6,13 @@
 //!
 //! The tag as printed is a grid of 10 x 10 cells (the family's `total_width`): a white quiet
 //! zone one cell wide, the black border (`width_at_border` = 8 cells: the tag's *size* is the
-//! side of this square, as AprilTag and OpenCV define it) and 6 x 6 data cells; bit `i` of the
-//! 36-bit code (most significant first) is the cell at column `bit_x[i]`, row `bit_y[i]` of
-//! the 8 x 8 square, white when set (the codes and layout are kornia-apriltag's copy of
-//! AprilTag 3's `tag36h11.c`). The white cells are drawn as polygons on the dark background,
-//! which shows through as the black ones.
+//! side of this square, as AprilTag and OpenCV define it) and 6 x 6 data cells. "As printed"
+//! is as OpenCV prints the tag (`cv2.aruco.generateImageMarker` of `DICT_APRILTAG_36h11`),
+//! the corner order's reference: that is the AprilTag library's own layout turned half a
+//! turn. In the library's layout, bit `i` of the 36-bit code (most significant first) is the
+//! cell at column `bit_x[i]`, row `bit_y[i]` of the 8 x 8 square, white when set (the codes
+//! and layout are kornia-apriltag's copy of AprilTag 3's `tag36h11.c`). The white cells are
+//! drawn as polygons on the dark background, which shows through as the black ones.
 
 use nalgebra::{Isometry3, Point3};
 
@@ -86,8 +88,9 @@ impl RigTag {
     }
 }
 
-/// The data bits of tag36h11 tag `id` as printed: `[row][column]` of the 6 x 6 data square,
-/// true for white. Ids beyond the family give all black.
+/// The data bits of tag36h11 tag `id` as printed (as OpenCV prints it: the library's layout
+/// turned half a turn): `[row][column]` of the 6 x 6 data square, true for white. Ids beyond
+/// the family give all black.
 pub fn tag36h11_bits(id: u32) -> [[bool; 6]; 6] {
     let mut bits = [[false; 6]; 6];
     let Some(&code) = kornia_apriltag::family::tag36h11::CODE_DATA.get(id as usize) else {
@@ -96,8 +99,8 @@ pub fn tag36h11_bits(id: u32) -> [[bool; 6]; 6] {
     let (bit_x, bit_y) = tag36h11_layout();
     let n = bit_x.len();
     for i in 0..n {
-        // Border coordinates 1..=6 are the data cells 0..=5.
-        let (x, y) = (bit_x[i] as usize - 1, bit_y[i] as usize - 1);
+        // Layout coordinates 1..=6 are the data cells 0..=5; half a turn: 5 - x, 5 - y.
+        let (x, y) = (DATA_CELLS - bit_x[i] as usize, DATA_CELLS - bit_y[i] as usize);
         bits[y][x] = (code >> (n - 1 - i)) & 1 == 1;
     }
     bits
@@ -221,9 +224,11 @@ mod tests {
     #[test]
     fn the_first_code_is_tag36h11s() {
         // AprilTag 3's tag36h11 code 0 is 0xd7e00984b; bit 35 (the most significant) is the
-        // cell at bit_x = 1, bit_y = 1: the top-left data cell.
+        // cell at bit_x = 1, bit_y = 1 of the library's layout: the bottom-right data cell as
+        // OpenCV prints the tag; bit 0 (set) is at bit_x = 3, bit_y = 4 and bit 2 (clear) at
+        // bit_x = 2, bit_y = 4.
         let bits = tag36h11_bits(0);
-        assert!(bits[0][0]);
+        assert!(bits[5][5] && bits[1][2] && !bits[1][3]);
         let ones: usize = bits.iter().flatten().filter(|&&b| b).count();
         assert_eq!(ones, 0xd7e00984b_u64.count_ones() as usize);
         assert_eq!(tag36h11_bits(600), [[false; 6]; 6]);
