@@ -158,3 +158,15 @@ def test_views_outline_each_tag_with_its_id():
     u, v = np.round(pixels[0]).astype(int)
     assert (drawn[v - 1 : v + 2, u - 1 : u + 2] != rgb[v - 1 : v + 2, u - 1 : u + 2]).any()
     assert np.array_equal(_outline(rgb.copy(), pixels, []), rgb)
+
+
+def test_the_scene_figure_places_a_rigs_corners():
+    from vsinv.plots import _object_points
+
+    d = vsinv.load_scenario("tags-12-12").to_dict()
+    _, pixels, _ = vsinv.render_view(d, reference=True)
+    corners = _object_points(d)
+    assert corners.shape == (12, 3)
+    # Projected with K* at F*: the rendered views' true projections.
+    projected = 1200.0 * corners[:, :2] / corners[:, 2:] + [416.0, 312.0]
+    np.testing.assert_allclose(projected, pixels, atol=1e-6)

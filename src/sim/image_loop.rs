@@ -16,7 +16,6 @@ use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
 use crate::vision::target::dots::Dots;
-use crate::vision::target::tags::TagRig;
 use crate::vision::target::{Target, TargetPoint};
 use crate::vision::tracker::TrackerConfig;
 
@@ -41,7 +40,7 @@ pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
 pub(crate) enum TargetKind {
     /// A white disc per point ([`Dots`]), found by the dot tracker.
     Dots,
-    /// A rig of AprilTags ([`TagRig`], `[[object.tags]]`), found by the tag detector: four
+    /// A rig of AprilTags ([`TagRig`](crate::vision::TagRig), `[[object.tags]]`), found by the tag detector: four
     /// corners a tag, by identity.
     Tags,
 }
