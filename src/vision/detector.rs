@@ -3,9 +3,11 @@
 //! found flag. A tracker is a detector that is started once on a first image with where each
 //! point is expected (the user's clicks, or the projections); a detector that needs no help
 //! (a tag detector) ignores those hints. [`DotTracking`](dot_tracking::DotTracking), the dot
-//! tracker, is today's detector.
+//! tracker, and [`TagDetector`](tags::TagDetector), AprilTag corners by identity, are the
+//! detectors.
 
 pub mod dot_tracking;
+pub mod tags;
 
 use crate::error::Result;
 use crate::vision::image::GreyImage;

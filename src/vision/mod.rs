@@ -11,6 +11,8 @@
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
+//! | AprilTags as a detector: four corners a tag ([`TagDetector`]) | [`detector::tags`] |
+//! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
 //! | dot detection: threshold, connected components, subpixel centroids | [`dots`] |
 //! | bright or dark dots, or decided by the image | [`polarity`] |
 //! | dot tracking from image to image, never swapping two dots | [`tracker`] |
@@ -39,15 +41,18 @@ pub mod dots;
 pub mod image;
 pub mod polarity;
 pub mod render;
+pub mod tags;
 pub mod target;
 pub mod tracker;
 
 pub use self::detector::dot_tracking::DotTracking;
+pub use self::detector::tags::TagDetector;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
+pub use self::tags::{TAG_CORNERS_IN_LAYOUT, Tag, TagDecoder, TagFamily, detect_tags};
 pub use self::target::dots::Dots;
 pub use self::target::tags::{RigTag, TagRig};
 pub use self::target::{Target, TargetPoint};

@@ -1,0 +1,345 @@
+//! AprilTag detection ([`detect_tags`]): the tags of one family found in an image, each with
+//! its id and its four corners, by `kornia-apriltag` (a pure-Rust port of the AprilTag 3
+//! detector: Wang & Olson, "AprilTag 2: Efficient and robust fiducial detection", IROS 2016;
+//! Krogius, Haggenmiller & Olson, "Flexible layouts for fiducial tags", IROS 2019).
+//!
+//! # Corners: order and pixel convention
+//!
+//! The corners are reported as OpenCV's `cv::aruco::ArucoDetector` reports them for the same
+//! family (`DICT_APRILTAG_36h11`, ...), so the two can be swapped:
+//!
+//! - **Pixel convention:** pixel `(u, v)` covers `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]`
+//!   (its centre is at integer coordinates), as OpenCV and [`detect_dots`](super::detect_dots).
+//!   The AprilTag library (and so `kornia-apriltag`, ViSP and its published ground truth)
+//!   puts pixel centres at `u + 0.5`; its corners are moved by `-0.5` here.
+//! - **Order:** OpenCV's: top-left, top-right, bottom-right, bottom-left of the marker as
+//!   OpenCV's `generateImageMarker` draws it, which is clockwise in an image with `v`
+//!   pointing down. OpenCV draws the AprilTag families rotated by half a turn with respect to
+//!   the AprilTag library's own images (the `apriltag-imgs` PNG files, the family's
+//!   `bit_x`/`bit_y` layout with `y` down): in that layout, corner 0 is the bottom-right
+//!   corner of the black square, then bottom-left, top-left and top-right
+//!   ([`TAG_CORNERS_IN_LAYOUT`]). The AprilTag library reports bottom-left, bottom-right,
+//!   top-right, top-left of its layout (ViSP's ground-truth files too).
+
+use kornia_apriltag::family::TagFamilyKind;
+use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
+use kornia_image::{Image, ImageSize};
+
+use crate::error::{Error, Result};
+use crate::vision::image::{GreyBuffer, Pixels, check_image};
+
+/// The tag families [`detect_tags`] reads: those OpenCV's aruco module has too (its
+/// `DICT_APRILTAG_*` dictionaries), whose corner order is checked against it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum TagFamily {
+    /// tag36h11: 587 ids, 6 x 6 data bits, minimum Hamming distance 11 (the recommended family).
+    #[default]
+    Tag36h11,
+    /// tag36h10: 2320 ids, 6 x 6 data bits, minimum Hamming distance 10.
+    Tag36h10,
+    /// tag25h9: 35 ids, 5 x 5 data bits, minimum Hamming distance 9.
+    Tag25h9,
+    /// tag16h5: 30 ids, 4 x 4 data bits, minimum Hamming distance 5 (false positives likely).
+    Tag16h5,
+}
+
+impl TagFamily {
+    /// The names, as Python spells them (AprilTag's names).
+    pub const NAMES: [&'static str; 4] = ["tag36h11", "tag36h10", "tag25h9", "tag16h5"];
+
+    /// The family of a name (`"tag36h11"`, ...), `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "tag36h11" => Some(Self::Tag36h11),
+            "tag36h10" => Some(Self::Tag36h10),
+            "tag25h9" => Some(Self::Tag25h9),
+            "tag16h5" => Some(Self::Tag16h5),
+            _ => None,
+        }
+    }
+
+    /// The name of a family.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Tag36h11 => "tag36h11",
+            Self::Tag36h10 => "tag36h10",
+            Self::Tag25h9 => "tag25h9",
+            Self::Tag16h5 => "tag16h5",
+        }
+    }
+
+    fn kind(self) -> TagFamilyKind {
+        match self {
+            Self::Tag36h11 => TagFamilyKind::Tag36H11,
+            Self::Tag36h10 => TagFamilyKind::Tag36H10,
+            Self::Tag25h9 => TagFamilyKind::Tag25H9,
+            Self::Tag16h5 => TagFamilyKind::Tag16H5,
+        }
+    }
+}
+
+/// Where the corners of [`Tag::corners`] are in the family's own layout (the AprilTag
+/// library's `bit_x`/`bit_y` frame: `x` right, `y` down, unit one data cell, `(0, 0)` the
+/// top-left corner of the black square, whose side is `width_at_border` cells: 8 for
+/// tag36h11, 7 for tag25h9, 6 for tag16h5), as fractions of that side: corner `k` is at
+/// `TAG_CORNERS_IN_LAYOUT[k] * width_at_border`.
+pub const TAG_CORNERS_IN_LAYOUT: [[f64; 2]; 4] = [[1.0, 1.0], [0.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
+
+/// A tag found in an image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tag {
+    /// Its id in the family.
+    pub id: u32,
+    /// The corners `(u, v)` of its black square, pixels, in OpenCV's order and convention
+    /// (see the [module docs](self)).
+    pub corners: [[f64; 2]; 4],
+}
+
+/// Finds the tags of `family` in an 8-bit grey image, sorted by id (an id seen twice is
+/// reported once, the detection with the best decoding margin). An empty image is an
+/// error; an image without tags gives an empty list.
+pub fn detect_tags<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Result<Vec<Tag>> {
+    TagDecoder::new(family).detect(image)
+}
+
+/// A tag detector kept from image to image: its buffers are reused while the image size
+/// stays the same ([`detect_tags`] makes a new one each call).
+pub struct TagDecoder {
+    family: TagFamily,
+    decoder: Option<(ImageSize, AprilTagDecoder)>,
+}
+
+impl std::fmt::Debug for TagDecoder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TagDecoder").field("family", &self.family).finish_non_exhaustive()
+    }
+}
+
+fn decoder_error(reason: impl std::fmt::Display) -> Error {
+    Error::InvalidImage { what: "image".to_string(), reason: format!("tag detection failed: {reason}") }
+}
+
+/// The smallest side the detector reads: its adaptive threshold works on 4 x 4 tiles of the
+/// image decimated by 2. A smaller image cannot hold a readable tag and gives none.
+const MIN_SIDE: u32 = 8;
+
+impl TagDecoder {
+    /// A detector of `family`'s tags.
+    pub fn new(family: TagFamily) -> Self {
+        Self { family, decoder: None }
+    }
+
+    /// The family it finds.
+    pub fn family(&self) -> TagFamily {
+        self.family
+    }
+
+    /// The tags in `image`, as [`detect_tags`].
+    pub fn detect<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Vec<Tag>> {
+        check_image("image", image)?;
+        if image.width() < MIN_SIDE || image.height() < MIN_SIDE {
+            return Ok(Vec::new());
+        }
+        let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
+        let pixels: &[u8] = image.as_raw();
+        let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
+        let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
+        let decoder = self.decoder_for(size)?;
+        let detections = decoder.decode(&source).map_err(decoder_error);
+        decoder.clear();
+        let mut tags: Vec<(f32, Tag)> = detections?
+            .iter()
+            .map(|d| {
+                // The decoded homography maps the tag frame (x right, y down in the AprilTag
+                // layout, the black square at -1..1) to the image, with pixel centres at +0.5;
+                // OpenCV's order is the layout's bottom-right, bottom-left, top-left, top-right.
+                let corner = |(x, y): (f32, f32)| {
+                    let p = d.quad.homography_project(x, y);
+                    [f64::from(p.x) - 0.5, f64::from(p.y) - 0.5]
+                };
+                let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)].map(corner);
+                (d.decision_margin, Tag { id: u32::from(d.id), corners })
+            })
+            .collect();
+        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(b.0.total_cmp(&a.0)));
+        tags.dedup_by_key(|t| t.1.id);
+        Ok(tags.into_iter().map(|(_, tag)| tag).collect())
+    }
+
+    fn decoder_for(&mut self, size: ImageSize) -> Result<&mut AprilTagDecoder> {
+        if self.decoder.as_ref().is_none_or(|(s, _)| *s != size) {
+            let config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
+            self.decoder = Some((size, AprilTagDecoder::new(config, size).map_err(decoder_error)?));
+        }
+        match self.decoder.as_mut() {
+            Some((_, decoder)) => Ok(decoder),
+            None => Err(decoder_error("no decoder")),
+        }
+    }
+}
+
+/// Tags drawn in closed form for the tests: a fronto-parallel tag, turned by quarter turns,
+/// each pixel the exact area average of the cells it overlaps (a perfect box-filter camera).
+#[cfg(test)]
+pub(crate) mod synthetic {
+    use kornia_apriltag::family::TagFamily as Layout;
+
+    use super::{TAG_CORNERS_IN_LAYOUT, TagFamily};
+    use crate::vision::image::GreyImage;
+
+    /// Where a tag is drawn: the centre of its black square `(u, v)` in pixels (OpenCV's
+    /// convention), the side of one cell in pixels, and quarter turns (counter-clockwise on the
+    /// screen, `v` down) of the layout.
+    #[derive(Debug, Clone, Copy)]
+    pub struct Placement {
+        pub id: usize,
+        pub centre: [f64; 2],
+        pub cell: f64,
+        pub quarter_turns: u32,
+    }
+
+    fn layout(family: TagFamily) -> Layout {
+        Layout::try_from(&family.kind()).unwrap()
+    }
+
+    /// Layout point (cells, from the black square's top-left) to pixel.
+    fn to_pixel(p: &Placement, half: f64, x: f64, y: f64) -> [f64; 2] {
+        let (dx, dy) = ((x - half) * p.cell, (y - half) * p.cell);
+        let (dx, dy) = (0..p.quarter_turns % 4).fold((dx, dy), |(a, b), _| (b, -a));
+        [p.centre[0] + dx, p.centre[1] + dy]
+    }
+
+    /// The true corners of a drawn tag, in [`Tag::corners`](super::Tag)'s order.
+    pub fn corners(family: TagFamily, p: &Placement) -> [[f64; 2]; 4] {
+        let w = layout(family).width_at_border as f64;
+        TAG_CORNERS_IN_LAYOUT.map(|[x, y]| to_pixel(p, w / 2.0, x * w, y * w))
+    }
+
+    /// Whether cell `(x, y)` of the black square (`0..width_at_border`) is white for tag `id`.
+    fn white(l: &Layout, id: usize, x: i64, y: i64) -> bool {
+        let code = l.code_data[id];
+        (0..l.nbits).any(|i| {
+            i64::from(l.bit_x[i]) == x && i64::from(l.bit_y[i]) == y && code >> (l.nbits - 1 - i) & 1 == 1
+        })
+    }
+
+    /// Draws tags (black 30, white 220) on a white `width x height` image.
+    pub fn draw(family: TagFamily, width: u32, height: u32, tags: &[Placement]) -> GreyImage {
+        let l = layout(family);
+        let w = l.width_at_border as i64;
+        let mut darkness = vec![0.0f64; (width * height) as usize];
+        for p in tags {
+            for y in 0..w {
+                for x in 0..w {
+                    let data = x > 0 && y > 0 && x < w - 1 && y < w - 1;
+                    if !(data && white(&l, p.id, x, y)) {
+                        let a = to_pixel(p, w as f64 / 2.0, x as f64, y as f64);
+                        let b = to_pixel(p, w as f64 / 2.0, (x + 1) as f64, (y + 1) as f64);
+                        paint(&mut darkness, width, [a[0].min(b[0]), a[1].min(b[1])], [a[0].max(b[0]), a[1].max(b[1])]);
+                    }
+                }
+            }
+        }
+        let grey = darkness.iter().map(|d| (220.0 - 190.0 * d.min(1.0)).round() as u8).collect();
+        GreyImage::from_raw(width, height, grey).unwrap()
+    }
+
+    /// Adds the area of the rectangle `lo..hi` (pixels) to each pixel it overlaps.
+    fn paint(darkness: &mut [f64], width: u32, lo: [f64; 2], hi: [f64; 2]) {
+        let height = darkness.len() as u32 / width;
+        let overlap = |c: f64, a: f64, b: f64| ((c + 0.5).min(b) - (c - 0.5).max(a)).max(0.0);
+        let first = |a: f64| (a + 0.5).floor().max(0.0) as u32;
+        for v in first(lo[1])..(first(hi[1]) + 1).min(height) {
+            for u in first(lo[0])..(first(hi[0]) + 1).min(width) {
+                let area = overlap(f64::from(u), lo[0], hi[0]) * overlap(f64::from(v), lo[1], hi[1]);
+                darkness[(v * width + u) as usize] += area;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::synthetic::{Placement, corners, draw};
+    use super::*;
+    use crate::vision::image::GreyImage;
+
+    /// The AprilTag 3 edge refinement (kept by kornia-apriltag) reads whole pixels along each
+    /// edge's normal: on these closed-form images its corners are off by 0.25-0.33 px (median
+    /// 0.28), up to 0.45 px once blurred (sigma 1.5 px).
+    const SHARP_TOLERANCE: f64 = 0.35;
+    const BLURRED_TOLERANCE: f64 = 0.5;
+
+    fn worst_error(found: &[[f64; 2]; 4], truth: &[[f64; 2]; 4]) -> f64 {
+        found.iter().zip(truth).map(|(f, t)| (f[0] - t[0]).hypot(f[1] - t[1])).fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn finds_drawn_tags_at_their_closed_form_corners_in_every_orientation() {
+        for quarter_turns in 0..4 {
+            for (cell, centre) in [(6.0, [80.0, 60.0]), (7.3, [81.37, 58.81]), (11.0, [90.5, 70.25])] {
+                let p = Placement { id: 17, centre, cell, quarter_turns };
+                let image = draw(TagFamily::Tag36h11, 180, 140, &[p]);
+                let tags = detect_tags(&image, TagFamily::Tag36h11).unwrap();
+                let truth = corners(TagFamily::Tag36h11, &p);
+                assert_eq!(tags.len(), 1, "{p:?}");
+                assert_eq!(tags[0].id, 17);
+                let error = worst_error(&tags[0].corners, &truth);
+                assert!(error < SHARP_TOLERANCE, "{p:?}: {:?} vs {truth:?}", tags[0].corners);
+            }
+        }
+    }
+
+    #[test]
+    fn blurred_tags_keep_their_corners() {
+        for sigma in [0.6f32, 1.0, 1.5] {
+            for quarter_turns in 0..4 {
+                for (cell, centre) in [(4.0, [70.2, 60.7]), (7.3, [81.37, 58.81])] {
+                    let p = Placement { id: 101, centre, cell, quarter_turns };
+                    let image = imageproc::filter::gaussian_blur_f32(&draw(TagFamily::Tag36h11, 180, 140, &[p]), sigma);
+                    let tags = detect_tags(&image, TagFamily::Tag36h11).unwrap();
+                    assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [101], "{p:?} sigma {sigma}");
+                    let error = worst_error(&tags[0].corners, &corners(TagFamily::Tag36h11, &p));
+                    assert!(error < BLURRED_TOLERANCE, "{p:?} sigma {sigma}: {error}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn several_tags_sorted_by_id_in_every_family() {
+        for family in [TagFamily::Tag36h11, TagFamily::Tag36h10, TagFamily::Tag25h9, TagFamily::Tag16h5] {
+            let tags = [(9, [60.0, 50.0], 0), (2, [160.0, 55.0], 3), (5, [110.0, 130.0], 2)];
+            let placed = tags.map(|(id, centre, quarter_turns)| Placement { id, centre, cell: 7.0, quarter_turns });
+            let found = detect_tags(&draw(family, 220, 180, &placed), family).unwrap();
+            assert_eq!(found.iter().map(|t| t.id).collect::<Vec<_>>(), [2, 5, 9], "{family:?}");
+            for tag in &found {
+                let p = placed.iter().find(|p| p.id as u32 == tag.id).unwrap();
+                assert!(worst_error(&tag.corners, &corners(family, p)) < SHARP_TOLERANCE, "{family:?} {tag:?}");
+            }
+            assert_eq!(TagFamily::from_name(family.name()), Some(family));
+        }
+        assert_eq!(TagFamily::NAMES.map(|n| TagFamily::from_name(n).unwrap().name()), TagFamily::NAMES);
+        assert_eq!(TagFamily::from_name("tag36h12"), None);
+    }
+
+    #[test]
+    fn empty_images_are_refused_and_small_or_blank_ones_have_no_tags() {
+        let err = detect_tags(&GreyImage::new(0, 0), TagFamily::Tag36h11).unwrap_err();
+        assert!(matches!(err, Error::InvalidImage { .. }), "{err}");
+        assert!(err.to_string().contains("image"), "{err}");
+        assert!(detect_tags(&GreyImage::new(5, 0), TagFamily::Tag36h11).is_err());
+        for (w, h) in [(1, 1), (2, 3), (7, 100), (100, 7), (8, 8), (9, 13), (1000, 1), (1, 1000), (640, 480)] {
+            for level in [0u8, 128, 255] {
+                let image = GreyImage::from_pixel(w, h, ::image::Luma([level]));
+                assert!(detect_tags(&image, TagFamily::Tag36h11).unwrap().is_empty(), "{w} x {h}");
+            }
+        }
+        // Borrowed bytes read as an owned image.
+        let p = Placement { id: 1, centre: [40.0, 40.0], cell: 6.0, quarter_turns: 0 };
+        let owned = draw(TagFamily::Tag36h11, 80, 80, &[p]);
+        let view = crate::vision::image::view("image", 80, 80, owned.as_raw()).unwrap();
+        assert_eq!(detect_tags(&view, TagFamily::Tag36h11).unwrap(), detect_tags(&owned, TagFamily::Tag36h11).unwrap());
+    }
+}
