@@ -13,8 +13,10 @@ use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
 use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
+use crate::vision::tags::TagFamily;
 use crate::vision::target::dots::Dots;
 use crate::vision::target::{Target, TargetPoint};
 use crate::vision::tracker::TrackerConfig;
@@ -73,7 +75,7 @@ pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<Scene
                 .tags()
                 .cloned()
                 .ok_or(Error::InvalidParameter { name: "object.tags", reason: "the scene has no tag rig".into() })?;
-            Ok(SceneVision { target: Box::new(tags), detector: Box::new(DotTracking::new(TrackerConfig::default())) })
+            Ok(SceneVision { target: Box::new(tags), detector: Box::new(TagDetector::new(TagFamily::Tag36h11)) })
         }
     }
 }

@@ -218,9 +218,8 @@ pub(crate) mod synthetic {
     /// Whether cell `(x, y)` of the black square (`0..width_at_border`) is white for tag `id`.
     fn white(l: &Layout, id: usize, x: i64, y: i64) -> bool {
         let code = l.code_data[id];
-        (0..l.nbits).any(|i| {
-            i64::from(l.bit_x[i]) == x && i64::from(l.bit_y[i]) == y && code >> (l.nbits - 1 - i) & 1 == 1
-        })
+        (0..l.nbits)
+            .any(|i| i64::from(l.bit_x[i]) == x && i64::from(l.bit_y[i]) == y && code >> (l.nbits - 1 - i) & 1 == 1)
     }
 
     /// Draws tags (black 30, white 220) on a white `width x height` image.

@@ -72,10 +72,10 @@ mod tests {
         let ids: Vec<u32> = tags.points().iter().map(|p| p.id).collect();
         assert_eq!(ids, (4..16).collect::<Vec<u32>>());
         assert_eq!(config.scene.points().len(), 12);
-        // Three faces of a 120 mm cube: corners 60 mm from the faces' planes through the centre.
+
         for p in config.scene.points() {
-            let d = nalgebra::Vector3::new(p[0], p[1], p[2] - 0.65);
-            assert!((d.norm() - (0.06f64.powi(2) + 2.0 * 0.04f64.powi(2)).sqrt()).abs() < 1e-4, "{p:?}");
+            let d = nalgebra::Vector3::new(p[0], p[1], p[2] - 0.75);
+            assert!((d.norm() - (0.075f64.powi(2) + 2.0 * 0.05f64.powi(2)).sqrt()).abs() < 1e-4, "{p:?}");
         }
     }
 
