@@ -190,10 +190,34 @@ def _image_size(camera: Any) -> Optional[tuple[float, float]]:
     return float(w), float(h)
 
 
+def _rotation(theta_u_deg: Any) -> npt.NDArray[np.float64]:
+    """The rotation matrix of a theta-u vector in degrees (Rodrigues)."""
+    r = np.radians(np.asarray(theta_u_deg, dtype=float))
+    angle = float(np.linalg.norm(r))
+    if angle < 1e-12:
+        return np.eye(3)
+    k = r / angle
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * kx @ kx
+
+
 def _object_points(scenario: dict[str, Any]) -> npt.NDArray[np.float64]:
-    pts = (scenario.get("object") or {}).get("points") or []
-    arr = np.asarray(pts, dtype=float)
-    return arr.reshape(-1, 3)
+    """The object's points in F*: ``object.points``, or the corners of its tags (four per tag,
+    top-left, top-right, bottom-right, bottom-left, in the ``object.rig`` frame)."""
+    obj = scenario.get("object") or {}
+    tags = obj.get("tags") or []
+    if not tags:
+        return np.asarray(obj.get("points") or [], dtype=float).reshape(-1, 3)
+    rig = obj.get("rig") or {}
+    rig_r = _rotation(rig.get("rotation_deg", rig.get("rotation", [0.0, 0.0, 0.0])))
+    rig_t = np.asarray(rig.get("position", [0.0, 0.0, 0.0]), dtype=float)
+    corners = []
+    for tag in tags:
+        h = float(tag["size"]) / 2.0
+        r = rig_r @ _rotation(tag.get("rotation_deg", tag.get("rotation", [0.0, 0.0, 0.0])))
+        t = rig_r @ np.asarray(tag["position"], dtype=float) + rig_t
+        corners += [r @ np.array([x, y, 0.0]) + t for x, y in ((-h, h), (h, h), (h, -h), (-h, -h))]
+    return np.asarray(corners, dtype=float).reshape(-1, 3)
 
 
 def _save(fig: Figure, out_dir: Path, name: str) -> Path:

@@ -1,6 +1,7 @@
 """Figures of images: the camera views of a run with ``[vision]`` (reference view, first and
 last views with the tracked centroids, an animated GIF of the servo) and the paper's Fig. 3
-for dots tracked through image files.
+for dots tracked through image files. A tag rig's views also show each tag's outline (its
+four detected corners) and id.
 
 The views are rendered again from the recorded poses (``vsinv.render`` is deterministic: the
 same pose, time and seed give the simulator's image).
@@ -35,18 +36,44 @@ VIEW_FIGURES = ("view_reference.png", "view_first.png", "view_last.png", "camera
 GIF_FRAMES = 80
 
 
+def _tag_ids(scenario: object) -> list[int]:
+    """The ids of a scenario's tag rig, in order (empty for dots)."""
+    to_dict = getattr(scenario, "to_dict", None)
+    d = to_dict() if callable(to_dict) else scenario
+    tags = ((d or {}).get("object") or {}).get("tags") or [] if isinstance(d, dict) else []
+    return [int(t["id"]) for t in tags]
+
+
+def _tag_outlines(pixels: npt.NDArray[np.float64], ids: list[int]) -> list[tuple[int, npt.NDArray[np.float64]]]:
+    """Per tag whose four corners (points 4 k .. 4 k + 3) are all finite: its id and corners."""
+    out = []
+    for k, tag_id in enumerate(ids):
+        corners = pixels[4 * k : 4 * k + 4]
+        if len(corners) == 4 and np.isfinite(corners).all():
+            out.append((tag_id, corners))
+    return out
+
+
 def plot_view(
     image: npt.NDArray[np.uint8],
     tracked: npt.NDArray[np.float64],
     reference: npt.NDArray[np.float64],
     title: str,
     ax: AxesArg = None,
+    tag_ids: list[int] | None = None,
 ) -> Figure:
     """A camera view with the tracked centroids (red +) and the reference positions (green o),
-    drawn into ``ax`` or a new figure."""
+    drawn into ``ax`` or a new figure; with ``tag_ids`` (a tag rig: four points a tag), each
+    tag's outline through its tracked corners and its id."""
     h, w = image.shape
     fig, (ax,), own = _panels(ax, 1, figsize=(8, 8 * h / w + 0.6))
     ax.imshow(image, cmap="gray", vmin=0, vmax=255, interpolation="nearest")
+    for tag_id, corners in _tag_outlines(tracked, tag_ids or []):
+        closed = np.vstack([corners, corners[:1]])
+        ax.plot(closed[:, 0], closed[:, 1], "-", color="tab:cyan", lw=1.2)
+        ax.plot(corners[0, 0], corners[0, 1], "s", mfc="none", mec="tab:cyan", ms=7)
+        u, v = corners.mean(axis=0)
+        ax.text(u, v, f"id {tag_id}", color="tab:cyan", fontsize=10, ha="center", va="center", weight="bold")
     ax.plot(reference[:, 0], reference[:, 1], "o", mfc="none", mec="tab:green", ms=10, label="reference image p* (K*)")
     ax.plot(tracked[:, 0], tracked[:, 1], "+", color="tab:red", ms=10, mew=1.5, label="tracked centroid")
     for i, (u, v) in enumerate(tracked):
@@ -76,6 +103,22 @@ def _mark(rgb: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], colour: t
             rgb[max(iv - size, 0) : min(iv + size + 1, h), iu] = colour
 
 
+def _outline(rgb: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], ids: list[int]) -> npt.NDArray[np.uint8]:
+    """The frame with each tag's outline and id drawn (PIL), for the GIF."""
+    if not ids:
+        return rgb
+    from PIL import Image, ImageDraw
+
+    frame = Image.fromarray(rgb)
+    draw = ImageDraw.Draw(frame)
+    for tag_id, corners in _tag_outlines(pixels, ids):
+        points = [(float(u), float(v)) for u, v in corners]
+        draw.line([*points, points[0]], fill=(40, 200, 230), width=1)
+        u, v = corners.mean(axis=0)
+        draw.text((float(u) - 8, float(v) - 5), str(tag_id), fill=(40, 200, 230))
+    return np.asarray(frame)
+
+
 def _half(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
     """2 x 2 block means (odd edges dropped)."""
     h, w = image.shape[0] // 2 * 2, image.shape[1] // 2 * 2
@@ -86,14 +129,17 @@ def _half(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
 def save_servo_gif(result: RunResult, path: _PathLike, frame_ms: int = 80) -> Path:
     """An animated GIF of the camera view during the servo: up to :data:`GIF_FRAMES` frames
     evenly spaced over the run at half resolution, tracked centroids in red, reference
-    positions in green; 32 colours, so that the sensor noise does not swell the file."""
+    positions in green (a tag rig's outlines and ids in cyan); 32 colours, so that the sensor
+    noise does not swell the file."""
     from PIL import Image
 
     scenario, poses, times = result.scenario, result.pose, result.time
+    ids = _tag_ids(scenario)
     frames = []
     for k in _frame_indices(len(times)):
         grey = _half(render(scenario, pose=poses[k], time=float(times[k])))
         rgb = np.repeat(grey[:, :, None], 3, axis=2)
+        rgb = _outline(np.ascontiguousarray(rgb), result.pixels[k] / 2, ids).copy()
         _mark(rgb, result.reference_pixels / 2, (40, 200, 40), 3)
         _mark(rgb, result.pixels[k] / 2, (230, 40, 40), 4)
         frames.append(Image.fromarray(rgb).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
@@ -114,9 +160,10 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
         (render(sc, pose=result.pose[last], time=float(result.time[last])), result.pixels[last], "last camera view"),
     ]
     paths = []
+    ids = _tag_ids(sc)
     for (image, tracked, what), name in zip(views, VIEW_FIGURES):
         title = f"{sc.name}: {what}, iteration {0 if 'first' in what else last if 'last' in what else '-'}"
-        paths.append(_save(plot_view(image, tracked, ref, title), out, name))
+        paths.append(_save(plot_view(image, tracked, ref, title, tag_ids=ids), out, name))
     paths.append(save_servo_gif(result, out / VIEW_FIGURES[3]))
     return paths
 

@@ -329,7 +329,7 @@ pub fn run_scenario(
     let mut outcome = outcome?;
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
-    let (rows, n) = (r.len(), scenario.object.points.len());
+    let (rows, n) = (r.len(), config.scene.points().len());
     let arm = match &config.robot {
         Robot::Arm(arm) => Some(arm),
         _ => None,

@@ -13,8 +13,10 @@ use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
 use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
+use crate::vision::tags::TagFamily;
 use crate::vision::target::dots::Dots;
 use crate::vision::target::{Target, TargetPoint};
 use crate::vision::tracker::TrackerConfig;
@@ -40,12 +42,15 @@ pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
 pub(crate) enum TargetKind {
     /// A white disc per point ([`Dots`]), found by the dot tracker.
     Dots,
+    /// A rig of AprilTags ([`TagRig`](crate::vision::TagRig), `[[object.tags]]`), found by the tag detector: four
+    /// corners a tag, by identity.
+    Tags,
 }
 
 impl TargetKind {
-    /// The kind a scene shows (today always dots; a scenario key naming the target is read here).
-    pub(crate) fn of(_scene: &Scene) -> Self {
-        TargetKind::Dots
+    /// The kind a scene shows: tags when it has a tag rig, else dots.
+    pub(crate) fn of(scene: &Scene) -> Self {
+        if scene.tags().is_some() { TargetKind::Tags } else { TargetKind::Dots }
     }
 }
 
@@ -65,6 +70,13 @@ pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<Scene
                 ..TrackerConfig::default()
             })),
         }),
+        TargetKind::Tags => {
+            let tags = scene
+                .tags()
+                .cloned()
+                .ok_or(Error::InvalidParameter { name: "object.tags", reason: "the scene has no tag rig".into() })?;
+            Ok(SceneVision { target: Box::new(tags), detector: Box::new(TagDetector::new(TagFamily::Tag36h11)) })
+        }
     }
 }
 
@@ -306,5 +318,37 @@ mod tests {
             assert!(detection[i] < 0.1, "point {i}: {} px", detection[i]);
             assert!((pixels[i][0] - obs.pixels[i][0]).abs() < 0.1, "point {i}");
         }
+    }
+
+    #[test]
+    fn a_tag_that_is_not_decoded_drops_its_four_corners() {
+        use crate::vision::target::tags::{RigTag, TagRig};
+        use nalgebra::{Translation3, UnitQuaternion, Vector3};
+        // Tag 5 faces the camera; tag 9 beside it is turned away (its back is not drawn).
+        let facing = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI);
+        let away = UnitQuaternion::identity();
+        let tag = |id, x: f64, rotation| RigTag {
+            id,
+            size: 0.05,
+            pose: Isometry3::from_parts(Translation3::new(x, 0.0, 0.5), rotation),
+        };
+        let rig = TagRig::new(vec![tag(5, -0.04, facing), tag(9, 0.04, away)]).unwrap();
+        let points: Vec<[f64; 3]> = rig.points().iter().map(|p| p.position).collect();
+        let scene = Scene::new(points, vec![]).unwrap().with_tags(rig).unwrap();
+        let config = RenderConfig { noise_sigma: 1.0, ..RenderConfig::default() };
+        let (pose, k) = (Isometry3::identity(), Intrinsics::pinhole(800.0, 800.0, 160.0, 120.0).unwrap());
+        let mut obs = Observation::default();
+        scene.observe(&pose, &k, Some(ImageSize { width: 320.0, height: 240.0 }), &mut obs);
+        assert!(obs.visible.iter().all(|&v| v));
+        let mut images = ImageLoop::new(config, &scene, (320, 240)).unwrap();
+        let (mut pixels, mut visible, mut detection) = (vec![[0.0; 2]; 8], vec![false; 8], vec![0.0; 8]);
+        let tracked = Tracked { pixels: &mut pixels, visible: &mut visible, detection: &mut detection };
+        images.observe(&pose, &k, &Distortion::none(), &obs, tracked).unwrap();
+        assert_eq!(visible, [true, true, true, true, false, false, false, false]);
+        for i in 0..4 {
+            // A 40 px tag (5 px cells), blurred: the detector is within half a pixel.
+            assert!(detection[i] < 0.5, "corner {i}: {} px", detection[i]);
+        }
+        assert!(detection[4..].iter().all(|d| d.is_nan()));
     }
 }

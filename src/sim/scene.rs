@@ -63,6 +63,7 @@ pub struct Scene {
     world: Option<PhysicsWorld>,
     bodies: Vec<Body>,
     normals: Option<Vec<[f64; 3]>>,
+    tags: Option<crate::vision::TagRig>,
 }
 
 impl std::fmt::Debug for Scene {
@@ -74,7 +75,11 @@ impl std::fmt::Debug for Scene {
 impl Clone for Scene {
     fn clone(&self) -> Self {
         // Rebuilding from validated parts cannot fail.
-        Self { normals: self.normals.clone(), ..Self::build(self.points.clone(), self.bodies.clone()) }
+        Self {
+            normals: self.normals.clone(),
+            tags: self.tags.clone(),
+            ..Self::build(self.points.clone(), self.bodies.clone())
+        }
     }
 }
 
@@ -126,7 +131,7 @@ impl Scene {
             world.step();
             world
         });
-        Self { points, world, bodies, normals: None }
+        Self { points, world, bodies, normals: None, tags: None }
     }
 
     /// The same scene with a normal per point (F*; the orientation of each point's dot when
@@ -147,6 +152,28 @@ impl Scene {
         }
         self.normals = Some(normals);
         Ok(self)
+    }
+
+    /// The same scene shown as a rig of AprilTags: its points must be the tags' corners (four
+    /// per tag, in order).
+    pub fn with_tags(mut self, tags: crate::vision::TagRig) -> Result<Self> {
+        use crate::vision::Target;
+        let same = tags.points().len() == self.points.len()
+            && tags.points().iter().zip(&self.points).all(|(t, p)| t.position == *p);
+        if !same {
+            return Err(Error::Shape {
+                what: "tags",
+                expected: format!("the scene's {} points as the tags' corners", self.points.len()),
+                got: format!("{} corners", tags.points().len()),
+            });
+        }
+        self.tags = Some(tags);
+        Ok(self)
+    }
+
+    /// The tag rig the scene shows, if any (None: dots).
+    pub fn tags(&self) -> Option<&crate::vision::TagRig> {
+        self.tags.as_ref()
     }
 
     /// The dots' normals, if given (None: each dot faces the reference camera).

@@ -6,7 +6,8 @@
 //! |---|---|
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
 //! | what is drawn: the [`Target`] trait | [`target`] |
-//! | today's target: white discs ([`Dots`]) | [`target::dots`] |
+//! | white discs ([`Dots`]) | [`target::dots`] |
+//! | a rig of AprilTags (tag36h11, [`TagRig`]) | [`target::tags`] |
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
@@ -59,8 +60,9 @@ pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
 pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
 pub use self::polarity::Polarity;
-pub use self::render::{CameraView, Canvas, Disc, RenderConfig, Rendered, Renderer};
+pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
 pub use self::tags::{TAG_CORNERS_IN_LAYOUT, Tag, TagDecoder, TagFamily, detect_tags};
 pub use self::target::dots::Dots;
+pub use self::target::tags::{RigTag, TagRig};
 pub use self::target::{Target, TargetPoint};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

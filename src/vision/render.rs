@@ -6,8 +6,9 @@
 //!
 //! | concern | file |
 //! |---|---|
-//! | the canvas and its primitives ([`Disc`]) | `render/canvas.rs` |
+//! | the canvas and its primitives ([`Disc`], [`Polygon`]) | `render/canvas.rs` |
 //! | the image of a disc: its conic and bounding box | `render/conic.rs` |
+//! | the image of convex polygons: exact areas by clipping | `render/polygon.rs` |
 //! | the lens between the ideal pinhole image and the rendered one | `render/lens.rs` |
 //! | coverage, supersampling, blur, quantisation | `render/raster.rs` |
 //! | the sensor noise | `render/noise.rs` |
@@ -16,11 +17,12 @@ mod canvas;
 mod conic;
 mod lens;
 mod noise;
+mod polygon;
 mod raster;
 
 use nalgebra::Isometry3;
 
-pub use self::canvas::{Canvas, Disc};
+pub use self::canvas::{Canvas, Disc, Polygon};
 use self::noise::{Noise, frame_seed, noisy_background};
 use self::raster::{Paint, gaussian_kernel};
 use crate::core::camera::Intrinsics;

@@ -1,10 +1,10 @@
 //! What the camera looks at: a target is a set of points with identities (what a detector
 //! reports and the control law servoes on) and a way to draw itself with the renderer's
-//! primitives. [`Dots`](dots::Dots), one white disc per point, is today's target; a tag
-//! target (AprilTag: its corners as points, its cells as filled polygons) would be another
-//! file here implementing [`Target`].
+//! primitives: [`Dots`](dots::Dots), one white disc per point, and [`TagRig`](tags::TagRig), a rig
+//! of AprilTags (their corners as points, their white cells as filled polygons).
 
 pub mod dots;
+pub mod tags;
 
 use crate::vision::render::Canvas;
 

@@ -29,6 +29,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("vision-12-6", include_str!("../../../scenarios/vision-12-6.toml")),
     ("vision-25-12", include_str!("../../../scenarios/vision-25-12.toml")),
     ("vision-zoom", include_str!("../../../scenarios/vision-zoom.toml")),
+    ("tags-12-12", include_str!("../../../scenarios/tags-12-12.toml")),
+    ("tags-12-6", include_str!("../../../scenarios/tags-12-6.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).

@@ -22,6 +22,7 @@ use crate::sim::scene::{Body, MIN_DEPTH, Scene};
 
 mod arm;
 mod camera;
+mod tags;
 
 /// A pose from a position (metres) and a theta-u rotation in degrees.
 pub(super) fn pose_of(position: [f64; 3], rotation_deg: [f64; 3]) -> Isometry3<f64> {
@@ -104,9 +105,25 @@ impl Scenario {
         })
     }
 
-    /// `[object]`: enough finite points, a valid basis, valid bodies.
+    /// The object's points: `object.points`, or the corners of its tags.
+    fn object_points(&self) -> Result<(Vec<[f64; 3]>, Option<crate::vision::TagRig>)> {
+        let rig = self.object.tag_rig()?;
+        let points = match &rig {
+            Some(tags) => tags.tags().iter().flat_map(|t| t.corners()).collect(),
+            None => self.object.points.clone(),
+        };
+        Ok((points, rig))
+    }
+
+    /// `[object]`: enough finite points (or tags), a valid basis, valid bodies.
     fn scene(&self) -> Result<Scene> {
-        let points = &self.object.points;
+        let (points, rig) = self.object_points()?;
+        let points = &points;
+        // A point of a tag rig is a tag's corner.
+        let point_key = |i: usize| match rig {
+            Some(_) => format!("object.tags[{}]", i / 4),
+            None => format!("object.points[{i}]"),
+        };
         let min_points = match self.control.law {
             LawName::Invariant => MIN_POINTS,
             LawName::Ibvs => IBVS_MIN_POINTS,
@@ -114,14 +131,15 @@ impl Scenario {
         };
         if points.len() < min_points {
             let reason = format!("{} points given, at least {min_points} needed", points.len());
-            return Err(scenario_error("object.points", reason));
+            let key = if rig.is_some() { "object.tags" } else { "object.points" };
+            return Err(scenario_error(key, reason));
         }
         if let Some(i) = points.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
-            return Err(scenario_error(&format!("object.points[{i}]"), "non-finite coordinate"));
+            return Err(scenario_error(&point_key(i), "non-finite coordinate"));
         }
         if let Some(i) = points.iter().position(|p| p[2] <= MIN_DEPTH) {
             let reason = format!("the object is behind the reference camera (z = {} m in F*)", Short(points[i][2]));
-            return Err(scenario_error(&format!("object.points[{i}]"), reason));
+            return Err(scenario_error(&point_key(i), reason));
         }
         if let Some(b) = self.object.basis {
             crate::core::invariant::validate_basis(b, points.len())
@@ -129,6 +147,9 @@ impl Scenario {
         }
         let bodies = self.object.bodies.iter().map(body_of).collect();
         let scene = Scene::new(points.clone(), bodies).map_err(|e| scenario_error("object.bodies", e.to_string()))?;
+        if let Some(tags) = rig {
+            return scene.with_tags(tags).map_err(|e| scenario_error("object.tags", e.to_string()));
+        }
         match &self.object.normals {
             Some(normals) => {
                 scene.with_normals(normals.clone()).map_err(|e| scenario_error("object.normals", e.to_string()))
@@ -180,7 +201,7 @@ impl Scenario {
             }
         };
         let inv = start.inverse();
-        if let Some(i) = self.object.points.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
+        if let Some(i) = self.object_points()?.0.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
             let from = if matches!(robot, Robot::Arm(_)) {
                 " (robot.base * FK(robot.joints) * robot.camera_mount)"
             } else {

@@ -26,7 +26,8 @@ fn default_dt() -> f64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
-    /// Feature points in F*, metres.
+    /// Feature points in F*, metres (none when the object is a rig of `tags`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub points: Vec<[f64; 3]>,
     /// Basis indices (default: the widest triangle of the reference image).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -38,6 +39,29 @@ pub struct ObjectSpec {
     /// camera).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normals: Option<Vec<[f64; 3]>>,
+    /// A rig of AprilTags (tag36h11) instead of `points`: the points are the tags' corners,
+    /// four per tag in order (top-left, top-right, bottom-right, bottom-left as printed).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tags: Vec<TagSpec>,
+    /// The rig's frame in F*, in which the `tags` are placed (default: F*).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<PoseSpec>,
+}
+
+/// One `[[object.tags]]` entry: a tag36h11 tag on the rig.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TagSpec {
+    /// The tag's id in the family, 0-586.
+    pub id: u32,
+    /// Side of the black border's outer square, metres (AprilTag's and OpenCV's tag size).
+    pub size: f64,
+    /// The tag's centre in the rig frame, metres.
+    pub position: [f64; 3],
+    /// Theta-u rotation of the tag frame in the rig frame, degrees (`rotation` is read too):
+    /// the tag frame has x to the right and y up as printed and z out of the printed face.
+    #[serde(default, alias = "rotation")]
+    pub rotation_deg: [f64; 3],
 }
 
 /// One `[[object.bodies]]` entry.

@@ -1,13 +1,14 @@
 //! What a [`Target`](crate::vision::target::Target) draws with: a canvas over the noisy
 //! background of one frame, seen by one camera, and its primitives. Today the primitive is a
-//! white [`Disc`] of the object frame; another (a filled polygon, for the cells of a tag)
-//! would be one more method here and one more `Shape` (`render/raster.rs`).
+//! white [`Disc`] of the object frame, and white convex [`Polygon`]s (the cells of a tag),
+//! each with its `Shape` (`render/conic.rs`, `render/polygon.rs`; `render/raster.rs`).
 
-use nalgebra::Vector3;
+use nalgebra::{Point3, Vector3};
 
 use super::CameraView;
 use super::conic::ImageEllipse;
 use super::lens::Warp;
+use super::polygon::{ImagePolygon, ImagePolygons};
 use super::raster::{Paint, paint};
 use crate::error::{Error, Result, Short};
 use crate::vision::image::GreyImage;
@@ -50,6 +51,30 @@ impl Disc {
     }
 }
 
+/// A white planar convex polygon in the object frame (F*): its vertices in order around it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Polygon {
+    vertices: Vec<Point3<f64>>,
+}
+
+impl Polygon {
+    /// A polygon of at least 3 finite vertices (metres, F*), planar and convex (the caller's
+    /// guarantee: a tag's cells are).
+    pub fn new(vertices: Vec<[f64; 3]>) -> Result<Self> {
+        crate::error::check_finite("polygon", vertices.as_flattened())?;
+        if vertices.len() < 3 {
+            let reason = format!("at least 3 vertices, got {}", vertices.len());
+            return Err(Error::InvalidParameter { name: "polygon", reason });
+        }
+        Ok(Self { vertices: vertices.into_iter().map(Point3::from).collect() })
+    }
+
+    /// The vertices.
+    pub fn vertices(&self) -> &[Point3<f64>] {
+        &self.vertices
+    }
+}
+
 /// The image being drawn: one frame's noisy background, the camera that sees it, and the
 /// primitives that draw on it (anti-aliased, blurred, with the frame's noise; overlapping
 /// primitives take the brighter level).
@@ -78,6 +103,33 @@ impl<'a> Canvas<'a> {
             Some(ellipse) => paint(&mut self.image, &ellipse, &self.warp, &self.paint),
             None => false,
         }
+    }
+
+    /// Fills a white convex polygon; false when it is not drawn (as [`Canvas::fill_polygons`]).
+    pub fn fill_polygon(&mut self, polygon: &Polygon) -> bool {
+        self.fill_polygons(std::slice::from_ref(polygon))
+    }
+
+    /// Fills white convex polygons that do not overlap (they may share edges: the cells of a
+    /// tag), as one shape: the coverage of a pixel is the exact area of the polygons in it, so
+    /// a shared edge leaves no seam. False (nothing drawn) when a polygon is not entirely in
+    /// front of the camera or reaches beyond the lens model's fold, or when all fall outside
+    /// the image; a polygon seen edge-on is skipped.
+    pub fn fill_polygons(&mut self, polygons: &[Polygon]) -> bool {
+        let mut images = Vec::with_capacity(polygons.len());
+        for polygon in polygons {
+            match self.polygon_image(polygon) {
+                Some(Some(image)) => images.push(image),
+                Some(None) => {}
+                None => return false,
+            }
+        }
+        !images.is_empty() && paint(&mut self.image, &ImagePolygons { polygons: images }, &self.warp, &self.paint)
+    }
+
+    /// The image of a polygon: None when it cannot be drawn, Some(None) when seen edge-on.
+    fn polygon_image(&self, polygon: &Polygon) -> Option<Option<ImagePolygon>> {
+        ImagePolygon::of(&polygon.vertices, self.view.pose, self.view.intrinsics, &self.warp)
     }
 
     pub(super) fn into_image(self) -> GreyImage {

@@ -20,6 +20,21 @@ pub(super) trait Shape {
     fn value(&self, u: f64, v: f64) -> f64;
     /// Its gradient at `(u, v)`.
     fn gradient(&self, u: f64, v: f64) -> Vector2<f64>;
+
+    /// The area fraction of each pixel of the patch inside the shape (pixel `(u, v)` covers
+    /// `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]`), row-major: by default exact inside and
+    /// outside and supersampled near the boundary; a shape that knows its exact areas (a
+    /// polygon) gives them.
+    fn coverage(&self, patch: &Patch, warp: &Warp) -> Vec<f32>
+    where
+        Self: Sized,
+    {
+        let mut out = vec![0.0f32; patch.w * patch.h];
+        for (index, (u, v)) in patch.pixels().enumerate() {
+            out[index] = warp.local(u, v).map_or(0.0, |local| pixel_coverage(self, &local));
+        }
+        out
+    }
 }
 
 /// How a shape is painted.
@@ -35,11 +50,19 @@ pub(super) struct Paint<'a> {
 }
 
 /// A rectangle of pixels: the top-left pixel and the size.
-struct Patch {
-    u0: i64,
-    v0: i64,
-    w: usize,
-    h: usize,
+pub(super) struct Patch {
+    pub(super) u0: i64,
+    pub(super) v0: i64,
+    pub(super) w: usize,
+    pub(super) h: usize,
+}
+
+impl Patch {
+    /// The pixels `(u, v)`, row-major.
+    pub(super) fn pixels(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        (0..self.h)
+            .flat_map(move |j| (0..self.w).map(move |i| ((self.u0 + i as i64) as f64, (self.v0 + j as i64) as f64)))
+    }
 }
 
 /// Paints one shape (coverage, blur, noise, quantisation) over the image; false when it
@@ -54,7 +77,7 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
         return false;
     }
     let patch = Patch { u0, v0, w: (u1 - u0 + 1) as usize, h: (v1 - v0 + 1) as usize };
-    let mut coverage = coverage(shape, &patch, warp);
+    let mut coverage = shape.coverage(&patch, warp);
     blur(&mut coverage, &patch, paint.kernel);
     let (bg, fg) = (f64::from(paint.background), f64::from(paint.foreground));
     let width = image.width() as usize;
@@ -69,20 +92,6 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
         }
     }
     true
-}
-
-/// The area fraction of each pixel of the patch inside the shape (pixel `(u, v)` covers
-/// `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]`), row-major.
-fn coverage(shape: &impl Shape, patch: &Patch, warp: &Warp) -> Vec<f32> {
-    let mut out = vec![0.0f32; patch.w * patch.h];
-    for j in 0..patch.h {
-        let v = (patch.v0 + j as i64) as f64;
-        for i in 0..patch.w {
-            let u = (patch.u0 + i as i64) as f64;
-            out[j * patch.w + i] = warp.local(u, v).map_or(0.0, |local| pixel_coverage(shape, &local));
-        }
-    }
-    out
 }
 
 /// Exact inside and outside (first-order distance to the boundary beyond 1.5 pixels),
