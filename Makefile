@@ -49,6 +49,7 @@ bench: install
 	$(PYTHON) benches/compare.py
 	$(PYTHON) benches/vision.py
 	$(PYTHON) benches/tags_vs_opencv.py
+	$(PYTHON) benches/image_servo.py
 	$(PYTHON) benches/dots_vs_opencv.py
 	$(PYTHON) benches/noise_honesty.py
 	$(PYTHON) benches/tracker_mire2.py
