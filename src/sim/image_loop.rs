@@ -345,9 +345,9 @@ mod tests {
         let tracked = Tracked { pixels: &mut pixels, visible: &mut visible, detection: &mut detection };
         images.observe(&pose, &k, &Distortion::none(), &obs, tracked).unwrap();
         assert_eq!(visible, [true, true, true, true, false, false, false, false]);
-        for i in 0..4 {
+        for (i, d) in detection[..4].iter().enumerate() {
             // A 40 px tag (5 px cells), blurred: the detector is within half a pixel.
-            assert!(detection[i] < 0.5, "corner {i}: {} px", detection[i]);
+            assert!(*d < 0.5, "corner {i}: {d} px");
         }
         assert!(detection[4..].iter().all(|d| d.is_nan()));
     }

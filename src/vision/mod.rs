@@ -48,8 +48,8 @@ pub mod image;
 pub mod image_servo;
 pub mod polarity;
 pub mod render;
-pub mod tags;
 pub mod runs;
+pub mod tags;
 pub mod target;
 pub mod tracker;
 

@@ -8,7 +8,7 @@
 //! while nothing is found, up to `max_search_radius` or the dot's own size.
 //!
 //! A found component must be the same dot as in the previous image: its area and its
-//! principal spreads may change by a bounded factor ([`shape`]). A dot that fails is reported
+//! principal spreads may change by a bounded factor (the `shape` module). A dot that fails is reported
 //! lost and keeps its last position, never returned at a wrong position: when the predicted
 //! pixel lies in a component that is too large, cut by the window, or of another shape (the
 //! dot merged with a neighbouring region), the dot is lost for that image and no other

@@ -81,7 +81,8 @@ mod tests {
 
     #[test]
     fn tag_key_errors_name_the_key() {
-        let cases: Vec<(Box<dyn Fn(&mut Scenario)>, &str)> = vec![
+        type Change = Box<dyn Fn(&mut Scenario)>;
+        let cases: Vec<(Change, &str)> = vec![
             (Box::new(|s| s.object.tags[1].id = 587), "object.tags[1].id"),
             (Box::new(|s| s.object.tags[2].id = 1), "object.tags[2].id"),
             (Box::new(|s| s.object.tags[0].size = -0.01), "object.tags[0].size"),
