@@ -46,9 +46,7 @@ import argparse
 import os
 import platform
 import re
-import statistics
 import sys
-import timeit
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -62,11 +60,10 @@ import vsinv
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_step import write_json  # noqa: E402
+from vision import timed_min_of_medians  # noqa: E402
 
 VISP = Path("/usr/share/visp-images-data/ViSP-images/AprilTag")
 VISP_TO_OPENCV = [1, 0, 3, 2]
-REPEAT = 5
-MIN_REPEAT_S = 0.05
 SCALE = 2.25  # 640 x 480 -> 1440 x 1080
 
 
@@ -146,24 +143,6 @@ def accuracy(found: dict[int, np.ndarray], truth: dict[int, np.ndarray]) -> Accu
 
 
 # --------------------------------------------------------------------------- timing
-
-
-def calls_per_repeat(timer: timeit.Timer) -> int:
-    number = 1
-    while timer.timeit(number) < MIN_REPEAT_S:
-        number *= 2
-    return number
-
-
-def timed_min_of_medians(fns: dict[str, object], rounds: int) -> dict[str, float]:
-    timers = {name: timeit.Timer(fn) for name, fn in fns.items()}  # type: ignore[arg-type]
-    numbers = {name: calls_per_repeat(t) for name, t in timers.items()}
-    best = {name: float("inf") for name in fns}
-    for _ in range(rounds):
-        for name, t in timers.items():
-            median = statistics.median(t.repeat(repeat=REPEAT, number=numbers[name])) / numbers[name]
-            best[name] = min(best[name], median)
-    return best
 
 
 @dataclass
