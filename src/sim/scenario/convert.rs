@@ -255,7 +255,10 @@ impl Scenario {
         if let Some(sigma) = s.reference_pixel_sigma
             && !(0.0..=1000.0).contains(&sigma)
         {
-            return Err(scenario_error("stop.reference_pixel_sigma", format!("pixels, from 0 to 1000, got {sigma}")));
+            return Err(scenario_error(
+                "stop.reference_pixel_sigma",
+                format!("pixels, from 0 to 1000, got {}", Short(sigma)),
+            ));
         }
         Ok(())
     }
