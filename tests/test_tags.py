@@ -102,21 +102,22 @@ def test_synthetic_markers_give_ids_and_corners_in_opencvs_order_and_convention(
     assert len(tags) == 4 and repr(tags) == "Tags(4 tag36h11 found)" and tags.family == "tag36h11"
     errors = errors_against(tags, truth)
     print(f"synthetic: median {np.median(errors):.3f} px, max {errors.max():.3f} px")
-    # The AprilTag 3 edge refinement reads whole pixels: 0.2-0.3 px on these perfectly sharp edges.
-    assert errors.max() < 0.35
+    # The corners measured on the edges: exact on these sharp edges (the AprilTag 3 detector
+    # alone reads whole pixels there: 0.2-0.3 px off).
+    assert errors.max() < 0.01
     # OpenCV on the same image: the same ids and corners, no offset between the two.
     assert_agrees_with_opencv(tags, image, within=0.5)
 
 
-def assert_agrees_with_opencv(tags: vsinv.Tags, image: np.ndarray, within: float) -> None:
+def assert_agrees_with_opencv(tags: vsinv.Tags, image: np.ndarray, within: float, offset: float = 0.1) -> None:
     """OpenCV finds the same ids, and the same corners: each within `within` px, and on
-    average within 0.1 px per axis (no half-pixel offset, no other corner order)."""
+    average within `offset` px per axis (no half-pixel offset, no other corner order)."""
     theirs = opencv_tags(image)
     assert sorted(theirs) == [int(i) for i in tags.ids]
     diff = np.stack([tags.corners[k] - theirs[int(i)] for k, i in enumerate(tags.ids)]).reshape(-1, 2)
     print(f"vs OpenCV: max {np.linalg.norm(diff, axis=1).max():.3f} px, mean offset {diff.mean(axis=0).round(3)}")
     assert np.linalg.norm(diff, axis=1).max() < within
-    assert np.abs(diff.mean(axis=0)).max() < 0.1
+    assert np.abs(diff.mean(axis=0)).max() < offset
 
 
 def test_blurred_noisy_markers_agree_with_opencv() -> None:
@@ -130,7 +131,7 @@ def test_blurred_noisy_markers_agree_with_opencv() -> None:
     theirs = np.concatenate([np.linalg.norm(cv[t] - c, axis=1) for t, c in truth.items()])
     print(f"blurred + noise: median {np.median(ours):.3f} px, max {ours.max():.3f} px; "
           f"OpenCV median {np.median(theirs):.3f} px, max {theirs.max():.3f} px")
-    assert ours.max() < 0.35
+    assert ours.max() < 0.1
     assert_agrees_with_opencv(tags, noisy, within=0.75)
 
 
@@ -171,7 +172,10 @@ def test_apriltag_pgm_matches_its_ground_truth(visp: Path) -> None:  # noqa: F81
     theirs = opencv_tags(image)
     assert sorted(theirs) == sorted(truth)
     report("AprilTag.pgm, OpenCV vs ground truth", np.concatenate([np.linalg.norm(theirs[t] - truth[t], axis=1) for t in truth]))
-    assert_agrees_with_opencv(tags, image, within=1.0)
+    # On this photograph the three detectors differ on average by up to 0.15 px in v (ours
+    # -0.01 / +0.09 px from the ground truth, which is the AprilTag library's output, OpenCV
+    # +0.03 / -0.06 px): no half-pixel offset.
+    assert_agrees_with_opencv(tags, image, within=1.0, offset=0.2)
 
 
 @pytest.mark.parametrize("family", ["tag36h11", "tag25h9", "tag16h5"])

@@ -20,6 +20,14 @@
 //!   corner of the black square, then bottom-left, top-left and top-right
 //!   ([`TAG_CORNERS_IN_LAYOUT`]). The AprilTag library reports bottom-left, bottom-right,
 //!   top-right, top-left of its layout (ViSP's ground-truth files too).
+//!
+//! # Corners: accuracy
+//!
+//! The detector's corners are measured again on the black square's outer edges
+//! ([`edges`]): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
+//! do not support its corners is not reported (never reported with a wrong corner).
+
+mod edges;
 
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
@@ -65,6 +73,15 @@ impl TagFamily {
             Self::Tag36h10 => "tag36h10",
             Self::Tag25h9 => "tag25h9",
             Self::Tag16h5 => "tag16h5",
+        }
+    }
+
+    /// Cells across the black square (the layout's `width_at_border`).
+    pub fn border_cells(self) -> u32 {
+        match self {
+            Self::Tag36h11 | Self::Tag36h10 => 8,
+            Self::Tag25h9 => 7,
+            Self::Tag16h5 => 6,
         }
     }
 
@@ -147,9 +164,10 @@ impl TagDecoder {
         let decoder = self.decoder_for(size)?;
         let detections = decoder.decode(&source).map_err(decoder_error);
         decoder.clear();
+        let border_cells = f64::from(self.family.border_cells());
         let mut tags: Vec<(f32, Tag)> = detections?
             .iter()
-            .map(|d| {
+            .filter_map(|d| {
                 // The decoded homography maps the tag frame (x right, y down in the AprilTag
                 // layout, the black square at -1..1) to the image, with pixel centres at +0.5;
                 // OpenCV's order is the layout's bottom-right, bottom-left, top-left, top-right.
@@ -158,7 +176,8 @@ impl TagDecoder {
                     [f64::from(p.x) - 0.5, f64::from(p.y) - 0.5]
                 };
                 let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)].map(corner);
-                (d.decision_margin, Tag { id: u32::from(d.id), corners })
+                let corners = edges::refine_corners(image, &corners, border_cells)?;
+                Some((d.decision_margin, Tag { id: u32::from(d.id), corners }))
             })
             .collect();
         tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(b.0.total_cmp(&a.0)));
@@ -265,11 +284,13 @@ mod tests {
     use super::*;
     use crate::vision::image::GreyImage;
 
-    /// The AprilTag 3 edge refinement (kept by kornia-apriltag) reads whole pixels along each
-    /// edge's normal: on these closed-form images its corners are off by 0.25-0.33 px (median
-    /// 0.28), up to 0.45 px once blurred (sigma 1.5 px).
-    const SHARP_TOLERANCE: f64 = 0.35;
-    const BLURRED_TOLERANCE: f64 = 0.5;
+    /// On these closed-form images the corners of the AprilTag 3 detector alone (kornia-apriltag)
+    /// are off by 0.25-0.33 px (median 0.28), up to 0.45 px once blurred; measured again on
+    /// the edges they are off by at most 0.003 px sharp, 0.1 px with a blur up to a quarter
+    /// of a cell, 0.37 px when the blur reaches the data cells (sigma 1.5 px, 4 px cells).
+    const SHARP_TOLERANCE: f64 = 0.01;
+    const BLURRED_TOLERANCE: f64 = 0.12;
+    const VERY_BLURRED_TOLERANCE: f64 = 0.5;
 
     fn worst_error(found: &[[f64; 2]; 4], truth: &[[f64; 2]; 4]) -> f64 {
         found.iter().zip(truth).map(|(f, t)| (f[0] - t[0]).hypot(f[1] - t[1])).fold(0.0, f64::max)
@@ -301,7 +322,9 @@ mod tests {
                     let tags = detect_tags(&image, TagFamily::Tag36h11).unwrap();
                     assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [101], "{p:?} sigma {sigma}");
                     let error = worst_error(&tags[0].corners, &corners(TagFamily::Tag36h11, &p));
-                    assert!(error < BLURRED_TOLERANCE, "{p:?} sigma {sigma}: {error}");
+                    let tolerance =
+                        if f64::from(sigma) <= cell / 4.0 { BLURRED_TOLERANCE } else { VERY_BLURRED_TOLERANCE };
+                    assert!(error < tolerance, "{p:?} sigma {sigma}: {error}");
                 }
             }
         }
@@ -322,6 +345,14 @@ mod tests {
         }
         assert_eq!(TagFamily::NAMES.map(|n| TagFamily::from_name(n).unwrap().name()), TagFamily::NAMES);
         assert_eq!(TagFamily::from_name("tag36h12"), None);
+    }
+
+    #[test]
+    fn border_cells_are_the_layouts() {
+        for family in TagFamily::NAMES.map(|n| TagFamily::from_name(n).unwrap()) {
+            let layout = kornia_apriltag::family::TagFamily::try_from(&family.kind()).unwrap();
+            assert_eq!(family.border_cells() as usize, layout.width_at_border, "{family:?}");
+        }
     }
 
     #[test]
