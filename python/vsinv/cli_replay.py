@@ -47,6 +47,17 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--max-search-radius", metavar="PX", type=float, default=80.0, help="dots: largest window while a dot is lost (80)")
     p.add_argument("--polarity", choices=("light", "dark", "auto"), default="light", help="dots: light dots, dark dots, or decided by REF (light)")
     p.add_argument("--out", metavar="DIR", type=Path, help="write replay.csv and replay.png to DIR")
+    p.add_argument("--max-frames", metavar="N", type=_positive_int, help="read at most N frames (default: all)")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
 
 
 def _intrinsics(text: str) -> Intrinsics:
@@ -96,7 +107,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     k_hat = load_calibration(args.calibration).intrinsics if args.calibration is not None else _intrinsics(args.K_hat)
-    result = replay(args.reference, args.frames, k_hat, args.target, **_options(args))
+    result = replay(args.reference, args.frames, k_hat, args.target, args.max_frames, **_options(args))
     print(result.table())
     lost = int((~result.found).sum())
     print(f"{len(result.names)} frames, {result.found.shape[1]} points; {lost} point-frames not found")
