@@ -151,6 +151,8 @@ def test_invariance_tracks_the_issue_pair_with_clicks_in_both_images(capsys, tmp
         (("--first-points", "short.csv"), "--first-points: expected 12 points (one per reference dot), got 2 points"),
         (("--first-points", "far.csv"), "--first-points: point 0 at (5.0, 5.0): no dot around it"),
         (("--points", "far.csv"), "--points: point 0 at (5.0, 5.0): no dot around it"),
+        (("--basis", "0,1,20"), "--basis: indices [0, 1, 20] out of range for 12 points"),
+        (("--basis", "0,0,1"), "--basis: indices [0, 0, 1] must be distinct"),
     ],
 )
 def test_invariance_errors_name_the_option(capsys, tmp_path: Path, options, named) -> None:
@@ -161,7 +163,7 @@ def test_invariance_errors_name_the_option(capsys, tmp_path: Path, options, name
     args = ["invariance", tmp_path / "reference.png", tmp_path / "start.png", "--points", tmp_path / "reference.csv"]
     code, _, err = run_cli(capsys, *args, *(tmp_path / o if o.endswith(".csv") else o for o in options))
     assert code == 2 and named in err, err
-    assert "max_search_radius" not in err and "initial_pixels" not in err
+    assert "max_search_radius" not in err and "initial_pixels" not in err and "invalid parameter" not in err
 
 
 def test_replay_shares_the_tracker_options(capsys, tmp_path: Path) -> None:

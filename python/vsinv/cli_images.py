@@ -12,7 +12,8 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from .cli_tracker import add_tracker_options, tracker_options
+from ._core import VsinvError
+from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
 
 __all__ = ["add_allow_outside_files", "add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
@@ -124,10 +125,13 @@ def complete(result: InvarianceResult) -> bool:
 
 
 def cmd_invariance(args: argparse.Namespace) -> int:
-    result = track_invariance(
-        args.reference, args.images, args.points, _parse_basis(args.basis), first_points=args.first_points,
-        labels=("--points", "--first-points"), **tracker_options(args),
-    )
+    try:
+        result = track_invariance(
+            args.reference, args.images, args.points, _parse_basis(args.basis), first_points=args.first_points,
+            labels=("--points", "--first-points"), **tracker_options(args),
+        )
+    except VsinvError as e:
+        raise named_as_options(e, {"basis": "--basis"}) from None
     print(format_invariance(result))
     if args.out is not None:
         from .plots import _save

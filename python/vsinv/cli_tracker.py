@@ -97,10 +97,12 @@ def tracker_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def named_as_options(error: VsinvError, options: Mapping[str, str]) -> VsinvError:
-    """The same error with the keyword argument it starts by naming (``first_points: ...``)
-    renamed to the command option the user typed (``--first-points: ...``)."""
+    """The same error with the keyword argument it starts by naming (``first_points: ...`` or
+    ``invalid parameter `basis`: ...``) renamed to the command option the user typed
+    (``--first-points: ...``, ``--basis: ...``)."""
     message = str(error)
     for argument, option in options.items():
-        if message.startswith(argument + ":"):
-            return type(error)(option + message[len(argument):])
+        for prefix in (f"{argument}:", f"invalid parameter `{argument}`:"):
+            if message.startswith(prefix):
+                return type(error)(f"{option}:{message[len(prefix):]}")
     return error
