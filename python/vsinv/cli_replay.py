@@ -49,6 +49,17 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--gain", type=float, default=0.5, help="the law's gain (0.5)")
     add_tracker_options(p, "dots: ")
     p.add_argument("--out", metavar="DIR", type=Path, help="write replay.csv and replay.png to DIR")
+    p.add_argument("--max-frames", metavar="N", type=_positive_int, help="read at most N frames (default: all)")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
 
 
 def _intrinsics(text: str) -> Intrinsics:
@@ -95,7 +106,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 def cmd_replay(args: argparse.Namespace) -> int:
     k_hat = load_calibration(args.calibration).intrinsics if args.calibration is not None else _intrinsics(args.K_hat)
     try:
-        result = replay(args.reference, args.frames, k_hat, args.target, **_options(args))
+        result = replay(args.reference, args.frames, k_hat, args.target, args.max_frames, **_options(args))
     except VsinvError as e:
         raise named_as_options(e, _OPTION_NAMES) from None
     print(result.table())
