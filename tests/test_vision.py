@@ -48,7 +48,8 @@ def test_detect_dots_finds_opencv_discs_within_005_px_median(radius: float) -> N
 def weighted_moments_centroid(image: np.ndarray, dots: vsinv.Dots, k: int, labels: np.ndarray) -> np.ndarray:
     """cv2.moments of the pixels detect_dots documents for dot k: its bounding box grown by
     2 px, grey levels above the least-squares plane fitted to that box's border ring (NumPy's
-    lstsq), other components masked."""
+    lstsq), other components masked, and the box's pixels off the dot counted only above two
+    RMS of the ring's residuals."""
     u0, v0, u1, v1 = dots.bboxes[k]
     h, w = image.shape
     u0, v0, u1, v1 = max(u0 - 2, 0), max(v0 - 2, 0), min(u1 + 2, w - 1), min(v1 + 2, h - 1)
@@ -60,10 +61,13 @@ def weighted_moments_centroid(image: np.ndarray, dots: vsinv.Dots, k: int, label
     vv, uu = np.mgrid[0 : box.shape[0], 0 : box.shape[1]]
     design = np.c_[np.ones(ring.sum()), uu[ring], vv[ring]]
     plane = np.linalg.lstsq(design, box[ring], rcond=None)[0]
-    weights = np.clip(box - (plane[0] + plane[1] * uu + plane[2] * vv), 0, None)
+    above = box - (plane[0] + plane[1] * uu + plane[2] * vv)
+    ring_rms = np.sqrt(np.mean(above[ring] ** 2))
+    weights = np.clip(above, 0, None)
     own = box_labels[box_labels > 0]
     own_label = np.bincount(own).argmax()
     weights[(box_labels != 0) & (box_labels != own_label)] = 0
+    weights[(box_labels == 0) & (above <= 2.0 * ring_rms)] = 0
     m = cv2.moments(weights.astype(np.float32))
     return np.array([m["m10"] / m["m00"] + u0, m["m01"] / m["m00"] + v0])
 

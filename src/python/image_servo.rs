@@ -11,7 +11,6 @@ use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
 use super::vision::{image_arg, polarity_arg};
-use crate::vision::image::GreyImage;
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
 use crate::vision::tags::TagFamily;
 use crate::vision::tracker::TrackerConfig;
@@ -50,14 +49,6 @@ fn points_arg(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<Vec
     let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
     let a = f64_array(obj, what, &[None, Some(2)])?;
     Ok(Some(points2(&a)?.to_vec()))
-}
-
-/// An owned copy of a `(height, width)` uint8 array (the detectors take owned images).
-fn owned_image(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<GreyImage> {
-    let arg = image_arg(obj, what)?;
-    let b = arg.buffer(what)?;
-    GreyImage::from_raw(b.width(), b.height(), b.as_raw().to_vec())
-        .ok_or_else(|| crate::Error::InvalidImage { what: what.into(), reason: "inconsistent size".into() }.into())
 }
 
 /// The target of `target="dots"` from its keyword arguments.
@@ -136,7 +127,8 @@ impl PyImageServo {
         reference_distortion: Option<&Bound<'_, PyAny>>,
         servo: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let image = owned_image(reference_image, "reference_image")?;
+        let reference_image = image_arg(reference_image, "reference_image")?;
+        let image = reference_image.buffer("reference_image")?;
         let given = |o: Option<&Bound<'_, PyAny>>| o.is_some_and(|o| !o.is_none());
         let target = match target {
             "dots" => {
@@ -186,7 +178,8 @@ impl PyImageServo {
     /// One frame (a `(height, width)` uint8 array): the twist to send, the verdict, the
     /// telemetry, and per point the pixel found and whether it was found.
     fn step(&mut self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
-        let image = owned_image(image, "image")?;
+        let image = image_arg(image, "image")?;
+        let image = image.buffer("image")?;
         let pipeline = &mut self.inner;
         let step = py.detach(|| pipeline.step(&image))?;
         let found = self.inner.found().to_vec();

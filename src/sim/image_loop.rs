@@ -15,6 +15,7 @@ use crate::vision::GreyImage;
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::image::view_of;
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
 use crate::vision::tags::TagFamily;
 use crate::vision::target::dots::Dots;
@@ -126,7 +127,8 @@ impl ImageLoop {
         let view = CameraView { pose: &Isometry3::identity(), intrinsics: k_star, distortion, size };
         let rendered = renderer.render(&*target, Some(&obs.visible), &view, 0)?;
         let points = target.points();
-        let found = detector.start(&rendered.image, &expected(points, &obs.pixels)).map_err(|e| reference_error(&e))?;
+        let image = view_of(&rendered.image)?;
+        let found = detector.start(&image, &expected(points, &obs.pixels)).map_err(|e| reference_error(&e))?;
         for (i, hit) in per_point(points, &found).into_iter().enumerate() {
             match (hit, obs.pixels.get_mut(i)) {
                 (Some(d), Some(pixel)) if d.found => *pixel = d.pixel,
@@ -153,11 +155,12 @@ impl ImageLoop {
         self.frame += 1;
         let view = CameraView { pose, intrinsics: k, distortion, size: self.size };
         let rendered = self.renderer.render(&*self.target, Some(&obs.visible), &view, self.frame)?;
+        let image = view_of(&rendered.image)?;
         if !self.started {
-            self.detector.start(&rendered.image, &expected(self.target.points(), &obs.pixels))?;
+            self.detector.start(&image, &expected(self.target.points(), &obs.pixels))?;
             self.started = true;
         }
-        let detections = self.detector.detect(&rendered.image)?;
+        let detections = self.detector.detect(&image)?;
         let hits = per_point(self.target.points(), &detections);
         for i in 0..run.pixels.len() {
             let hit = hits.get(i).copied().flatten();
@@ -210,6 +213,7 @@ mod tests {
     use std::sync::{Arc, Mutex};
 
     use super::*;
+    use crate::vision::GreyView;
     use crate::vision::render::Canvas;
 
     fn scene() -> Scene {
@@ -246,13 +250,13 @@ mod tests {
     }
 
     impl Detector for Scripted {
-        fn start(&mut self, _: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>> {
+        fn start(&mut self, _: &GreyView<'_>, expected: &[Expected]) -> Result<Vec<Detection>> {
             self.calls.lock().unwrap().0 += 1;
             self.expected = expected.to_vec();
             self.detect_all()
         }
 
-        fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>> {
+        fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
             assert_eq!(image.dimensions(), (320, 240));
             self.calls.lock().unwrap().1 += 1;
             self.detect_all()

@@ -10,7 +10,7 @@ pub mod dot_tracking;
 pub mod tags;
 
 use crate::error::Result;
-use crate::vision::image::GreyImage;
+use crate::vision::image::GreyView;
 
 /// Where a point is expected in the first image: its identity and a pixel near it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -36,9 +36,9 @@ pub struct Detection {
 pub trait Detector: Send + Sync {
     /// Starts on the first image, given where each point is expected; returns the points
     /// found in it. An error when the detector cannot start (a point it needs is not there).
-    fn start(&mut self, image: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>>;
+    fn start(&mut self, image: &GreyView<'_>, expected: &[Expected]) -> Result<Vec<Detection>>;
 
     /// The points in the next image (after [`Detector::start`]); a point may be missing from
     /// the list or reported with `found` false.
-    fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>>;
+    fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>>;
 }

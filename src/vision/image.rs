@@ -12,6 +12,18 @@ pub type GreyImage = ::image::GrayImage;
 /// (`GreyBuffer<&[u8]>`, e.g. a NumPy array read in place).
 pub type GreyBuffer<C> = ::image::ImageBuffer<::image::Luma<u8>, C>;
 
+/// Borrowed row-major bytes read as an image, in place: what a [`Detector`](crate::vision::Detector)
+/// reads (a NumPy array, a camera's frame buffer, or an owned image through [`view_of`]).
+pub type GreyView<'a> = GreyBuffer<&'a [u8]>;
+
+/// Any grey buffer seen as a [`GreyView`] (no copy).
+pub fn view_of<C: Pixels>(image: &GreyBuffer<C>) -> Result<GreyView<'_>> {
+    let data: &[u8] = image.as_raw();
+    let len = image.width() as usize * image.height() as usize;
+    let data = data.get(..len).ok_or_else(|| image_error("image", "short buffer"))?;
+    view("image", image.width(), image.height(), data)
+}
+
 /// What the detection and tracking functions read: any grey buffer of bytes (shared between
 /// threads: read in parallel).
 pub trait Pixels: std::ops::Deref<Target = [u8]> + Sync {}

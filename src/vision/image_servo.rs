@@ -12,7 +12,7 @@ use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, ServoStep};
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
-use crate::vision::image::GreyImage;
+use crate::vision::image::{GreyBuffer, GreyView, Pixels, view_of};
 use crate::vision::tags::TagFamily;
 use crate::vision::tracker::TrackerConfig;
 
@@ -143,14 +143,15 @@ impl std::fmt::Debug for ImageServo {
 impl ImageServo {
     /// Finds `target` in the reference image (every point must be found there) and sets up
     /// the session servoing to it.
-    pub fn new(
-        reference: &GreyImage,
+    pub fn new<C: Pixels>(
+        reference: &GreyBuffer<C>,
         target: &ImageTarget,
         config: ImageServoConfig,
         depths: ServoDepths,
     ) -> Result<Self> {
         target.validate()?;
-        let found = reference_points(reference, target.detector().as_mut(), &target.reference_hints())
+        let reference = view_of(reference)?;
+        let found = reference_points(&reference, target.detector().as_mut(), &target.reference_hints())
             .map_err(|e| hints_named(e, "reference_points"))?;
         let found = target.select(found)?;
         let first = target.first_hints(&found);
@@ -183,11 +184,12 @@ impl ImageServo {
     /// One frame: detect (the first frame starts the detector on its hints), match by
     /// identity, step the session. A frame in which the detector cannot start is an error
     /// and the next frame starts it again.
-    pub fn step(&mut self, image: &GreyImage) -> Result<ServoStep> {
+    pub fn step<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<ServoStep> {
+        let image = view_of(image)?;
         let detections = if self.started {
-            self.detector.detect(image)?
+            self.detector.detect(&image)?
         } else {
-            let d = self.detector.start(image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
+            let d = self.detector.start(&image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
             self.started = true;
             d
         };
@@ -237,7 +239,7 @@ fn hints_named(error: Error, name: &'static str) -> Error {
 }
 
 /// The points of the reference image: each hint's point must be found.
-fn reference_points(image: &GreyImage, detector: &mut dyn Detector, hints: &[Expected]) -> Result<Vec<Detection>> {
+fn reference_points(image: &GreyView<'_>, detector: &mut dyn Detector, hints: &[Expected]) -> Result<Vec<Detection>> {
     let found: Vec<Detection> = detector.start(image, hints)?.into_iter().filter(|d| d.found).collect();
     if found.is_empty() {
         return Err(Error::InvalidImage {
@@ -270,6 +272,7 @@ mod tests {
     use super::*;
     use crate::core::camera::project_points;
     use crate::servo::{Law, Status, Verdict};
+    use crate::vision::image::GreyImage;
     use crate::vision::render::{CameraView, RenderConfig, Renderer};
     use crate::vision::target::dots::Dots;
 
@@ -350,10 +353,10 @@ mod tests {
     struct Scripted(Vec<Vec<Detection>>);
 
     impl Detector for Scripted {
-        fn start(&mut self, _: &GreyImage, _: &[Expected]) -> Result<Vec<Detection>> {
+        fn start(&mut self, _: &GreyView<'_>, _: &[Expected]) -> Result<Vec<Detection>> {
             Ok(self.0.remove(0))
         }
-        fn detect(&mut self, _: &GreyImage) -> Result<Vec<Detection>> {
+        fn detect(&mut self, _: &GreyView<'_>) -> Result<Vec<Detection>> {
             Ok(self.0.remove(0))
         }
     }

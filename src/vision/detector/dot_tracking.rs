@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::vision::detector::{Detection, Detector, Expected};
-use crate::vision::image::GreyImage;
+use crate::vision::image::GreyView;
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// Dots tracked from image to image.
@@ -32,7 +32,7 @@ impl DotTracking {
 
 impl Detector for DotTracking {
     /// Finds each dot near its expected pixel (every dot must be there).
-    fn start(&mut self, image: &GreyImage, expected: &[Expected]) -> Result<Vec<Detection>> {
+    fn start(&mut self, image: &GreyView<'_>, expected: &[Expected]) -> Result<Vec<Detection>> {
         let clicks: Vec<[f64; 2]> = expected.iter().map(|e| e.pixel).collect();
         let tracker = DotTracker::new(image, &clicks, self.config)?;
         self.ids = expected.iter().map(|e| e.id).collect();
@@ -41,7 +41,7 @@ impl Detector for DotTracking {
         Ok(out)
     }
 
-    fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>> {
+    fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
         let Some(tracker) = self.tracker.as_mut() else {
             return Err(Error::InvalidParameter { name: "detector", reason: "detect before start".into() });
         };
@@ -58,6 +58,7 @@ mod tests {
     use super::*;
     use crate::core::camera::Intrinsics;
     use crate::core::distortion::Distortion;
+    use crate::vision::image::{GreyImage, view_of};
     use crate::vision::render::{CameraView, RenderConfig, Renderer};
     use crate::vision::target::dots::Dots;
 
@@ -74,15 +75,15 @@ mod tests {
     fn reports_the_tracker_under_the_expected_identities() {
         let expected = [Expected { id: 9, pixel: [21.0, 40.0] }, Expected { id: 4, pixel: [99.0, 50.0] }];
         let mut detector = DotTracking::new(TrackerConfig::default());
-        assert!(detector.detect(&image(0.0)).is_err(), "detect before start");
+        assert!(detector.detect(&view_of(&image(0.0)).unwrap()).is_err(), "detect before start");
         let first = image(0.0);
-        let started = detector.start(&first, &expected).unwrap();
+        let started = detector.start(&view_of(&first).unwrap(), &expected).unwrap();
         let mut tracker = DotTracker::new(&first, &[[21.0, 40.0], [99.0, 50.0]], TrackerConfig::default()).unwrap();
         assert_eq!(started.iter().map(|d| (d.id, d.found)).collect::<Vec<_>>(), [(9, true), (4, true)]);
         assert_eq!(started.iter().map(|d| d.pixel).collect::<Vec<_>>(), tracker.positions());
         for shift in [0.0, 0.001, 0.002] {
             let next = image(shift);
-            let got = detector.detect(&next).unwrap();
+            let got = detector.detect(&view_of(&next).unwrap()).unwrap();
             let want = tracker.track(&next).unwrap();
             assert_eq!(got.iter().map(|d| d.pixel).collect::<Vec<_>>(), want.pixels);
             assert_eq!(got.iter().map(|d| d.found).collect::<Vec<_>>(), want.found);
@@ -90,6 +91,6 @@ mod tests {
         }
         // A dot not in the first image: the tracker cannot start.
         let missing = [Expected { id: 0, pixel: [60.0, 10.0] }];
-        assert!(DotTracking::new(TrackerConfig::default()).start(&first, &missing).is_err());
+        assert!(DotTracking::new(TrackerConfig::default()).start(&view_of(&first).unwrap(), &missing).is_err());
     }
 }

@@ -6,7 +6,7 @@
 
 use crate::error::{Error, Result};
 use crate::vision::detector::{Detection, Detector, Expected};
-use crate::vision::image::GreyImage;
+use crate::vision::image::{GreyBuffer, GreyView, Pixels};
 use crate::vision::tags::{Tag, TagDecoder, TagFamily};
 
 /// Tags of one family, found in each image.
@@ -36,19 +36,19 @@ impl TagDetector {
     }
 
     /// The tags in an image, as [`detect_tags`](crate::vision::detect_tags) (buffers reused).
-    pub fn tags(&mut self, image: &GreyImage) -> Result<Vec<Tag>> {
+    pub fn tags<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Vec<Tag>> {
         self.decoder.detect(image)
     }
 }
 
 impl Detector for TagDetector {
     /// The corners in the first image; `expected` is not needed and ignored.
-    fn start(&mut self, image: &GreyImage, _expected: &[Expected]) -> Result<Vec<Detection>> {
+    fn start(&mut self, image: &GreyView<'_>, _expected: &[Expected]) -> Result<Vec<Detection>> {
         self.detect(image)
     }
 
     /// The corners of the tags decoded in `image`, sorted by identity, all found.
-    fn detect(&mut self, image: &GreyImage) -> Result<Vec<Detection>> {
+    fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
         let mut out = Vec::new();
         for tag in self.decoder.detect(image)? {
             for (corner, &pixel) in (0u32..).zip(&tag.corners) {
@@ -67,6 +67,7 @@ impl Detector for TagDetector {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
+    use crate::vision::image::view_of;
     use crate::vision::tags::synthetic::{Placement, corners, draw};
 
     const FAMILY: TagFamily = TagFamily::Tag36h11;
@@ -75,7 +76,8 @@ mod tests {
     fn reports_four_corners_a_tag_under_their_identities() {
         let a = Placement { id: 3, centre: [60.0, 60.0], cell: 6.0, quarter_turns: 1 };
         let b = Placement { id: 0, centre: [150.0, 70.0], cell: 7.0, quarter_turns: 0 };
-        let image = draw(FAMILY, 220, 130, &[a, b]);
+        let drawn = draw(FAMILY, 220, 130, &[a, b]);
+        let image = view_of(&drawn).unwrap();
         let mut detector = TagDetector::new(FAMILY);
         // The hints are ignored: none, or wrong ones, give the same answer.
         let wrong = [Expected { id: 5, pixel: [1.0, 1.0] }];
@@ -102,14 +104,16 @@ mod tests {
         let a = Placement { id: 3, centre: [60.0, 60.0], cell: 6.0, quarter_turns: 0 };
         let b = Placement { id: 8, centre: [215.0, 60.0], cell: 6.0, quarter_turns: 0 };
         let image = draw(FAMILY, 220, 130, &[a, b]);
-        let found = TagDetector::new(FAMILY).detect(&image).unwrap();
+        let found = TagDetector::new(FAMILY).detect(&view_of(&image).unwrap()).unwrap();
         assert_eq!(found.iter().map(|d| d.id).collect::<Vec<_>>(), [12, 13, 14, 15]);
         let blank = draw(FAMILY, 220, 130, &[]);
+        let blank = view_of(&blank).unwrap();
         assert!(TagDetector::new(FAMILY).detect(&blank).unwrap().is_empty());
         // Images of another size reuse nothing by mistake.
         let mut detector = TagDetector::new(FAMILY);
         assert_eq!(detector.detect(&blank).unwrap().len(), 0);
-        assert_eq!(detector.detect(&draw(FAMILY, 140, 120, &[a])).unwrap().len(), 4);
+        let smaller = draw(FAMILY, 140, 120, &[a]);
+        assert_eq!(detector.detect(&view_of(&smaller).unwrap()).unwrap().len(), 4);
     }
 
     #[test]

@@ -24,7 +24,7 @@
 //! # Corners: accuracy
 //!
 //! The detector's corners are measured again on the black square's outer edges
-//! ([`edges`]): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
+//! (`src/vision/tags/edges.rs`): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
 //! do not support its corners is not reported (never reported with a wrong corner).
 
 mod edges;
