@@ -18,7 +18,7 @@
 //! [`LOCK_PATIENCE`] is taken for dead, and the call runs on a pool of its own instead. No
 //! path waits forever, and no `unsafe` (`pthread_atfork`) is needed.
 
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError, TryLockError};
+use std::sync::{Arc, Mutex, MutexGuard, TryLockError};
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
@@ -108,10 +108,9 @@ fn start(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     if let Some(n) = threads {
         builder = builder.num_threads(n);
     }
-    builder.build().map_err(|e| Error::InvalidParameter {
-        name: "threads",
-        reason: format!("cannot start the thread pool: {e}"),
-    })
+    builder
+        .build()
+        .map_err(|e| Error::InvalidParameter { name: "threads", reason: format!("cannot start the thread pool: {e}") })
 }
 
 /// Runs `op` on vsinv's pool of one thread per core, so that the rayon work inside it (its

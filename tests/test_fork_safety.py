@@ -144,3 +144,39 @@ def test_fork_while_another_thread_runs_a_batch() -> None:
         """
     )
     assert "children [0, 0, 0, 0, 0] parent 40" in out, out
+
+
+def test_fork_after_tag_detection() -> None:
+    """AprilTag decoding (kornia, rayon inside) runs on vsinv's pools too: a child forked after
+    ``detect_tags`` decodes the same tags."""
+    pytest.importorskip("cv2")
+    out = run_script(
+        """
+        import os, time
+        import cv2
+        import numpy as np
+        import vsinv
+
+        dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
+        image = np.full((1200, 1600), 220, np.uint8)
+        for k, tag in enumerate((0, 5, 9)):
+            marker = cv2.aruco.generateImageMarker(dictionary, tag, 240, borderBits=1)
+            image[300:540, 100 + 500 * k : 340 + 500 * k] = np.where(marker > 0, 220, 30)
+        parent = vsinv.detect_tags(image)
+        assert sorted(parent.ids.tolist()) == [0, 5, 9], parent.ids
+        pid = os.fork()
+        if pid == 0:
+            child = vsinv.detect_tags(image)
+            os._exit(0 if np.array_equal(child.corners, parent.corners) else 3)
+        for _ in range(1200):
+            done, status = os.waitpid(pid, os.WNOHANG)
+            if done == pid:
+                print("child exit", os.waitstatus_to_exitcode(status))
+                break
+            time.sleep(0.05)
+        else:
+            os.kill(pid, 9)
+            print("child hung")
+        """
+    )
+    assert "child exit 0" in out, out

@@ -13,9 +13,8 @@ pub const DEBUG: u32 = 10;
 /// when the logger is enabled for that level.
 pub fn log(py: Python<'_>, level: u32, message: impl FnOnce() -> String) -> PyResult<()> {
     static LOGGER: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-    let logger = LOGGER.get_or_try_init(py, || {
-        py.import("logging")?.call_method1("getLogger", ("vsinv",)).map(Bound::unbind)
-    })?;
+    let logger = LOGGER
+        .get_or_try_init(py, || py.import("logging")?.call_method1("getLogger", ("vsinv",)).map(Bound::unbind))?;
     let logger = logger.bind(py);
     if logger.call_method1("isEnabledFor", (level,))?.is_truthy()? {
         logger.call_method1("log", (level, "%s", message()))?;

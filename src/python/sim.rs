@@ -339,13 +339,23 @@ pub fn run_scenario(
     log(py, INFO, || {
         let s = &outcome.summary;
         let secs = started.elapsed().as_secs_f64();
-        format!("run_scenario {}: {} after {} iterations in {secs:.4} s", scenario.name, s.status.as_str(), s.iterations)
+        format!(
+            "run_scenario {}: {} after {} iterations in {secs:.4} s",
+            scenario.name,
+            s.status.as_str(),
+            s.iterations
+        )
     })?;
     run_result(py, scenario, &config, outcome)
 }
 
 /// `run_scenario`'s result: the summary and the recorded columns moved into NumPy.
-fn run_result(py: Python<'_>, scenario: Scenario, config: &crate::sim::SimulationConfig, mut outcome: Outcome) -> PyResult<PyRunResult> {
+fn run_result(
+    py: Python<'_>,
+    scenario: Scenario,
+    config: &crate::sim::SimulationConfig,
+    mut outcome: Outcome,
+) -> PyResult<PyRunResult> {
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
     let (rows, n) = (r.len(), config.scene.points().len());
