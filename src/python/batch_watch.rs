@@ -1,7 +1,7 @@
 //! A batch run with the GIL released while the calling thread reports its progress and
-//! answers Ctrl-C: the runs go on a scoped thread (on vsinv's rayon pool), the calling thread
-//! waits on the batch's counter and takes the GIL only to call `progress(done, total)` and to
-//! check for signals.
+//! answers Ctrl-C: the batch is a job of vsinv's rayon pool, the calling thread waits on the
+//! batch's counter and takes the GIL only to call `progress(done, total)` and to check for
+//! signals (every 0.1 s, and without a reporter only then).
 
 use std::time::Duration;
 
@@ -25,16 +25,23 @@ pub fn run_reporting(
     reporter: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<crate::Result<Summary>>> {
     let total = texts.len();
+    let pool = crate::parallel::pool(threads)?;
     let watch = BatchWatch::default();
     let reporter = reporter.map(|r| r.clone().unbind());
+    // Without a reporter the calling thread only wakes to check for signals.
+    let news = if reporter.is_some() { 0 } else { usize::MAX };
     let mut raised: Option<PyErr> = None;
-    let results = py.detach(|| {
-        std::thread::scope(|scope| {
-            let batch = scope.spawn(|| run_json_batch_watched(texts, threads, access, &watch));
+    let mut results = None;
+    py.detach(|| {
+        // The batch is a job of the pool (no thread is started for it); the calling thread
+        // stays outside the pool and watches.
+        pool.in_place_scope(|scope| {
+            scope.spawn(|_| results = Some(run_json_batch_watched(texts, threads, access, &watch)));
             let mut reported = 0;
             loop {
-                let (done, returned) = watch.wait_past(reported, SIGNAL_CHECK);
-                if raised.is_none() {
+                let (done, returned) = watch.wait_past(reported.max(news), SIGNAL_CHECK);
+                let news_due = reporter.is_some() && done > reported;
+                if raised.is_none() && (news_due || !returned) {
                     let report = (done > reported).then_some(done);
                     if let Err(e) = Python::attach(|py| tell(py, reporter.as_ref(), report, total)) {
                         watch.cancel();
@@ -46,15 +53,14 @@ pub fn run_reporting(
                     break;
                 }
             }
-            batch.join()
-        })
+        });
     });
     if let Some(e) = raised {
         return Err(e);
     }
     match results {
-        Ok(results) => Ok(results?),
-        Err(_) => Err(pyo3::exceptions::PyRuntimeError::new_err("run_batch: a worker thread panicked")),
+        Some(results) => Ok(results?),
+        None => Err(pyo3::exceptions::PyRuntimeError::new_err("run_batch: the batch did not run")),
     }
 }
 
