@@ -15,9 +15,11 @@
 //! fork). The registry's lock may itself have been copied locked (another thread of the
 //! parent held it at the instant of the fork, and that thread does not exist in the child):
 //! the lock is only ever held for a lookup or an insertion, so a lock still taken after
-//! [`LOCK_PATIENCE`] is taken for dead, and the call runs on a pool of its own instead. No
-//! path waits forever, and no `unsafe` (`pthread_atfork`) is needed.
+//! [`LOCK_PATIENCE`] is taken for dead: that call and every later one of the process run on
+//! a pool of their own, without waiting again. No path waits forever, and no `unsafe`
+//! (`pthread_atfork`) is needed.
 
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, TryLockError};
 use std::time::{Duration, Instant};
 
@@ -55,29 +57,43 @@ pub fn pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>> {
             reason: format!("must be at most {MAX_THREADS}, got {n}"),
         });
     }
-    pool_of(std::process::id(), threads, &POOLS, LOCK_PATIENCE)
+    /// The process whose registry lock was found dead (0: none).
+    static DEAD_IN: AtomicU32 = AtomicU32::new(0);
+    let process = std::process::id();
+    if DEAD_IN.load(Ordering::Relaxed) == process {
+        return start(threads).map(Arc::new);
+    }
+    let found = pool_of(process, threads, &POOLS, LOCK_PATIENCE);
+    if let Ok((_, false)) = found {
+        DEAD_IN.store(process, Ordering::Relaxed);
+    }
+    found.map(|(p, _)| p)
 }
 
-/// [`pool`] for the process `process` in the registry `registry`.
+/// [`pool`] for the process `process` in the registry `registry`, and whether the registry
+/// was usable (false: its lock stayed taken, the pool is this call's own).
 fn pool_of(
     process: u32,
     threads: Option<usize>,
     registry: &Mutex<Vec<Entry>>,
     patience: Duration,
-) -> Result<Arc<rayon::ThreadPool>> {
-    if let Some(found) = lock(registry, patience).and_then(|mut pools| find(&mut pools, process, threads)) {
-        return Ok(found);
-    }
-    // Started outside the lock: the lock is never held while threads start.
-    let built = Arc::new(start(threads)?);
+) -> Result<(Arc<rayon::ThreadPool>, bool)> {
     let Some(mut pools) = lock(registry, patience) else {
-        return Ok(built); // the registry is dead (see the module): this call's own pool
+        return Ok((Arc::new(start(threads)?), false));
     };
     if let Some(found) = find(&mut pools, process, threads) {
-        return Ok(found); // another thread was first; ours is dropped (this process's threads)
+        return Ok((found, true));
+    }
+    drop(pools); // threads are started outside the lock: a fork never waits for them
+    let built = Arc::new(start(threads)?);
+    let Some(mut pools) = lock(registry, patience) else {
+        return Ok((built, false));
+    };
+    if let Some(found) = find(&mut pools, process, threads) {
+        return Ok((found, true)); // another thread was first; ours is dropped (this process's threads)
     }
     pools.push(Entry { process, threads, pool: Arc::clone(&built) });
-    Ok(built)
+    Ok((built, true))
 }
 
 /// The registry's lock, or None when it stays taken for `patience` (copied locked by a fork).
@@ -145,9 +161,10 @@ mod tests {
     #[test]
     fn a_child_abandons_its_parents_pools() {
         let registry = Mutex::new(Vec::new());
-        let parent = pool_of(1, Some(2), &registry, LOCK_PATIENCE).unwrap();
-        assert!(Arc::ptr_eq(&parent, &pool_of(1, Some(2), &registry, LOCK_PATIENCE).unwrap()));
-        let child = pool_of(2, Some(2), &registry, LOCK_PATIENCE).unwrap();
+        let (parent, usable) = pool_of(1, Some(2), &registry, LOCK_PATIENCE).unwrap();
+        assert!(usable);
+        assert!(Arc::ptr_eq(&parent, &pool_of(1, Some(2), &registry, LOCK_PATIENCE).unwrap().0));
+        let (child, _) = pool_of(2, Some(2), &registry, LOCK_PATIENCE).unwrap();
         assert!(!Arc::ptr_eq(&parent, &child));
         assert_eq!(Arc::strong_count(&parent), 2, "the abandoned entry is leaked, not dropped");
         let entries: Vec<(u32, Option<usize>)> =
@@ -162,8 +179,8 @@ mod tests {
         let registry = Mutex::new(Vec::new());
         let held = registry.lock().unwrap();
         let started = Instant::now();
-        let own = pool_of(7, Some(1), &registry, Duration::from_millis(20)).unwrap();
-        assert!(started.elapsed() < Duration::from_secs(5));
+        let (own, usable) = pool_of(7, Some(1), &registry, Duration::from_millis(20)).unwrap();
+        assert!(!usable && started.elapsed() < Duration::from_secs(5));
         assert_eq!(own.install(|| 1 + 1), 2);
         drop(held);
         assert!(registry.lock().unwrap().is_empty());
