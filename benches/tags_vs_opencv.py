@@ -92,7 +92,8 @@ def enlarged(image: np.ndarray, truth: dict[int, np.ndarray]) -> tuple[np.ndarra
     return canvas, moved
 
 
-def images() -> list[tuple[str, np.ndarray, dict[int, np.ndarray] | None]]:
+def images() -> list[tuple[str, np.ndarray, dict[int, np.ndarray] | None, int]]:
+    """Name, image, ground truth (None: none published) and vsinv's decimation."""
     pgm = cv2.imread(str(VISP / "AprilTag.pgm"), cv2.IMREAD_GRAYSCALE)
     pgm_truth = visp_corners(VISP / "ground_truth_detection.txt", row_column=True)
     bench = cv2.imread(str(VISP / "benchmark/640x480/tag36_11_640x480.png"), cv2.IMREAD_GRAYSCALE)
@@ -100,10 +101,12 @@ def images() -> list[tuple[str, np.ndarray, dict[int, np.ndarray] | None]]:
     big_pgm, big_truth = enlarged(pgm, pgm_truth)
     big_bench = cv2.imread(str(VISP / "benchmark/1920x1080/tag36_11_1920x1080.png"), cv2.IMREAD_GRAYSCALE)
     return [
-        ("AprilTag.pgm 640x480", pgm, pgm_truth),
-        ("benchmark 640x480", bench, bench_truth),
-        ("AprilTag.pgm x2.25 1920x1080", big_pgm, big_truth),
-        ("benchmark 1920x1080", big_bench, None),
+        ("AprilTag.pgm 640x480", pgm, pgm_truth, 2),
+        ("benchmark 640x480", bench, bench_truth, 2),
+        ("AprilTag.pgm x2.25 1920x1080", big_pgm, big_truth, 2),
+        ("AprilTag.pgm x2.25 1920x1080, decimation 3", big_pgm, big_truth, 3),
+        ("benchmark 1920x1080", big_bench, None, 2),
+        ("benchmark 1920x1080, decimation 3", big_bench, None, 3),
     ]
 
 
@@ -123,8 +126,8 @@ def opencv_tags(detector: cv2.aruco.ArucoDetector, image: np.ndarray, shift: flo
     return {int(i): c.reshape(4, 2).astype(np.float64) - shift for i, c in zip(ids.ravel(), corners)}
 
 
-def vsinv_tags(image: np.ndarray) -> dict[int, np.ndarray]:
-    tags = vsinv.detect_tags(image)
+def vsinv_tags(image: np.ndarray, decimation: int) -> dict[int, np.ndarray]:
+    tags = vsinv.detect_tags(image, decimation=decimation)
     return {int(i): c for i, c in zip(tags.ids, tags.corners)}
 
 
@@ -165,14 +168,14 @@ def measure(rounds: int) -> list[Row]:
     subpix = opencv_detector(cv2.aruco.CORNER_REFINE_SUBPIX)
     april = opencv_detector(cv2.aruco.CORNER_REFINE_APRILTAG)
     rows = []
-    for name, image, truth in images():
-        ours, theirs = vsinv_tags(image), opencv_tags(subpix, image)
+    for name, image, truth, decimation in images():
+        ours, theirs = vsinv_tags(image, decimation), opencv_tags(subpix, image)
         theirs_april = opencv_tags(april, image, shift=0.5)
         # Without ground truth, OpenCV's subpixel corners stand for it (agreement, not accuracy).
         reference = truth if truth is not None else theirs
         t = timed_min_of_medians(
             {
-                "vsinv": lambda: vsinv.detect_tags(image),
+                "vsinv": lambda: vsinv.detect_tags(image, decimation=decimation),
                 "opencv": lambda: subpix.detectMarkers(image),
                 "opencv_apriltag": lambda: april.detectMarkers(image),
             },

@@ -240,3 +240,22 @@ def test_python_dash_m(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "vsinv", "list"], capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0
     assert "lens-12-6" in proc.stdout
+
+
+@pytest.mark.parametrize(
+    "observed, bound, printed",
+    [
+        (0.163, 0.1022, "max ||eps|| 0.163 > psi/phi 0.1022"),
+        (0.05, 0.1022, "max ||eps|| 0.05 <= psi/phi 0.1022"),
+        (0.1022, 0.1022, "max ||eps|| 0.1022 <= psi/phi 0.1022"),
+        (None, 0.1022, "max ||eps|| n/a vs psi/phi 0.1022"),
+        (float("nan"), 0.1022, "max ||eps|| n/a vs psi/phi 0.1022"),
+    ],
+)
+def test_prop3_line_prints_the_comparison_that_holds(observed, bound, printed):
+    # Issue 19: the summary printed "0.163 <= psi/phi 0.1022" whatever the numbers were.
+    from vsinv.cli import format_summary
+
+    summary = {"name": "x", "path_duration": 1.0, "observed_max_eps": observed, "tracking_bound": bound}
+    line = next(line for line in format_summary(summary).splitlines() if "Prop. 3" in line)
+    assert printed in line

@@ -6,6 +6,7 @@ detections, and bad arguments refused by name."""
 from __future__ import annotations
 
 import csv
+import itertools
 import subprocess
 import sys
 from pathlib import Path
@@ -157,6 +158,13 @@ def test_frame_sources(tmp_path: Path) -> None:
     (tmp_path / "empty").mkdir()
     with pytest.raises(vsinv.InvalidInput, match="no image files"):
         list(vsinv.frames(tmp_path / "empty"))
+    # An endless source read up to a bound.
+    endless = itertools.repeat(stack[0])
+    assert [n for n, _ in vsinv.frames(endless, max_frames=2)] == ["frame-0000", "frame-0001"]
+    assert len(list(vsinv.frames(folder, max_frames=10))) == 3
+    for bad in (0, -1, 2.5, True, "3"):
+        with pytest.raises(vsinv.InvalidInput, match="max_frames"):
+            vsinv.frames(stack, max_frames=bad)  # type: ignore[arg-type]
 
 
 def test_video_frames_are_read_with_opencv(tmp_path: Path) -> None:

@@ -135,7 +135,7 @@ def format_summary(summary: dict[str, Any]) -> str:
 
 
 def _compare(a: Any, b: Any) -> str:
-    """The comparison that holds between two numbers (``?`` when either is missing)."""
+    """The comparison that holds between two numbers (``vs`` when either is missing)."""
     if not all(isinstance(x, (int, float)) and math.isfinite(x) for x in (a, b)):
         return "vs"
     return "<=" if a <= b else ">"

@@ -12,6 +12,8 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from ._core import VsinvError
+from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
 
 __all__ = ["add_allow_outside_files", "add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
@@ -45,13 +47,19 @@ def add_image_commands(sub: Any) -> None:
         help="track dots through image files and print the image and invariant errors (Fig. 3)",
         description="Detect the reference dots near the approximate positions of --points, track them through the "
         "images in order, and print per image and point the image error ||p - p*|| (pixels) and the invariant "
-        "error ||q - q*||.",
+        "error ||q - q*||. Images from another camera (a lens change) see every dot elsewhere: give the dots' "
+        "approximate positions in the first image too (--first-points), in the order of --points, as one clicks "
+        "both images in ViSP.",
     )
     inv.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
     inv.add_argument("images", metavar="IMG", type=Path, nargs="+", help="the images, in tracking order (PNG, PGM/PPM or JPEG)")
-    inv.add_argument("--points", metavar="CSV", type=Path, required=True, help="approximate dot positions (u, v columns)")
+    inv.add_argument("--points", metavar="CSV", type=Path, required=True, help="approximate dot positions in REF (u, v columns)")
+    inv.add_argument(
+        "--first-points", metavar="CSV", type=Path,
+        help="approximate dot positions in the first IMG, in the order of --points (default: those found in REF)",
+    )
     inv.add_argument("--basis", metavar="I,J,K", help="the three basis points (default: the widest triangle)")
-    inv.add_argument("--search-radius", metavar="PX", type=float, default=20.0, help="tracker window half-side (20)")
+    add_tracker_options(inv)
     inv.add_argument("--out", metavar="DIR", type=Path, help="write invariance.csv and invariance.png to DIR")
 
 
@@ -117,9 +125,13 @@ def complete(result: InvarianceResult) -> bool:
 
 
 def cmd_invariance(args: argparse.Namespace) -> int:
-    result = track_invariance(
-        args.reference, args.images, args.points, _parse_basis(args.basis), search_radius=args.search_radius
-    )
+    try:
+        result = track_invariance(
+            args.reference, args.images, args.points, _parse_basis(args.basis), first_points=args.first_points,
+            labels=("--points", "--first-points"), **tracker_options(args),
+        )
+    except VsinvError as e:
+        raise named_as_options(e, {"basis": "--basis"}) from None
     print(format_invariance(result))
     if args.out is not None:
         from .plots import _save

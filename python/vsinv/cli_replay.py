@@ -8,7 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ._core import Intrinsics, load_calibration
+from ._core import Intrinsics, VsinvError, load_calibration
+from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import read_points
 from .replaying import read_depths, replay
 
@@ -16,6 +17,9 @@ __all__ = ["add_replay_command", "cmd_replay"]
 
 #: The targets the command can follow.
 TARGETS = ("dots", "tags")
+
+#: ImageServo's keyword arguments that an error may name, and the options that give them.
+_OPTION_NAMES = {"reference_points": "--points", "first_points": "--first-points"}
 
 
 def add_replay_command(sub: Any) -> None:
@@ -43,10 +47,19 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--reference-depths", metavar="CSV", type=Path, help="depths of the points at the reference pose, metres (z column)")
     p.add_argument("--depth", metavar="Z", type=float, help="one depth for every point, metres (IBVS; the invariant law needs --reference-depths)")
     p.add_argument("--gain", type=float, default=0.5, help="the law's gain (0.5)")
-    p.add_argument("--search-radius", metavar="PX", type=float, default=20.0, help="dots: tracker window half-side (20)")
-    p.add_argument("--max-search-radius", metavar="PX", type=float, default=80.0, help="dots: largest window while a dot is lost (80)")
-    p.add_argument("--polarity", choices=("light", "dark", "auto"), default="light", help="dots: light dots, dark dots, or decided by REF (light)")
+    add_tracker_options(p, "dots: ")
     p.add_argument("--out", metavar="DIR", type=Path, help="write replay.csv and replay.png to DIR")
+    p.add_argument("--max-frames", metavar="N", type=_positive_int, help="read at most N frames (default: all)")
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
 
 
 def _intrinsics(text: str) -> Intrinsics:
@@ -79,11 +92,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         options["reference_points"] = read_points(args.points)
         if args.first_points is not None:
             options["first_points"] = read_points(args.first_points)
-        options["tracker"] = {
-            "search_radius": args.search_radius,
-            "max_search_radius": args.max_search_radius,
-            "polarity": args.polarity,
-        }
+        options["tracker"] = tracker_options(args)
     else:
         options["family"] = args.family
         if args.tag_ids is not None:
@@ -96,7 +105,10 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     k_hat = load_calibration(args.calibration).intrinsics if args.calibration is not None else _intrinsics(args.K_hat)
-    result = replay(args.reference, args.frames, k_hat, args.target, **_options(args))
+    try:
+        result = replay(args.reference, args.frames, k_hat, args.target, args.max_frames, **_options(args))
+    except VsinvError as e:
+        raise named_as_options(e, _OPTION_NAMES) from None
     print(result.table())
     lost = int((~result.found).sum())
     print(f"{len(result.names)} frames, {result.found.shape[1]} points; {lost} point-frames not found")

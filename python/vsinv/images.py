@@ -136,15 +136,35 @@ def track_invariance(
     points: _PathLike,
     basis: Optional[Sequence[int]] = None,
     search_radius: float = 20.0,
+    *,
+    first_points: Optional[_PathLike] = None,
+    labels: tuple[str, str] = ("points", "first_points"),
+    **tracker: Any,
 ) -> InvarianceResult:
     """Detects the reference dots near the approximate positions of ``points`` (a CSV), tracks
-    them through ``images`` in order and measures the image and invariant errors of eq. (7)."""
-    ref_image = load_image(reference)
-    tracker = DotTracker(ref_image, read_points(points), search_radius=search_radius)
-    p_star = tracker.positions
+    them through ``images`` in order and measures the image and invariant errors of eq. (7).
+    ``first_points`` (a CSV, one row per reference dot, in the same order) gives the dots'
+    approximate positions in the first image, as when the images come from another camera
+    (a lens change moves every dot); without it the dots are searched near the reference
+    positions. ``tracker`` holds the other keyword arguments of :class:`DotTracker`. An error
+    about a CSV's points names it by ``labels`` (a command passes its options' names)."""
+    options = dict(tracker, search_radius=search_radius)
+    dots = _start_tracker(load_image(reference), read_points(points), labels[0], options)
+    p_star = dots.positions
     b = tuple(int(i) for i in basis) if basis is not None else choose_basis(p_star)
     q_star = invariant_points(p_star, b)
-    rows = [_track_one(tracker, load_image(path), p_star, q_star, b) for path in images]
+    rows = []
+    paths = list(images)
+    if first_points is not None and paths:
+        clicks = read_points(first_points)
+        if len(clicks) != len(p_star):
+            raise InvalidInput(f"{labels[1]}: expected {len(p_star)} points (one per reference dot), got {len(clicks)} points")
+        dots = _start_tracker(load_image(paths[0]), clicks, labels[1], options)
+        start = dots.positions
+        found = np.ones(len(start), dtype=bool)
+        rows.append(_errors(start, found, p_star, q_star, b))
+        paths = paths[1:]
+    rows += [_errors(*dots.track(load_image(path)), p_star, q_star, b) for path in paths]
     return InvarianceResult(
         names=[Path(p).name for p in images],
         reference_pixels=p_star,
@@ -156,8 +176,20 @@ def track_invariance(
     )
 
 
-def _track_one(tracker: DotTracker, image: Any, p_star: Any, q_star: Any, basis: Any) -> tuple[Any, Any, Any, Any]:
-    pixels, found = tracker.track(image)
+def _start_tracker(image: Any, clicks: Any, label: str, options: dict[str, Any]) -> DotTracker:
+    """A DotTracker started on ``clicks``; its complaint about them (a click without a dot)
+    names them by ``label``."""
+    try:
+        return DotTracker(image, clicks, **options)
+    except InvalidInput as e:
+        message = str(e)
+        if message.startswith("initial_pixels:"):
+            raise InvalidInput(label + message[len("initial_pixels"):]) from None
+        raise
+
+
+def _errors(pixels: Any, found: Any, p_star: Any, q_star: Any, basis: Any) -> tuple[Any, Any, Any, Any]:
+    """One image's row: pixels, found, image error and invariant error per dot."""
     image_error = np.where(found, np.linalg.norm(pixels - p_star, axis=1), np.nan)
     return pixels, found, image_error, _invariant_errors(pixels, found, q_star, basis)
 

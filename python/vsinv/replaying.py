@@ -104,11 +104,13 @@ def replay(
     source: Any,
     K_hat: Any,
     target: Literal["dots", "tags"] = "dots",
+    max_frames: Optional[int] = None,
     **options: Any,
 ) -> ReplayResult:
     """Runs :class:`vsinv.ImageServo` (``target`` and ``options`` as its own) on every frame of
-    ``source`` (see :func:`vsinv.frames`) from the reference image (an array or a file);
-    nothing moves, so each twist is what the servo would command on that frame."""
+    ``source`` (see :func:`vsinv.frames`), at most ``max_frames`` of them, from the reference
+    image (an array or a file); nothing moves, so each twist is what the servo would command
+    on that frame."""
     t0 = time.perf_counter()
     log.info("replay: start (%s target)", target)
     ref = load_image(reference) if isinstance(reference, (str, Path)) else reference
@@ -116,7 +118,7 @@ def replay(
     names: list[str] = []
     verdicts: list[str] = []
     twists, img, inv, pixels, found = [], [], [], [], []
-    for name, image in frame_source(source):
+    for name, image in frame_source(source, max_frames):
         step = pipeline.step(image)
         names.append(name)
         verdicts.append(step.verdict)

@@ -13,7 +13,8 @@ Every source yields ``(name, image)`` pairs, the image a ``(height, width)`` uin
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Union
+from itertools import islice
+from typing import Any, Iterable, Iterator, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -28,9 +29,18 @@ IMAGE_SUFFIXES = (".png", ".pgm", ".ppm", ".pnm", ".pam", ".jpg", ".jpeg")
 Frame = tuple[str, npt.NDArray[np.uint8]]
 
 
-def frames(source: Union[str, Path, npt.ArrayLike, Iterable[Any]]) -> Iterator[Frame]:
-    """The frames of ``source`` as ``(name, image)`` pairs (see the module documentation). A
-    source that is none of these raises ``InvalidInput`` naming ``source``."""
+def frames(source: Union[str, Path, npt.ArrayLike, Iterable[Any]], max_frames: Optional[int] = None) -> Iterator[Frame]:
+    """The frames of ``source`` as ``(name, image)`` pairs (see the module documentation), at
+    most ``max_frames`` of them (None: all; a video or an iterable may be endless). A source
+    that is none of these raises ``InvalidInput`` naming ``source``."""
+    if max_frames is None:
+        return _frames(source)
+    if isinstance(max_frames, bool) or not isinstance(max_frames, int) or max_frames < 1:
+        raise InvalidInput(f"max_frames: expected an integer >= 1 or None, got {max_frames!r}")
+    return islice(_frames(source), max_frames)
+
+
+def _frames(source: Union[str, Path, npt.ArrayLike, Iterable[Any]]) -> Iterator[Frame]:
     if isinstance(source, (str, Path)):
         path = Path(source)
         if path.is_dir():

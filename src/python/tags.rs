@@ -2,11 +2,42 @@
 //! OpenCV's order and pixel convention (see `crate::vision::tags`); the work runs with the
 //! GIL released.
 
+use std::cell::RefCell;
+
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
 use super::vision::image_arg;
-use crate::vision::tags::{Tag, TagFamily, detect_tags as detect};
+use crate::error::Result;
+use crate::vision::image::{GreyBuffer, Pixels};
+use crate::vision::tags::{DEFAULT_DECIMATION, MAX_DECIMATION, Tag, TagDecoder, TagFamily};
+
+/// Images up to this many pixels keep their decoder (its buffers) for the next call on the
+/// same thread; a larger one gets a decoder of its own, freed after the call.
+const KEPT_DECODER_PIXELS: u64 = 16 << 20;
+
+thread_local! {
+    static DECODER: RefCell<Option<TagDecoder>> = const { RefCell::new(None) };
+}
+
+/// The tags in `image`, with this thread's last decoder when it fits.
+fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: u32) -> Result<Vec<Tag>> {
+    let fresh = || TagDecoder::with_decimation(family, decimation);
+    if u64::from(image.width()) * u64::from(image.height()) > KEPT_DECODER_PIXELS {
+        return fresh()?.detect(image);
+    }
+    DECODER.with(|cell| {
+        let mut kept = cell.borrow_mut();
+        let reusable = kept.as_ref().is_some_and(|d| d.family() == family && d.decimation() == decimation);
+        if !reusable {
+            *kept = Some(fresh()?);
+        }
+        match kept.as_mut() {
+            Some(decoder) => decoder.detect(image),
+            None => fresh()?.detect(image),
+        }
+    })
+}
 
 /// Tags found in an image, sorted by id.
 #[pyclass(name = "Tags", module = "vsinv._core", frozen)]
@@ -54,18 +85,33 @@ fn family_arg(name: &str) -> PyResult<TagFamily> {
     })
 }
 
+// The signature's default, written as a literal for Python's introspection.
+const _: () = assert!(DEFAULT_DECIMATION == 2);
+
+/// `1..=8`; anything else raises `InvalidInput` naming `decimation`.
+fn decimation_arg(decimation: i64) -> PyResult<u32> {
+    u32::try_from(decimation).ok().filter(|d| (1..=MAX_DECIMATION).contains(d)).ok_or_else(|| {
+        super::errors::invalid_argument(
+            "decimation",
+            format!("decimation: must be in 1..={MAX_DECIMATION}, got {decimation}"),
+        )
+    })
+}
+
 /// The AprilTags of `family` in a `(height, width)` uint8 image, sorted by id: their ids and
 /// the four corners of each black square in OpenCV's order (top-left, top-right,
 /// bottom-right, bottom-left of the marker as OpenCV's aruco module draws it, clockwise in
 /// the image) and pixel convention (pixel `(u, v)` centred at integer coordinates). An empty
-/// image raises `InvalidInput`; an image without tags gives an empty result.
+/// image raises `InvalidInput`; an image without tags gives an empty result. Quads are
+/// searched in the image shrunk by `decimation` (1..=8); corners are measured at full size.
 #[pyfunction]
-#[pyo3(signature = (image, family = "tag36h11"))]
-pub fn detect_tags(py: Python<'_>, image: &Bound<'_, PyAny>, family: &str) -> PyResult<PyTags> {
+#[pyo3(signature = (image, family = "tag36h11", decimation = 2))]
+pub fn detect_tags(py: Python<'_>, image: &Bound<'_, PyAny>, family: &str, decimation: i64) -> PyResult<PyTags> {
     let family = family_arg(family)?;
+    let decimation = decimation_arg(decimation)?;
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
-    let tags = py.detach(|| detect(&buffer, family))?;
+    let tags = py.detach(|| detect(&buffer, family, decimation))?;
     tags_out(py, &tags, family)
 }
 

@@ -17,6 +17,9 @@ use crate::vision::runs::{Component, Labelling, Run};
 /// Pixels added around a component's bounding box for its centroid.
 pub const MARGIN: u32 = 2;
 
+/// Background pixels within this many ring RMS of the plane are noise, not the dot's edge.
+const NOISE_FLOOR: f64 = 2.0;
+
 /// Which pixels of a row segment: the background, the dot's own, or another dot's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Owner {
@@ -54,6 +57,8 @@ pub fn weighted_centroid<C: Pixels>(image: &GreyBuffer<C>, labelling: &Labelling
     let (plane, ring_residual) = ring_plane(labelling, index, bbox, centre, &level);
     let background =
         |u: u32, v: u32| plane[0] + plane[1] * (f64::from(u) - centre[0]) + plane[2] * (f64::from(v) - centre[1]);
+    // A background pixel counts only above the ring's noise: its anti-aliased edge share.
+    let floor = NOISE_FLOOR * ring_residual;
     let (mut sum, mut su, mut sv, mut own) = (0.0, 0.0, 0.0, 0.0);
     for v in bbox[1]..=bbox[3] {
         visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
@@ -62,10 +67,14 @@ pub fn weighted_centroid<C: Pixels>(image: &GreyBuffer<C>, labelling: &Labelling
             }
             for u in u0..u1 {
                 let above = level(u, v) - background(u, v);
-                if owner == Owner::Own {
+                let weight = if owner == Owner::Own {
                     own += above;
-                }
-                let weight = above.max(0.0);
+                    above.max(0.0)
+                } else if above > floor {
+                    above
+                } else {
+                    0.0
+                };
                 sum += weight;
                 su += weight * f64::from(u);
                 sv += weight * f64::from(v);

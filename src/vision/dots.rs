@@ -432,6 +432,30 @@ mod tests {
     }
 
     #[test]
+    fn background_noise_around_a_dot_does_not_weigh_on_its_centroid() {
+        // A disc on a background with +-3 levels of checkerboard noise (ring RMS 3): a pixel of
+        // the box at 5 levels above the background is noise and leaves the centroid as it is;
+        // at 40 levels it is part of the dot's edge and counts.
+        let centre = [31.3, 32.6];
+        let mut image = disc_on_gradient(centre, 6.0, 150.0, [40.0, 0.0, 0.0]);
+        for (u, v, g) in image.enumerate_pixels_mut() {
+            if g.0[0] == 40 {
+                g.0[0] = if (u + v) % 2 == 0 { 43 } else { 37 };
+            }
+        }
+        let centroid = |image: &GreyImage| detect_dots(image, &DetectConfig::default()).unwrap()[0].centroid;
+        let before = centroid(&image);
+        assert!((before[0] - centre[0]).hypot(before[1] - centre[1]) < 0.02, "{before:?}");
+        // (25, 26): inside the box grown around the disc (bounding box 26..37 x 27..38), off it.
+        for (bump, moves) in [(45u8, false), (80, true)] {
+            let mut bumped = image.clone();
+            bumped.put_pixel(25, 26, image::Luma([bump]));
+            let after = centroid(&bumped);
+            assert_eq!(after != before, moves, "a pixel at {bump}: {before:?} -> {after:?}");
+        }
+    }
+
+    #[test]
     fn shape_and_contrast_filters() {
         // A filled disc, a ring (fill ratio about 0.5), a bar with a bump, and a faint disc.
         let mut image = GreyImage::from_pixel(160, 64, image::Luma([30]));

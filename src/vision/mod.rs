@@ -61,7 +61,9 @@ pub use self::image::{GreyBuffer, GreyImage, load_image, load_png, save_png};
 pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
-pub use self::tags::{TAG_CORNERS_IN_LAYOUT, Tag, TagDecoder, TagFamily, detect_tags};
+pub use self::tags::{
+    DEFAULT_DECIMATION, MAX_DECIMATION, TAG_CORNERS_IN_LAYOUT, Tag, TagDecoder, TagFamily, detect_tags,
+};
 pub use self::target::dots::Dots;
 pub use self::target::tags::{RigTag, TagRig};
 pub use self::target::{Target, TargetPoint};

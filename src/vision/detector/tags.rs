@@ -21,6 +21,11 @@ impl TagDetector {
         Self { decoder: TagDecoder::new(family) }
     }
 
+    /// A detector reading tags with `decoder` (e.g. [`TagDecoder::with_decimation`]).
+    pub fn with_decoder(decoder: TagDecoder) -> Self {
+        Self { decoder }
+    }
+
     /// The identity of corner `corner` (0..3) of tag `tag_id`: `4 * tag_id + corner`;
     /// `None` when it does not fit a `u32` or `corner > 3`.
     pub fn corner_id(tag_id: u32, corner: u32) -> Option<u32> {

@@ -123,12 +123,21 @@ pub fn detect_tags<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Resul
 /// stays the same ([`detect_tags`] makes a new one each call).
 pub struct TagDecoder {
     family: TagFamily,
+    decimation: u32,
     decoder: Option<(ImageSize, AprilTagDecoder)>,
 }
 
+/// The detector's default decimation (AprilTag's): quads are searched in the image shrunk by 2.
+pub const DEFAULT_DECIMATION: u32 = 2;
+/// The largest decimation accepted.
+pub const MAX_DECIMATION: u32 = 8;
+
 impl std::fmt::Debug for TagDecoder {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("TagDecoder").field("family", &self.family).finish_non_exhaustive()
+        f.debug_struct("TagDecoder")
+            .field("family", &self.family)
+            .field("decimation", &self.decimation)
+            .finish_non_exhaustive()
     }
 }
 
@@ -141,9 +150,27 @@ fn decoder_error(reason: impl std::fmt::Display) -> Error {
 const MIN_SIDE: u32 = 8;
 
 impl TagDecoder {
-    /// A detector of `family`'s tags.
+    /// A detector of `family`'s tags, with the default decimation.
     pub fn new(family: TagFamily) -> Self {
-        Self { family, decoder: None }
+        Self { family, decimation: DEFAULT_DECIMATION, decoder: None }
+    }
+
+    /// A detector that searches quads in the image shrunk by `decimation` (`1..=8`; the
+    /// corners are always measured at full resolution). A larger decimation is faster and
+    /// finds large tags whose quiet zone touches clutter; a smaller one finds smaller tags.
+    pub fn with_decimation(family: TagFamily, decimation: u32) -> Result<Self> {
+        if !(1..=MAX_DECIMATION).contains(&decimation) {
+            return Err(Error::InvalidParameter {
+                name: "decimation",
+                reason: format!("must be in 1..={MAX_DECIMATION}, got {decimation}"),
+            });
+        }
+        Ok(Self { family, decimation, decoder: None })
+    }
+
+    /// The decimation of the quad search.
+    pub fn decimation(&self) -> u32 {
+        self.decimation
     }
 
     /// The family it finds.
@@ -188,7 +215,9 @@ impl TagDecoder {
 
     fn decoder_for(&mut self, size: ImageSize) -> Result<&mut AprilTagDecoder> {
         if self.decoder.as_ref().is_none_or(|(s, _)| *s != size) {
-            let config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
+            let mut config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
+            config.downscale_factor = self.decimation as usize;
+            config.min_tag_width = (self.family.border_cells() / self.decimation).max(3) as usize;
             self.decoder = Some((size, AprilTagDecoder::new(config, size).map_err(decoder_error)?));
         }
         match self.decoder.as_mut() {
@@ -346,6 +375,31 @@ mod tests {
         }
         assert_eq!(TagFamily::NAMES.map(|n| TagFamily::from_name(n).unwrap().name()), TagFamily::NAMES);
         assert_eq!(TagFamily::from_name("tag36h12"), None);
+    }
+
+    #[test]
+    fn every_decimation_finds_the_same_corners() {
+        let placed = [(4, [60.0, 55.0], 0), (8, [170.0, 60.0], 1)].map(|(id, centre, quarter_turns)| Placement {
+            id,
+            centre,
+            cell: 9.0,
+            quarter_turns,
+        });
+        let image = draw(TagFamily::Tag36h11, 240, 120, &placed);
+        for decimation in 1..=4 {
+            let mut decoder = TagDecoder::with_decimation(TagFamily::Tag36h11, decimation).unwrap();
+            assert_eq!(decoder.decimation(), decimation);
+            let tags = decoder.detect(&image).unwrap();
+            assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [4, 8], "decimation {decimation}");
+            for (tag, p) in tags.iter().zip(&placed) {
+                assert!(worst_error(&tag.corners, &corners(TagFamily::Tag36h11, p)) < SHARP_TOLERANCE, "{decimation}");
+            }
+        }
+        assert_eq!(TagDecoder::new(TagFamily::Tag16h5).decimation(), DEFAULT_DECIMATION);
+        for bad in [0, MAX_DECIMATION + 1, u32::MAX] {
+            let err = TagDecoder::with_decimation(TagFamily::Tag36h11, bad).unwrap_err();
+            assert!(err.to_string().contains("decimation"), "{err}");
+        }
     }
 
     #[test]
