@@ -13,6 +13,7 @@
 //! | the servo session: stop rules, depth sources, path following, verdicts | `servo` | `servo` | |
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
+//! | worker pools that a forked child rebuilds | `parallel` | `batch` or `vision` | rayon |
 //! | images: rendering, dot detection and tracking | `vision` | `vision` (default) | image, imageproc |
 //! | camera calibration files (ROS YAML, OpenCV YAML and XML) | [`calibration`] | `calibration` (default) | yaml-rust2, roxmltree |
 //! | Python bindings (the only module that knows about Python) | `python` (private) | `python` | pyo3, numpy |
@@ -74,6 +75,8 @@ pub mod core;
 pub mod error;
 #[cfg(any(feature = "calibration", feature = "vision"))]
 pub mod input_file;
+#[cfg(any(feature = "batch", feature = "vision"))]
+pub mod parallel;
 #[cfg(feature = "servo")]
 pub mod servo;
 #[cfg(feature = "sim")]

@@ -219,13 +219,17 @@ def test_run_batch(data: Any) -> None:
     names = ("threads",) if threads.expect in (INVALID, TYPE) else (f"scenario {bad_index}",) if bad_index is not None else ("scenario",)
     if threads.expect in (INVALID, TYPE) and bad_index is not None:
         names = (*names, f"scenario {bad_index}")  # either may be reported first
-    out = call(vsinv.run_batch, batch, threads=threads.value, _expect=expect, _names=names, _finite=False)
+    counts: list[int] = []
+    progress = data.draw(st.sampled_from([None, False, lambda done, total: counts.append(done)]), label="progress")
+    out = call(vsinv.run_batch, batch, threads=threads.value, progress=progress, _expect=expect, _names=names, _finite=False)
     if returned(out):
         assert all(len(c) == len(batch) for c in out.values())
+        assert counts == sorted(set(counts)) and counts[-1:] == ([len(batch)] if callable(progress) and batch else [])
         ok = out["status"] != "error"
         for k in ("final_translation_error_mm", "final_rotation_error_deg"):
             assert np.isfinite(out[k][ok]).all()
     call(vsinv.run_batch, 3, _expect=TYPE, _names=("scenarios", "iterable"))
+    call(vsinv.run_batch, [], progress="yes", _expect=TYPE, _names=("progress",))
 
 
 # The sweep's table converts to pandas and writes parquet with pyarrow when they are installed:

@@ -8,6 +8,8 @@ arrays of (u, v); the camera twist is (vx, vy, vz, wx, wy, wz) in the current ca
 poses are 4x4 homogeneous matrices of the camera frame in F*, the frame of the reference image.
 """
 
+import logging
+
 from ._core import (
     Calibration,
     DegenerateGeometry,
@@ -69,6 +71,10 @@ from . import sweep
 from .replaying import ReplayResult, replay
 from .sources import frames
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
+
+# The package logs on the "vsinv" logger (run starts and ends at INFO, details at DEBUG);
+# quiet until the application configures logging (the library convention of the logging HOWTO).
+logging.getLogger("vsinv").addHandler(logging.NullHandler())
 
 __all__ = [
     "Calibration",

@@ -7,6 +7,8 @@ itself."""
 from __future__ import annotations
 
 import csv
+import logging
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Literal, Optional, Union
@@ -17,6 +19,8 @@ import numpy.typing as npt
 from ._core import ImageServo, InvalidInput, load_image
 from .sources import frames as frame_source
 from .safe_files import replace_text_file
+
+log = logging.getLogger("vsinv")
 
 __all__ = ["ReplayResult", "replay"]
 
@@ -107,6 +111,8 @@ def replay(
     ``source`` (see :func:`vsinv.frames`), at most ``max_frames`` of them, from the reference
     image (an array or a file); nothing moves, so each twist is what the servo would command
     on that frame."""
+    t0 = time.perf_counter()
+    log.info("replay: start (%s target)", target)
     ref = load_image(reference) if isinstance(reference, (str, Path)) else reference
     pipeline = ImageServo(ref, target, K_hat, **options)
     names: list[str] = []
@@ -122,9 +128,11 @@ def replay(
         inv.append(t["invariant_error"])
         pixels.append(step.pixels)
         found.append(step.found)
+        log.debug("replay: frame %s: %s, %d points found", name, step.verdict, int(np.count_nonzero(step.found)))
     if not names:
         raise InvalidInput("source: no frames")
     n = len(pipeline.ids)
+    log.info("replay: %d frames in %.3f s", len(names), time.perf_counter() - t0)
     return ReplayResult(
         names=names,
         ids=pipeline.ids,

@@ -7,12 +7,14 @@
 
 mod args;
 mod arrays;
+mod batch_watch;
 mod camera;
 mod control;
 mod errors;
 mod image_servo;
 mod invariant;
 mod lens;
+mod logs;
 mod planning;
 mod se3;
 mod servo;

@@ -6,7 +6,9 @@ use pyo3::IntoPyObjectExt;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 
+use super::batch_watch::run_reporting;
 use super::errors::{PyError, invalid_argument, reraise};
+use super::logs::{DEBUG, INFO, log};
 use crate::sim::arm::ArmRobot;
 use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
@@ -304,6 +306,13 @@ pub fn run_scenario(
     let scenario = scenario_arg_with(scenario, access(allow_outside_files))?;
     let mut config = scenario.to_config()?;
     config.record = record;
+    let record_text = if record { "True" } else { "False" };
+    log(py, INFO, || format!("run_scenario {}: start (record={record_text})", scenario.name))?;
+    log(py, DEBUG, || {
+        let images = if config.vision.is_some() { "images in the loop" } else { "no images" };
+        format!("run_scenario {}: {} points, dt {} s, {images}", scenario.name, config.scene.points().len(), config.dt)
+    })?;
+    let started = std::time::Instant::now();
     let mut raised: Option<PyErr> = None;
     let outcome = py.detach(|| {
         let mut tick = |done: usize, total: usize| {
@@ -326,7 +335,27 @@ pub fn run_scenario(
     if let Some(e) = raised {
         return Err(e);
     }
-    let mut outcome = outcome?;
+    let outcome = outcome?;
+    log(py, INFO, || {
+        let s = &outcome.summary;
+        let secs = started.elapsed().as_secs_f64();
+        format!(
+            "run_scenario {}: {} after {} iterations in {secs:.4} s",
+            scenario.name,
+            s.status.as_str(),
+            s.iterations
+        )
+    })?;
+    run_result(py, scenario, &config, outcome)
+}
+
+/// `run_scenario`'s result: the summary and the recorded columns moved into NumPy.
+fn run_result(
+    py: Python<'_>,
+    scenario: Scenario,
+    config: &crate::sim::SimulationConfig,
+    mut outcome: Outcome,
+) -> PyResult<PyRunResult> {
     let summary = summary_dict(py, &scenario.name, &outcome)?;
     let r = outcome.recording.take().unwrap_or_default();
     let (rows, n) = (r.len(), config.scene.points().len());
@@ -380,20 +409,42 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// not measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2,
 /// within_tolerance, message (str). A scenario whose configuration is invalid raises before
 /// anything runs; a run that fails on the way has status "error" and its message.
+/// `progress`: a tqdm bar over runs (None: when stderr is a terminal; True, False), or a
+/// callable `progress(done, total)` called from this thread as runs finish. Ctrl-C (or an
+/// exception of `progress`) stops the batch and is raised.
 #[pyfunction]
-#[pyo3(signature = (scenarios, threads = None, allow_outside_files = false))]
+#[pyo3(signature = (scenarios, threads = None, allow_outside_files = false, progress = None))]
 pub fn run_batch<'py>(
     py: Python<'py>,
     scenarios: &Bound<'py, PyAny>,
     #[pyo3(from_py_with = super::args::threads)] threads: Option<usize>,
     allow_outside_files: bool,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let access = access(allow_outside_files);
     let texts = batch_texts(scenarios, access)?;
-    let results = py.detach(|| crate::sim::batch::run_json_batch_with(&texts, threads, access))?;
+    let started = std::time::Instant::now();
+    log(py, INFO, || format!("run_batch: {} scenarios on {}", texts.len(), threads_text(threads)))?;
+    let reporter = py.import("vsinv._progress")?.call_method1("reporter", (progress, texts.len(), "batch"))?;
+    let results = run_reporting(py, &texts, threads, access, Some(&reporter).filter(|r| !r.is_none()));
+    if !reporter.is_none() {
+        reporter.call_method0("close")?;
+    }
+    let results = results?;
     let mut table = BatchTable::with_capacity(results.len());
     results.iter().for_each(|r| table.push(r));
+    log(py, INFO, || {
+        let converged = table.status.iter().filter(|s| *s == "converged").count();
+        let errors = table.status.iter().filter(|s| *s == "error").count();
+        let (n, secs) = (table.status.len(), started.elapsed().as_secs_f64());
+        format!("run_batch: {n} runs in {secs:.4} s: {converged} converged, {errors} errors")
+    })?;
     table.into_dict(py)
+}
+
+/// A thread count for messages.
+fn threads_text(threads: Option<usize>) -> String {
+    threads.map_or_else(|| "all cores".into(), |n| format!("{n} threads"))
 }
 
 /// The batch's scenarios as JSON texts. Dictionaries become JSON here (the GIL is needed);

@@ -1,19 +1,27 @@
 //! Many simulations at once, in parallel (rayon), without per-iteration recording so that
-//! memory stays flat however many runs there are.
+//! memory stays flat however many runs there are. The runs go on vsinv's own pools
+//! ([`crate::parallel`]), which a forked child rebuilds.
 
-use std::sync::{Arc, Mutex};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Condvar, Mutex, PoisonError};
+use std::time::Duration;
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::parallel::pool;
 use crate::sim::scenario::{FileAccess, Scenario};
 use crate::sim::{SimulationConfig, Summary, simulate};
+
+/// The most worker threads a batch may ask for (each is an OS thread with its own stack).
+pub use crate::parallel::MAX_THREADS;
 
 /// Runs every configuration (recording off) on `threads` worker threads (None: one per
 /// core) and returns one result per configuration, in order. A run that cannot start
 /// (invalid configuration) gives its error in place; the others are unaffected.
 pub fn run_batch(configs: &[SimulationConfig], threads: Option<usize>) -> Result<Vec<Result<Summary>>> {
-    Ok(pool(threads)?.install(|| configs.par_iter().map(run_one).collect()))
+    let watch = BatchWatch::default();
+    Ok(pool(threads)?.install(|| configs.par_iter().map(|c| run_one(c, &watch)).collect()))
 }
 
 /// Like [`run_batch`] for scenarios given as JSON texts, parsed in parallel too. Every
@@ -29,6 +37,35 @@ pub fn run_json_batch_with(
     threads: Option<usize>,
     access: FileAccess,
 ) -> Result<Vec<Result<Summary>>> {
+    run_json_batch_watched(texts, threads, access, &BatchWatch::default())
+}
+
+/// [`run_json_batch_with`] that counts the finished runs in `watch` (for a progress report
+/// from another thread) and skips or stops the runs once `watch` is cancelled (those give an
+/// error). `watch` is marked finished when the batch returns, whatever the result.
+pub fn run_json_batch_watched(
+    texts: &[String],
+    threads: Option<usize>,
+    access: FileAccess,
+    watch: &BatchWatch,
+) -> Result<Vec<Result<Summary>>> {
+    /// Marks the batch returned however it ends (a panicking run included).
+    struct Returned<'a>(&'a BatchWatch);
+    impl Drop for Returned<'_> {
+        fn drop(&mut self) {
+            self.0.finish();
+        }
+    }
+    let _returned = Returned(watch);
+    json_batch_on_pool(texts, threads, access, watch)
+}
+
+fn json_batch_on_pool(
+    texts: &[String],
+    threads: Option<usize>,
+    access: FileAccess,
+    watch: &BatchWatch,
+) -> Result<Vec<Result<Summary>>> {
     pool(threads)?.install(|| {
         let configs: Vec<Result<SimulationConfig>> =
             texts.par_iter().map(|t| Scenario::config_from_json_with(t, access)).collect();
@@ -41,51 +78,70 @@ pub fn run_json_batch_with(
                 other => Error::Scenario { key: format!("[{i}]"), reason: other.to_string() },
             });
         }
-        Ok(configs.into_par_iter().flatten().collect::<Vec<_>>().par_iter().map(run_one).collect())
+        let configs: Vec<SimulationConfig> = configs.into_par_iter().flatten().collect();
+        Ok(configs.par_iter().map(|c| run_one(c, watch)).collect())
     })
 }
 
-fn run_one(c: &SimulationConfig) -> Result<Summary> {
+fn run_one(c: &SimulationConfig, watch: &BatchWatch) -> Result<Summary> {
+    if watch.is_cancelled() {
+        return Err(cancelled());
+    }
     let mut c = c.clone();
     c.record = false;
-    simulate(&c, &mut |_, _| true).map(|o| o.summary)
+    let result = simulate(&c, &mut |_, _| !watch.is_cancelled()).map(|o| o.summary);
+    watch.finished_one();
+    result
 }
 
-/// The most worker threads a batch may ask for (each is an OS thread with its own stack).
-pub const MAX_THREADS: usize = 1024;
+fn cancelled() -> Error {
+    Error::InvalidParameter { name: "batch", reason: "cancelled before this run started".into() }
+}
 
-/// The worker pool for `threads` (None: one thread per core). Pools are kept and reused, one
-/// per thread count: starting threads on every call costs their start-up and, with glibc,
-/// fresh malloc arenas that keep the process's memory growing over the first thousands of
-/// batches.
-fn pool(threads: Option<usize>) -> Result<Arc<rayon::ThreadPool>> {
-    static POOLS: Mutex<Vec<(Option<usize>, Arc<rayon::ThreadPool>)>> = Mutex::new(Vec::new());
-    if threads == Some(0) {
-        return Err(Error::InvalidParameter { name: "threads", reason: "must be >= 1".into() });
+/// A running batch seen from another thread: how many runs have finished, whether the batch
+/// has returned, and a switch that stops it early.
+#[derive(Debug, Default)]
+pub struct BatchWatch {
+    /// Finished runs, and whether the batch has returned.
+    state: Mutex<(usize, bool)>,
+    changed: Condvar,
+    cancelled: AtomicBool,
+}
+
+impl BatchWatch {
+    fn update(&self, f: impl FnOnce(&mut (usize, bool))) {
+        f(&mut self.state.lock().unwrap_or_else(PoisonError::into_inner));
+        self.changed.notify_all();
     }
-    if let Some(n) = threads
-        && n > MAX_THREADS
-    {
-        return Err(Error::InvalidParameter {
-            name: "threads",
-            reason: format!("must be at most {MAX_THREADS}, got {n}"),
-        });
+
+    fn finished_one(&self) {
+        self.update(|s| s.0 += 1);
     }
-    let mut pools = POOLS.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    if let Some((_, p)) = pools.iter().find(|(n, _)| *n == threads) {
-        return Ok(Arc::clone(p));
+
+    fn finish(&self) {
+        self.update(|s| s.1 = true);
     }
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        builder = builder.num_threads(n);
+
+    /// Waits at most `timeout` for more than `seen` runs to have finished or for the batch to
+    /// return; gives (finished runs, batch returned).
+    pub fn wait_past(&self, seen: usize, timeout: Duration) -> (usize, bool) {
+        let state = self.state.lock().unwrap_or_else(PoisonError::into_inner);
+        let (state, _) = self
+            .changed
+            .wait_timeout_while(state, timeout, |s| s.0 <= seen && !s.1)
+            .unwrap_or_else(PoisonError::into_inner);
+        *state
     }
-    let built = builder.build().map_err(|e| Error::InvalidParameter {
-        name: "threads",
-        reason: format!("cannot start the thread pool: {e}"),
-    })?;
-    let built = Arc::new(built);
-    pools.push((threads, Arc::clone(&built)));
-    Ok(built)
+
+    /// Stops the batch: runs not started are skipped, running ones stop at their next iteration.
+    pub fn cancel(&self) {
+        self.cancelled.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether [`cancel`](Self::cancel) was called.
+    pub fn is_cancelled(&self) -> bool {
+        self.cancelled.load(Ordering::Relaxed)
+    }
 }
 
 #[cfg(test)]
@@ -124,5 +180,30 @@ mod tests {
             Err(Error::Scenario { key, .. }) => assert_eq!(key, "[1].control.gain"),
             other => panic!("{other:?}"),
         }
+    }
+
+    #[test]
+    fn a_watched_batch_counts_its_runs_and_can_be_cancelled() {
+        let texts = vec![builtin("lens-12-6").unwrap().to_json().unwrap(); 5];
+        let watch = BatchWatch::default();
+        let results = std::thread::scope(|s| {
+            let batch = s.spawn(|| run_json_batch_watched(&texts, Some(2), FileAccess::ScenarioFolder, &watch));
+            let mut seen = 0;
+            loop {
+                let (done, returned) = watch.wait_past(seen, Duration::from_secs(60));
+                assert!(done >= seen && done <= texts.len());
+                seen = done;
+                if returned {
+                    break;
+                }
+            }
+            batch.join().unwrap().unwrap()
+        });
+        assert_eq!(watch.wait_past(0, Duration::ZERO), (5, true));
+        assert!(results.iter().all(Result::is_ok));
+        let stopped = BatchWatch::default();
+        stopped.cancel();
+        let results = run_json_batch_watched(&texts, Some(2), FileAccess::ScenarioFolder, &stopped).unwrap();
+        assert!(results.iter().all(Result::is_err));
     }
 }

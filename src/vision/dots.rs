@@ -126,6 +126,11 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
             reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
         });
     }
+    crate::parallel::install(|| dots_of(image, config))
+}
+
+/// [`detect_dots`] of a checked image and configuration, on the calling thread's rayon pool.
+fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> {
     let dark = config.polarity.dark_dots(image);
     let thresholds = match config.threshold {
         Some(t) if dark => TileThresholds::uniform(image, 255 - t),
@@ -150,7 +155,7 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
         })
         .collect();
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
-    Ok(dots)
+    dots
 }
 
 fn check_config(config: &DetectConfig) -> Result<()> {

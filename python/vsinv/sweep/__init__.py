@@ -49,6 +49,8 @@ through). With any :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor
 ``client.get_executor()``, ...) the module-level :func:`vsinv.sweep.execute._run_chunk` is
 submitted per chunk, a bounded number at a time (memory stays flat), and the results are gathered in order. In worker
 processes pass ``threads`` (e.g. ``os.cpu_count() // workers``) to avoid oversubscription.
+Process pools with any start method work whatever ran before in this process: a forked
+worker starts its own rayon pools (vsinv's pools are per process, see ``src/parallel.rs``).
 
 The package, one concern a module: :mod:`.distributions` (random axes), :mod:`.keys` (dotted and
 derived keys), :mod:`.plan` (the runs and their seeds), :mod:`.execute` (chunks, executors,

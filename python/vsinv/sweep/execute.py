@@ -4,9 +4,9 @@
 from __future__ import annotations
 
 import json
+import logging
 import math
 import os
-import sys
 import time
 from collections.abc import Iterator, Mapping
 from typing import TYPE_CHECKING, Any, Optional
@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 
 from .._core import InvalidInput, VsinvError, load_scenario, run_batch
+from .._progress import Bar
 from .columns import Column
 from .plan import _Plan, _plan
 from .result import SweepResult
@@ -21,13 +22,16 @@ from .result import SweepResult
 if TYPE_CHECKING:
     import concurrent.futures as cf
 
+log = logging.getLogger("vsinv")
+
 
 def _run_chunk(
     scenarios: list[str], threads: Optional[int] = None, allow_outside_files: bool = False
 ) -> dict[str, Column]:
     """Run a chunk of scenarios written as JSON texts with :func:`vsinv.run_batch` (module
-    level: picklable, for executors; texts pickle faster than nested dicts)."""
-    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files)
+    level: picklable, for executors; texts pickle faster than nested dicts). The sweep has
+    its own bar: the chunk shows none."""
+    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=False)
 
 
 def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
@@ -61,25 +65,6 @@ def _explain(plan: _Plan, start: int, chunk: list[dict[str, Any]], exc: BaseExce
             i = start + j
             return InvalidInput(f"sweep run {i} ({plan.values(i)}, seed {int(plan.columns['seed'][i])}): {inner}")
     return exc
-
-
-class _Bar:
-    def __init__(self, enabled: Optional[bool], total: int, desc: str) -> None:
-        if enabled is None:
-            enabled = sys.stderr.isatty()
-        self.bar: Any = None
-        if enabled:
-            from tqdm import tqdm  # type: ignore[import-untyped, unused-ignore]
-
-            self.bar = tqdm(total=total, desc=desc, unit="run", file=sys.stderr, dynamic_ncols=True)
-
-    def update(self, n: int) -> None:
-        if self.bar is not None:
-            self.bar.update(n)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
 
 
 def _chunks(n: int, size: int) -> Iterator[tuple[int, int]]:
@@ -127,7 +112,10 @@ def run_sweep(
     if isinstance(chunk_size, bool) or not isinstance(chunk_size, int) or chunk_size < 1:
         raise InvalidInput(f"chunk_size: expected an integer >= 1, got {chunk_size!r}")
 
-    bar = _Bar(progress, n, f"sweep {plan.base.get('name', '')}")
+    base_name = str(plan.base.get("name", ""))
+    where = "this process" if executor is None else type(executor).__name__
+    log.info("run_sweep %s: %d runs in chunks of %d on %s", base_name, n, chunk_size, where)
+    bar = Bar(progress, n, f"sweep {base_name}")
     parts: dict[int, dict[str, Column]] = {}
     try:
         if executor is None:
@@ -145,6 +133,7 @@ def run_sweep(
                         except (VsinvError, ValueError) as exc:
                             raise _explain(plan, r_start, r_chunk, exc) from exc
                         bar.update(r_stop - r_start)
+                        log.debug("run_sweep: runs %d to %d done", r_start, r_stop - 1)
                         running = None
                     if chunk:
                         running = (start, stop, chunk, runner.submit(
@@ -159,14 +148,18 @@ def run_sweep(
     ordered = [parts.pop(s) for s in sorted(parts)]
     for name in list(ordered[0]) if ordered else []:  # column by column: the chunks are freed as we go
         columns[name] = np.concatenate([p.pop(name) for p in ordered])
+    elapsed = time.perf_counter() - t0
+    if log.isEnabledFor(logging.INFO) and "status" in columns:
+        converged = int(np.count_nonzero(np.asarray(columns["status"]) == "converged"))
+        log.info("run_sweep %s: %d runs in %.3f s: %d converged", base_name, n, elapsed, converged)
     return SweepResult(
         columns=columns,
         grid_keys=plan.grid_keys,
         random_keys=plan.random_keys,
-        base_name=str(plan.base.get("name", "")),
+        base_name=base_name,
         repeats=repeats,
         seed=int(seed),
-        elapsed_s=time.perf_counter() - t0,
+        elapsed_s=elapsed,
     )
 
 
@@ -178,7 +171,7 @@ def _run_on(
     threads: Optional[int],
     window: int,
     parts: dict[int, dict[str, Column]],
-    bar: _Bar,
+    bar: Bar,
 ) -> None:
     """Submit the chunks to ``executor``, at most ``window`` in flight."""
     import concurrent.futures as cf
@@ -203,6 +196,7 @@ def _run_on(
                 except (VsinvError, ValueError) as exc:
                     raise _explain(plan, start, plan.scenarios(start, stop), exc) from exc
                 bar.update(stop - start)
+                log.debug("run_sweep: runs %d to %d done", start, stop - 1)
     finally:
         for fut in pending:
             fut.cancel()

@@ -189,7 +189,8 @@ impl TagDecoder {
         let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
         let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
         let decoder = self.decoder_for(size)?;
-        let detections = decoder.decode(&source).map_err(decoder_error);
+        // kornia decodes with rayon: on vsinv's pool, never rayon's global one (see `parallel`).
+        let detections = crate::parallel::install(|| decoder.decode(&source))?.map_err(decoder_error);
         decoder.clear();
         let border_cells = f64::from(self.family.border_cells());
         let mut tags: Vec<(f32, Tag)> = detections?
