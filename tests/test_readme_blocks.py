@@ -1,0 +1,432 @@
+"""Every fenced code block of README.md, executed (issue 19, item 2: a README that is true).
+
+`tests/readme.rs` checks the README's scenario block against the schema (it parses and names
+every key); this file runs the blocks as a reader would and checks what the text says of them.
+
+Each block is matched to one entry of `BLOCKS` by its language and the start of its first
+line (so the README needs no markers, and a block can move). An entry says how the block is
+taken:
+
+- `RUN`: executed in a temporary working directory, in a fresh interpreter (Python) or bash
+  (shell, with `vsinv` standing for `python -m vsinv`; Python, after `import numpy as np,
+  vsinv` as in the README's first block). A block that is a fragment (it uses
+  `reference_pixels`, `clicks`, `send_to_robot`, ...) gets a short `prelude` that defines
+  those names from a built-in scenario, and a `check` run after it (Python) or applied to its
+  output (shell): the outcome or the figures the README states next to the block.
+- `SLOW`: runs only when `VSINV_README_SLOW=1` (minutes); counted otherwise.
+- `NOT_RUN`: cannot run here (a real robot, a crate registry, a whole build); the reason is
+  written down and counted.
+
+Every block must match exactly one entry and every entry one block: a new block without an
+entry fails `test_every_block_has_an_entry`, so no block is silently skipped. The counts are
+printed by `test_block_counts` (`pytest -s`).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import textwrap
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+README = ROOT / "README.md"
+VISP = Path("/usr/share/visp-images-data/ViSP-images")
+TIME_LIMIT_S = 300
+
+RUN, SLOW, NOT_RUN = "run", "slow", "not run"
+
+
+@dataclass(frozen=True)
+class Block:
+    lang: str
+    code: str
+    line: int  # of the opening fence, 1-based
+
+    @property
+    def first_line(self) -> str:
+        return self.code.split("\n", 1)[0]
+
+
+def readme_blocks() -> list[Block]:
+    text = README.read_text(encoding="utf-8")
+    blocks = []
+    for m in re.finditer(r"^```(\w*)\n(.*?)^```", text, re.M | re.S):
+        blocks.append(Block(m.group(1), m.group(2), text.count("\n", 0, m.start()) + 1))
+    return blocks
+
+
+def readme_text() -> str:
+    return README.read_text(encoding="utf-8")
+
+
+@dataclass(frozen=True)
+class Entry:
+    lang: str
+    starts: str  # the start of the block's first line
+    mode: str
+    reason: str = ""
+    prelude: str = ""  # Python, run before the block (for shell blocks: in its own interpreter)
+    check: str | Callable[[str], None] = ""  # Python after the block, or a check of a shell block's output
+    output: str = ""  # text the README quotes as the block's output (stdout or stderr)
+    needs_visp: bool = False
+
+
+# Every Python block runs after the README's first import (its "Python" section).
+PYTHON_CONVENTION = "import numpy as np, vsinv"
+
+# --- preludes: the names a fragment uses, from the built-in scenarios --------------------------
+
+LENS_SCENE = """
+import numpy as np, vsinv
+_s = vsinv.load_scenario("lens-12-6").to_dict()
+_obj = np.array(_s["object"]["points"])
+_kc = lambda c: vsinv.Intrinsics(c["fku"], c["fkv"], c["u0"], c["v0"])
+"""
+
+CONTROL_PRELUDE = LENS_SCENE + """
+reference_pixels, _ = vsinv.project(_obj, vsinv.Intrinsics(1200, 1200, 384, 288))
+pixels, depths = vsinv.project(_obj + [0.01, -0.02, 0.05], vsinv.Intrinsics(600, 600, 384, 288))
+K = vsinv.Intrinsics(600, 600, 384, 288).matrix
+K_hat = vsinv.Intrinsics(650, 570, 395, 280).matrix
+max_b = 0.1
+"""
+
+ERRORS_PRELUDE = """
+import vsinv
+d = vsinv.load_scenario("lens-12-6").to_dict()
+d["control"]["gain"] = -1.0
+"""
+
+CALIBRATION_PRELUDE = """
+import shutil, numpy as np, vsinv
+shutil.copy({fixture!r}, "camera.yaml")
+K = vsinv.Intrinsics(600, 600, 416, 312).matrix
+pixels = np.array([[100.0, 80.0], [416.0, 312.0], [700.0, 500.0]])
+k1, k2, p1, p2, k3 = -0.3, 0.1, 0.0005, -0.0008, -0.02
+""".format(fixture=str(ROOT / "tests/fixtures/calibration/ros_plumb_bob.yaml"))
+
+CALIBRATION_CHECK = """
+assert np.allclose(vsinv.distort_points(ideal, K, [k1, k2, p1, p2, k3]), distorted, atol=1e-9)
+"""
+
+SIMULATOR_PRELUDE = f"""
+README = {str(README)!r}
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import vsinv
+ax = plt.figure().add_subplot()
+"""
+
+# The figures the README states under the block: the noisy copy with its loosened rule, and
+# the same copy with the default rule.
+SIMULATOR_CHECK = """
+import re
+text = open(README).read()
+m = re.search(r"with the default\\s+`\\[stop\\]` the noisy copy above ends `(\\w+)` after (\\d+) iterations \\(([\\d.]+) mm", text)
+plain = dict(d, stop=vsinv.load_scenario("lens-12-6").to_dict()["stop"])
+s = vsinv.run_scenario(plain).summary
+assert (s["status"], str(s["iterations"]), f"{s['final_translation_error'] * 1e3:.2f}") == m.groups(), (s, m.groups())
+m = re.search(r"the copy then meets its rule after (\\d+) iterations,\\s+([\\d.]+) mm from the goal, and ends `(\\w+)`: "
+              r"with `lens-12-6`'s object the images still allow\\s+([\\d.]+) mm", text)
+s = noisy.summary
+assert (str(s["iterations"]), f"{s['final_translation_error'] * 1e3:.2f}", s["status"]) == m.groups()[:3], (s, m.groups())
+assert f"{s['translation_uncertainty'] * 1e3:.1f}" == m.group(4), s["translation_uncertainty"]
+"""
+
+SIMULATOR_CLI_PRELUDE = """
+import vsinv
+open("my_scenario.toml", "w").write(vsinv.load_scenario("lens-12-6").to_toml())
+"""
+
+RENDER_PRELUDE = """
+import numpy as np, vsinv
+# The block tracks from the 6 mm view at the reference pose: clicks 1.5 px off its dots.
+next_image, _true, _ = vsinv.render_view("vision-12-6", pose=np.eye(4), time=0.0)
+clicks = _true + [1.5, -1.0]
+"""
+
+RENDER_CHECK = """
+assert found.all() and pixels.shape == (12, 2), found
+assert (vsinv.load_image("view.png") == image).all()
+"""
+
+IMAGE_SERVO_PRELUDE = LENS_SCENE.replace("lens-12-6", "vision-12-6") + """
+import types
+clicks_in_reference, z_star = vsinv.project(_obj, _kc(_s["reference_camera"]))
+K_hat = _kc(_s["camera"]).matrix
+# Dark dots on a light background (the block's tracker polarity): the negatives of the renderings.
+reference_image = 255 - vsinv.render("vision-12-6", reference=True)
+_frame, clicks_in_first_frame, _ = vsinv.render_view("vision-12-6", pose=np.eye(4))
+camera_frames = [255 - _frame] * 3
+calibration = types.SimpleNamespace(distortion=vsinv.Distortion([0.0, 0.0, 0.0, 0.0, 0.0]))
+sent = []
+send_to_robot = sent.append
+"""
+
+IMAGE_SERVO_CHECK = """
+assert len(sent) == 3 and step.found.all(), (len(sent), step.found)
+"""
+
+TAGS_SERVO_PRELUDE = """
+import numpy as np, vsinv
+reference_image = vsinv.render("tags-12-6", reference=True)
+K_hat = vsinv.Intrinsics(600, 600, 416, 312).matrix
+z_star = np.full(12, 0.75)   # the rig is about 750 mm away: depths up to a common scale (sec. 4.1)
+"""
+
+TAGS_SERVO_CHECK = """
+step = pipeline.step(vsinv.render("tags-12-6"))
+assert step.found.sum() == 12, step.found
+"""
+
+BATCH_PRELUDE = """
+import concurrent.futures, numpy as np, vsinv
+scenario_a = vsinv.load_scenario("lens-12-6")
+scenario_b = vsinv.load_scenario("ibvs-12-6")
+scenarios = [scenario_a] * 4
+"""
+
+BATCH_CHECK = """
+assert list(table["status"][:2]) == ["converged", "max_iterations"] or len(table["status"]) == 4
+import os
+assert os.path.exists("sweep.parquet") or os.path.exists("sweep.csv")
+"""
+
+LOGGING_OUTPUT = "vsinv run_scenario lens-12-6: converged after 213 iterations in"
+
+SERVO_PRELUDE = LENS_SCENE + """
+reference_pixels, z_star = vsinv.project(_obj, _kc(_s["reference_camera"]))
+_k = _kc(_s["camera"])
+K_hat = _k.matrix
+found = np.ones(len(_obj), dtype=bool)
+_pose = vsinv.pose_from_position_thetau(_s["start"]["position"], np.radians(_s["start"]["rotation_deg"]))
+
+def pixels_from_your_camera():   # a simulated camera: the object seen from the current pose
+    inverse = np.linalg.inv(_pose)
+    return vsinv.project(_obj @ inverse[:3, :3].T + inverse[:3, 3], _k)[0]
+
+def send_to_robot(twist):        # a simulated robot: the twist held for 40 ms
+    global _pose
+    _pose = _pose @ vsinv.exp_twist(twist, 0.04)
+"""
+
+SERVO_CHECK = """
+assert str(step.verdict) == "converged", (step.verdict, step.reason)
+assert np.linalg.norm(_pose[:3, 3]) < 1e-3, _pose
+"""
+
+
+# --- checks of shell output: the figures the README quotes next to the block ------------------
+
+
+def _number_after(pattern: str, text: str) -> float:
+    m = re.search(pattern, text)
+    assert m, f"README no longer says {pattern!r}"
+    return float(m.group(1))
+
+
+def check_zoom_invariance(out: str) -> None:
+    """'prints image errors growing to 120.6 px at 1550 px while every invariant error stays at
+    or below 3.75e-4'."""
+    text = readme_text()
+    quoted_image = _number_after(r"prints image errors growing to ([\d.]+) px", text)
+    quoted_invariant = _number_after(r"every invariant error stays at or below\s+([\d.e-]+)", text)
+    m = re.search(r"max image error ([\d.]+) px .*max invariant error ([\d.e+-]+) over", out)
+    assert m, out
+    assert round(float(m.group(1)), 1) == quoted_image, (m.group(1), quoted_image)
+    assert float(f"{float(m.group(2)):.3g}") == quoted_invariant, (m.group(2), quoted_invariant)
+    assert "0 of 96 dots not found" in out, out
+
+
+def check_lens_invariance(out: str) -> None:
+    """'finds all 12 dots (image errors 82.9 to 379.2 px; invariant errors up to 0.145 ...)'."""
+    text = readme_text()
+    m = re.search(r"finds all (\d+) dots \(image errors ([\d.]+) to ([\d.]+) px; invariant errors up to ([\d.]+)", text)
+    assert m, "README no longer states the lens-change invariance figures"
+    dots, low, high, invariant = int(m.group(1)), float(m.group(2)), float(m.group(3)), float(m.group(4))
+    rows = re.findall(r"^\s*\d+\s+([\d.]+) / ([\d.e+-]+)\s*$", out, re.M)
+    assert len(rows) == dots, out
+    errors = [float(r[0]) for r in rows]
+    assert (round(min(errors), 1), round(max(errors), 1)) == (low, high), errors
+    worst = re.search(r"max invariant error ([\d.e+-]+) over", out)
+    assert worst and round(float(worst.group(1)), 3) == invariant, out
+    assert f"0 of {dots} dots not found" in out, out
+
+
+def check_exit_only(out: str) -> None:
+    """The block's commands all exit 0 (checked by the runner); nothing is quoted."""
+
+
+def check_sweeps(out: str) -> None:
+    assert Path("sweeps").is_dir()
+
+
+# --- the registry: one entry per README block --------------------------------------------------
+
+BLOCKS: list[Entry] = [
+    Entry("sh", "make run", NOT_RUN, "the whole install and test suite (make run compiles for several minutes, "
+          "make test about 15 minutes on 2 cores): CI and the lead run it, and this file is part of it"),
+    Entry("python", "import numpy as np, vsinv", RUN, prelude=CONTROL_PRELUDE),
+    Entry("python", "try:", RUN, prelude=ERRORS_PRELUDE, check="print('no exception escaped')"),
+    Entry("python", "cal = vsinv.load_calibration", RUN, prelude=CALIBRATION_PRELUDE, check=CALIBRATION_CHECK),
+    Entry("sh", "vsinv list", RUN, prelude=SIMULATOR_CLI_PRELUDE, check=check_exit_only),
+    Entry("python", "result = vsinv.run_scenario", RUN, prelude=SIMULATOR_PRELUDE, check=SIMULATOR_CHECK),
+    Entry("toml", 'name = "my-run"', RUN, "loaded and run: the outcome stated under the block"),
+    Entry("python", "image = vsinv.render(", RUN, prelude=RENDER_PRELUDE, check=RENDER_CHECK),
+    Entry("sh", "vsinv render vision-zoom", RUN, check=check_zoom_invariance),
+    Entry("sh", "vsinv render vision-12-6", RUN, check=check_lens_invariance),
+    Entry("python", 'image = vsinv.load_image("/usr/share/visp-images-data', RUN, needs_visp=True,
+          check="assert len(dots.centroids) == 36, len(dots.centroids)"),
+    Entry("python", "tags = vsinv.detect_tags", RUN, needs_visp=True,
+          check="assert tags.ids[0] == 8 and tags.ids[1] == 9 and tags.ids[-1] == 19, tags.ids\n"
+          "assert tags.corners[0].shape == (4, 2)"),
+    Entry("python", "pipeline = vsinv.ImageServo(reference_image, \"dots\"", RUN,
+          prelude=IMAGE_SERVO_PRELUDE, check=IMAGE_SERVO_CHECK),
+    Entry("python", "pipeline = vsinv.ImageServo(reference_image, \"tags\"", RUN,
+          prelude=TAGS_SERVO_PRELUDE, check=TAGS_SERVO_CHECK),
+    Entry("sh", "vsinv replay reference.png frames/", NOT_RUN,
+          "needs recorded frames with their calibration and depths files (a real camera); "
+          "tests/test_real_images.py runs replay on ViSP's mire-2 frames"),
+    Entry("python", "table = vsinv.run_batch(", RUN, prelude=BATCH_PRELUDE, check=BATCH_CHECK),
+    Entry("sh", "vsinv sweep lens-12-6", RUN, check=check_sweeps),
+    Entry("python", "import logging", RUN, output=LOGGING_OUTPUT),
+    Entry("python", "servo = vsinv.Servo(", RUN, prelude=SERVO_PRELUDE, check=SERVO_CHECK),
+    Entry("toml", "[dependencies]", RUN, "a Cargo manifest: parsed, its version checked against Cargo.toml "
+          "(not built: the crate is not on crates.io yet)"),
+    Entry("rust", "use vsinv::{Intrinsics", NOT_RUN, "a fragment (reference_pixels, pixels, depths undefined); "
+          "examples/control_loop.rs is the compiled loop with the same calls (make test-examples)"),
+    Entry("", "src/", NOT_RUN, "not code: the source tree (checked: every top-level entry exists)"),
+    Entry("sh", "make bench", NOT_RUN, "the benchmarks: tens of minutes, timing only (make bench)"),
+]
+
+
+def entry_for(block: Block) -> Entry:
+    matches = [e for e in BLOCKS if e.lang == block.lang and block.first_line.startswith(e.starts)]
+    assert len(matches) == 1, f"README block at line {block.line} ({block.lang!r}: {block.first_line!r}) matches {len(matches)} entries"
+    return matches[0]
+
+
+def test_every_block_has_an_entry() -> None:
+    blocks = readme_blocks()
+    used = [entry_for(b) for b in blocks]
+    unused = [e for e in BLOCKS if e not in used]
+    assert not unused, f"entries that match no README block (a block changed its first line?): {unused}"
+
+
+def test_block_counts() -> None:
+    """How the blocks are taken; printed with `pytest -s`."""
+    counts: dict[str, int] = {}
+    for block in readme_blocks():
+        entry = entry_for(block)
+        mode = entry.mode
+        if entry.needs_visp and not VISP.is_dir():
+            mode = "skipped: no visp-images-data"
+        counts[mode] = counts.get(mode, 0) + 1
+    print(f"README blocks: {sum(counts.values())}; " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())))
+    assert sum(counts.values()) == len(BLOCKS)
+
+
+def run_python(code: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    script = cwd / "block.py"
+    script.write_text(code, encoding="utf-8")
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run([sys.executable, str(script)], cwd=cwd, capture_output=True, text=True,
+                          timeout=TIME_LIMIT_S, env=env, check=False)
+
+
+def run_shell(code: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    shell = f'set -e\nvsinv() {{ "{sys.executable}" -m vsinv "$@"; }}\n{code}'
+    env = dict(os.environ, MPLBACKEND="Agg")
+    return subprocess.run(["bash", "-c", shell], cwd=cwd, capture_output=True, text=True,
+                          timeout=TIME_LIMIT_S, env=env, check=False)
+
+
+def _ids() -> list[str]:
+    return [f"line{b.line}-{b.lang or 'text'}" for b in readme_blocks()]
+
+
+@pytest.mark.parametrize("block", readme_blocks(), ids=_ids())
+def test_readme_block(block: Block, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    entry = entry_for(block)
+    if entry.mode == NOT_RUN:
+        check_not_run(block, entry)
+        return
+    if entry.mode == SLOW and os.environ.get("VSINV_README_SLOW") != "1":
+        pytest.skip(f"slow: {entry.reason} (VSINV_README_SLOW=1 runs it)")
+    if entry.needs_visp and not VISP.is_dir():
+        pytest.skip("ViSP's image dataset is not installed: apt-get install visp-images-data")
+    monkeypatch.chdir(tmp_path)
+    if block.lang == "python":
+        run_python_block(block, entry, tmp_path)
+    elif block.lang == "sh":
+        run_shell_block(block, entry, tmp_path)
+    elif block.lang == "toml":
+        run_toml_block(block, entry)
+    else:
+        raise AssertionError(f"no runner for {block.lang!r}")
+
+
+def check_not_run(block: Block, entry: Entry) -> None:
+    assert entry.reason, f"block at line {block.line} is not run without a reason"
+    if block.lang == "":
+        for line in block.code.splitlines():
+            m = re.match(r"^(\S+/|\S+\.rs)\s", line + " ")
+            if m and not line.startswith(" "):
+                assert (ROOT / m.group(1)).exists() or (ROOT / "src" / m.group(1)).exists(), line
+    if block.lang == "rust":
+        example = (ROOT / "examples/control_loop.rs").read_text(encoding="utf-8")
+        assert "InvariantController::new(" in example and "InvariantControllerConfig::default()" in example
+
+
+def run_python_block(block: Block, entry: Entry, cwd: Path) -> None:
+    assert isinstance(entry.check, str)
+    code = "\n".join([PYTHON_CONVENTION, textwrap.dedent(entry.prelude), "# --- README block ---", block.code, "# --- check ---", entry.check])
+    proc = run_python(code, cwd)
+    assert proc.returncode == 0, f"README block at line {block.line} failed:\n{proc.stdout}\n{proc.stderr}"
+    assert entry.output in proc.stderr + proc.stdout, proc.stderr
+
+
+def run_shell_block(block: Block, entry: Entry, cwd: Path) -> None:
+    if entry.prelude:
+        pre = run_python(textwrap.dedent(entry.prelude), cwd)
+        assert pre.returncode == 0, pre.stderr
+    proc = run_shell(block.code, cwd)
+    assert proc.returncode == 0, f"README block at line {block.line} failed:\n{proc.stdout}\n{proc.stderr}"
+    assert callable(entry.check)
+    entry.check(proc.stdout)
+
+
+def run_toml_block(block: Block, entry: Entry) -> None:
+    data = tomllib.loads(block.code)
+    if "dependencies" in data:
+        crate = tomllib.loads((ROOT / "Cargo.toml").read_text(encoding="utf-8"))["package"]
+        wanted = data["dependencies"]["vsinv"]["version"]
+        assert crate["version"].startswith(wanted + "."), (crate["version"], wanted)
+        return
+    check_full_scenario(block)
+
+
+def check_full_scenario(block: Block) -> None:
+    """The scenario block runs to the outcome the README states under it."""
+    import vsinv
+
+    text = readme_text()
+    after = text.split(block.code, 1)[1]
+    m = re.search(r"This scenario, as written, ends `(\w+)` after (\d+) iterations, ([\d.]+) mm and "
+                  r"([\d.]+) degrees from the goal", after)
+    assert m, "the README no longer states the outcome of its scenario block"
+    result = vsinv.run_scenario(vsinv.Scenario.from_toml(block.code))
+    s = result.summary
+    assert s["status"] == m.group(1), s["message"]
+    assert s["iterations"] == int(m.group(2)), s["iterations"]
+    assert f"{s['final_translation_error'] * 1e3:.2f}" == m.group(3), s["final_translation_error"]
+    assert f"{s['final_rotation_error'] * 180 / 3.141592653589793:.3f}" == m.group(4), s["final_rotation_error"]
