@@ -9,11 +9,13 @@ ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control r
 
 .PHONY: install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
+# No -q: the first install compiles the Rust extension in release mode (several minutes on
+# 2 cores); -v passes cargo's progress through, so the build is seen to move.
 install:
-	$(PIP) install -q -e ".[test]"
+	$(PIP) install -v -e ".[test]"
 
 install-run:
-	$(PIP) install -q -e .
+	$(PIP) install -v -e .
 
 test: install test-rust test-embedded test-examples test-python stubtest
 

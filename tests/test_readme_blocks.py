@@ -430,3 +430,14 @@ def check_full_scenario(block: Block) -> None:
     assert s["iterations"] == int(m.group(2)), s["iterations"]
     assert f"{s['final_translation_error'] * 1e3:.2f}" == m.group(3), s["final_translation_error"]
     assert f"{s['final_rotation_error'] * 180 / 3.141592653589793:.3f}" == m.group(4), s["final_rotation_error"]
+
+
+def test_long_compiles_show_progress() -> None:
+    """`make run` and `make test` install first, which compiles the extension for minutes: the
+    install targets must not silence it (`-q`), and the README says how long to expect."""
+    makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    for target in ("install:", "install-run:"):
+        recipe = makefile.split("\n" + target, 1)[1].split("\n\n", 1)[0]
+        assert "pip" in recipe.lower() or "$(PIP)" in recipe, recipe
+        assert " -q" not in recipe, f"{target} silences the compile: {recipe!r}"
+    assert re.search(r"first `make run`.*compiles.*several minutes", readme_text(), re.S)
