@@ -441,3 +441,92 @@ def test_long_compiles_show_progress() -> None:
         assert "pip" in recipe.lower() or "$(PIP)" in recipe, recipe
         assert " -q" not in recipe, f"{target} silences the compile: {recipe!r}"
     assert re.search(r"first `make run`.*compiles.*several minutes", readme_text(), re.S)
+
+
+# --- the tables of built-in results: each figure is what `vsinv run NAME --json` prints ----------
+
+
+def readme_table(header_start: str) -> list[list[str]]:
+    """The rows of the README table whose header line starts with `header_start`."""
+    lines = readme_text().split("\n")
+    start = next(i for i, line in enumerate(lines) if line.startswith(header_start))
+    rows = []
+    for line in lines[start + 2:]:
+        if not line.startswith("|"):
+            break
+        rows.append([cell.strip() for cell in line.strip().strip("|").split("|")])
+    return rows
+
+
+def agrees(quoted: str, value: float | None) -> bool:
+    """`value` rounds to the README's figure at the README's precision (`n/a`: no value)."""
+    quoted = quoted.split(" ")[0]
+    if quoted == "n/a":
+        return value is None or value != value  # None or NaN
+    decimals = len(quoted.split(".")[1]) if "." in quoted else 0
+    return value is not None and round(value, decimals) == float(quoted)
+
+
+DEG = 180.0 / 3.141592653589793
+
+
+def test_builtin_table_is_what_the_runs_print() -> None:
+    """The README's table of built-in scenarios ("Measured with `vsinv run NAME --json`")."""
+    import vsinv
+
+    rows = readme_table("| scenario | status | iterations | final translation error (mm) | final rotation error (deg) | final image")
+    assert len(rows) >= 17
+    for name, status, iterations, *figures in rows:
+        s = vsinv.run_scenario(name).summary
+        got = [s["final_translation_error"] * 1e3, s["final_rotation_error"] * DEG, s["final_image_error"],
+               s["final_invariant_error"], s["peak_linear_speed"], s["peak_angular_speed"] * DEG]
+        assert status.split(" ")[0] == s["status"] and int(iterations) == s["iterations"], (name, s["status"], s["iterations"])
+        wrong = [(q, g) for q, g in zip(figures, got) if not agrees(q, g)]
+        assert not wrong, f"{name}: README figure vs run: {wrong}"
+
+
+def test_path_table_is_what_the_runs_print() -> None:
+    """The README's sec. 5.3 table (Prop. 3's figures along the planned path)."""
+    import vsinv
+
+    rows = readme_table("| scenario | status | iterations | final translation error (mm) | final rotation error (deg) | max line")
+    assert [r[0] for r in rows] == ["path-500", "path-3000", "path-500-feedforward"]
+    for name, status, iterations, *figures in rows:
+        s = vsinv.run_scenario(name).summary
+        got = [s["final_translation_error"] * 1e3, s["final_rotation_error"] * DEG, s["max_line_deviation"] * 1e3,
+               s["tracking_sigma"], s["tracking_psi"], s["tracking_bound"], s["observed_max_eps"]]
+        assert (status, int(iterations)) == (s["status"], s["iterations"]), (name, s["status"], s["iterations"])
+        wrong = [(q, g) for q, g in zip(figures, got) if not agrees(q, g)]
+        assert not wrong, f"{name}: README figure vs run: {wrong}"
+
+
+VISION_TABLE = "| scenario | status | iterations | final translation error (mm) | final rotation error (deg) | detection"
+
+
+def test_vision_table_status_is_the_recorded_one() -> None:
+    """Status and iterations of the vision table against tests/fixtures/builtin_results.txt
+    (which tests/builtin_results.rs keeps bit-identical to the runs); the other figures are
+    checked by the slow test below."""
+    recorded = {}
+    for line in (ROOT / "tests/fixtures/builtin_results.txt").read_text(encoding="utf-8").splitlines():
+        name, status, iterations, _digest = line.split()
+        recorded[name] = (status, int(iterations))
+    for name, status, iterations, *_ in readme_table(VISION_TABLE):
+        assert recorded[name] == (status.split(" ")[0], int(iterations)), (name, recorded[name])
+
+
+@pytest.mark.skipif(os.environ.get("VSINV_README_SLOW") != "1", reason="slow (about 2 minutes): VSINV_README_SLOW=1 runs it")
+def test_vision_table_is_what_the_runs_print() -> None:
+    """The README's table of the built-ins through images (also printed by
+    `cargo test --release --test vision_loop -- --nocapture`)."""
+    import vsinv
+
+    rows = readme_table(VISION_TABLE)
+    assert len(rows) >= 6
+    for name, status, iterations, translation, rotation, detection in rows:
+        s = vsinv.run_scenario(name).summary
+        assert (status.split(" ")[0], int(iterations)) == (s["status"], s["iterations"]), (name, s["status"], s["iterations"])
+        median, worst = detection.split(" / ")
+        got = [s["final_translation_error"] * 1e3, s["final_rotation_error"] * DEG, s["detection_error_median"], s["detection_error_max"]]
+        wrong = [(q, g) for q, g in zip([translation, rotation, median, worst], got) if not agrees(q, g)]
+        assert not wrong, f"{name}: README figure vs run: {wrong}"
