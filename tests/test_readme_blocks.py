@@ -529,3 +529,26 @@ def test_vision_table_is_what_the_runs_print() -> None:
         got = [s["final_translation_error"] * 1e3, s["final_rotation_error"] * DEG, s["detection_error_median"], s["detection_error_max"]]
         wrong = [(q, g) for q, g in zip([translation, rotation, median, worst], got) if not agrees(q, g)]
         assert not wrong, f"{name}: README figure vs run: {wrong}"
+
+
+def test_speed_limit_figures() -> None:
+    """'Without limits the first step of `lens-12-6` asks for 82 deg/s (422 deg/s with the
+    paper's `rz_task = "tau21"`) ... (lens-12-6: 212 iterations without the limits, 213 with them'."""
+    import math
+
+    import vsinv
+
+    m = re.search(r"Without limits the first step of `lens-12-6` asks for\s+(\d+) deg/s \((\d+) deg/s with the paper's "
+                  r"`rz_task = \"tau21\"`\).*?lens-12-6: (\d+)\s+iterations without the limits, (\d+) with them", readme_text(), re.S)
+    assert m, "the README no longer states the speed-limit figures"
+    free = vsinv.load_scenario("lens-12-6").to_dict()
+    for key in ("max_linear_speed", "max_angular_speed_deg"):
+        free["control"].pop(key)
+    first_steps = []
+    for rz_task in ("angle", "tau21"):
+        run = vsinv.run_scenario(dict(free, control=dict(free["control"], rz_task=rz_task)))
+        first_steps.append(round(math.degrees(float(sum(w * w for w in run.twist[0][3:]) ** 0.5))))
+        if rz_task == "angle":
+            unlimited = run.summary["iterations"]
+    limited = vsinv.run_scenario("lens-12-6").summary["iterations"]
+    assert [str(x) for x in (*first_steps, unlimited, limited)] == list(m.groups()), (first_steps, unlimited, limited)
