@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 import subprocess
 import sys
 import textwrap
@@ -129,6 +130,7 @@ ax = plt.figure().add_subplot()
 # the same copy with the default rule.
 SIMULATOR_CHECK = """
 import re
+import shutil
 text = open(README).read()
 m = re.search(r"with the default\\s+`\\[stop\\]` the noisy copy above ends `(\\w+)` after (\\d+) iterations \\(([\\d.]+) mm", text)
 plain = dict(d, stop=vsinv.load_scenario("lens-12-6").to_dict()["stop"])
@@ -552,3 +554,16 @@ def test_speed_limit_figures() -> None:
             unlimited = run.summary["iterations"]
     limited = vsinv.run_scenario("lens-12-6").summary["iterations"]
     assert [str(x) for x in (*first_steps, unlimited, limited)] == list(m.groups()), (first_steps, unlimited, limited)
+
+
+@pytest.mark.skipif(shutil.which("cargo") is None, reason="needs cargo")
+def test_core_crate_count() -> None:
+    """'nalgebra and thiserror as its only dependencies (16 crates in all, vsinv included'."""
+    m = re.search(r"as its only dependencies \((\d+) crates in all, vsinv included", readme_text())
+    assert m, "the README no longer states the core's crate count"
+    tree = subprocess.run(["cargo", "tree", "--offline", "--no-default-features", "-e", "normal", "--prefix", "none"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120, check=False)
+    if tree.returncode != 0:
+        pytest.skip(f"cargo tree failed (offline, no registry cache?): {tree.stderr[-300:]}")
+    crates = {line.replace(" (*)", "").strip() for line in tree.stdout.splitlines() if line.strip()}
+    assert len(crates) == int(m.group(1)), sorted(crates)
