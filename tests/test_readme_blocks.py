@@ -567,3 +567,53 @@ def test_core_crate_count() -> None:
         pytest.skip(f"cargo tree failed (offline, no registry cache?): {tree.stderr[-300:]}")
     crates = {line.replace(" (*)", "").strip() for line in tree.stdout.splitlines() if line.strip()}
     assert len(crates) == int(m.group(1)), sorted(crates)
+
+
+def _barrel_runs(slow: bool) -> dict[str, dict]:
+    """The runs behind the README's "Distortion in the loop" figures (as tests/distortion_loop.rs)."""
+    import vsinv
+
+    runs = {"known (default)": vsinv.load_scenario("lens-12-6-barrel").to_dict()}
+    unknown = vsinv.load_scenario("lens-12-6-barrel").to_dict()
+    unknown["estimate"] = {"fku": 600.0, "fkv": 600.0, "u0": 416.0, "v0": 312.0, "distortion": [0.0] * 5}
+    runs["unknown (`[estimate] distortion = [0, 0, 0, 0, 0]`)"] = unknown
+    if slow:
+        through_images = vsinv.load_scenario("vision-12-6").to_dict()
+        through_images["camera"]["distortion"] = [-0.30, 0.10, 0.0005, -0.0008, -0.02]
+        runs["wrong K_hat"] = dict(through_images)
+        through_images = dict(through_images)
+        through_images.pop("estimate")
+        runs["known, through images (`vision-12-6` with this lens)"] = through_images
+    return {key: vsinv.run_scenario(d).summary for key, d in runs.items()}
+
+
+def check_barrel_figures(slow: bool) -> None:
+    rows = {r[0]: r for r in readme_table("| distortion | K_hat | status | iterations |")}
+    summaries = _barrel_runs(slow)
+    for key, s in summaries.items():
+        if key == "wrong K_hat":
+            continue
+        _, _, status, iterations, translation, rotation = rows[key]
+        assert (status, int(iterations)) == (s["status"], s["iterations"]), (key, s["status"], s["iterations"])
+        got = [s["final_translation_error"] * 1e3, s["final_rotation_error"] * DEG]
+        assert all(agrees(q, g) for q, g in zip([translation, rotation], got)), (key, got, translation, rotation)
+    text = readme_text()
+    unknown = summaries["unknown (`[estimate] distortion = [0, 0, 0, 0, 0]`)"]
+    m = re.search(r"the invariant error stays at\s+([\d.]+)\)", text)
+    assert m and agrees(m.group(1), unknown["final_invariant_error"]), (m, unknown["final_invariant_error"])
+    if slow:
+        wrong = summaries["wrong K_hat"]
+        m = re.search(r"that run stops ([\d.]+) mm and ([\d.]+) degrees away", text)
+        assert m and agrees(m.group(1), wrong["final_translation_error"] * 1e3), (m, wrong)
+        assert agrees(m.group(2), wrong["final_rotation_error"] * DEG), (m, wrong)
+
+
+def test_barrel_table_is_what_the_runs_print() -> None:
+    """The README's "Distortion in the loop" table, its first two rows (the third is slow)."""
+    check_barrel_figures(slow=False)
+
+
+@pytest.mark.skipif(os.environ.get("VSINV_README_SLOW") != "1", reason="slow (about 40 s): VSINV_README_SLOW=1 runs it")
+def test_barrel_figures_through_images() -> None:
+    """The third row (through images) and the run with vision-12-6's wrong K_hat: 1.0 mm, 0.91 degrees."""
+    check_barrel_figures(slow=True)
