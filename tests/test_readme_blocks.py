@@ -20,6 +20,11 @@ taken:
 Every block must match exactly one entry and every entry one block: a new block without an
 entry fails `test_every_block_has_an_entry`, so no block is silently skipped. The counts are
 printed by `test_block_counts` (`pytest -s`).
+
+Below the blocks, the README's figures are checked against the runs that make them: the tables
+of built-in results (main, sec. 5.3, through images, lens distortion), the speed-limit figures
+and the core's crate count. Default run: about 35 s; `VSINV_README_SLOW=1` adds the runs
+through images (about 2.5 minutes more).
 """
 
 from __future__ import annotations
