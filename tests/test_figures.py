@@ -75,6 +75,7 @@ def test_pose_errors_per_axis_beside_the_norms(lens: vsinv.RunResult) -> None:
 
 def test_a_stationary_camera_gets_fig3_and_no_meaningless_figures(zoom: vsinv.RunResult, lens, tmp_path: Path) -> None:
     assert plots.is_stationary(zoom) and not plots.is_stationary(lens)
+    assert not plots.is_stationary(vsinv.run_scenario("planar"))  # degenerate at its first iteration
     paths = plots.save_figures(zoom, tmp_path)
     assert [p.name for p in paths] == list(plots.STATIONARY_FIGURES)
     assert {"path3d.png", "velocities.png", "task_functions.png", "pose_errors.png"}.isdisjoint(os.listdir(tmp_path))
@@ -160,7 +161,7 @@ def test_arm_joints_in_degrees_with_their_limits(ur5: vsinv.RunResult, kind: str
             np.testing.assert_allclose(np.asarray(data[0].get_ydata(), dtype=float), np.degrees(values[:, j]))
             drawn = sorted(float(ln.get_ydata()[0]) for ln in ax.get_lines() if ln.get_linestyle() == "--")
             np.testing.assert_allclose(drawn, [low[j], high[j]])
-            assert any(t.get_text().startswith(f"limits [{low[j]:.4g}, {high[j]:.4g}] {unit}") for t in ax.texts)
+            assert ax.get_title(loc="right").startswith(f"limits [{low[j]:.4g}, {high[j]:.4g}] {unit};")
         assert fig.axes[-1].get_xlabel() == "time (s)"
     finally:
         plt.close(fig)

@@ -322,11 +322,13 @@ def plot_image_trajectories(result: RunResult, ax: AxesArg = None, *, scenario: 
 
 def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """The invariant-space error (and the path tracking error) and the image error."""
-    t = np.asarray(result.time, dtype=float)
+    scen = scenario if scenario is not None else _scenario_dict(result)
+    stationary = is_stationary(result, scen)  # no servo, no stop rule: the images are numbered
+    t = np.arange(1.0, len(result.time) + 1.0) if stationary else np.asarray(result.time, dtype=float)
     inv = np.asarray(result.invariant_error, dtype=float)
     img = np.asarray(result.image_error, dtype=float)
     s = result.summary
-    stop = (scenario if scenario is not None else _scenario_dict(result)).get("stop") or {}
+    stop = {} if stationary else scen.get("stop") or {}
     fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
     if _all_nan(inv):
         _no_data(a1, "no invariant error recorded")
@@ -343,7 +345,7 @@ def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = 
         tol = stop.get("invariant_error")
         if tol is not None and tol > 0 and s.get("stop_rule") == "invariant":
             a1.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g}")
-        a1.legend(loc="upper right", fontsize=9)
+        a1.legend(loc="best", fontsize=9)
         _finish_time_axis(a1, t)
     a1.set_ylabel("||s - s*|| (invariant space)")
     a1.set_title("invariant-space error", fontsize=10)
@@ -355,11 +357,13 @@ def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = 
         if tol is not None and tol > 0 and s.get("stop_rule") == "pixel":
             a2.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g} px")
         a2.set_ylim(bottom=0.0)
-        a2.legend(loc="upper right", fontsize=9)
+        a2.legend(loc="best", fontsize=9)
         _finish_time_axis(a2, t)
     a2.set_ylabel("image error (px)")
     a2.set_title("largest distance to the reference pixel", fontsize=10)
-    a2.set_xlabel("time (s)")
+    a2.set_xlabel("image" if stationary else "time (s)")
+    if stationary and len(t) <= 40:
+        a2.set_xticks(t)
     _title(fig, result, "errors", own)
     return fig
 
@@ -646,11 +650,13 @@ def _point_errors(result: RunResult) -> tuple[npt.NDArray[np.float64], npt.NDArr
 
 
 def is_stationary(result: RunResult, scenario: _Scenario = None) -> bool:
-    """Whether the camera never moves in the run (``law = "none"``, or every recorded pose the
-    first): its path, velocity, task-function and pose-error figures mean nothing."""
+    """Whether the camera never moves in the run (``law = "none"``, or several iterations all
+    at the first pose): its path, velocity, task-function and pose-error figures mean nothing.
+    A run that ended at its first iteration (lost, degenerate) is not stationary: its figures
+    show where it stopped."""
     law = ((scenario if scenario is not None else _scenario_dict(result)).get("control") or {}).get("law")
     pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
-    return law == "none" or (len(pose) > 0 and bool(np.all(pose == pose[:1])))
+    return law == "none" or (len(pose) > 1 and bool(np.all(pose == pose[:1])))
 
 
 def plot_point_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
@@ -677,7 +683,7 @@ def _joint_panels(
     t = np.asarray(result.time, dtype=float)
     names = list((result.joint_limits or {}).get("names", []))
     n = values.shape[1]
-    fig, axes, own = _panels(ax, n, 1, figsize=(8, 1.25 * n + 1.0), sharex=True)
+    fig, axes, own = _panels(ax, n, 1, figsize=(8, 1.45 * n + 1.0), sharex=True)
     for j, a in enumerate(axes):
         v = values[:, j]
         name = names[j] if j < len(names) else f"joint {j}"
@@ -699,9 +705,8 @@ def _joint_panels(
         a.set_ylabel(f"{name}\n({unit})", fontsize=8)
         a.tick_params(labelsize=8)
         margin = min(hi - vmax, vmin - lo)
-        a.text(0.995, 0.92, f"limits [{lo:.4g}, {hi:.4g}] {unit}; closest approach {margin:.3g} {unit}",
-               ha="right", va="top", transform=a.transAxes, fontsize=7.5, color="tab:red",
-               bbox={"facecolor": "white", "alpha": 0.8, "edgecolor": "none", "pad": 1.0})
+        a.set_title(f"limits [{lo:.4g}, {hi:.4g}] {unit}; closest approach {margin:.3g} {unit}", loc="right",
+                    fontsize=7.5, color="tab:red", pad=2)
         _finish_time_axis(a, t)
     axes[-1].set_xlabel("time (s)")
     _title(fig, result, what, own)

@@ -179,7 +179,7 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
     paths = []
     ids = _tag_ids(sc)
     for (image, tracked, what), name in zip(views, VIEW_FIGURES):
-        title = f"{sc.name}: {what}, iteration {0 if 'first' in what else last if 'last' in what else '-'}"
+        title = f"{sc.name}: {what}" + (f", iteration {last}" if "last" in what else ", iteration 0" if "first" in what else "")
         paths.append(_save(plot_view(image, tracked, ref, title, tag_ids=ids), out, name))
     paths.append(save_servo_gif(result, out / VIEW_FIGURES[3]))
     return paths
