@@ -138,6 +138,7 @@ def test_invariance_figure_has_a_legend_and_shared_image_axis() -> None:
         assert a.get_xlabel() == b.get_xlabel() == "image" and a.get_xlim() == b.get_xlim()
         assert "(px)" in a.get_ylabel() and fig.legends and len(fig.legends[0].get_texts()) == 16
         assert "basis [0, 7, 10]" in fig.get_suptitle()
+        assert [t.get_text() for t in a.get_xticklabels()] == result.names  # the images named
     finally:
         plt.close(fig)
 

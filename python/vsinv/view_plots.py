@@ -192,6 +192,10 @@ def plot_invariance(result: InvarianceResult, ax: AxesArg = None) -> Figure:
     x = np.arange(1, len(result.names) + 1, dtype=float)
     fig, (a, b), own = _panels(ax, 1, 2, figsize=(13, 4.8))
     draw_point_errors(fig, (a, b), x, result.image_error, result.invariant_error, result.basis, "image", own)
+    if len(x) <= 12:  # few images: name them under their ticks
+        for c in (a, b):
+            c.set_xticks(x, [name if len(name) <= 14 else name[:13] + "…" for name in result.names],
+                         rotation=30, ha="right", fontsize=8)
     if own:
         fig.suptitle(f"image and invariant error per point (Fig. 3): {len(x)} images, basis {list(result.basis)}",
                      fontsize=11)
