@@ -250,5 +250,10 @@ def test_vision_run_writes_views_and_gif(capsys, tmp_path: Path) -> None:
 
     gif = Image.open(tmp_path / "camera.gif")
     assert getattr(gif, "n_frames") == 6 and gif.size == (384, 288)
+    assert (tmp_path / "camera.gif").stat().st_size < 1_000_000
+    # The camera never moves: Fig. 3 (per point), no path, velocity, task-function or pose plots.
+    assert (tmp_path / "point_errors.png").read_bytes()[:4] == b"\x89PNG"
+    for name in ("path3d.png", "velocities.png", "task_functions.png", "pose_errors.png"):
+        assert not (tmp_path / name).exists() and name not in out
     npz = np.load(tmp_path / "trajectory.npz")
     assert "detection_error" in npz.files and npz["detection_error"].shape == (6, 16)

@@ -142,7 +142,7 @@ def test_bad_tags_name_the_key(edit, key):
 
 def test_views_outline_each_tag_with_its_id():
     pytest.importorskip("matplotlib")
-    from vsinv.view_plots import _outline, _tag_ids, plot_view
+    from vsinv.view_plots import _CYAN, _gif_frame, _tag_ids, plot_view
 
     scenario = vsinv.load_scenario("tags-12-12")
     assert _tag_ids(scenario) == [1, 2, 3] and _tag_ids(vsinv.load_scenario("vision-12-12")) == []
@@ -152,12 +152,11 @@ def test_views_outline_each_tag_with_its_id():
     fig = plot_view(image, hidden, pixels, "tags", tag_ids=_tag_ids(scenario))
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert "id 1" in texts and "id 3" in texts and "id 2" not in texts
-    rgb = np.repeat(image[:, :, None], 3, axis=2)
-    drawn = _outline(rgb.copy(), pixels, [1, 2, 3])
+    drawn = np.asarray(_gif_frame(image, pixels, pixels, [1, 2, 3], "t = 0.00 s"))  # the GIF's frame
     # The outline passes through the corners' pixels.
     u, v = np.round(pixels[0]).astype(int)
-    assert (drawn[v - 1 : v + 2, u - 1 : u + 2] != rgb[v - 1 : v + 2, u - 1 : u + 2]).any()
-    assert np.array_equal(_outline(rgb.copy(), pixels, []), rgb)
+    assert (drawn[v - 1 : v + 2, u - 1 : u + 2] == _CYAN).any()
+    assert not (np.asarray(_gif_frame(image, pixels, pixels, [], "t = 0.00 s")) == _CYAN).any()
 
 
 def test_the_scene_figure_places_a_rigs_corners():

@@ -4,7 +4,7 @@ matplotlib is imported inside the functions (with the non-interactive Agg backen
 ``import vsinv`` does not need it.
 
 >>> result = vsinv.run_scenario("lens-12-6")
->>> save_figures(result, "out")      # six PNGs
+>>> save_figures(result, "out")      # six PNGs (three for a camera that never moves)
 >>> save_npz(result, "out/trajectory.npz")
 >>> fig, axes = plt.subplots(1, 2); result.plot("errors", ax=axes[0]); result.plot("path3d", ax=axes[1])
 
@@ -36,7 +36,10 @@ if TYPE_CHECKING:
 
     from ._core import RunResult
 
-__all__ = ["ARM_FIGURES", "FIGURES", "PLOTS", "plot", "save_figures", "save_npz", "summary_json"]
+__all__ = [
+    "ARM_FIGURES", "FIGURES", "PLOTS", "STATIONARY_FIGURES", "draw_point_errors", "is_stationary", "plot",
+    "point_styles", "save_figures", "save_npz", "summary_json", "theta_u",
+]
 
 _PathLike = Union[str, "os.PathLike[str]"]
 #: Where a figure is drawn: None (a figure of its own), an Axes, or one Axes per panel.
@@ -52,6 +55,11 @@ FIGURES = (
     "pose_errors.png",
     "path3d.png",
 )
+
+#: File names written by :func:`save_figures` for a camera that never moves (sec. 5.1, the
+#: stationary zoom): its path, velocity, task functions and pose error would be flat lines;
+#: the image and invariant error per point (the paper's Fig. 3) are what the run shows.
+STATIONARY_FIGURES = ("image_trajectories.png", "errors.png", "point_errors.png")
 
 #: File names also written for an arm (``[robot] kind = "urdf"``), in order.
 ARM_FIGURES = ("joints.png", "joint_velocities.png")
@@ -314,11 +322,13 @@ def plot_image_trajectories(result: RunResult, ax: AxesArg = None, *, scenario: 
 
 def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
     """The invariant-space error (and the path tracking error) and the image error."""
-    t = np.asarray(result.time, dtype=float)
+    scen = scenario if scenario is not None else _scenario_dict(result)
+    stationary = is_stationary(result, scen)  # no servo, no stop rule: the images are numbered
+    t = np.arange(1.0, len(result.time) + 1.0) if stationary else np.asarray(result.time, dtype=float)
     inv = np.asarray(result.invariant_error, dtype=float)
     img = np.asarray(result.image_error, dtype=float)
     s = result.summary
-    stop = (scenario if scenario is not None else _scenario_dict(result)).get("stop") or {}
+    stop = {} if stationary else scen.get("stop") or {}
     fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
     if _all_nan(inv):
         _no_data(a1, "no invariant error recorded")
@@ -335,7 +345,7 @@ def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = 
         tol = stop.get("invariant_error")
         if tol is not None and tol > 0 and s.get("stop_rule") == "invariant":
             a1.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g}")
-        a1.legend(loc="upper right", fontsize=9)
+        a1.legend(loc="best", fontsize=9)
         _finish_time_axis(a1, t)
     a1.set_ylabel("||s - s*|| (invariant space)")
     a1.set_title("invariant-space error", fontsize=10)
@@ -347,11 +357,13 @@ def plot_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = 
         if tol is not None and tol > 0 and s.get("stop_rule") == "pixel":
             a2.axhline(float(tol), color="tab:red", linestyle=":", linewidth=1.0, label=f"stop threshold {tol:g} px")
         a2.set_ylim(bottom=0.0)
-        a2.legend(loc="upper right", fontsize=9)
+        a2.legend(loc="best", fontsize=9)
         _finish_time_axis(a2, t)
     a2.set_ylabel("image error (px)")
     a2.set_title("largest distance to the reference pixel", fontsize=10)
-    a2.set_xlabel("time (s)")
+    a2.set_xlabel("image" if stationary else "time (s)")
+    if stationary and len(t) <= 40:
+        a2.set_xticks(t)
     _title(fig, result, "errors", own)
     return fig
 
@@ -417,22 +429,63 @@ def plot_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenari
     return fig
 
 
+def theta_u(rotations: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    """The theta-u vectors (rad) of rotation matrices (..., 3, 3): the axis u times the angle
+    theta in [0, pi] (the rotation error components of the paper's Figs. 5, 7 and 9)."""
+    r = np.asarray(rotations, dtype=float)
+    skew = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], axis=-1)
+    cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arccos(cos)
+    sin = np.sin(angle)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(sin > 1e-6, angle / (2.0 * np.where(sin > 1e-6, sin, 1.0)), 0.5 + angle**2 / 12.0)
+    out = skew * scale[..., None]
+    # Near pi the skew part vanishes: u u^T = ((R + R^T) / 2 - cos(theta) I) / (1 - cos(theta))
+    # (Rodrigues' formula), its column of largest diagonal gives the axis, the skew part its sign.
+    for idx in zip(*np.nonzero(angle > 2.5)):
+        m = ((r[idx] + r[idx].T) / 2.0 - cos[idx] * np.eye(3)) / (1.0 - cos[idx])
+        col = m[:, int(np.argmax(np.diag(m)))]
+        axis = col / np.linalg.norm(col)
+        if np.dot(axis, skew[idx]) < 0:
+            axis = -axis
+        out[idx] = axis * angle[idx]
+    return out
+
+
 def plot_pose_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
-    """Distance (mm) and angle (deg) of the camera from the goal."""
+    """The pose error as in the paper's Figs. 5, 7 and 9: the translation of the camera from
+    the goal per axis (mm, in F*) and its rotation per axis (theta-u components, deg), beside
+    the distance and the angle (left). Four panels: norms on the left, components on the right."""
     t = np.asarray(result.time, dtype=float)
     te = np.asarray(result.translation_error, dtype=float) * 1e3
     re = np.degrees(np.asarray(result.rotation_error, dtype=float))
-    fig, (a1, a2), own = _panels(ax, 2, figsize=(8, 6.2), sharex=True)
+    pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
+    tr = pose[:, :3, 3] * 1e3
+    tu = np.degrees(theta_u(np.nan_to_num(pose[:, :3, :3])))
+    tu[~np.isfinite(pose[:, :3, :3]).all(axis=(1, 2))] = np.nan
+    fig, (a1, b1, a2, b2), own = _panels(ax, 2, 2, figsize=(12, 6.4), sharex=True)
     a1.plot(t, te, color="tab:blue", label="||t||")
     a1.set_ylabel("translation error (mm)")
     a1.set_title("distance of the camera centre to the goal", fontsize=10)
     a2.plot(t, re, color="tab:red", label="|θ|")
     a2.set_ylabel("rotation error (deg)")
     a2.set_title("rotation angle to the goal orientation", fontsize=10)
+    for j, name in enumerate("xyz"):
+        b1.plot(t, tr[:, j], label=f"t_{name}")
+        b2.plot(t, tu[:, j], label=f"θu_{name}")
+    b1.set_ylabel("translation error (mm)")
+    b1.set_title("translation per axis (camera centre in F*)", fontsize=10)
+    b2.set_ylabel("rotation error θu (deg)")
+    b2.set_title("rotation per axis (θu components)", fontsize=10)
+    for a in (a1, a2):
+        a.set_ylim(bottom=0.0)
+    for a in (b1, b2):
+        a.axhline(0.0, color="0.5", linewidth=0.8)
+        a.legend(loc="best", ncol=3, fontsize=9)
+    for a in (a1, a2, b1, b2):
+        _finish_time_axis(a, t)
     a2.set_xlabel("time (s)")
-    for ax in (a1, a2):
-        ax.set_ylim(bottom=0.0)
-        _finish_time_axis(ax, t)
+    b2.set_xlabel("time (s)")
     s = result.summary
     ft, fr = _scaled(s.get("final_translation_error"), 1e3), _scaled(s.get("final_rotation_error"), 180 / math.pi)
     if ft is not None:
@@ -523,58 +576,163 @@ def plot_path3d(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = 
     return fig
 
 
-def _plot_normalised_joints(
-    result: RunResult, values: npt.NDArray[np.float64], what: str, ylabel: str, ax: AxesArg
+def point_styles(n: int) -> list[dict[str, Any]]:
+    """Distinct line styles for ``n`` points: the 20 colours of tab20, then the same colours
+    dashed, then dotted (so that 16 points never share a colour)."""
+    import matplotlib.pyplot as plt
+
+    cmap = plt.get_cmap("tab20")
+    dashes = ("-", "--", ":", "-.")
+    markers = ("o", "s", "^", "D")
+    return [{"color": cmap(i % 20), "linestyle": dashes[(i // 20) % 4], "marker": markers[(i // 20) % 4]}
+            for i in range(n)]
+
+
+def draw_point_errors(
+    fig: Figure,
+    axes: tuple[Axes, Axes],
+    x: npt.NDArray[np.float64],
+    image_error: npt.NDArray[np.float64],
+    invariant_error: npt.NDArray[np.float64],
+    basis: Sequence[int],
+    xlabel: str,
+    own: bool,
+) -> None:
+    """The paper's Fig. 3 into two Axes: per point, the image error ||p_i - p_i*|| (px) and the
+    invariant error ||q_i - q_i*|| against ``x``; one style per point (:func:`point_styles`),
+    the same in both panels, one legend naming the points (the basis points marked)."""
+    a, b = axes
+    n = image_error.shape[1] if image_error.ndim == 2 else 0
+    few = len(x) <= 40  # mark the samples of a short sequence (the six images of sec. 5.1)
+    for i, style in enumerate(point_styles(n)):
+        kw = dict(style, markersize=4 if few else 0, linewidth=1.2)
+        label = f"point {i}" + (" (basis)" if i in basis else "")
+        a.plot(x, image_error[:, i], label=label, **kw)
+        b.plot(x, invariant_error[:, i], **kw)
+    a.set_ylabel("image error ||p_i − p_i*|| (px)")
+    a.set_title("image error per point", fontsize=10)
+    b.set_ylabel("invariant error ||q_i − q_i*|| (dimensionless)")
+    b.set_title(f"invariant error per point (basis {list(basis)}: zero by construction)", fontsize=10)
+    for c in (a, b):
+        c.set_ylim(bottom=0.0)
+        c.set_xlabel(xlabel)
+        c.grid(True, alpha=0.3)
+        if few and len(x):
+            c.set_xticks(x)
+    if len(x) > 1:
+        b.set_xlim(a.get_xlim())
+    handles, labels = a.get_legend_handles_labels()
+    if own:
+        fig.legend(handles, labels, loc="outside right center", fontsize=8, title="points")
+    elif handles:
+        b.legend(handles, labels, loc="upper left", fontsize=6, ncol=2, title="points", title_fontsize=7)
+
+
+def _point_errors(result: RunResult) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], tuple[int, int, int]]:
+    """Per iteration and point: the image error ||p_i - p_i*|| (px), the invariant error
+    ||q_i - q_i*|| (eq. 7, NaN where the point or a basis point is not visible), the basis."""
+    from ._core import choose_basis, invariant_points
+
+    px = np.asarray(result.pixels, dtype=float)
+    ref = np.asarray(result.reference_pixels, dtype=float)
+    image_error = np.linalg.norm(px - ref[None], axis=2)
+    given = result.summary.get("basis")
+    basis = tuple(int(i) for i in given) if given else tuple(choose_basis(ref))
+    b3 = (basis[0], basis[1], basis[2])
+    q_star = invariant_points(ref, b3)
+    invariant_error = np.full(image_error.shape, np.nan)
+    for k, row in enumerate(px):
+        if np.isfinite(row[list(b3)]).all():
+            filled = np.where(np.isfinite(row), row, ref)  # invariant_points wants finite pixels
+            err = np.linalg.norm(invariant_points(filled, b3) - q_star, axis=1)
+            invariant_error[k] = np.where(np.isfinite(row).all(axis=1), err, np.nan)
+    return image_error, invariant_error, b3
+
+
+def is_stationary(result: RunResult, scenario: _Scenario = None) -> bool:
+    """Whether the camera never moves in the run (``law = "none"``, or several iterations all
+    at the first pose): its path, velocity, task-function and pose-error figures mean nothing.
+    A run that ended at its first iteration (lost, degenerate) is not stationary: its figures
+    show where it stopped."""
+    law = ((scenario if scenario is not None else _scenario_dict(result)).get("control") or {}).get("law")
+    pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
+    return law == "none" or (len(pose) > 1 and bool(np.all(pose == pose[:1])))
+
+
+def plot_point_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
+    """The paper's Fig. 3 for a run: per point, the image error and the invariant error, against
+    the image number for a stationary camera (sec. 5.1), against time otherwise."""
+    image_error, invariant_error, basis = _point_errors(result)
+    fig, (a, b), own = _panels(ax, 1, 2, figsize=(13, 4.8))
+    if is_stationary(result, scenario):
+        x, xlabel = np.arange(1, len(result.time) + 1, dtype=float), "image"
+    else:
+        x, xlabel = np.asarray(result.time, dtype=float), "time (s)"
+    draw_point_errors(fig, (a, b), x, image_error, invariant_error, basis, xlabel, own)
+    _title(fig, result, "image and invariant error per point (Fig. 3)", own)
+    return fig
+
+
+def _joint_panels(
+    result: RunResult, values: npt.NDArray[np.float64], low: npt.NDArray[np.float64],
+    high: npt.NDArray[np.float64], what: str, unit: str, ax: AxesArg,
 ) -> Figure:
-    """One line per joint against the band of its limits, both normalised to [-1, 1]."""
+    """One panel per joint: its value (display units) and its limits (red dashed lines, the
+    region beyond them shaded). The axis spans the motion; a limit far off it is written in
+    the panel instead of squashing the motion to a line."""
     t = np.asarray(result.time, dtype=float)
-    limits = result.joint_limits or {}
-    names = list(limits.get("names", []))
-    fig, (ax,), own = _panels(ax, 1, figsize=(8, 4.8))
-    ax.axhspan(1.0, 1.2, color="tab:red", alpha=0.12, linewidth=0)
-    ax.axhspan(-1.2, -1.0, color="tab:red", alpha=0.12, linewidth=0)
-    for y in (-1.0, 1.0):
-        ax.axhline(y, color="tab:red", linewidth=1.0, linestyle="--")
-    ax.axhline(0.0, color="0.5", linewidth=0.8)
-    for j in range(values.shape[1]):
-        ax.plot(t, values[:, j], label=names[j] if j < len(names) else f"joint {j}")
-    ax.set_ylim(-1.2, 1.2)
-    ax.set_ylabel(ylabel)
-    ax.set_xlabel("time (s)")
-    ax.legend(loc="lower left", ncol=4, fontsize=8)
-    peak = float(np.nanmax(np.abs(values))) if not _all_nan(values) else float("nan")
-    ax.text(0.99, 0.97, f"largest |value| {peak:.2f} (limits at ±1)", ha="right", va="top", transform=ax.transAxes,
-            fontsize=9)
-    _finish_time_axis(ax, t)
+    names = list((result.joint_limits or {}).get("names", []))
+    n = values.shape[1]
+    fig, axes, own = _panels(ax, n, 1, figsize=(8, 1.45 * n + 1.0), sharex=True)
+    for j, a in enumerate(axes):
+        v = values[:, j]
+        name = names[j] if j < len(names) else f"joint {j}"
+        a.plot(t, v, color=f"C{j % 10}", label=name)
+        lo, hi = float(low[j]), float(high[j])
+        finite = v[np.isfinite(v)]
+        vmin, vmax = (float(finite.min()), float(finite.max())) if finite.size else (lo, hi)
+        span = max(vmax - vmin, 0.05 * (hi - lo), 1e-9)
+        bottom, top = vmin - 0.25 * span, vmax + 0.25 * span
+        if lo >= vmin - 1.5 * span:
+            bottom = lo - 0.1 * span
+        if hi <= vmax + 1.5 * span:
+            top = hi + 0.1 * span
+        for y in (lo, hi):
+            a.axhline(y, color="tab:red", linestyle="--", linewidth=1.0)
+        a.axhspan(hi, max(top, hi) + abs(hi - lo) + 1.0, color="tab:red", alpha=0.12, linewidth=0)
+        a.axhspan(min(bottom, lo) - abs(hi - lo) - 1.0, lo, color="tab:red", alpha=0.12, linewidth=0)
+        a.set_ylim(bottom, top)
+        a.set_ylabel(f"{name}\n({unit})", fontsize=8)
+        a.tick_params(labelsize=8)
+        margin = min(hi - vmax, vmin - lo)
+        a.set_title(f"limits [{lo:.4g}, {hi:.4g}] {unit}; closest approach {margin:.3g} {unit}", loc="right",
+                    fontsize=7.5, color="tab:red", pad=2)
+        _finish_time_axis(a, t)
+    axes[-1].set_xlabel("time (s)")
     _title(fig, result, what, own)
-    if not own:
-        ax.set_title(what, fontsize=10)
     return fig
 
 
 def plot_joints(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
-    """An arm's joint positions, ``(q - mid) / half`` of each joint's range: the limits at ±1."""
+    """An arm's joint positions in degrees, one panel per joint with its limits drawn."""
     limits = result.joint_limits or {}
-    q = np.asarray(result.joints, dtype=float)
-    lower = np.asarray(limits.get("lower", []), dtype=float)
-    upper = np.asarray(limits.get("upper", []), dtype=float)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        normalised = (q - (upper + lower) / 2.0) / ((upper - lower) / 2.0)
-    return _plot_normalised_joints(result, normalised, "joint positions within their limits",
-                                   "position, normalised to the range", ax)
+    q = np.degrees(np.asarray(result.joints, dtype=float))
+    lower = np.degrees(np.asarray(limits.get("lower", []), dtype=float))
+    upper = np.degrees(np.asarray(limits.get("upper", []), dtype=float))
+    return _joint_panels(result, q, lower, upper, "joint positions and their limits", "deg", ax)
 
 
 def plot_joint_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
-    """An arm's joint velocities over their speed limits: the limits at ±1."""
+    """An arm's joint velocities in deg/s, one panel per joint with its speed limit ±v drawn."""
     limits = result.joint_limits or {}
-    dq = np.asarray(result.joint_velocities, dtype=float)
-    velocity = np.asarray(limits.get("velocity", []), dtype=float)
-    return _plot_normalised_joints(result, dq / velocity, "joint velocities within their limits",
-                                   "velocity / speed limit", ax)
+    dq = np.degrees(np.asarray(result.joint_velocities, dtype=float))
+    velocity = np.degrees(np.asarray(limits.get("velocity", []), dtype=float))
+    return _joint_panels(result, dq, -velocity, velocity, "joint velocities and their speed limits", "deg/s", ax)
 
 
-#: The figures of a run by kind (``RunResult.plot(kind)``), in the order of :data:`FIGURES`
-#: then :data:`ARM_FIGURES` (file name ``<kind>.png``; the arm's only for an arm).
+#: The figures of a run by kind (``RunResult.plot(kind)``; file name ``<kind>.png``): those of
+#: :data:`FIGURES`, ``point_errors`` (Fig. 3, written for a stationary camera) and those of
+#: :data:`ARM_FIGURES` (an arm only).
 PLOTS: dict[str, Callable[..., Figure]] = {
     "image_trajectories": plot_image_trajectories,
     "errors": plot_errors,
@@ -582,6 +740,7 @@ PLOTS: dict[str, Callable[..., Figure]] = {
     "velocities": plot_velocities,
     "pose_errors": plot_pose_errors,
     "path3d": plot_path3d,
+    "point_errors": plot_point_errors,
     "joints": plot_joints,
     "joint_velocities": plot_joint_velocities,
 }
@@ -599,15 +758,16 @@ def plot(result: RunResult, kind: str, ax: AxesArg = None, *, scenario: _Scenari
 
 
 def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
-    """Write the six figures of a recorded run to ``out_dir`` (created if needed), and
-    :data:`ARM_FIGURES` for an arm; returns the paths written, in the order of
-    :data:`FIGURES` then :data:`ARM_FIGURES`. The scenario is converted to a dict once."""
+    """Write the figures of a recorded run to ``out_dir`` (created if needed): :data:`FIGURES`,
+    or :data:`STATIONARY_FIGURES` for a camera that never moves (:func:`is_stationary`), then
+    :data:`ARM_FIGURES` for an arm; returns the paths written, in that order (each file is
+    ``<kind>.png`` of :data:`PLOTS`). The scenario is converted to a dict once."""
     if len(result.time) == 0:
         raise ValueError("the run was not recorded (run_scenario(..., record=False)): nothing to plot")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     scenario = _scenario_dict(result)
-    names: tuple[str, ...] = FIGURES
+    names: tuple[str, ...] = STATIONARY_FIGURES if is_stationary(result, scenario) else FIGURES
     if result.joint_limits is not None and result.joint_velocities is not None:
-        names = FIGURES + ARM_FIGURES
-    return [_save(make(result, scenario=scenario), out, name) for make, name in zip(PLOTS.values(), names)]
+        names = names + ARM_FIGURES
+    return [_save(PLOTS[Path(name).stem](result, scenario=scenario), out, name) for name in names]

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import TYPE_CHECKING, Union
+from typing import TYPE_CHECKING, Any, Union
 
 import numpy as np
 import numpy.typing as npt
 
 from ._core import render
-from .plots import AxesArg, _panels, _save
+from .plots import AxesArg, _panels, _save, draw_point_errors
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -90,33 +90,17 @@ def _frame_indices(rows: int) -> npt.NDArray[np.int64]:
     return np.unique(np.linspace(0, rows - 1, min(rows, GIF_FRAMES)).round().astype(np.int64))
 
 
-def _mark(rgb: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], colour: tuple[int, int, int], size: int) -> None:
-    """Draws a small cross at each finite pixel (a few array slices per dot)."""
-    h, w, _ = rgb.shape
+def _mark(frame: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], colour: int, size: int) -> None:
+    """Draws a small cross of palette index ``colour`` at each finite pixel."""
+    h, w = frame.shape
     for u, v in pixels:
         if not (np.isfinite(u) and np.isfinite(v)):
             continue
         iu, iv = int(round(u)), int(round(v))
         if 0 <= iv < h:
-            rgb[iv, max(iu - size, 0) : min(iu + size + 1, w)] = colour
+            frame[iv, max(iu - size, 0) : min(iu + size + 1, w)] = colour
         if 0 <= iu < w:
-            rgb[max(iv - size, 0) : min(iv + size + 1, h), iu] = colour
-
-
-def _outline(rgb: npt.NDArray[np.uint8], pixels: npt.NDArray[np.float64], ids: list[int]) -> npt.NDArray[np.uint8]:
-    """The frame with each tag's outline and id drawn (PIL), for the GIF."""
-    if not ids:
-        return rgb
-    from PIL import Image, ImageDraw
-
-    frame = Image.fromarray(rgb)
-    draw = ImageDraw.Draw(frame)
-    for tag_id, corners in _tag_outlines(pixels, ids):
-        points = [(float(u), float(v)) for u, v in corners]
-        draw.line([*points, points[0]], fill=(40, 200, 230), width=1)
-        u, v = corners.mean(axis=0)
-        draw.text((float(u) - 8, float(v) - 5), str(tag_id), fill=(40, 200, 230))
-    return np.asarray(frame)
+            frame[max(iv - size, 0) : min(iv + size + 1, h), iu] = colour
 
 
 def _half(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
@@ -126,25 +110,58 @@ def _half(image: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]:
     return (blocks.sum(axis=(1, 3)) // 4).astype(np.uint8)
 
 
+#: Grey levels of the GIF: few enough that the sensor noise does not fill the file
+#: (80 frames of vision-12-6 took 5.2 MB with 32 adaptive colours, 0.4 MB with these).
+GIF_GREYS = 16
+_GREEN, _RED, _CYAN, _WHITE, _BLACK = range(GIF_GREYS, GIF_GREYS + 5)
+
+
+def _gif_palette() -> list[int]:
+    greys = [round(255 * k / (GIF_GREYS - 1)) for k in range(GIF_GREYS)]
+    rgb = [c for g in greys for c in (g, g, g)]
+    rgb += [40, 200, 40, 230, 40, 40, 40, 200, 230, 255, 255, 255, 0, 0, 0]
+    return rgb + [0] * (768 - len(rgb))
+
+
+def _gif_frame(grey: npt.NDArray[np.uint8], tracked: npt.NDArray[np.float64], reference: npt.NDArray[np.float64],
+               ids: list[int], stamp: str) -> Any:
+    """One GIF frame (palette image): the view in :data:`GIF_GREYS` levels, reference positions
+    (green), tracked centroids (red), a tag rig's outlines and ids (cyan) and the time stamp."""
+    from PIL import Image, ImageDraw
+
+    index = np.rint(grey.astype(np.float64) * ((GIF_GREYS - 1) / 255.0)).astype(np.uint8)
+    _mark(index, reference, _GREEN, 3)
+    _mark(index, tracked, _RED, 4)
+    frame = Image.fromarray(index, mode="P")
+    frame.putpalette(_gif_palette())
+    draw = ImageDraw.Draw(frame)
+    for tag_id, corners in _tag_outlines(tracked, ids):
+        points = [(float(u), float(v)) for u, v in corners]
+        draw.line([*points, points[0]], fill=_CYAN, width=1)
+        u, v = corners.mean(axis=0)
+        draw.text((float(u) - 8, float(v) - 5), str(tag_id), fill=_CYAN)
+    box = draw.textbbox((4, 3), stamp)
+    draw.rectangle((box[0] - 2, box[1] - 2, box[2] + 2, box[3] + 2), fill=_BLACK)
+    draw.text((4, 3), stamp, fill=_WHITE)
+    return frame
+
+
 def save_servo_gif(result: RunResult, path: _PathLike, frame_ms: int = 80) -> Path:
     """An animated GIF of the camera view during the servo: up to :data:`GIF_FRAMES` frames
-    evenly spaced over the run at half resolution, tracked centroids in red, reference
-    positions in green (a tag rig's outlines and ids in cyan); 32 colours, so that the sensor
-    noise does not swell the file."""
-    from PIL import Image
-
+    evenly spaced over the run at half resolution, each stamped with its time and iteration,
+    tracked centroids in red, reference positions in green (a tag rig's outlines and ids in
+    cyan); :data:`GIF_GREYS` grey levels, so that the sensor noise does not swell the file
+    (under 1 MB for the built-ins)."""
     scenario, poses, times = result.scenario, result.pose, result.time
     ids = _tag_ids(scenario)
+    last = len(times) - 1
     frames = []
     for k in _frame_indices(len(times)):
         grey = _half(render(scenario, pose=poses[k], time=float(times[k])))
-        rgb = np.repeat(grey[:, :, None], 3, axis=2)
-        rgb = _outline(np.ascontiguousarray(rgb), result.pixels[k] / 2, ids).copy()
-        _mark(rgb, result.reference_pixels / 2, (40, 200, 40), 3)
-        _mark(rgb, result.pixels[k] / 2, (230, 40, 40), 4)
-        frames.append(Image.fromarray(rgb).convert("P", palette=Image.Palette.ADAPTIVE, colors=32))
+        stamp = f"t = {float(times[k]):.2f} s  iteration {k}/{last}"
+        frames.append(_gif_frame(grey, result.pixels[k] / 2, result.reference_pixels / 2, ids, stamp))
     out = Path(path)
-    frames[0].save(out, save_all=True, append_images=frames[1:], duration=frame_ms, loop=0, optimize=True)
+    frames[0].save(out, save_all=True, append_images=frames[1:], duration=frame_ms, loop=0, optimize=False)
     return out
 
 
@@ -162,7 +179,7 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
     paths = []
     ids = _tag_ids(sc)
     for (image, tracked, what), name in zip(views, VIEW_FIGURES):
-        title = f"{sc.name}: {what}, iteration {0 if 'first' in what else last if 'last' in what else '-'}"
+        title = f"{sc.name}: {what}" + (f", iteration {last}" if "last" in what else ", iteration 0" if "first" in what else "")
         paths.append(_save(plot_view(image, tracked, ref, title, tag_ids=ids), out, name))
     paths.append(save_servo_gif(result, out / VIEW_FIGURES[3]))
     return paths
@@ -170,21 +187,16 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
 
 def plot_invariance(result: InvarianceResult, ax: AxesArg = None) -> Figure:
     """The paper's Fig. 3: per image, the image error ||p - p*|| and the invariant error
-    ||q - q*|| of every point, drawn into ``ax`` (divided in two, or two Axes) or a new figure."""
-    x = np.arange(1, len(result.names) + 1)
-    fig, (a, b), own = _panels(ax, 1, 2, figsize=(11, 4.2))
-    for i in range(result.image_error.shape[1]):
-        a.plot(x, result.image_error[:, i], "o-", ms=3, lw=1)
-        b.plot(x, result.invariant_error[:, i], "o-", ms=3, lw=1)
-    a.set_title("image error ||p - p*|| (pixels)", fontsize=10)
-    b.set_title("invariant error ||q - q*||", fontsize=10)
-    for ax in (a, b):
-        ax.set_xlabel("image")
-        ax.set_xticks(x)
-        ax.grid(True, alpha=0.3)
-    b.set_ylim(bottom=0.0)
+    ||q - q*|| of every point (one style per point, the same in both panels, a legend naming
+    the points), drawn into ``ax`` (divided in two, or two Axes) or a new figure."""
+    x = np.arange(1, len(result.names) + 1, dtype=float)
+    fig, (a, b), own = _panels(ax, 1, 2, figsize=(13, 4.8))
+    draw_point_errors(fig, (a, b), x, result.image_error, result.invariant_error, result.basis, "image", own)
+    if len(x) <= 12:  # few images: name them under their ticks
+        for c in (a, b):
+            c.set_xticks(x, [name if len(name) <= 14 else name[:13] + "…" for name in result.names],
+                         rotation=30, ha="right", fontsize=8)
     if own:
-        fig.suptitle(f"{len(x)} images, basis {list(result.basis)}", fontsize=11)
+        fig.suptitle(f"image and invariant error per point (Fig. 3): {len(x)} images, basis {list(result.basis)}",
+                     fontsize=11)
     return fig
-
-
