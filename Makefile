@@ -77,10 +77,11 @@ run: install-run
 WHEEL_DIR ?= target/dist
 WHEEL_PYTHONS ?= $(PYTHON)
 WHEEL_FLAGS ?= --zig --compatibility manylinux2014
+MATURIN ?= maturin
 wheels:
 	$(PIP) install -q "maturin>=1.9.4,<2" ziglang
 	rm -rf $(WHEEL_DIR)
 	PATH="$$($(PYTHON) -c 'import os, ziglang; print(os.path.dirname(ziglang.__file__))'):$$PATH" \
-		$(PYTHON) -m maturin build --release $(WHEEL_FLAGS) -o $(WHEEL_DIR)
-	$(PYTHON) -m maturin sdist -o $(WHEEL_DIR)
+		$(MATURIN) build --release $(WHEEL_FLAGS) -o $(WHEEL_DIR)
+	$(MATURIN) sdist -o $(WHEEL_DIR)
 	$(PYTHON) tests/wheel_smoke.py $(WHEEL_DIR) $(WHEEL_PYTHONS)
