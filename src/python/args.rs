@@ -99,7 +99,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for BasisArg {
     type Error = PyErr;
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
         if let Ok(s) = obj.cast::<PyString>() {
-            return match s.to_str()? {
+            return match &*s.to_cow()? {
                 "auto" => Ok(BasisArg::Auto),
                 other => {
                     Err(invalid_argument("basis", format!("basis: expected three indices or \"auto\", got {other:?}")))

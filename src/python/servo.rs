@@ -112,7 +112,7 @@ fn depth_source(depths: &Bound<'_, PyAny>) -> PyResult<ServoDepths> {
         return Ok(ServoDepths::Estimated(Box::new(e.borrow().inner.clone())));
     }
     if let Ok(s) = depths.cast::<PyString>() {
-        return match s.to_str()? {
+        return match &*s.to_cow()? {
             "reference" => Ok(ServoDepths::Reference),
             "per_step" => Ok(ServoDepths::PerStep),
             other => Err(invalid_argument(

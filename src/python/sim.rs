@@ -482,7 +482,7 @@ fn batch_text(item: &Bound<'_, PyAny>, dumps: &Bound<'_, PyAny>, access: FileAcc
         return dumps.call1((item,))?.extract::<String>();
     }
     if let Ok(s) = item.cast::<PyString>()
-        && s.to_str()?.trim_start().starts_with(JSON_OBJECT_START)
+        && s.to_cow()?.trim_start().starts_with(JSON_OBJECT_START)
     {
         return s.extract::<String>();
     }
