@@ -315,6 +315,8 @@ def check_sweeps(out: str) -> None:
 BLOCKS: list[Entry] = [
     Entry("sh", "make run", NOT_RUN, "the whole install and test suite (make run compiles for several minutes, "
           "make test about 15 minutes on 2 cores): CI and the lead run it, and this file is part of it"),
+    Entry("sh", "python -m pip install .", NOT_RUN, "compiles the extension from source (5-15 minutes); make wheels "
+          "and tests/test_wheels.py (VSINV_WHEELS=1) run the same install in a fresh venv"),
     Entry("python", "import numpy as np, vsinv", RUN, prelude=CONTROL_PRELUDE),
     Entry("python", "try:", RUN, prelude=ERRORS_PRELUDE, check="print('no exception escaped')"),
     Entry("python", "cal = vsinv.load_calibration", RUN, prelude=CALIBRATION_PRELUDE, check=CALIBRATION_CHECK),
