@@ -27,10 +27,26 @@ pytestmark = pytest.mark.skipif(not hasattr(os, "fork"), reason="needs os.fork (
 TIME_LIMIT_S = 120
 
 
+# Defined in every script: the parent's side of a fork, waiting up to a minute for the child and
+# printing its exit code, or "child hung" (and killing it).
+WAIT_FOR_CHILD = """
+import os as _os, time as _time
+def wait_for(pid):
+    for _ in range(1200):
+        done, status = _os.waitpid(pid, _os.WNOHANG)
+        if done == pid:
+            print("child exit", _os.waitstatus_to_exitcode(status))
+            return
+        _time.sleep(0.05)
+    _os.kill(pid, 9)
+    print("child hung")
+"""
+
+
 def run_script(code: str) -> str:
     """Run ``code`` in a fresh interpreter; its stdout. Fails on a hang or a non-zero exit."""
     proc = subprocess.Popen(
-        [sys.executable, "-c", textwrap.dedent(code)],
+        [sys.executable, "-c", WAIT_FOR_CHILD + textwrap.dedent(code)],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -98,15 +114,7 @@ def test_fork_after_dot_detection_on_a_large_image() -> None:
             child = vsinv.detect_dots(image)
             same = np.array_equal(child.centroids, parent.centroids)
             os._exit(0 if same else 3)
-        for _ in range(1200):
-            done, status = os.waitpid(pid, os.WNOHANG)
-            if done == pid:
-                print("child exit", os.waitstatus_to_exitcode(status))
-                break
-            time.sleep(0.05)
-        else:
-            os.kill(pid, 9)
-            print("child hung")
+        wait_for(pid)
         """
     )
     assert "child exit 0" in out, out
@@ -168,15 +176,7 @@ def test_fork_after_tag_detection() -> None:
         if pid == 0:
             child = vsinv.detect_tags(image)
             os._exit(0 if np.array_equal(child.corners, parent.corners) else 3)
-        for _ in range(1200):
-            done, status = os.waitpid(pid, os.WNOHANG)
-            if done == pid:
-                print("child exit", os.waitstatus_to_exitcode(status))
-                break
-            time.sleep(0.05)
-        else:
-            os.kill(pid, 9)
-            print("child hung")
+        wait_for(pid)
         """
     )
     assert "child exit 0" in out, out
