@@ -68,6 +68,13 @@ struct Line {
     offset: f64,
 }
 
+impl Line {
+    /// The signed distance of `q` from the line.
+    fn distance(&self, q: &P) -> f64 {
+        dot(self.normal, *q) - self.offset
+    }
+}
+
 fn fit_edges<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border_cells: f64) -> Option<[Line; 4]> {
     let centre = [0, 1].map(|k| corners.iter().map(|c| c[k]).sum::<f64>() / 4.0);
     let mut lines = [Line { normal: [0.0, 0.0], offset: 0.0 }; 4];
@@ -141,14 +148,16 @@ fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64) -> Optio
 /// three RMS; `None` when they scatter more than [`MAX_EDGE_RMS`].
 fn fit_line(points: &[P]) -> Option<Line> {
     let line = total_least_squares(points.iter())?;
-    let residual = |q: &P| dot(line.normal, *q) - line.offset;
-    let rms = (points.iter().map(|q| residual(q).powi(2)).sum::<f64>() / points.len() as f64).sqrt();
-    let keep = 3.0 * rms.max(0.05);
-    let kept: Vec<&P> = points.iter().filter(|q| residual(q).abs() <= keep).collect();
+    let keep = 3.0 * rms(line, points.iter()).max(0.05);
+    let kept: Vec<&P> = points.iter().filter(|q| line.distance(q).abs() <= keep).collect();
     let line = total_least_squares(kept.iter().copied())?;
-    let rms =
-        (kept.iter().map(|q| (dot(line.normal, **q) - line.offset).powi(2)).sum::<f64>() / kept.len() as f64).sqrt();
-    (kept.len() >= 3 && rms <= MAX_EDGE_RMS).then_some(line)
+    (kept.len() >= 3 && rms(line, kept.iter().copied()) <= MAX_EDGE_RMS).then_some(line)
+}
+
+/// The root mean square distance of the points from the line.
+fn rms<'a>(line: Line, points: impl Iterator<Item = &'a P>) -> f64 {
+    let (sum, n) = points.fold((0.0, 0usize), |(sum, n), q| (sum + line.distance(q).powi(2), n + 1));
+    (sum / n as f64).sqrt()
 }
 
 fn total_least_squares<'a>(points: impl Iterator<Item = &'a P> + Clone) -> Option<Line> {
