@@ -280,7 +280,7 @@ def test_the_session_stops_with_a_zero_twist(views: dict[str, Any]) -> None:
     assert s.start(0.1) == (True, "running") and s.pipeline.iterations == 0  # a new session
     # a frame the pipeline refuses: stop, not raise
     out = s.frame(np.zeros((10, 10), np.uint8), 0.2)
-    assert not out.twist.any() and s.state == "stopped" and "frame refused" in s.reason
+    assert not out.twist.any() and s.state == "stopped" and "frame refused" in s.reason and out.frame_used
     # the watchdog, counted from the start and from the last image
     s.start(1.0)
     assert s.watchdog(1.4).twist is None
@@ -320,3 +320,28 @@ def test_entry_point_without_ros(tmp_path: Path) -> None:
     blocked = "import sys; sys.modules['rclpy'] = None; from vsinv.ros.__main__ import main; sys.exit(main(['vsinv-ros']))"
     done = subprocess.run([sys.executable, "-c", blocked], capture_output=True, text=True, timeout=60)
     assert done.returncode == 2 and "rclpy is not importable" in done.stderr
+
+
+def test_the_readme_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The README's parameters file, with files of its own, passes the bridge's parser."""
+    yaml = pytest.importorskip("yaml")
+    import re
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"^```yaml\n(vsinv_ros:.*?)^```", readme, re.M | re.S)
+    assert block, "the README's ROS 2 parameters block"
+    parameters = yaml.safe_load(block.group(1))["vsinv_ros"]["ros__parameters"]
+    monkeypatch.chdir(tmp_path)
+    vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / parameters["reference_image"])
+    (tmp_path / parameters["reference_depths_file"]).write_text("z\n" + "0.5\n" * 16)
+
+    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in d.items():
+            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
+        return out
+
+    c = parse_parameters(flat(parameters))
+    assert c.target == "tags" and c.output_frame == "end_effector" and c.topics["twist"] == "/servo_node/delta_twist_cmds"
+    np.testing.assert_allclose(c.hand_eye[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-6)  # 90 degrees about z
+    assert len(c.servo_options["reference_depths"]) == 16

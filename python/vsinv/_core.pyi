@@ -401,6 +401,13 @@ class ImageServo:
     @property
     def basis(self) -> tuple[int, int, int]:
         """The basis in use."""
+    @property
+    def pixel_sigma(self) -> float | None:
+        """The pixel noise measured on the last frames (None before three), pixels."""
+    def certainty(self) -> dict[str, float] | None:
+        """What the frames say about the pose, as ``Servo.certainty()`` (pixel_sigma,
+        reference_pixel_sigma, translation_sigma, translation_bound in metres, rotation_sigma,
+        rotation_bound in radians); None when it cannot be computed."""
 
 @final
 class ImageStep(ServoStep):

@@ -12,7 +12,7 @@ vsinv's camera frame), sensor_msgs/CameraInfo's K (3x3 row-major), D and distort
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Literal, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -75,12 +75,12 @@ def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics
     if model not in ("plumb_bob", "rational_polynomial"):
         raise InvalidInput(f"camera_info: distortion_model {model!r} is not read (plumb_bob or rational_polynomial)")
     try:
-        return intrinsics, Distortion(d, model)
+        return intrinsics, Distortion(d, cast(Literal["plumb_bob", "rational_polynomial"], model))
     except InvalidInput as e:
         raise InvalidInput(f"camera_info.d: {e}") from None
 
 
-def intrinsics_from_numbers(name: str, values: Sequence[float]) -> Intrinsics:
+def intrinsics_from_numbers(name: str, values: npt.ArrayLike) -> Intrinsics:
     """Intrinsics from [fx, fy, u0, v0] or a 3x3 row-major matrix; others refused naming ``name``."""
     v = np.asarray(values, dtype=float).ravel()
     try:
@@ -103,7 +103,7 @@ def _rotation_from_quaternion(q: npt.NDArray[np.float64]) -> npt.NDArray[np.floa
     ])
 
 
-def hand_eye_matrix(name: str, values: Sequence[float]) -> npt.NDArray[np.float64]:
+def hand_eye_matrix(name: str, values: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The 4x4 pose of the camera in the end effector frame from 16 numbers (row-major, a
     rotation and a last row 0 0 0 1, to 1e-6) or 7 (x, y, z, qx, qy, qz, qw: a unit quaternion
     to 1e-3, normalised); others refused naming ``name``."""
@@ -124,7 +124,7 @@ def hand_eye_matrix(name: str, values: Sequence[float]) -> npt.NDArray[np.float6
     return m.copy()
 
 
-def twist_in_end_effector_frame(twist: Sequence[float], hand_eye: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+def twist_in_end_effector_frame(twist: npt.ArrayLike, hand_eye: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The camera twist (v, w), camera frame, as the end effector's twist in its own frame for
     the camera pose ``hand_eye`` in it (R, t): w_e = R w, v_e = R v + t x w_e, the adjoint of
     the rigid mount (a rigid body's velocity field)."""

@@ -33,7 +33,7 @@ from .session import BridgeSession, Output, validate_pipeline
 __all__ = ["BridgeNode"]
 
 
-class BridgeNode(Node):  # type: ignore[misc]
+class BridgeNode(Node):
     """The bridge. Its parameters are read at construction (every parameter given is declared
     from the overrides, so a misspelt one is refused by name) and a bad one raises
     :class:`vsinv.InvalidInput` there; afterwards nothing raises out of a callback for a bad
@@ -87,9 +87,10 @@ class BridgeNode(Node):  # type: ignore[misc]
             stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
             self.latency = self._now() - stamp if stamp > 0 else None
         self._publish_status()
-        step = out.step
-        if step is not None and self.config.publish_annotated and self.annotated_pub.get_subscription_count() > 0:
-            self._publish_annotated(msg, annotate(grey, step.pixels, step.found))
+        if out.frame_used and self.config.publish_annotated and self.annotated_pub.get_subscription_count() > 0:
+            step = out.step
+            marks = (step.pixels, step.found) if step is not None else (np.zeros((0, 2)), np.zeros(0, bool))
+            self._publish_annotated(msg, annotate(grey, *marks))
 
     def _on_watchdog(self) -> None:
         out = self.session.watchdog(time.monotonic())

@@ -15,7 +15,7 @@ import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping, Optional, Sequence
+from typing import Any, Literal, Mapping, Optional, Sequence, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -123,7 +123,7 @@ class BridgeConfig:
     override, the output frame and hand-eye transform, the topics and the watchdog."""
 
     reference_image: npt.NDArray[np.uint8]
-    target: str
+    target: Literal["dots", "tags"]
     servo_options: dict[str, Any]
     K_hat: Optional[Intrinsics] = None
     distortion: Optional[Distortion] = None
@@ -249,7 +249,7 @@ def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str
     """ImageServo's target arguments: the dots' pixels and tracker, or the tags' family and ids
     (another target's, given explicitly, refused)."""
     options: dict[str, Any] = {}
-    dot_names = ("reference_points", "reference_points_file", "first_points", "first_points_file")
+    dot_names: tuple[str, ...] = ("reference_points", "reference_points_file", "first_points", "first_points_file")
     dot_names += tuple(p.name for p in PARAMETERS if p.name.startswith("tracker."))
     foreign = ("family", "tag_ids") if target == "dots" else dot_names
     for name in foreign:
@@ -342,7 +342,7 @@ def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:
         reference = load_image(_file("reference_image", given["reference_image"]))
     except InvalidInput as e:
         raise _refuse("reference_image", str(e)) from None
-    target = given["target"]
+    target = cast(Literal["dots", "tags"], given["target"])
     options = {**_target_options(given, explicit, target), **_servo_options(given)}
     ref_k, ref_d = _lens(given, "reference_K", "reference_distortion", "reference_calibration")
     if ref_k is not None:

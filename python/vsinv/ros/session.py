@@ -29,11 +29,13 @@ ZERO_TWIST = np.zeros(6)
 
 @dataclass
 class Output:
-    """What to publish after an event: the twist (output frame; None: nothing) and the step
-    (None when the frame was not stepped)."""
+    """What to publish after an event: the twist (output frame; None: nothing), the step
+    (None when no step came of it), and whether a frame went to the pipeline (stepped or
+    refused by it)."""
 
     twist: Optional[npt.NDArray[np.float64]]
     step: Optional[ImageStep] = None
+    frame_used: bool = False
 
 
 def _stand_in_lens(reference: npt.NDArray[np.uint8]) -> Intrinsics:
@@ -123,15 +125,17 @@ class BridgeSession:
             step = self.pipeline.step(grey)
         except VsinvError as e:
             self.finished = True
-            return self.stop(f"frame refused: {e}")
+            out = self.stop(f"frame refused: {e}")
+            out.frame_used = True
+            return out
         self.last_step = step
         if not step.running:
             self.finished = True
             out = self.stop(f"{step.verdict}: {step.reason}")
-            out.step = step
+            out.step, out.frame_used = step, True
             return out
         self.twist = np.asarray(step.twist, dtype=float)
-        return Output(self.output_twist(self.twist), step)
+        return Output(self.output_twist(self.twist), step, True)
 
     def refuse_frame(self, error: InvalidInput) -> None:
         """A message that is no usable image: said in the status; not an image for the watchdog."""
@@ -170,8 +174,7 @@ class BridgeSession:
         found = np.asarray(step.found, dtype=bool)
         s["points"] = {"found": int(found.sum()), "total": int(found.size), "found_mask": [bool(x) for x in found],
                        "pixels": [[float(u), float(v)] for u, v in np.asarray(step.pixels)]}
-        certainty = getattr(self.pipeline, "certainty", None)
-        s["uncertainty"] = certainty() if callable(certainty) else None
+        s["uncertainty"] = self.pipeline.certainty() if self.pipeline is not None else None
         return s
 
     def status_json(self, **extra: Any) -> str:
