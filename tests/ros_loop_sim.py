@@ -175,7 +175,8 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     try:
         # the bridge sees images before it starts: it needs a CameraInfo for K_hat
-        spin_until(executor, lambda: sup.status.get("state") == "idle" or camera.published > 3, deadline)
+        spin_until(executor, lambda: sup.status.get("K_hat") is not None, time.monotonic() + 30.0)
+        out["K_hat"] = sup.status.get("K_hat")
         out["start"] = call(executor, sup, "start", deadline)
         if not out["start"][0]:
             return out

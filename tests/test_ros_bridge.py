@@ -298,8 +298,10 @@ def test_the_lens_comes_from_camera_info_unless_given(views: dict[str, Any]) -> 
     s = session(views, K_hat=None)
     ok, message = s.start(0.0)
     assert not ok and "no CameraInfo" in message and s.state == "idle"
+    assert json.loads(s.status_json())["K_hat"] is None
     s.camera_info(lens_from_camera_info(camera_info(d=[], distortion_model="")))
     assert s.start(0.0)[0] and s.lens[0].fkv == 610.0
+    assert json.loads(s.status_json())["K_hat"] == [600.0, 610.0, 416.0, 312.0]
     fixed = session(views)
     fixed.camera_info(lens_from_camera_info(camera_info()))
     assert fixed.lens[0] == vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0)

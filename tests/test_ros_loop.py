@@ -132,6 +132,7 @@ def test_the_loop_converges_through_ros_messages(tmp_path: Path) -> None:
     assert bridge.returncode == 0, err[-3000:]
     r = json.loads((tmp_path / "out.json").read_text())
     assert r["start"][0], (r["start"], err[-3000:])
+    assert r["K_hat"] == K_6MM  # from CameraInfo
     s = r["status"]
     print(
         f"\nROS loop: {s['verdict']} after {s['iterations']} iterations: {r['error_mm']:.3f} mm, {r['error_deg']:.4f} deg; "

@@ -164,6 +164,8 @@ class BridgeSession:
         s["iterations"] = self.pipeline.iterations if self.pipeline is not None else 0
         s["twist"] = [float(x) for x in self.output_twist(self.twist)]
         s["output_frame"] = self.config.output_frame
+        k = self.lens[0] if self.lens is not None else None
+        s["K_hat"] = [k.fku, k.fkv, k.u0, k.v0] if k is not None else None
         step = self.last_step
         if step is None:
             s.update(verdict=None, points=None)
