@@ -110,9 +110,31 @@ def stop(process: subprocess.Popen[str]) -> tuple[str, str]:
         return process.communicate()
 
 
+def in_process_loop(parameters: dict[str, Any], start: np.ndarray) -> tuple[int, float, float]:
+    """The same pipeline stepped in this process on the same renderings (K_hat the CameraInfo's,
+    the twist integrated in the camera frame): iterations, final errors (mm, degrees)."""
+    scenario = vsinv.load_scenario(SCENARIO)
+    options = {k: v for k, v in parameters.items() if k in ("reference_depths", "law", "rz_task", "max_linear_speed",
+                                                            "max_angular_speed", "dt", "stop")}
+    pipeline = vsinv.ImageServo(
+        vsinv.load_image(parameters["reference_image"]), "dots", vsinv.Intrinsics(*K_6MM),
+        reference_points=np.reshape(parameters["reference_points"], (-1, 2)),
+        first_points=np.reshape(parameters["first_points"], (-1, 2)), **options,
+    )
+    pose = start
+    for _ in range(parameters["stop"]["max_iterations"] + 1):
+        step = pipeline.step(vsinv.render(scenario, pose=pose))
+        if not step.running:
+            break
+        pose = pose @ vsinv.exp_twist(step.twist, DT)
+    position, thetau = vsinv.thetau_from_pose(pose)
+    return pipeline.iterations, 1e3 * float(np.linalg.norm(position)), float(np.degrees(np.linalg.norm(thetau)))
+
+
 def test_the_loop_converges_through_ros_messages(tmp_path: Path) -> None:
     env = ros_env()
-    params = write_params(tmp_path / "bridge.yaml", bridge_parameters(tmp_path))
+    parameters = bridge_parameters(tmp_path)
+    params = write_params(tmp_path / "bridge.yaml", parameters)
     start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
     config = {"scenario": SCENARIO, "K": K_6MM, "start_pose": start.tolist(), "dt": DT, "frame": "tool0",
               "hand_eye": hand_eye_matrix("hand_eye", HAND_EYE).tolist(), "timeout": 240.0}
@@ -141,6 +163,11 @@ def test_the_loop_converges_through_ros_messages(tmp_path: Path) -> None:
     )
     assert s["verdict"] == "converged", s
     assert r["error_mm"] < 1.0 and r["error_deg"] < 0.1
+    # as the same pipeline in this process: the messages and the mount change nothing
+    iterations, error_mm, error_deg = in_process_loop(parameters, start)
+    print(f"in process: {iterations} iterations, {error_mm:.3f} mm, {error_deg:.4f} deg")
+    assert abs(s["iterations"] - iterations) <= 5, (s["iterations"], iterations)
+    assert abs(r["error_mm"] - error_mm) < 0.05 and abs(r["error_deg"] - error_deg) < 0.005, (error_mm, error_deg)
     assert r["frames"] == ["tool0"]
     assert r["last_twist"] == [0.0] * 6  # the stop is a zero twist
     assert s["points"]["found"] == 12 and s["uncertainty"] is not None
