@@ -347,3 +347,23 @@ def test_the_readme_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.
     assert c.target == "tags" and c.output_frame == "end_effector" and c.topics["twist"] == "/servo_node/delta_twist_cmds"
     np.testing.assert_allclose(c.hand_eye[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-6)  # 90 degrees about z
     assert len(c.servo_options["reference_depths"]) == 16
+
+
+def test_bad_files_are_refused_by_parameter_name(views: dict[str, Any], tmp_path: Path) -> None:
+    garbage = tmp_path / "garbage.png"
+    garbage.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(10))
+    text = tmp_path / "bad.csv"
+    text.write_text("a,b\n1,2\n")
+    cases = [
+        ({"reference_image": str(garbage)}, "reference_image"),
+        ({"reference_points": None, "reference_points_file": str(text)}, "reference_points_file"),
+        ({"first_points": None, "first_points_file": str(tmp_path / "missing.csv")}, "first_points_file"),
+        ({"reference_depths": None, "reference_depths_file": str(text)}, "reference_depths_file"),
+        ({"K_hat": None, "calibration": str(text)}, "calibration"),
+        ({"reference_calibration": str(garbage)}, "reference_calibration"),
+    ]
+    for change, name in cases:
+        with pytest.raises(vsinv.InvalidInput) as e:
+            parse_parameters(good(views, **change))
+        message = str(e.value)
+        assert message.startswith(f"parameter {name}: ") and message.count("parameter ") == 1, message

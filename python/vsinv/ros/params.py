@@ -215,8 +215,9 @@ def _points(given: dict[str, Any], name: str) -> Optional[npt.NDArray[np.float64
     if which == name:
         return _pairs(name, given[name])
     if which is not None:
+        path = _file(which, given[which])
         try:
-            return read_points(_file(which, given[which]))
+            return read_points(path)
         except (ValueError, OSError) as e:
             raise _refuse(which, str(e)) from None
     return None
@@ -228,8 +229,9 @@ def _lens(given: dict[str, Any], k_name: str, d_name: str, file_name: str) -> tu
     if which == file_name:
         if d_name in given:
             raise _refuse(d_name, f"the distortion comes from {file_name}")
+        path = _file(file_name, given[file_name])
         try:
-            c = load_calibration(_file(file_name, given[file_name]))
+            c = load_calibration(path)
         except InvalidInput as e:
             raise _refuse(file_name, str(e)) from None
         return c.intrinsics, c.distortion
@@ -282,8 +284,9 @@ def _servo_options(given: dict[str, Any]) -> dict[str, Any]:
     elif which == "reference_depths_file":
         from ..replaying import read_depths
 
+        path = _file(which, given[which])
         try:
-            options["reference_depths"] = read_depths(_file(which, given[which]))
+            options["reference_depths"] = read_depths(path)
         except (ValueError, OSError) as e:
             raise _refuse(which, str(e)) from None
     elif which == "depth":
@@ -338,8 +341,9 @@ def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:
         raise _refuse("reference_image", "required (the reference image file)")
     from .._core import load_image
 
+    path = _file("reference_image", given["reference_image"])
     try:
-        reference = load_image(_file("reference_image", given["reference_image"]))
+        reference = load_image(path)
     except InvalidInput as e:
         raise _refuse("reference_image", str(e)) from None
     target = cast(Literal["dots", "tags"], given["target"])
