@@ -72,6 +72,14 @@ class BridgeNode(Node):
             self._publish_status()
 
     def _on_image(self, msg: Image) -> None:
+        try:
+            self._servo_on(msg)
+        except Exception as e:  # a fault of the bridge itself: the robot stops, the node stays up
+            self.get_logger().error(f"vsinv_ros: internal error on an image: {e!r}")
+            self._send(self.session.stop(f"internal error: {e!r}"))
+
+    def _servo_on(self, msg: Image) -> None:
+        """One image: converted, stepped while running, the twist, status and annotated image sent."""
         received = time.monotonic()
         if not self.config.camera_frame and msg.header.frame_id and self.config.output_frame == "camera":
             self.frame_id = msg.header.frame_id
