@@ -161,71 +161,88 @@ def call(executor: SingleThreadedExecutor, sup: Supervisor, name: str, deadline:
     return bool(result.success), str(result.message)
 
 
+def converge(executor: SingleThreadedExecutor, camera: SimCamera, robot: SimRobot, sup: Supervisor, deadline: float) -> dict[str, Any]:
+    """Starts the bridge once it has a CameraInfo and waits for its final verdict: the loop's
+    measurements."""
+    out: dict[str, Any] = {}
+    spin_until(executor, lambda: sup.status.get("K_hat") is not None, time.monotonic() + 30.0)
+    out["K_hat"] = sup.status.get("K_hat")
+    out["start"] = call(executor, sup, "start", deadline)
+    if not out["start"][0]:
+        return out
+    t0, n0 = time.monotonic(), len(robot.received)
+    spin_until(executor, lambda: sup.status.get("state") == "stopped", deadline)
+    elapsed = time.monotonic() - t0
+    status = dict(sup.status)
+    spin_until(executor, lambda: False, time.monotonic() + 0.3)  # the stop's zero twist
+    position, thetau = vsinv.thetau_from_pose(robot.camera_pose())
+    lat = np.array(robot.latencies)
+    twists = len(robot.received) - n0
+    out.update(
+        status=status, seconds=elapsed, twists=twists, images=camera.published,
+        rate_hz=twists / elapsed if elapsed > 0 else 0.0,
+        latency_median_ms=1e3 * float(np.median(lat)) if lat.size else None,
+        latency_p99_ms=1e3 * float(np.percentile(lat, 99)) if lat.size else None,
+        error_mm=1e3 * float(np.linalg.norm(position)), error_deg=math.degrees(float(np.linalg.norm(thetau))),
+        last_twist=robot.received[-1][1] if robot.received else None,
+        frames=sorted({f for _, _, f in robot.received}),
+    )
+    return out
+
+
+def annotated_and_refused(executor: SingleThreadedExecutor, camera: SimCamera, sup: Supervisor, deadline: float) -> dict[str, Any]:
+    """A new session with a viewer of the annotated image; then an image of another encoding."""
+    out: dict[str, Any] = {}
+    annotated: list[Image] = []
+    viewer = sup.create_subscription(Image, "/vsinv_ros/annotated", annotated.append, QoSProfile(depth=1))
+    spin_until(executor, lambda: viewer.get_publisher_count() > 0, time.monotonic() + 10.0)
+    spin_until(executor, lambda: False, time.monotonic() + 0.5)  # the bridge's side of the match
+    out["reset"] = call(executor, sup, "reset", deadline)
+    out["annotated_start"] = call(executor, sup, "start", deadline)
+    spin_until(executor, lambda: bool(annotated), time.monotonic() + 10.0)
+    out["annotated"] = [(m.encoding, m.width, m.height, len(m.data)) for m in annotated[:1]]
+    out["annotated_status"] = dict(sup.status)
+    out["stop"] = call(executor, sup, "stop", deadline)
+    camera.image_pub.publish(Image(height=2, width=2, encoding="yuv422", step=4, data=bytes(8)))
+    spin_until(executor, lambda: "yuv422" in str(sup.status.get("message")), time.monotonic() + 10.0)
+    out["refused_message"] = sup.status.get("message")
+    return out
+
+
+def watchdog(executor: SingleThreadedExecutor, camera: SimCamera, robot: SimRobot, sup: Supervisor, deadline: float) -> dict[str, Any]:
+    """Started again with the camera silent: the watchdog's stop and the twists sent."""
+    camera.paused = True
+    spin_until(executor, lambda: False, time.monotonic() + 0.3)
+    n1 = len(robot.received)
+    out: dict[str, Any] = {"restart": call(executor, sup, "start", deadline)}
+    spin_until(executor, lambda: str(sup.status.get("reason")).startswith("watchdog"), time.monotonic() + 10.0)
+    spin_until(executor, lambda: False, time.monotonic() + 0.3)
+    out["watchdog_status"] = dict(sup.status)
+    out["watchdog_twists"] = [tw for _, tw, _ in robot.received[n1:]]
+    return out
+
+
 def run(config: dict[str, Any]) -> dict[str, Any]:
+    """The three phases, the nodes destroyed at the end."""
     deadline = time.monotonic() + config["timeout"]
     hand_eye = np.asarray(config["hand_eye"], dtype=float)
     start = np.asarray(config["start_pose"], dtype=float)
-    scenario = vsinv.load_scenario(config["scenario"])
-    camera = SimCamera(scenario, config["K"], start)
+    camera = SimCamera(vsinv.load_scenario(config["scenario"]), config["K"], start)
     robot = SimRobot(camera, start @ np.linalg.inv(hand_eye), hand_eye, config["dt"], config["frame"])
     sup = Supervisor()
     executor = SingleThreadedExecutor()
     for node in (camera, robot, sup):
         executor.add_node(node)
-    out: dict[str, Any] = {}
     try:
-        # the bridge sees images before it starts: it needs a CameraInfo for K_hat
-        spin_until(executor, lambda: sup.status.get("K_hat") is not None, time.monotonic() + 30.0)
-        out["K_hat"] = sup.status.get("K_hat")
-        out["start"] = call(executor, sup, "start", deadline)
-        if not out["start"][0]:
-            return out
-        t0, n0 = time.monotonic(), len(robot.received)
-        spin_until(executor, lambda: sup.status.get("state") == "stopped", deadline)
-        elapsed = time.monotonic() - t0
-        status = dict(sup.status)
-        spin_until(executor, lambda: False, time.monotonic() + 0.3)  # the stop's zero twist
-        position, thetau = vsinv.thetau_from_pose(robot.camera_pose())
-        lat = np.array(robot.latencies)
-        twists = len(robot.received) - n0
-        out.update(
-            status=status, seconds=elapsed, twists=twists, images=camera.published,
-            rate_hz=twists / elapsed if elapsed > 0 else 0.0,
-            latency_median_ms=1e3 * float(np.median(lat)) if lat.size else None,
-            latency_p99_ms=1e3 * float(np.percentile(lat, 99)) if lat.size else None,
-            error_mm=1e3 * float(np.linalg.norm(position)), error_deg=math.degrees(float(np.linalg.norm(thetau))),
-            last_twist=robot.received[-1][1] if robot.received else None,
-            frames=sorted({f for _, _, f in robot.received}),
-        )
-        # a new session with a viewer of the annotated image; an image of another encoding
-        annotated: list[Image] = []
-        viewer = sup.create_subscription(Image, "/vsinv_ros/annotated", annotated.append, QoSProfile(depth=1))
-        spin_until(executor, lambda: viewer.get_publisher_count() > 0, time.monotonic() + 10.0)
-        spin_until(executor, lambda: False, time.monotonic() + 0.5)  # the bridge's side of the match
-        out["reset"] = call(executor, sup, "reset", deadline)
-        out["annotated_start"] = call(executor, sup, "start", deadline)
-        spin_until(executor, lambda: bool(annotated), time.monotonic() + 10.0)
-        out["annotated"] = [(m.encoding, m.width, m.height, len(m.data)) for m in annotated[:1]]
-        out["annotated_status"] = dict(sup.status)
-        out["stop"] = call(executor, sup, "stop", deadline)
-        yuv = Image(height=2, width=2, encoding="yuv422", step=4, data=bytes(8))
-        camera.image_pub.publish(yuv)
-        spin_until(executor, lambda: "yuv422" in str(sup.status.get("message")), time.monotonic() + 10.0)
-        out["refused_message"] = sup.status.get("message")
-        # the watchdog: no more images after a new start
-        camera.paused = True
-        spin_until(executor, lambda: False, time.monotonic() + 0.3)
-        n1 = len(robot.received)
-        out["restart"] = call(executor, sup, "start", deadline)
-        spin_until(executor, lambda: sup.status.get("state") == "stopped", deadline)
-        spin_until(executor, lambda: False, time.monotonic() + 0.3)
-        out["watchdog_status"] = dict(sup.status)
-        out["watchdog_twists"] = [tw for _, tw, _ in robot.received[n1:]]
+        out = converge(executor, camera, robot, sup, deadline)
+        if out["start"][0]:
+            out.update(annotated_and_refused(executor, camera, sup, deadline))
+            out.update(watchdog(executor, camera, robot, sup, deadline))
+        return out
     finally:
         executor.shutdown()
         for node in (camera, robot, sup):
             node.destroy_node()
-    return out
 
 
 def main() -> None:
