@@ -367,3 +367,14 @@ def test_bad_files_are_refused_by_parameter_name(views: dict[str, Any], tmp_path
             parse_parameters(good(views, **change))
         message = str(e.value)
         assert message.startswith(f"parameter {name}: ") and message.count("parameter ") == 1, message
+
+
+def test_lost_features_stop_with_a_zero_twist(views: dict[str, Any]) -> None:
+    s = session(views)
+    s.start(0.0)
+    assert s.frame(views["start"], 0.01).twist.any()
+    out = s.frame(np.full_like(views["start"], 30), 0.02)  # the dots gone
+    assert s.state == "stopped" and s.reason.startswith("lost_features"), s.reason
+    assert out.twist is not None and not out.twist.any() and out.frame_used
+    status = json.loads(s.status_json())
+    assert status["verdict"] == "lost_features" and status["points"]["found"] < 12
