@@ -340,6 +340,10 @@ BLOCKS: list[Entry] = [
     Entry("sh", "vsinv sweep lens-12-6", RUN, check=check_sweeps),
     Entry("python", "import logging", RUN, output=LOGGING_OUTPUT),
     Entry("python", "servo = vsinv.Servo(", RUN, prelude=SERVO_PRELUDE, check=SERVO_CHECK),
+    Entry("python", "q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]", RUN,
+          check="assert solution.position_residual < 1e-10 and solution.rotation_residual < 1e-10\n"
+          "assert np.allclose(vsinv.fk('ur5', solution.joints), pose, atol=1e-9)\n"
+          "assert list(sweep['status']) == ['converged'] * 3, list(sweep['status'])"),
     Entry("toml", "[dependencies]", RUN, "a Cargo manifest: parsed, its version checked against Cargo.toml "
           "(not built: the crate is not on crates.io yet)"),
     Entry("rust", "use vsinv::{Intrinsics", NOT_RUN, "a fragment (reference_pixels, pixels, depths undefined); "
