@@ -71,6 +71,11 @@ fn joint_limits_are_respected() {
     limits.upper[0] = 0.35;
     let s = DampedLeastSquaresIk::default().solve(&arm, &limits, &target, None).unwrap();
     assert!((0.25..=0.35).contains(&s.joints[0]), "{:?}", s.joints);
+    // A folded elbow 0.01 rad from its limit: reached only near the limit, which the active
+    // set holds while the other joints make up the rest of the step.
+    let folded = [0.314, 0.629, -2.148, -3.061, -2.443, 3.238, 2.193];
+    let s = arm.ik(&arm.fk(&folded).unwrap(), None).unwrap();
+    arm.check_limits(&s.joints).unwrap();
     // The UR5's base joint narrowed to [1, 1.2] rad: the pose of q0 = 0.1 has its base joint at
     // 0.1 or 3.602 rad (mod 2 pi; the two shoulder solutions of the closed form), both outside.
     let ur5 = ArmModel::builtin("ur5").unwrap();

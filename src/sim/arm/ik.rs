@@ -8,7 +8,8 @@
 //! `lambda = E + w`, `E = e^T e / 2` (large far from the goal, vanishing near it, so the
 //! iteration ends with Newton's quadratic convergence) and a bias `w` that grows when a step
 //! fails to lower `E` and shrinks when it succeeds. Each step is projected onto the joint
-//! limits (clamped). Seeds: the given one (default: the middle of the limits), then the
+//! limits by an active set (joints driven past a limit are held at it, the others solved
+//! again). Seeds: the given one (default: the middle of the limits), then the
 //! Halton points of the limits' box (deterministic, well spread), until one converges.
 
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
@@ -128,6 +129,39 @@ fn seed_joints(limits: &ArmLimits, given: Option<&[f64]>, k: usize) -> Vec<f64> 
         .collect()
 }
 
+/// The damped step `dq = (J^T J + lambda I)^-1 J^T e` from `q`, projected on the limits by
+/// an active set: a joint the step would carry past a limit is set at it, and the step is
+/// solved again for the free joints against the error the clamped motion leaves (so that
+/// they make up for it rather than the whole step being cut); at most one pass per joint.
+/// `None` when the damped matrix cannot be factorised.
+fn projected_step(j: &DMatrix<f64>, e: &DVector<f64>, q: &[f64], limits: &ArmLimits, lambda: f64) -> Option<Vec<f64>> {
+    let n = q.len();
+    let mut next = q.to_vec();
+    let mut free: Vec<usize> = (0..n).collect();
+    for _ in 0..n {
+        let clamped_motion = DVector::from_fn(n, |i, _| next[i] - q[i]);
+        let rest = e - j * clamped_motion;
+        let jf = j.select_columns(&free);
+        let mut h = jf.transpose() * &jf;
+        for k in 0..free.len() {
+            h[(k, k)] += lambda;
+        }
+        let dq = h.cholesky()?.solve(&(jf.transpose() * rest));
+        let mut still_free = Vec::with_capacity(free.len());
+        for (k, &i) in free.iter().enumerate() {
+            next[i] = (q[i] + dq[k]).clamp(limits.lower[i], limits.upper[i]);
+            if next[i] == q[i] + dq[k] {
+                still_free.push(i);
+            }
+        }
+        if still_free.len() == free.len() || still_free.is_empty() {
+            break;
+        }
+        free = still_free;
+    }
+    Some(next)
+}
+
 /// One seed's run: the joints, the error and the iterations when it stopped.
 struct Descent {
     joints: Vec<f64>,
@@ -159,18 +193,7 @@ impl DampedLeastSquaresIk {
             let cost = e.norm_squared() / 2.0;
             let jac = model.jacobian_base(&q)?;
             let j = DMatrix::from_column_slice(6, n, jac.as_slice());
-            let mut h = j.transpose() * &j;
-            for i in 0..n {
-                h[(i, i)] += cost + bias;
-            }
-            let Some(chol) = h.cholesky() else { break };
-            let dq = chol.solve(&(j.transpose() * &e));
-            let next: Vec<f64> = q
-                .iter()
-                .zip(dq.iter())
-                .enumerate()
-                .map(|(i, (q, d))| (q + d).clamp(limits.lower[i], limits.upper[i]))
-                .collect();
+            let Some(next) = projected_step(&j, &e, &q, limits, cost + bias) else { break };
             let next_error = pose_error(&model.fk(&next)?, target);
             if next_error.norm_squared() / 2.0 < cost {
                 (q, e, bias) = (next, next_error, (bias / 2.0).max(BIAS_MIN));
