@@ -160,8 +160,8 @@ pub enum Error {
     /// Inverse kinematics found no joints within the limits that reach a pose: the best
     /// residual over every seed is reported.
     #[error(
-        "pose: unreachable by {arm} within its joint limits (position {} m, theta-u {} deg): the best of {seeds} seeds stops {} m and {} rad away",
-        Triple(*position), Triple(*thetau_deg), Short(*position_residual), Short(*rotation_residual)
+        "pose: unreachable by {arm} within its joint limits (position {} m, theta-u {} deg): the best of {seeds} seeds stops {position_residual:.3e} m and {rotation_residual:.3e} rad away",
+        Triple(*position), Triple(*thetau_deg)
     )]
     Unreachable {
         /// The arm's name.

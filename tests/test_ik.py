@@ -105,6 +105,13 @@ def test_sweeps_vary_the_start_of_an_arm_placed_by_pose():
     x0 = d["start"]["position"][0]
     result = vsinv.run_sweep(d, {"start.position.0": [x0 - 0.05, x0, x0 + 0.05]})
     assert len(result) == 3 and list(result["status"]) == ["converged"] * 3
+    rolled = vsinv.run_sweep(d, {"roll_deg": [-10.0, 10.0]})
+    assert list(rolled["status"]) == ["converged"] * 2
     # An arm placed by its joints has no start pose to vary: refused, naming both ways.
     with pytest.raises(vsinv.InvalidInput, match=r"start\.position\.0.*robot\.joints"):
         vsinv.run_sweep("arm-ur5-12-6", {"start.position.0": [0.2]})
+    with pytest.raises(vsinv.InvalidInput, match=r"roll_deg.*robot\.joints"):
+        vsinv.run_sweep("arm-ur5-12-6", {"roll_deg": [5.0]})
+    # A start the arm cannot reach is refused before anything runs, naming the key.
+    with pytest.raises(vsinv.InvalidInput, match=r"start\.position\.2.*unreachable by ur5"):
+        vsinv.run_sweep(d, {"start.position.2": [-3.0]})
