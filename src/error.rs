@@ -157,6 +157,36 @@ pub enum Error {
         /// The estimated coefficient.
         a_hat: f64,
     },
+    /// Inverse kinematics found no joints within the limits that reach a pose: the best
+    /// residual over every seed is reported.
+    #[error(
+        "pose: unreachable by {arm} within its joint limits (position {} m, theta-u {} deg): the best of {seeds} seeds stops {position_residual:.3e} m and {rotation_residual:.3e} rad away",
+        Triple(*position), Triple(*thetau_deg)
+    )]
+    Unreachable {
+        /// The arm's name.
+        arm: String,
+        /// The target position, metres (base frame).
+        position: [f64; 3],
+        /// The target orientation as theta-u, degrees (base frame).
+        thetau_deg: [f64; 3],
+        /// The smallest position residual reached, metres.
+        position_residual: f64,
+        /// The rotation residual of that solution, radians.
+        rotation_residual: f64,
+        /// How many seeds were tried.
+        seeds: usize,
+    },
+}
+
+/// Three numbers as `[a, b, c]`, each printed by [`Short`] to four significant digits.
+struct Triple([f64; 3]);
+
+impl std::fmt::Display for Triple {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [a, b, c] = self.0.map(|v| Short((v * 1e4).round() / 1e4));
+        write!(f, "[{a}, {b}, {c}]")
+    }
 }
 
 impl Error {

@@ -449,7 +449,7 @@ def test_issue16_messages_print_short_numbers():
 # Issue 17, item 6: exceptions carry the error's fields as attributes ------------------------
 
 ATTRIBUTES = ("kind", "argument", "index", "row", "column", "expected", "got", "needed", "count", "reason", "basis",
-              "image", "ratio", "threshold", "depth", "estimate", "hint", "key", "file", "field", "a_hat")
+              "image", "ratio", "threshold", "depth", "estimate", "hint", "key", "file", "field", "a_hat", "residual")
 
 
 def raised(f):

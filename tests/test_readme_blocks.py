@@ -345,6 +345,10 @@ BLOCKS: list[Entry] = [
           "tests/test_ros_loop.py runs the bridge from such a file over ROS 2 topics"),
     Entry("sh", "vsinv-ros --ros-args", NOT_RUN, "needs ROS 2, a camera driver and MoveIt Servo; "
           "tests/test_ros_loop.py runs the same command against a simulated camera and robot"),
+    Entry("python", "q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]", RUN,
+          check="assert solution.position_residual < 1e-10 and solution.rotation_residual < 1e-10\n"
+          "assert np.allclose(vsinv.fk('ur5', solution.joints), pose, atol=1e-9)\n"
+          "assert list(sweep['status']) == ['converged'] * 3, list(sweep['status'])"),
     Entry("toml", "[dependencies]", RUN, "a Cargo manifest: parsed, its version checked against Cargo.toml "
           "(not built: the crate is not on crates.io yet)"),
     Entry("rust", "use vsinv::{Intrinsics", NOT_RUN, "a fragment (reference_pixels, pixels, depths undefined); "

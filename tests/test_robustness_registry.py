@@ -22,6 +22,7 @@ AREAS = (
     "test_robustness_geometry",
     "test_robustness_camera",
     "test_robustness_se3",
+    "test_robustness_kinematics",
     "test_robustness_control",
     "test_robustness_planning",
     "test_robustness_scenarios",

@@ -63,6 +63,9 @@ __all__ = [
     "exp_twist",
     "pose_from_position_thetau",
     "thetau_from_pose",
+    "IkSolution",
+    "fk",
+    "ik",
     "__version__",
 ]
 
@@ -81,7 +84,8 @@ class VsinvError(Exception):
     """The kind of error: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics',
     'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis',
     'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario',
-    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular' or 'not_ready'."""
+    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable' or
+    'not_ready'."""
     argument: str | None
     """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
     index: int | None
@@ -122,6 +126,8 @@ class VsinvError(Exception):
     """The entry of a calibration file at fault ('camera_matrix.data')."""
     a_hat: float | None
     """The vanishing coefficient of the rz law (eq. 23)."""
+    residual: float | None
+    """The smallest position residual (m) inverse kinematics reached for an unreachable pose."""
 
 class InvalidInput(VsinvError, ValueError):
     """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or
@@ -852,3 +858,41 @@ def pose_from_position_thetau(position: _ArrayLike, thetau: _ArrayLike) -> _F64A
 
 def thetau_from_pose(pose: _ArrayLike) -> tuple[_F64Array, _F64Array]:
     """(position (3,), thetau (3,)) of a 4x4 pose, theta in [0, pi]."""
+
+@final
+class IkSolution:
+    """A solution of :func:`ik`: joints within the limits and how far their pose is from the
+    target."""
+
+    @property
+    def joints(self) -> _F64Array:
+        """Joint positions (rad; m for prismatic joints), base to end-effector."""
+    @property
+    def position_residual(self) -> float:
+        """Distance between the reached and the target positions, metres."""
+    @property
+    def rotation_residual(self) -> float:
+        """Angle between the reached and the target orientations, radians."""
+    @property
+    def iterations(self) -> int:
+        """Iterations of the seed that converged."""
+    @property
+    def seed(self) -> int:
+        """The seed that converged: 0 for the given one (or the middle of the limits), then
+        the spread seeds in order."""
+
+def fk(arm: str, joints: _ArrayLike) -> _F64Array:
+    """The 4x4 pose of the end-effector of the built-in ``arm`` ('ur5': ``tool0``, 'panda':
+    ``panda_hand_tcp``) in the arm's base frame (its URDF root link: ``base_link``,
+    ``panda_link0``) at ``joints`` (rad), one value per joint."""
+
+def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution:
+    """Joints within the limits of the built-in ``arm`` ('ur5', 'panda') that put its
+    end-effector at ``pose``: a 4x4 float64 rigid motion of the end-effector frame ('ur5':
+    ``tool0``, 'panda': ``panda_hand_tcp``) in the arm's base frame (the URDF root link), as
+    :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011) projected on
+    the joint limits, from ``seed`` (one value per joint; default the middle of the limits),
+    then from up to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A
+    redundant arm (the Panda) returns one of its solutions. Raises InvalidInput (kind
+    'unreachable', argument 'pose', ``residual`` the best position residual) when no seed
+    reaches the pose."""

@@ -29,7 +29,8 @@ pub(crate) const ATTRIBUTES: &[(&str, &str)] = &[
         "str: the kind of error, snake_case: 'non_finite', 'non_finite_point', 'shape', \
          'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points', \
          'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', \
-         'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'not_ready'",
+         'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable', \
+         'not_ready'",
     ),
     ("argument", "str: the argument or parameter at fault (e.g. 'pixels', 'gain'; an image's file path)"),
     ("index", "int: the flat index of a non-finite value, or the point at fault"),
@@ -51,6 +52,7 @@ pub(crate) const ATTRIBUTES: &[(&str, &str)] = &[
     ("file", "str: the file at fault (a scenario, calibration or URDF file)"),
     ("field", "str: the entry of a calibration file at fault (e.g. 'camera_matrix.data')"),
     ("a_hat", "float: the vanishing coefficient of the rz law (eq. 23)"),
+    ("residual", "float: the smallest position residual (metres) inverse kinematics reached for an unreachable pose"),
 ];
 
 fn new_class<'py>(py: Python<'py>, name: &str, bases: Bound<'py, PyTuple>, doc: &str) -> PyResult<Bound<'py, PyType>> {
@@ -257,6 +259,9 @@ fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
             ("calibration", [("file", s(file))].into_iter().chain(field).chain([("reason", s(reason))]).collect())
         }
         Error::RzSingular { a_hat } => ("rz_singular", vec![("a_hat", Float(*a_hat))]),
+        Error::Unreachable { position_residual, .. } => {
+            ("unreachable", vec![("argument", s("pose")), ("residual", Float(*position_residual))])
+        }
     }
 }
 

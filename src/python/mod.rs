@@ -13,6 +13,7 @@ mod control;
 mod errors;
 mod image_servo;
 mod invariant;
+mod kinematics;
 mod lens;
 mod logs;
 mod planning;
@@ -45,6 +46,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     image_servo::register(m)?;
     tags::register(m)?;
     se3::register(m)?;
+    kinematics::register(m)?;
     lens::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

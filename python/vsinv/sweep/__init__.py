@@ -33,6 +33,11 @@ at t = 0), other missing sections are created empty. Derived keys:
 - ``"roll_deg"`` a: an extra rotation about the optical axis at the start:
   ``R' = R Rz(a)`` with R the start rotation, written back as theta-u degrees.
 
+**Arms.** ``start.*`` and ``roll_deg`` move the camera's start pose, which an arm scenario
+has when it is placed by that pose (``[start]``; the joints follow by inverse kinematics,
+from ``robot.ik_seed`` when given); one placed by ``robot.joints`` is refused, naming the
+key. A varied start the arm cannot reach is refused as any invalid value is.
+
 Dotted keys are applied first (in the order given), then the derived keys in the order above,
 then the noise seed.
 

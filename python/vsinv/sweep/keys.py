@@ -230,9 +230,25 @@ _DERIVED: dict[str, Callable[[dict[str, Any], float], None]] = {
 }
 
 
+def _check_start_varies(d: Mapping[str, Any], key: str, path: list[Union[str, int]]) -> None:
+    """A key moving the start pose (``start.*``, ``roll_deg``) needs a scenario whose start is
+    a pose: an arm placed by ``robot.joints`` has none (its start follows from the joints)."""
+    if path[0] not in ("start", "roll_deg"):
+        return
+    robot = d.get("robot") or {}
+    if d.get("start") is None and robot.get("kind") == "urdf" and robot.get("joints") is not None:
+        raise InvalidInput(
+            f"vary key {key!r}: this arm is placed by robot.joints, so its start pose is not a key to vary; "
+            "place it by the camera pose instead ([start] position and rotation_deg, robot.ik_seed to pick "
+            "the joints' branch; the joints then follow by inverse kinematics)"
+        )
+
+
 def _apply(base: Mapping[str, Any], values: Mapping[str, Any], paths: Mapping[str, list[Union[str, int]]]) -> dict[str, Any]:
     """A new scenario dict: ``base`` with ``values`` applied (dotted keys, then derived keys)."""
     d = dict(base)
+    for key in values:
+        _check_start_varies(d, key, paths.get(key) or [key])
     for key, value in values.items():
         if key not in _DERIVED:
             _set_dotted(d, key, paths[key], value)

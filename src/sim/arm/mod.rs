@@ -1,6 +1,7 @@
 //! Serial arms from URDF: the chain of joints from the base link to an end-effector link,
 //! forward kinematics of any link of the chain, geometric Jacobians in the base and
-//! end-effector frames, and manipulability.
+//! end-effector frames, manipulability, and inverse kinematics (damped least squares with
+//! joint limits and several seeds, [`DampedLeastSquaresIk`]).
 //!
 //! Revolute, continuous, prismatic and fixed joints are supported (fixed joints are folded
 //! into the next joint's origin). URDF origins are `Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll)`.
@@ -19,13 +20,17 @@
 //! let jac = arm.jacobian_end_effector(&q)?; // twist (v, w) of tool0 in tool0 per unit dq
 //! assert_eq!(jac.shape(), (6, 6));
 //! assert!(pose.translation.vector.norm() < 1.0 && arm.manipulability(&q)? > 0.0);
+//! let back = arm.ik(&pose, None)?; // joints within the limits reaching the same pose
+//! assert!(back.position_residual < 1e-9 && back.rotation_residual < 1e-9);
 //! # Ok::<(), vsinv::Error>(())
 //! ```
 
+mod ik;
 mod kinematics;
 mod model;
 pub mod servo;
 
+pub use ik::{DampedLeastSquaresIk, IkSolution, InverseKinematics};
 pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
 pub use servo::{ArmRobot, ArmStep};
 

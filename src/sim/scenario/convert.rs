@@ -182,7 +182,7 @@ impl Scenario {
         Ok((reference_camera, camera, estimate, distortion))
     }
 
-    /// `[start]` (or an arm's camera pose at `robot.joints`): a finite pose with the whole
+    /// `[start]` (or an arm's camera pose at its start joints): a finite pose with the whole
     /// object in front of the camera, reachable by the robot.
     fn start_pose(&self, robot: &Robot) -> Result<Isometry3<f64>> {
         let given = match &self.start {
@@ -197,13 +197,13 @@ impl Scenario {
             (Robot::Arm(arm), given) => arm_start(arm, given)?,
             (_, Some(start)) => start,
             (_, None) => {
-                return Err(scenario_error("start", "missing (only an arm's start follows from robot.joints)"));
+                return Err(scenario_error("start", "missing (only an arm's start may follow from robot.joints)"));
             }
         };
         let inv = start.inverse();
         if let Some(i) = self.object_points()?.0.iter().position(|p| (inv * Point3::from(*p)).z <= MIN_DEPTH) {
             let from = if matches!(robot, Robot::Arm(_)) {
-                " (robot.base * FK(robot.joints) * robot.camera_mount)"
+                " (robot.base * FK(start joints) * robot.camera_mount)"
             } else {
                 ""
             };
@@ -331,11 +331,12 @@ impl Scenario {
             ("robot.camera_mount", r.camera_mount.is_some()),
             ("robot.base", r.base.is_some()),
             ("robot.joints", r.joints.is_some()),
+            ("robot.ik_seed", r.ik_seed.is_some()),
             ("robot.min_manipulability", r.min_manipulability.is_some()),
             ("robot.damping", r.damping.is_some()),
         ];
         match (r.kind, first_given(arm_key)) {
-            (RobotKind::Urdf, _) => arm::robot(r, self.files()),
+            (RobotKind::Urdf, _) => arm::robot(r, self.start.as_ref(), self.files()),
             (_, Some(key)) => Err(scenario_error(key, "applies to kind = \"urdf\" only")),
             (RobotKind::Free, None) => {
                 if r.joint_min.is_some() || r.joint_max.is_some() || r.joint_velocity.is_some() {
@@ -368,16 +369,15 @@ fn cartesian(r: &super::schema::RobotSpec) -> Result<Robot> {
     Ok(Robot::Cartesian(CartesianRobot { limits }))
 }
 
-/// An arm's start pose: the camera pose at its start joints, which a given `[start]` must
-/// match.
+/// An arm's start pose: the camera pose at its start joints (given as `robot.joints`, or
+/// solved from `[start]` by inverse kinematics, which must then agree with it).
 fn arm_start(arm: &crate::sim::arm::ArmRobot, given: Option<Isometry3<f64>>) -> Result<Isometry3<f64>> {
     let start = arm.camera_pose(&arm.start).map_err(|e| scenario_error("robot.joints", e.to_string()))?;
     if let Some(given) = given {
         let (dt, dr) = crate::core::se3::pose_error(&start, &given);
         if dt > 1e-6 || dr > 1e-6 {
             let reason = format!(
-                "the arm's camera at robot.joints is {:.3e} mm and {:.3e} degrees away from [start]; \
-                 leave [start] out (it follows from robot.joints) or make it agree",
+                "the arm's camera at the start joints is {:.3e} mm and {:.3e} degrees away from [start]",
                 dt * 1e3,
                 dr.to_degrees()
             );

@@ -329,8 +329,13 @@ pub struct RobotSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub base: Option<PoseSpec>,
     /// Arm: joint positions at the start (degrees, metres); the start pose follows from them.
+    /// Give either these or the camera's start pose `[start]` (joints by inverse kinematics).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joints: Option<Vec<f64>>,
+    /// Arm placed by `[start]`: the joints (degrees, metres) the inverse kinematics starts
+    /// from, which picks the branch (elbow up or down, ...); default: the middle of the limits.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_seed: Option<Vec<f64>>,
     /// Arm: a run ends `singular` below this manipulability (default 1e-4).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_manipulability: Option<f64>,
@@ -355,6 +360,7 @@ impl Default for RobotSpec {
             camera_mount: None,
             base: None,
             joints: None,
+            ik_seed: None,
             min_manipulability: None,
             damping: None,
         }
@@ -399,8 +405,8 @@ pub struct Scenario {
     /// K_hat (default: the servo camera at t = 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub estimate: Option<CameraSpec>,
-    /// Start pose (with an arm, optional: it follows from `robot.joints`, and is checked
-    /// against them if given).
+    /// Start pose of the camera. With an arm, either this (the start joints then follow by
+    /// inverse kinematics) or `robot.joints` (the start pose then follows from them).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<StartSpec>,
     /// The control law.

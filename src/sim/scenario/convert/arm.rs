@@ -1,5 +1,6 @@
-//! `[robot] kind = "urdf"`: the model, the mount, the base, the start joints and the limits,
-//! each checked with an error naming its key.
+//! `[robot] kind = "urdf"`: the model, the mount, the base, the start joints (given, or
+//! solved from the camera's start pose by inverse kinematics) and the limits, each checked
+//! with an error naming its key.
 
 use std::sync::Arc;
 
@@ -7,19 +8,26 @@ use super::{check_values, pose_of};
 use crate::error::{Error, Result};
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::schema::{PoseSpec, RobotSpec};
+use crate::sim::scenario::schema::{PoseSpec, RobotSpec, StartSpec};
 use crate::sim::scenario::{FileScope, scenario_error};
 
-/// The arm of `[robot]`; `files` resolves a URDF path.
-pub(super) fn robot(r: &RobotSpec, files: FileScope<'_>) -> Result<Robot> {
+/// The arm of `[robot]`, placed by `robot.joints` or by the camera's pose `start`; `files`
+/// resolves a URDF path.
+pub(super) fn robot(r: &RobotSpec, start: Option<&StartSpec>, files: FileScope<'_>) -> Result<Robot> {
     let model = model(r, files)?;
     let units = Units::of(&model);
     let n = model.dof();
-    let joints =
-        r.joints.as_ref().ok_or_else(|| scenario_error("robot.joints", "missing: the start joint positions"))?;
-    let start = units.convert("robot.joints", joints, n, &model)?;
+    let joints = match (&r.joints, start, &r.ik_seed) {
+        (Some(_), Some(_), _) => return Err(scenario_error("start", BOTH_GIVEN)),
+        (Some(_), None, Some(_)) => {
+            return Err(scenario_error("robot.ik_seed", "applies when [start] places the arm, not with robot.joints"));
+        }
+        (Some(joints), None, None) => units.convert("robot.joints", joints, n, &model)?,
+        (None, Some(_), _) => vec![0.0; n], // solved below, once the limits are final
+        (None, None, _) => return Err(scenario_error("robot.joints", NEITHER_GIVEN)),
+    };
     let mut arm =
-        ArmRobot::new(model, pose("robot.base", &r.base)?, pose("robot.camera_mount", &r.camera_mount)?, start);
+        ArmRobot::new(model, pose("robot.base", &r.base)?, pose("robot.camera_mount", &r.camera_mount)?, joints);
     override_limits(&mut arm, r, &units)?;
     if let Some(d) = r.damping {
         arm.damping = d;
@@ -27,11 +35,30 @@ pub(super) fn robot(r: &RobotSpec, files: FileScope<'_>) -> Result<Robot> {
     if let Some(w) = r.min_manipulability {
         arm.min_manipulability = w;
     }
+    if let Some(s) = start {
+        arm.start = start_joints(&arm, s, r.ik_seed.as_deref(), &units)?;
+    }
     arm.validate().map_err(|e| match e {
         Error::InvalidParameter { name, reason } if name.starts_with("robot.") => scenario_error(name, reason),
         other => scenario_error("robot", other.to_string()),
     })?;
     Ok(Robot::Arm(Arc::new(arm)))
+}
+
+const BOTH_GIVEN: &str = "the arm is placed twice: by robot.joints and by [start] (start.position, \
+     start.rotation_deg); give one (the other follows from it)";
+const NEITHER_GIVEN: &str = "missing: the start joint positions, or the camera's start pose [start] \
+     (start.position, start.rotation_deg) to place the arm by inverse kinematics";
+
+/// The joints that put the camera at `start` (F*): inverse kinematics from `robot.ik_seed`
+/// (or the middle of the limits) within the arm's limits and above its `min_manipulability`.
+fn start_joints(arm: &ArmRobot, start: &StartSpec, seed: Option<&[f64]>, units: &Units) -> Result<Vec<f64>> {
+    check_values("start.position", &start.position)?;
+    check_values("start.rotation_deg", &start.rotation_deg)?;
+    let seed = seed.map(|q| units.convert("robot.ik_seed", q, arm.dof(), &arm.model)).transpose()?;
+    let camera = pose_of(start.position, start.rotation_deg);
+    let solution = arm.ik_camera(&camera, seed.as_deref()).map_err(|e| scenario_error("start", e.to_string()))?;
+    Ok(solution.joints)
 }
 
 /// `robot.urdf` (a built-in name or a file) up to `robot.end_effector`.

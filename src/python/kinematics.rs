@@ -1,0 +1,129 @@
+//! Forward and inverse kinematics of the built-in arms in Python: `fk(arm, joints)` and
+//! `ik(arm, pose, seed=None)` with poses of the end-effector in the arm's base frame (4x4).
+
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+
+use super::arrays::{f64_array, from_matrix, vec1};
+use super::errors::invalid_argument;
+use crate::core::se3;
+use crate::sim::arm::{ArmModel, BUILTIN_ARMS, IkSolution};
+
+/// A built-in arm by name (its default end-effector).
+fn builtin_arm(arm: &Bound<'_, PyAny>) -> PyResult<ArmModel> {
+    let name: String = arm.extract().map_err(|_| {
+        invalid_argument(
+            "arm",
+            format!("arm: expected a built-in arm name ({}), got {}", BUILTIN_ARMS.join(", "), type_name(arm)),
+        )
+    })?;
+    Ok(ArmModel::builtin(&name)?)
+}
+
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type().name().map_or_else(|_| "an object".into(), |n| n.to_string())
+}
+
+/// One float per joint of `model`, read from `obj` (`what` names it).
+fn joints_arg(obj: &Bound<'_, PyAny>, what: &'static str, model: &ArmModel) -> PyResult<Vec<f64>> {
+    let a = f64_array(obj, what, &[None])?;
+    let q = a.as_slice()?.to_vec();
+    if q.len() != model.dof() {
+        let reason = format!(
+            "{what}: expected {} values (joints {}), got {}",
+            model.dof(),
+            model.joint_names().join(", "),
+            q.len()
+        );
+        return Err(invalid_argument(what, reason));
+    }
+    crate::error::check_finite(what, &q)?;
+    Ok(q)
+}
+
+/// A solution of [`ik`]: the joints (radians; metres for prismatic joints) and how far their
+/// pose is from the target.
+#[pyclass(name = "IkSolution", module = "vsinv._core", frozen)]
+struct PyIkSolution {
+    inner: IkSolution,
+}
+
+#[pymethods]
+impl PyIkSolution {
+    /// Joint positions, base to end-effector, within the joint limits.
+    #[getter]
+    fn joints<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, &self.inner.joints)
+    }
+
+    /// Distance between the reached and the target positions, metres.
+    #[getter]
+    fn position_residual(&self) -> f64 {
+        self.inner.position_residual
+    }
+
+    /// Angle between the reached and the target orientations, radians.
+    #[getter]
+    fn rotation_residual(&self) -> f64 {
+        self.inner.rotation_residual
+    }
+
+    /// Iterations of the seed that converged.
+    #[getter]
+    fn iterations(&self) -> usize {
+        self.inner.iterations
+    }
+
+    /// The seed that converged: 0 for the given one (or the middle of the limits), then the
+    /// spread seeds in order.
+    #[getter]
+    fn seed(&self) -> usize {
+        self.inner.seed
+    }
+
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "IkSolution(joints={:?}, position_residual={:.3e}, rotation_residual={:.3e}, iterations={}, seed={})",
+            s.joints, s.position_residual, s.rotation_residual, s.iterations, s.seed
+        )
+    }
+}
+
+/// The 4x4 pose of the built-in `arm`'s end-effector in its base frame at `joints`.
+#[pyfunction]
+fn fk<'py>(
+    py: Python<'py>,
+    arm: &Bound<'py, PyAny>,
+    joints: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let model = builtin_arm(arm)?;
+    let q = joints_arg(joints, "joints", &model)?;
+    from_matrix(py, &model.fk(&q)?.to_homogeneous())
+}
+
+/// Joints within the limits of the built-in `arm` that put its end-effector at `pose` (4x4,
+/// base frame), by damped least squares from `seed` and then spread seeds.
+#[pyfunction]
+#[pyo3(signature = (arm, pose, seed = None))]
+fn ik(
+    py: Python<'_>,
+    arm: &Bound<'_, PyAny>,
+    pose: &Bound<'_, PyAny>,
+    seed: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyIkSolution> {
+    let model = builtin_arm(arm)?;
+    let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
+    let target = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
+    let seed = seed.map(|s| joints_arg(s, "seed", &model)).transpose()?;
+    let inner = py.detach(|| model.ik(&target, seed.as_deref()))?;
+    Ok(PyIkSolution { inner })
+}
+
+/// Adds `fk`, `ik` and `IkSolution`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyIkSolution>()?;
+    m.add_function(wrap_pyfunction!(fk, m)?)?;
+    m.add_function(wrap_pyfunction!(ik, m)?)?;
+    Ok(())
+}

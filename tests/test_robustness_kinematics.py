@@ -1,0 +1,75 @@
+"""Robustness of the public Python API under hypothesis, the arms' kinematics (``fk``, ``ik``
+and ``IkSolution``).
+
+The promise and the harness are described in tests/robustness_harness.py.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+import vsinv
+from robustness_harness import ANY, INVALID, V, arrays, call, choices, covers, fuzz, fuzz_settings, returned
+
+Q = np.array([0.1, -1.2, 1.0, -0.5, 1.4, 0.3])
+SEED = Q + np.array([0.05, -0.04, 0.03, -0.02, 0.05, 0.01])
+ARMS = choices(["ur5"], ["kuka", "", None, 5, b"ur5", ["ur5"]])
+#: A pose must be a rigid motion: scaled, zeroed or flipped ones are refused.
+NOT_RIGID = {"zero": INVALID, "negative": INVALID, "fewer": INVALID, "empty": INVALID, "flat": INVALID,
+             "huge": INVALID, "bool": INVALID, "tiny": INVALID, "float32": ANY}
+
+
+def check_solution(target: np.ndarray) -> Any:
+    def check(out: Any) -> None:
+        assert isinstance(out, vsinv.IkSolution)
+        q = out.joints
+        assert q.shape == (6,) and np.all(np.abs(q) <= 2 * np.pi)
+        d = np.linalg.inv(call(vsinv.fk, "ur5", q)) @ target
+        assert np.linalg.norm(d[:3, 3]) < 1e-9 and out.position_residual <= 1e-10
+        assert out.rotation_residual <= 1e-10 and out.iterations >= 0 and out.seed >= 0
+    return check
+
+
+@covers("ik", "IkSolution", "IkSolution.joints", "IkSolution.position_residual", "IkSolution.rotation_residual",
+        "IkSolution.iterations", "IkSolution.seed")
+@fuzz_settings(120)
+@given(st.data())
+def test_ik(data: Any) -> None:
+    pose = vsinv.fk("ur5", Q)
+    args: dict[str, Any] = {"arm": "ur5", "pose": pose, "seed": SEED}
+    strategies = {
+        "arm": ARMS,
+        "pose": arrays(pose, overrides=NOT_RIGID),
+        "seed": arrays(SEED, overrides={"none": ANY, "flat": ANY}),
+    }
+    ref = vsinv.ik("ur5", pose, SEED)
+    name, v, out = fuzz(data, vsinv.ik, args, strategies, ref=ref, digest=lambda s: s.joints, rtol=1e-12)
+    if returned(out):
+        check_solution(np.asarray(v.value, dtype=float) if name == "pose" else pose)(out)
+
+
+@covers("fk")
+@fuzz_settings(100)
+@given(st.data())
+def test_fk(data: Any) -> None:
+    args: dict[str, Any] = {"arm": "ur5", "joints": Q}
+    strategies = {"arm": ARMS, "joints": arrays(Q)}
+    name, v, out = fuzz(data, vsinv.fk, args, strategies, ref=vsinv.fk("ur5", Q), rtol=1e-12)
+    if returned(out):
+        assert out.shape == (4, 4)
+        np.testing.assert_allclose(out[:3, :3] @ out[:3, :3].T, np.eye(3), atol=1e-9)
+
+
+@covers("ik")
+@fuzz_settings(20)
+@given(st.lists(st.floats(-3, 3), min_size=3, max_size=3), st.lists(st.floats(-3, 3), min_size=3, max_size=3))
+def test_ik_returns_or_refuses_any_pose(position: list[float], thetau: list[float]) -> None:
+    """Any rigid motion: reached within 1e-9, or refused as unreachable naming the pose."""
+    pose = vsinv.pose_from_position_thetau(position, thetau)
+    out = call(vsinv.ik, "ur5", pose)
+    if returned(out):
+        check_solution(pose)(out)
