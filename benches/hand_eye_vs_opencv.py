@@ -69,7 +69,9 @@ def stations(rng: np.random.Generator, n: int, noise: tuple[float, float]):
 
 def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
     r = found[:3, :3].T @ truth[:3, :3]
-    angle = np.degrees(np.arccos(np.clip((np.trace(r) - 1) / 2, -1, 1)))
+    # atan2(sin, cos) of the angle: accurate at small angles too (arccos of the trace is not).
+    sin = np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / 2
+    angle = np.degrees(np.arctan2(sin, (np.trace(r) - 1) / 2))
     return float(angle), float(np.linalg.norm(found[:3, 3] - truth[:3, 3]) * 1000)
 
 
