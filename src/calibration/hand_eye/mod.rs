@@ -56,8 +56,8 @@ mod tsai;
 use nalgebra::{Isometry3, Matrix4, Rotation3, Translation3, UnitQuaternion};
 
 pub use diagnostics::{AxisSpread, HandEyeAgreement, MIN_AXIS_SPREAD_DEG, MIN_MOTION_ROTATION_DEG, PairResidual};
-use motions::{Motion, Rigid, motions, rigid_poses};
 pub use motions::{MAX_POSE_TRANSLATION_M, MAX_POSES, RIGID_TOLERANCE};
+use motions::{Motion, Rigid, motions, rigid_poses};
 pub use tsai::TSAI_BAND;
 
 use crate::error::{Error, Result};
@@ -209,7 +209,10 @@ pub fn calibrate_hand_eye(
 /// that agree to within the residuals confirm the calibration; a method that disagrees
 /// points at noise its assumptions do not absorb. Fails when the poses are refused, or when
 /// every method fails (with the first method's error).
-pub fn compare_hand_eye_methods(gripper_poses: &[Matrix4<f64>], target_poses: &[Matrix4<f64>]) -> Result<HandEyeAgreement> {
+pub fn compare_hand_eye_methods(
+    gripper_poses: &[Matrix4<f64>],
+    target_poses: &[Matrix4<f64>],
+) -> Result<HandEyeAgreement> {
     let (motions, spread) = prepare(gripper_poses, target_poses)?;
     let (mut calibrations, mut failures, mut first_error) = (Vec::new(), Vec::new(), None);
     for method in HandEyeMethod::ALL {

@@ -148,7 +148,10 @@ fn pure_translations_are_refused() {
         c.push(((p * x).inverse() * target_in_base).to_homogeneous());
     }
     let err = compare_hand_eye_methods(&g, &c).unwrap_err();
-    assert!(matches!(&err, Error::DegenerateMotion { reason, .. } if reason.contains("no gripper motion rotates")), "{err}");
+    assert!(
+        matches!(&err, Error::DegenerateMotion { reason, .. } if reason.contains("no gripper motion rotates")),
+        "{err}"
+    );
 }
 
 #[test]

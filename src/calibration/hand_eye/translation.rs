@@ -24,7 +24,12 @@ pub(crate) fn solve_translation<'a>(
 
 /// The minimum-norm solution of the normal equations `N x = r` (SVD), refused when `N` has
 /// lost rank: the motions do not determine `what`.
-pub(crate) fn least_squares(normal: &Matrix3<f64>, rhs: &Vector3<f64>, poses: usize, what: &str) -> Result<Vector3<f64>> {
+pub(crate) fn least_squares(
+    normal: &Matrix3<f64>,
+    rhs: &Vector3<f64>,
+    poses: usize,
+    what: &str,
+) -> Result<Vector3<f64>> {
     let svd = normal.svd(true, true);
     let (largest, smallest) = (svd.singular_values[0], svd.singular_values[2]);
     // The normal matrix squares the condition number: 1e-12 here is 1e-6 on the motions.

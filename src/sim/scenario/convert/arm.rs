@@ -18,8 +18,11 @@ pub(super) fn robot(r: &RobotSpec, files: FileScope<'_>) -> Result<Robot> {
     let joints =
         r.joints.as_ref().ok_or_else(|| scenario_error("robot.joints", "missing: the start joint positions"))?;
     let start = units.convert("robot.joints", joints, n, &model)?;
-    let mut arm =
-        ArmRobot::new(model, pose("robot.base", &r.base)?, pose("robot.camera_mount", &r.camera_mount)?, start);
+    let mount = pose("robot.camera_mount", &r.camera_mount)?;
+    let mut arm = ArmRobot::new(model, pose("robot.base", &r.base)?, mount, start);
+    if r.mount_error.is_some() {
+        arm.believed_mount = Some(mount * pose("robot.mount_error", &r.mount_error)?);
+    }
     override_limits(&mut arm, r, &units)?;
     if let Some(d) = r.damping {
         arm.damping = d;
