@@ -231,4 +231,5 @@ pub fn compare_hand_eye_methods(
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used, clippy::type_complexity)]
 mod tests;
