@@ -7,7 +7,7 @@ RUST_EXAMPLES := control_loop servo_loop simulation batch
 ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
 	robustness_vision robustness_regressions
 
-.PHONY: wheels install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
+.PHONY: docs wheels install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
 # No -q: the first install compiles the Rust extension in release mode (several minutes on
 # 2 cores); -v passes cargo's progress through, so the build is seen to move.
@@ -17,7 +17,7 @@ install:
 install-run:
 	$(PIP) install -v -e .
 
-test: install test-rust test-embedded test-examples test-python stubtest
+test: install test-rust test-embedded test-examples test-python stubtest docs
 
 test-rust:
 	cargo test --release
@@ -44,6 +44,14 @@ lint:
 	cargo clippy --no-default-features --features servo -- -D warnings
 	cargo clippy --features python -- -D warnings
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps -q
+
+# The documentation site in site/: the Rust API (cargo doc, warnings are errors), the pages' code
+# run in docs/ (its figures land in docs/figures/; a failing block fails the build), then mkdocs
+# in strict mode (a broken link or a docstring it cannot read fails the build). Needs the `docs` extra.
+docs:
+	$(PYTHON) docs/pages.py rust
+	$(PYTHON) docs/pages.py run
+	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict
 
 bench: install
 	cargo bench --bench vsinv

@@ -143,6 +143,7 @@ def test_check_stability_report():
     neg = np.array([[-600.0, 0, 300], [0, 1800, 200], [0, 0, 1]])
     r = vsinv.check_stability(k.matrix, neg)
     assert not r.prop1 and not r.prop2 and (r.eigenvalues.real < 0).any()
+    assert repr(r).startswith("StabilityReport(prop1=False, prop2=False, sigma=")  # Python's bools
     sched = np.stack([lens(f).matrix for f in (2250.0, 1900.0, 1550.0)])
     r = vsinv.check_stability(sched, lens(1500.0), kappa=0.8, gain=2.0)
     assert r.eigenvalues.shape == (3, 5) and r.prop2

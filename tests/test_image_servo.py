@@ -118,6 +118,8 @@ def test_bad_arguments_are_refused_by_name(scenario: vsinv.Scenario) -> None:
         ({"reference_points": None}, "reference_points"),
         ({"reference_points": ref_px[:, :1]}, "points"),
         ({"first_points": ref_px[:5]}, "first_points"),
+        ({"first_points": np.where(np.arange(24).reshape(12, 2) == 7, np.nan, ref_px)}, "first_points: non-finite value at row 3, column 1"),
+        ({"reference_points": np.where(np.arange(24).reshape(12, 2) == 0, np.inf, ref_px)}, "reference_points: non-finite value at row 0"),
         ({"gain_typo": 1.0}, "gain_typo"),
         ({"interaction": "current"}, "interaction"),
         ({"tracker": {"radius": 3}}, "tracker.radius"),

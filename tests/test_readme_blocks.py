@@ -359,6 +359,11 @@ BLOCKS: list[Entry] = [
     Entry("sh", "vsinv sweep lens-12-6", RUN, check=check_sweeps),
     Entry("python", "import logging", RUN, output=LOGGING_OUTPUT),
     Entry("python", "servo = vsinv.Servo(", RUN, prelude=SERVO_PRELUDE, check=SERVO_CHECK),
+    Entry("yaml", "vsinv_ros:", NOT_RUN, "a ROS 2 parameters file for a real camera and arm: "
+          "tests/test_ros_bridge.py parses it with the bridge's parser (with files of its own), and "
+          "tests/test_ros_loop.py runs the bridge from such a file over ROS 2 topics"),
+    Entry("sh", "vsinv-ros --ros-args", NOT_RUN, "needs ROS 2, a camera driver and MoveIt Servo; "
+          "tests/test_ros_loop.py runs the same command against a simulated camera and robot"),
     Entry("toml", "[dependencies]", RUN, "a Cargo manifest: parsed, its version checked against Cargo.toml "
           "(not built: the crate is not on crates.io yet)"),
     Entry("rust", "use vsinv::{Intrinsics", NOT_RUN, "a fragment (reference_pixels, pixels, depths undefined); "

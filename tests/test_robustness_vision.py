@@ -219,7 +219,7 @@ def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 @covers("ImageServo", "ImageServo.step", "ImageServo.ids", "ImageServo.reference_pixels", "ImageServo.iterations",
-        "ImageServo.basis", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.twist",
+        "ImageServo.basis", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.twist",
         "ImageStep.verdict", "ImageStep.reason", "ImageStep.running", "ImageStep.telemetry")
 @fuzz_settings(60)
 @given(st.data())
@@ -234,7 +234,7 @@ def test_image_servo(data: Any) -> None:
     over = {"fewer": ANY, "empty": ANY, "huge": ANY, "zero": ANY, "negative": ANY}
     name, v, out = fuzz(data, vsinv.ImageServo, args,
                         {"reference_image": image_variants(ref), "reference_points": arrays(ref_px + 1.0, overrides=over),
-                         "first_points": arrays(px + 1.0, overrides={**over, "fewer": INVALID, "empty": INVALID}),
+                         "first_points": arrays(px + 1.0, overrides={**over, "fewer": INVALID, "empty": INVALID, "none": RETURN}),
                          "target": choices(["dots"], ["tags?", "", 3], bad_expect=TYPE),
                          "gain": floats(0.5, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID}),
                          "depths": floats(0.6, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID})},
@@ -260,6 +260,10 @@ def test_image_servo(data: Any) -> None:
         assert "image_error" in call(getattr, step, "telemetry", _api="ImageStep.telemetry", _finite=False)
         if nxt.expect == SAME and pipeline is ref_pipeline:
             assert found.all()
+    # one frame: no noise measured yet (three are needed), and the certainty a dict or None
+    assert call(getattr, pipeline, "pixel_sigma", _api="ImageServo.pixel_sigma", _finite=False) is None
+    certainty = call(pipeline.certainty, _api="ImageServo.certainty", _expect=ANY, _finite=False)
+    assert certainty is None or set(certainty) >= {"translation_sigma", "rotation_bound"}
 
 
 @covers("frames", "replay", "ReplayResult", "ReplayResult.table", "ReplayResult.write_csv", "ReplayResult.plot")

@@ -164,16 +164,38 @@ class Intrinsics:
 
 _IntrinsicsLike = Union[Intrinsics, _ArrayLike]
 
-def project(points: _ArrayLike, K: _IntrinsicsLike) -> tuple[_F64Array, _F64Array]: ...
-def invariant_points(pixels: _ArrayLike, basis: _Basis = (0, 1, 2)) -> _F64Array: ...
-def invariant_jacobian(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> _F64Array: ...
-def structure_ratio(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> float: ...
-def interaction_matrix(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike) -> _F64Array: ...
-def jacobian_factors(pixels: _ArrayLike, depths: _ArrayLike, basis: _Basis = (0, 1, 2)) -> tuple[_F64Array, _F64Array]: ...
+def project(points: _ArrayLike, K: _IntrinsicsLike) -> tuple[_F64Array, _F64Array]:
+    """Projects points (n, 3) given in the camera frame (metres) with intrinsics `K`
+    (eqs. 1-3): returns (pixels (n, 2), depths (n,))."""
+
+def invariant_points(pixels: _ArrayLike, basis: _Basis = (0, 1, 2)) -> _F64Array:
+    """The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array; Q is
+    built from the three `basis` points, so q does not depend on the intrinsics."""
+
+def invariant_jacobian(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> _F64Array:
+    """The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths: the
+    motion of the non-basis invariant points per unit of (vx, vy, vz, wx, wy)."""
+
+def structure_ratio(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> float:
+    """sigma_5/sigma_1 of the depth-balanced invariant Jacobian: near 0 for a degenerate
+    structure (a planar object, equal depths), where the law cannot tell motions apart."""
+
+def interaction_matrix(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike) -> _F64Array:
+    """The pixel interaction matrices (n, 2, 6) of the points: dp_k/dt = L_k (v, w)."""
+
+def jacobian_factors(pixels: _ArrayLike, depths: _ArrayLike, basis: _Basis = (0, 1, 2)) -> tuple[_F64Array, _F64Array]:
+    """The factors (Phi (3(n-3), 3), Psi (3(n-3), 2)) of sec. 4.1, with J = [Phi K, Psi F(K)]."""
+
 def rz_coefficients(
     pixels: _ArrayLike, depths: _ArrayLike, reference_pixels: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)
-) -> tuple[float, _F64Array]: ...
-def choose_basis(pixels: _ArrayLike) -> tuple[int, int, int]: ...
+) -> tuple[float, _F64Array]:
+    """The coefficients (a, c (5,)) of eq. (23): d eps_z/dt = a w_z + c . (vx, vy, vz, wx, wy)."""
+
+def choose_basis(pixels: _ArrayLike) -> tuple[int, int, int]:
+    """Three points well spread in the image (the widest triangle; among equal areas the first
+    (i, j, k) in index order), sorted. Refuses (`InvalidInput`, `pixels`) point sets with more
+    than 10,000 convex-hull vertices."""
+
 
 @final
 class InvariantController:
@@ -407,6 +429,13 @@ class ImageServo:
     @property
     def basis(self) -> tuple[int, int, int]:
         """The basis in use."""
+    @property
+    def pixel_sigma(self) -> float | None:
+        """The pixel noise measured on the last frames (None before three), pixels."""
+    def certainty(self) -> dict[str, float] | None:
+        """What the frames say about the pose, as ``Servo.certainty()`` (pixel_sigma,
+        reference_pixel_sigma, translation_sigma, translation_bound in metres, rotation_sigma,
+        rotation_bound in radians); None when it cannot be computed."""
 
 @final
 class ImageStep(ServoStep):
@@ -469,8 +498,16 @@ class StabilityReport:
     def eigenvalues(self) -> npt.NDArray[np.complex128]: ...
     def tracking_bound(self, max_b: float) -> float: ...
 
-def check_stability(K: _IntrinsicsLike, K_hat: _IntrinsicsLike, kappa: float = 1.0, gain: float = 1.0) -> StabilityReport: ...
-def tracking_bound(gain: float, sigma: float, max_b: float) -> float: ...
+def check_stability(K: _IntrinsicsLike, K_hat: _IntrinsicsLike, kappa: float = 1.0, gain: float = 1.0) -> StabilityReport:
+    """Props. 1-2 for the true intrinsics `K` (one camera, or a schedule of cameras), an
+    estimate `K_hat` (a 3x3 upper-triangular matrix or Intrinsics), the depth scale `kappa`
+    and the gain."""
+
+def tracking_bound(gain: float, sigma: float, max_b: float) -> float:
+    """The bound psi/phi = 2 max_b / (gain sigma) of Prop. 3 (eq. 20) on ||eps|| while
+    ||b(t)|| <= max_b; `InvalidInput` for gain <= 0, sigma <= 0 (Prop. 2 fails: no bound),
+    max_b < 0 or a bound that overflows."""
+
 
 @final
 class Scenario:
@@ -615,7 +652,10 @@ class PlaneParallax:
 
 def estimate_plane_parallax(
     current_pixels: _ArrayLike, reference_pixels: _ArrayLike, basis: _Basis = (0, 1, 2)
-) -> PlaneParallax: ...
+) -> PlaneParallax:
+    """Eq. (9) from a current and a reference image of n >= 7 points (the linear method for
+    n >= 8, the minimal 7-point method otherwise)."""
+
 @final
 class InvariantPath:
     """The path of eq. (10) from the current image (t = 0) to the reference image (t = T)."""
@@ -629,7 +669,11 @@ class InvariantPath:
     def plane_parallax(self) -> PlaneParallax: ...
     def sample(self, t: float) -> tuple[_F64Array, _F64Array]: ...
 
-def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]: ...
+def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]:
+    """Eq. (26): the depths of the first image of a pure-translation pair (any camera), up to
+    one positive scale (mean 1). Returns (depths (n,), epipole (3,), residual)."""
+
+
 @final
 class ResectionDepths:
     """Appendix A on line: current depths up to kappa(t) > 0 by DLT resection."""
@@ -781,10 +825,15 @@ class Distortion:
 
 _DistortionLike = Union[Distortion, _ArrayLike]
 
-def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array: ...
+def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
+    """Distorts pixels (n, 2) of the ideal pinhole image: K d(K^-1 p), OpenCV's model."""
+
 def undistort_points(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
-) -> _F64Array: ...
+) -> _F64Array:
+    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol`
+    pixels within `max_iter` iterations."""
+
 @final
 class Calibration:
     """A camera calibration read from a file: intrinsics, distortion and image size."""
@@ -796,7 +845,10 @@ class Calibration:
     @property
     def image_size(self) -> tuple[int, int] | None: ...
 
-def load_calibration(path: str | os.PathLike[str]) -> Calibration: ...
+def load_calibration(path: str | os.PathLike[str]) -> Calibration:
+    """Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML (a
+    regular file of at most 1 MiB; no YAML aliases)."""
+
 def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:
     """The 4x4 rigid motion of holding a camera twist (vx, vy, vz, wx, wy, wz) for dt seconds:
     the next pose is ``pose @ exp_twist(twist, dt)``."""

@@ -467,8 +467,8 @@ fn opt_repr(x: Option<f64>) -> String {
     x.map_or_else(|| "None".to_string(), |x| format!("{x:?}"))
 }
 
-/// A Python bool.
-fn bool_repr(b: bool) -> &'static str {
+/// A Python bool as Python writes it (`True`, `False`).
+pub(super) fn bool_repr(b: bool) -> &'static str {
     if b { "True" } else { "False" }
 }
 

@@ -210,6 +210,17 @@ impl PyImageServo {
         let [a, b, c] = self.inner.servo().basis();
         (a, b, c)
     }
+    /// The pixel noise measured on the last frames (None before three), pixels.
+    #[getter]
+    fn pixel_sigma(&self) -> Option<f64> {
+        self.inner.servo().pixel_sigma()
+    }
+    /// What the frames say about the pose, as `Servo.certainty()`: pixel_sigma,
+    /// reference_pixel_sigma (pixels), translation_sigma, translation_bound (metres),
+    /// rotation_sigma, rotation_bound (radians); None when it cannot be computed.
+    fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        super::servo::certainty_dict(py, self.inner.servo())
+    }
     fn __repr__(&self) -> String {
         let s = self.inner.servo();
         format!(

@@ -410,15 +410,7 @@ impl PyServo {
     /// translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound (radians);
     /// None when it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(c) = self.inner.certainty() else { return Ok(None) };
-        let d = PyDict::new(py);
-        d.set_item("pixel_sigma", c.pixel_sigma)?;
-        d.set_item("reference_pixel_sigma", c.reference_pixel_sigma)?;
-        d.set_item("translation_sigma", c.sigma.0)?;
-        d.set_item("rotation_sigma", c.sigma.1)?;
-        d.set_item("translation_bound", c.bound.0)?;
-        d.set_item("rotation_bound", c.bound.1)?;
-        Ok(Some(d))
+        certainty_dict(py, &self.inner)
     }
     fn __repr__(&self) -> String {
         let s = &self.inner;
@@ -430,6 +422,21 @@ impl PyServo {
             s.iterations()
         )
     }
+}
+
+/// A session's `certainty()` as the dict Python sees: pixel_sigma, reference_pixel_sigma
+/// (pixels), translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound
+/// (radians); None when it cannot be computed.
+pub(super) fn certainty_dict<'py>(py: Python<'py>, servo: &Servo) -> PyResult<Option<Bound<'py, PyDict>>> {
+    let Some(c) = servo.certainty() else { return Ok(None) };
+    let d = PyDict::new(py);
+    d.set_item("pixel_sigma", c.pixel_sigma)?;
+    d.set_item("reference_pixel_sigma", c.reference_pixel_sigma)?;
+    d.set_item("translation_sigma", c.sigma.0)?;
+    d.set_item("rotation_sigma", c.sigma.1)?;
+    d.set_item("translation_bound", c.bound.0)?;
+    d.set_item("rotation_bound", c.bound.1)?;
+    Ok(Some(d))
 }
 
 /// What one step returns.

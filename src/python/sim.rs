@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString, PyTuple};
 
 use super::batch_watch::run_reporting;
+use super::control::bool_repr;
 use super::errors::{PyError, invalid_argument, reraise};
 use super::logs::{DEBUG, INFO, log};
 use crate::sim::arm::ArmRobot;
@@ -306,8 +307,7 @@ pub fn run_scenario(
     let scenario = scenario_arg_with(scenario, access(allow_outside_files))?;
     let mut config = scenario.to_config()?;
     config.record = record;
-    let record_text = if record { "True" } else { "False" };
-    log(py, INFO, || format!("run_scenario {}: start (record={record_text})", scenario.name))?;
+    log(py, INFO, || format!("run_scenario {}: start (record={})", scenario.name, bool_repr(record)))?;
     log(py, DEBUG, || {
         let images = if config.vision.is_some() { "images in the loop" } else { "no images" };
         format!("run_scenario {}: {} points, dt {} s, {images}", scenario.name, config.scene.points().len(), config.dt)

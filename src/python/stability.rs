@@ -6,6 +6,7 @@ use pyo3::prelude::*;
 
 use super::arrays::f64_array;
 use super::camera::{PyIntrinsics, intrinsics, matrix3};
+use super::control::bool_repr;
 use super::errors::{PyError, Value, invalid_argument, reraise};
 use crate::core::stability::{StabilityReport, check_upper_triangular};
 use crate::error::fixed_or_short;
@@ -50,8 +51,8 @@ impl PyStabilityReport {
     fn __repr__(&self) -> String {
         format!(
             "StabilityReport(prop1={}, prop2={}, sigma={})",
-            self.inner.prop1,
-            self.inner.prop2,
+            bool_repr(self.inner.prop1),
+            bool_repr(self.inner.prop2),
             fixed_or_short(self.inner.sigma, 6)
         )
     }

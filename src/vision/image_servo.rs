@@ -7,7 +7,7 @@
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, undistort_point};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, check_finite_points};
 use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, ServoStep};
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
@@ -82,20 +82,20 @@ impl ImageTarget {
         Ok(found.into_iter().filter(|d| ids.contains(&(d.id / 4))).collect())
     }
 
-    /// Checks the hints' lengths: the reference's and the first frame's must match.
+    /// Checks the hints: finite pixels, and as many in the first frame as in the reference.
     fn validate(&self) -> Result<()> {
-        match self {
-            ImageTarget::Dots { first_points: Some(first), reference_points, .. }
-                if first.len() != reference_points.len() =>
-            {
-                Err(Error::Shape {
-                    what: "first_points",
-                    expected: format!("{} points (one per reference point)", reference_points.len()),
-                    got: format!("{} points", first.len()),
-                })
-            }
-            _ => Ok(()),
+        let ImageTarget::Dots { reference_points, first_points, .. } = self else { return Ok(()) };
+        check_finite_points("reference_points", reference_points)?;
+        let Some(first) = first_points else { return Ok(()) };
+        check_finite_points("first_points", first)?;
+        if first.len() != reference_points.len() {
+            return Err(Error::Shape {
+                what: "first_points",
+                expected: format!("{} points (one per reference point)", reference_points.len()),
+                got: format!("{} points", first.len()),
+            });
         }
+        Ok(())
     }
 }
 

@@ -1,0 +1,372 @@
+"""The bridge's ROS parameters: their table (name, type, default, meaning) and their parsing
+into a :class:`BridgeConfig`, refusing an unknown name, a wrong type or a bad value at start
+with :class:`vsinv.InvalidInput` naming the parameter. Pure Python: no ROS needed.
+
+The names of the image pipeline's options are :class:`vsinv.ImageServo`'s keyword arguments
+(``gain``, ``reference_points``, ``stop.max_iterations``, ...), so that its refusals name the
+ROS parameter too. ROS parameters have no 2-d arrays: point lists are flat ``[u0, v0, u1, v1,
+...]`` or a CSV file (``u, v`` columns; ``z`` for depths).
+"""
+
+from __future__ import annotations
+
+import array
+import difflib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal, Mapping, Optional, Sequence, cast
+
+import numpy as np
+import numpy.typing as npt
+
+from .._core import Distortion, Intrinsics, InvalidInput, load_calibration
+from .conversions import hand_eye_matrix, intrinsics_from_numbers
+
+__all__ = ["PARAMETERS", "Parameter", "BridgeConfig", "parse_parameters", "parameter_help"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One ROS parameter: its name, type (str, float, int, bool, floats, ints), default (None:
+    unset) and meaning."""
+
+    name: str
+    kind: str
+    default: Any
+    doc: str
+    choices: tuple[str, ...] = ()
+
+
+_P = Parameter
+#: Every parameter the node reads, in the order ``vsinv-ros --help`` lists them.
+PARAMETERS: tuple[Parameter, ...] = (
+    # the reference and the target
+    _P("reference_image", "str", None, "the reference image file (PNG, PGM/PPM, JPEG), taken by any camera; required"),
+    _P("reference_calibration", "str", None, "the reference camera's calibration file (ROS/OpenCV YAML), to undistort its points"),
+    _P("reference_K", "floats", None, "the reference camera's intrinsics [fx, fy, u0, v0] or 3x3 row-major (instead of reference_calibration)"),
+    _P("reference_distortion", "floats", None, "the reference camera's distortion (OpenCV order k1, k2, p1, p2[, k3...]); needs reference_K"),
+    _P("target", "str", "tags", "what to servo on: AprilTags by identity, or dots tracked from approximate pixels", ("tags", "dots")),
+    _P("family", "str", "tag36h11", "tags: the AprilTag family"),
+    _P("tag_ids", "ints", None, "tags: the tags to servo on (unset: every tag decoded in the reference image)"),
+    _P("reference_points", "floats", None, "dots: approximate pixels in the reference image, flat [u0, v0, u1, v1, ...]"),
+    _P("reference_points_file", "str", None, "dots: the same as a CSV file with u, v columns"),
+    _P("first_points", "floats", None, "dots: approximate pixels in the first frame, flat (unset: near the reference ones)"),
+    _P("first_points_file", "str", None, "dots: the same as a CSV file with u, v columns"),
+    _P("tracker.search_radius", "float", None, "dots: the tracker's search radius, pixels"),
+    _P("tracker.max_search_radius", "float", None, "dots: the largest search radius, pixels"),
+    _P("tracker.min_area", "int", None, "dots: the smallest dot, pixels"),
+    _P("tracker.max_area_ratio", "float", None, "dots: the largest area change between frames"),
+    _P("tracker.polarity", "str", None, "dots: light, dark or auto"),
+    # the servo camera
+    _P("K_hat", "floats", None, "the servo camera's intrinsics [fx, fy, u0, v0] or 3x3 row-major (unset: from CameraInfo)"),
+    _P("distortion", "floats", None, "the servo camera's distortion with K_hat (OpenCV order); unset: none"),
+    _P("calibration", "str", None, "the servo camera's calibration file (ROS camera_info or OpenCV YAML) instead of CameraInfo"),
+    _P("image_rectified", "bool", False, "the images are rectified: K_hat from CameraInfo's P, no distortion"),
+    # the control law (vsinv.Servo's options)
+    _P("law", "str", "invariant", "the control law", ("invariant", "ibvs", "none")),
+    _P("reference_depths", "floats", None, "the points' depths at the reference pose, metres, in the points' order"),
+    _P("reference_depths_file", "str", None, "the same as a CSV file with a z column"),
+    _P("depth", "float", None, "one depth for every point, metres (IBVS)"),
+    _P("depths", "str", None, "the depth source: reference or per_step", ("reference", "per_step")),
+    _P("basis", "ints", None, "the three points of the invariant basis (unset: chosen)"),
+    _P("gain", "float", None, "the law's gain, 1/s"),
+    _P("gain_rz", "float", None, "the gain of the rotation about the optical axis, 1/s"),
+    _P("rz_task", "str", None, "the rz task: angle or tau21", ("angle", "tau21")),
+    _P("feedforward", "bool", None, "path following: the path's feed-forward term"),
+    _P("min_structure_ratio", "float", None, "the invariant law's smallest structure ratio"),
+    _P("interaction", "str", None, "IBVS: current, desired or mean interaction matrix", ("current", "desired", "mean")),
+    _P("adaptive_gain", "floats", None, "[gain at zero error, gain at infinity, slope at zero]"),
+    _P("max_linear_speed", "float", None, "the twist is scaled as a whole to this linear speed, m/s"),
+    _P("max_angular_speed", "float", None, "and to this angular speed, rad/s"),
+    _P("stop.max_iterations", "int", None, "stop after this many images"),
+    _P("stop.window", "int", None, "images averaged by the stop rules"),
+    _P("stop.pixel_error", "float", None, "converged below this image error, pixels (pixel rule)"),
+    _P("stop.invariant_error", "float", None, "converged below this invariant error (invariant rule)"),
+    _P("stop.tau21", "float", None, "and below this rz error"),
+    _P("stop.max_translation_uncertainty", "float", None, "converged only if the images certify this translation, metres"),
+    _P("stop.max_rotation_uncertainty_deg", "float", None, "and this rotation, degrees"),
+    _P("stop.reference_pixel_sigma", "float", None, "the reference image's pixel noise, pixels"),
+    _P("stop_rule", "str", None, "the image rule that decides convergence", ("pixel", "invariant")),
+    _P("path_samples", "int", None, "path following: images along the path"),
+    _P("dt", "float", 1.0 / 30.0, "the camera period, seconds (the path's time step)"),
+    # the output
+    _P("output_frame", "str", "camera", "the twist's frame: the camera's optical frame, or the end effector's through hand_eye", ("camera", "end_effector")),
+    _P("camera_frame", "str", "", "the camera optical frame's name (empty: the images' header frame_id)"),
+    _P("end_effector_frame", "str", "", "the end effector frame's name (output_frame end_effector)"),
+    _P("hand_eye", "floats", None, "the camera pose in the end effector frame: 4x4 row-major, or [x, y, z, qx, qy, qz, qw]"),
+    _P("watchdog_timeout", "float", 0.5, "publish a zero twist and stop when no image came for this long, seconds"),
+    _P("autostart", "bool", False, "start servoing at the first image (otherwise call the start service)"),
+    _P("publish_annotated", "bool", True, "publish the image with the points found"),
+    _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8 or bgr8)"),
+    _P("camera_info_topic", "str", "camera_info", "sensor_msgs/CameraInfo in"),
+    _P("twist_topic", "str", "~/twist", "geometry_msgs/TwistStamped out (MoveIt Servo: /servo_node/delta_twist_cmds)"),
+    _P("status_topic", "str", "~/status", "std_msgs/String out: the status as JSON"),
+    _P("annotated_topic", "str", "~/annotated", "sensor_msgs/Image out: rgb8 with the points found"),
+)
+
+_BY_NAME = {p.name: p for p in PARAMETERS}
+
+#: Parameters every ROS 2 node has, which are not the bridge's to parse.
+_ROS_OWN = ("use_sim_time", "start_type_description_service")
+
+#: ImageServo's keyword arguments given by a parameter of the same name.
+_SERVO_SCALARS = (
+    "law", "depths", "gain", "gain_rz", "rz_task", "feedforward", "min_structure_ratio", "interaction",
+    "max_linear_speed", "max_angular_speed", "stop_rule", "path_samples", "dt",
+)
+
+
+@dataclass
+class BridgeConfig:
+    """The parsed parameters: the reference image, ImageServo's target and options, the lens
+    override, the output frame and hand-eye transform, the topics and the watchdog."""
+
+    reference_image: npt.NDArray[np.uint8]
+    target: Literal["dots", "tags"]
+    servo_options: dict[str, Any]
+    K_hat: Optional[Intrinsics] = None
+    distortion: Optional[Distortion] = None
+    image_rectified: bool = False
+    output_frame: str = "camera"
+    camera_frame: str = ""
+    end_effector_frame: str = ""
+    hand_eye: Optional[npt.NDArray[np.float64]] = None
+    watchdog_timeout: float = 0.5
+    autostart: bool = False
+    publish_annotated: bool = True
+    topics: dict[str, str] = field(default_factory=dict)
+
+
+def _refuse(name: str, reason: str) -> InvalidInput:
+    return InvalidInput(f"parameter {name}: {reason}")
+
+
+def _typed(p: Parameter, value: Any) -> Any:
+    """The value as the parameter's type, or a refusal naming it."""
+    number = (int, float, np.integer, np.floating)
+    if p.kind == "str" and isinstance(value, str):
+        if p.choices and value not in p.choices:
+            raise _refuse(p.name, f"expected one of {', '.join(p.choices)}, got {value!r}")
+        return value
+    if p.kind == "bool" and isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if p.kind == "int" and isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        return int(value)
+    if p.kind == "float" and isinstance(value, number) and not isinstance(value, bool):
+        if not math.isfinite(float(value)):
+            raise _refuse(p.name, f"expected a finite number, got {value!r}")
+        return float(value)
+    if p.kind in ("floats", "ints") and isinstance(value, (list, tuple, array.array, np.ndarray)):
+        kind = number if p.kind == "floats" else (int, np.integer)
+        items = list(value)
+        if all(isinstance(x, kind) and not isinstance(x, bool) for x in items):
+            if p.kind == "floats" and not all(math.isfinite(float(x)) for x in items):
+                raise _refuse(p.name, "expected finite numbers")
+            return tuple(float(x) for x in items) if p.kind == "floats" else tuple(int(x) for x in items)
+    expected = {"str": "a string", "bool": "true or false", "int": "an integer", "float": "a number",
+                "floats": "an array of numbers", "ints": "an array of integers"}[p.kind]
+    raise _refuse(p.name, f"expected {expected}, got {value!r} ({type(value).__name__})")
+
+
+def _known(values: Mapping[str, Any]) -> dict[str, Any]:
+    """The bridge's parameters among ``values``, typed; an unknown name is refused (with the
+    closest known names)."""
+    out: dict[str, Any] = {}
+    for name, value in values.items():
+        if name in _ROS_OWN or name.startswith("qos_overrides."):
+            continue
+        p = _BY_NAME.get(name)
+        if p is None:
+            close = difflib.get_close_matches(name, _BY_NAME, n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else "; `vsinv-ros --help` lists them"
+            raise _refuse(name, f"unknown{hint}")
+        if value is not None:
+            out[name] = _typed(p, value)
+    return out
+
+
+def _one_of(given: dict[str, Any], *names: str) -> Optional[str]:
+    """The one of ``names`` given, None; two given are refused."""
+    present = [n for n in names if n in given]
+    if len(present) > 1:
+        raise _refuse(present[1], f"give either {present[0]} or {present[1]}, not both")
+    return present[0] if present else None
+
+
+def _pairs(name: str, flat: Sequence[float]) -> npt.NDArray[np.float64]:
+    if not flat or len(flat) % 2:
+        raise _refuse(name, f"expected a flat list of pixel pairs [u0, v0, u1, v1, ...], got {len(flat)} numbers")
+    return np.asarray(flat, dtype=float).reshape(-1, 2)
+
+
+def _file(name: str, text: str) -> Path:
+    path = Path(text).expanduser()
+    if not path.is_file():
+        raise _refuse(name, f"no such file: {text!r}")
+    return path
+
+
+def _points(given: dict[str, Any], name: str) -> Optional[npt.NDArray[np.float64]]:
+    """``name`` (flat pairs) or ``name_file`` (CSV), or None."""
+    from ..images import read_points
+
+    which = _one_of(given, name, f"{name}_file")
+    if which == name:
+        return _pairs(name, given[name])
+    if which is not None:
+        path = _file(which, given[which])
+        try:
+            return read_points(path)
+        except (ValueError, OSError) as e:
+            raise _refuse(which, str(e)) from None
+    return None
+
+
+def _lens(given: dict[str, Any], k_name: str, d_name: str, file_name: str) -> tuple[Optional[Intrinsics], Optional[Distortion]]:
+    """A camera's intrinsics and distortion from numbers or a calibration file, or (None, None)."""
+    which = _one_of(given, k_name, file_name)
+    if which == file_name:
+        if d_name in given:
+            raise _refuse(d_name, f"the distortion comes from {file_name}")
+        path = _file(file_name, given[file_name])
+        try:
+            c = load_calibration(path)
+        except InvalidInput as e:
+            raise _refuse(file_name, str(e)) from None
+        return c.intrinsics, c.distortion
+    if which is None:
+        if d_name in given:
+            raise _refuse(d_name, f"needs {k_name} (the intrinsics it goes with)")
+        return None, None
+    k = intrinsics_from_numbers(k_name, given[k_name])
+    try:
+        d = Distortion(list(given[d_name])) if d_name in given else None
+    except InvalidInput as e:
+        raise _refuse(d_name, str(e)) from None
+    return k, d
+
+
+def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str) -> dict[str, Any]:
+    """ImageServo's target arguments: the dots' pixels and tracker, or the tags' family and ids
+    (another target's, given explicitly, refused)."""
+    options: dict[str, Any] = {}
+    dot_names: tuple[str, ...] = ("reference_points", "reference_points_file", "first_points", "first_points_file")
+    dot_names += tuple(p.name for p in PARAMETERS if p.name.startswith("tracker."))
+    foreign = ("family", "tag_ids") if target == "dots" else dot_names
+    for name in foreign:
+        if name in explicit:
+            raise _refuse(name, f"not a parameter of target {target!r}")
+    if target == "tags":
+        options["family"] = given["family"]
+        if "tag_ids" in given:
+            options["tag_ids"] = list(given["tag_ids"])
+        return options
+    reference = _points(given, "reference_points")
+    if reference is None:
+        raise _refuse("reference_points", "target 'dots' needs the dots' approximate pixels in the reference image")
+    options["reference_points"] = reference
+    first = _points(given, "first_points")
+    if first is not None:
+        options["first_points"] = first
+    tracker = {k[len("tracker."):]: v for k, v in given.items() if k.startswith("tracker.")}
+    if tracker:
+        options["tracker"] = tracker
+    return options
+
+
+def _servo_options(given: dict[str, Any]) -> dict[str, Any]:
+    """The Servo session's keyword arguments."""
+    options: dict[str, Any] = {k: given[k] for k in _SERVO_SCALARS if k in given}
+    which = _one_of(given, "reference_depths", "reference_depths_file", "depth")
+    if which == "reference_depths":
+        options["reference_depths"] = list(given[which])
+    elif which == "reference_depths_file":
+        from ..replaying import read_depths
+
+        path = _file(which, given[which])
+        try:
+            options["reference_depths"] = read_depths(path)
+        except (ValueError, OSError) as e:
+            raise _refuse(which, str(e)) from None
+    elif which == "depth":
+        if "depths" in given:
+            raise _refuse("depth", "give either depth (one depth for every point) or depths")
+        options["depths"] = given["depth"]
+    if "basis" in given:
+        if len(given["basis"]) != 3:
+            raise _refuse("basis", f"expected three point indices, got {list(given['basis'])}")
+        options["basis"] = list(given["basis"])
+    if "adaptive_gain" in given:
+        if len(given["adaptive_gain"]) != 3:
+            raise _refuse("adaptive_gain", "expected [gain at zero, gain at infinity, slope at zero]")
+        options["adaptive_gain"] = tuple(given["adaptive_gain"])
+    stop = {k[len("stop."):]: v for k, v in given.items() if k.startswith("stop.")}
+    if stop:
+        options["stop"] = stop
+    return options
+
+
+def _output(given: dict[str, Any], config: BridgeConfig) -> None:
+    """The output frame, the hand-eye transform, the watchdog and the topics, into ``config``."""
+    config.output_frame = given["output_frame"]
+    config.camera_frame = given["camera_frame"]
+    config.end_effector_frame = given["end_effector_frame"]
+    if config.output_frame == "end_effector":
+        if "hand_eye" not in given:
+            raise _refuse("hand_eye", "output_frame end_effector needs the camera pose in the end effector frame")
+        if not config.end_effector_frame:
+            raise _refuse("end_effector_frame", "output_frame end_effector needs the end effector frame's name")
+        config.hand_eye = hand_eye_matrix("hand_eye", given["hand_eye"])
+    elif "hand_eye" in given:
+        raise _refuse("hand_eye", "only used with output_frame end_effector")
+    timeout = given["watchdog_timeout"]
+    if not timeout > 0.0:
+        raise _refuse("watchdog_timeout", f"expected a positive number of seconds, got {timeout}")
+    config.watchdog_timeout = timeout
+    for key in ("image", "camera_info", "twist", "status", "annotated"):
+        name = f"{key}_topic"
+        if not given[name].strip():
+            raise _refuse(name, "empty topic name")
+        config.topics[key] = given[name]
+
+
+def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:
+    """The configuration from the node's parameter values (name to value; a value of None is
+    unset). Raises :class:`vsinv.InvalidInput` naming the first bad parameter."""
+    given = {p.name: p.default for p in PARAMETERS if p.default is not None}
+    explicit = _known(values)
+    given.update(explicit)
+    if "reference_image" not in given:
+        raise _refuse("reference_image", "required (the reference image file)")
+    from .._core import load_image
+
+    path = _file("reference_image", given["reference_image"])
+    try:
+        reference = load_image(path)
+    except InvalidInput as e:
+        raise _refuse("reference_image", str(e)) from None
+    target = cast(Literal["dots", "tags"], given["target"])
+    options = {**_target_options(given, explicit, target), **_servo_options(given)}
+    ref_k, ref_d = _lens(given, "reference_K", "reference_distortion", "reference_calibration")
+    if ref_k is not None:
+        options["reference_K"] = ref_k
+        if ref_d is not None:
+            options["reference_distortion"] = ref_d
+    k_hat, distortion = _lens(given, "K_hat", "distortion", "calibration")
+    if k_hat is not None and given["image_rectified"]:
+        raise _refuse("image_rectified", "only used with K_hat from CameraInfo (K_hat or calibration is given)")
+    config = BridgeConfig(reference, target, options, k_hat, distortion, given["image_rectified"])
+    config.autostart, config.publish_annotated = given["autostart"], given["publish_annotated"]
+    _output(given, config)
+    return config
+
+
+def parameter_help() -> str:
+    """The parameter table, one line a parameter, for ``vsinv-ros --help``."""
+    lines = []
+    for p in PARAMETERS:
+        default = "" if p.default is None else f" (default {p.default!r})"
+        choices = f" [{'|'.join(p.choices)}]" if p.choices else ""
+        lines.append(f"  {p.name:<34} {p.kind:<6} {p.doc}{choices}{default}")
+    return "\n".join(lines)
