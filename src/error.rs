@@ -150,6 +150,27 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A pose (a 4x4 homogeneous matrix) that is not a rigid motion: a non-finite entry, a
+    /// last row other than `(0, 0, 0, 1)`, or a rotation block that is not orthonormal with
+    /// determinant +1.
+    #[error("{what}[{index}]: not a rigid transform: {reason}")]
+    InvalidPose {
+        /// Which input (e.g. `gripper_poses`).
+        what: &'static str,
+        /// The pose at fault.
+        index: usize,
+        /// What is wrong.
+        reason: String,
+    },
+    /// Robot motions that do not determine the hand-eye transform (AX = XB): too few poses,
+    /// no rotation, or rotations about (nearly) parallel axes only.
+    #[error("degenerate hand-eye motions ({poses} poses): {reason}")]
+    DegenerateMotion {
+        /// The number of poses given.
+        poses: usize,
+        /// What is missing and how to fix it.
+        reason: String,
+    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]
@@ -191,7 +212,8 @@ impl std::fmt::Display for Triple {
 
 impl Error {
     /// True for errors caused by the scene geometry (collinear basis, planar object,
-    /// points behind the camera, too few points) rather than by malformed input.
+    /// points behind the camera, too few points, degenerate robot motions) rather than by
+    /// malformed input.
     pub fn is_degenerate(&self) -> bool {
         matches!(
             self,
@@ -201,6 +223,7 @@ impl Error {
                 | Error::DegenerateStructure { .. }
                 | Error::DegenerateEstimate { .. }
                 | Error::RzSingular { .. }
+                | Error::DegenerateMotion { .. }
         )
     }
 }

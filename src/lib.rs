@@ -15,7 +15,7 @@
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
 //! | worker pools that a forked child rebuilds | `parallel` | `batch` or `vision` | rayon |
 //! | images: rendering, dot detection and tracking | `vision` | `vision` (default) | image, imageproc |
-//! | camera calibration files (ROS YAML, OpenCV YAML and XML) | [`calibration`] | `calibration` (default) | yaml-rust2, roxmltree |
+//! | camera calibration files (ROS YAML, OpenCV YAML and XML), hand-eye calibration | [`calibration`] | `calibration` (default) | yaml-rust2, roxmltree |
 //! | Python bindings (the only module that knows about Python) | `python` (private) | `python` | pyo3, numpy |
 //!
 //! A controller that needs only the control law depends on

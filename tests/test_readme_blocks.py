@@ -122,6 +122,24 @@ CALIBRATION_CHECK = """
 assert np.allclose(vsinv.distort_points(ideal, K, [k1, k2, p1, p2, k3]), distorted, atol=1e-9)
 """
 
+# Synthetic stations for the hand-eye block: a known camera-to-gripper X, a target fixed in
+# the base, gripper poses rotated about varied axes, the exact target-to-camera poses.
+HAND_EYE_PRELUDE = """
+import math, numpy as np, vsinv
+X = vsinv.pose_from_position_thetau([0.03, -0.02, 0.1], [0.1, -0.2, 1.2])
+target_in_base = vsinv.pose_from_position_thetau([0.6, 0.0, 0.0], [0.0, 0.0, 0.3])
+gripper_poses = np.array([vsinv.pose_from_position_thetau(
+    [0.4 + 0.05 * math.sin(k), 0.1 * math.cos(1.7 * k), 0.5],
+    [0.5 * math.sin(1.3 * k), 0.5 * math.cos(0.7 * k + 1), 0.3 * math.sin(2.1 * k)]) for k in range(8)])
+target_poses = np.array([np.linalg.inv(g @ X) @ target_in_base for g in gripper_poses])
+"""
+
+HAND_EYE_CHECK = """
+assert np.abs(cal.matrix - X).max() < 1e-9
+assert cal.rms_rotation_deg < 1e-6 and 20 < cal.axis_spread_deg <= 90
+assert agreement.max_rotation_deg < 1e-6 and agreement.max_translation_m < 1e-9
+"""
+
 SIMULATOR_PRELUDE = f"""
 README = {str(README)!r}
 import matplotlib
@@ -320,6 +338,7 @@ BLOCKS: list[Entry] = [
     Entry("python", "import numpy as np, vsinv", RUN, prelude=CONTROL_PRELUDE),
     Entry("python", "try:", RUN, prelude=ERRORS_PRELUDE, check="print('no exception escaped')"),
     Entry("python", "cal = vsinv.load_calibration", RUN, prelude=CALIBRATION_PRELUDE, check=CALIBRATION_CHECK),
+    Entry("python", "cal = vsinv.calibrate_hand_eye", RUN, prelude=HAND_EYE_PRELUDE, check=HAND_EYE_CHECK),
     Entry("sh", "vsinv list", RUN, prelude=SIMULATOR_CLI_PRELUDE, check=check_exit_only),
     Entry("python", "result = vsinv.run_scenario", RUN, prelude=SIMULATOR_PRELUDE, check=SIMULATOR_CHECK),
     Entry("toml", 'name = "my-run"', RUN, "loaded and run: the outcome stated under the block"),

@@ -1,5 +1,5 @@
 """Robustness of the public Python API under hypothesis, the SE(3) helpers (exponential of a
-twist, theta-u poses).
+twist, theta-u poses) and hand-eye calibration (poses in, a pose out).
 
 The promise and the harness are described in tests/robustness_harness.py.
 """
@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 import vsinv
 from robustness_harness import (
-    ANY, INVALID, SAME, V, arrays, call, covers, floats, fuzz, fuzz_settings, returned, rodrigues,
+    ANY, INVALID, SAME, V, arrays, call, choices, covers, floats, fuzz, fuzz_settings, returned, rodrigues,
 )
 
 
@@ -85,3 +85,101 @@ def test_exp_twist_composes(tw: list[float], dt: float) -> None:
     p, tu = call(vsinv.thetau_from_pose, a)
     back = call(vsinv.pose_from_position_thetau, p, tu)
     np.testing.assert_allclose(back, a, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# hand-eye calibration
+
+
+def hand_eye_stations(n: int = 6, one_axis: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Gripper-to-base and exact target-to-camera poses for a fixed camera-to-gripper X; with
+    ``one_axis`` the gripper rotates about one axis only (degenerate)."""
+    def rigid(tu: Any, t: Any) -> np.ndarray:
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = rodrigues(np.asarray(tu, dtype=float)), t
+        return m
+
+    x = rigid([0.1, -0.2, 1.2], [0.03, -0.02, 0.1])
+    target = rigid([0.0, 0.0, 0.3], [0.6, 0.0, 0.0])
+    g, c = [], []
+    for k in range(n):
+        tu = [0.0, 0.0, 0.4 * k] if one_axis else [0.5 * math.sin(1.3 * k), 0.5 * math.cos(0.7 * k + 1), 0.3 * math.sin(2.1 * k)]
+        gk = rigid(tu, [0.4 + 0.05 * math.sin(k), 0.1 * math.cos(1.7 * k), 0.5])
+        g.append(gk)
+        c.append(np.linalg.inv(gk @ x) @ target)
+    return np.array(g), np.array(c)
+
+
+def pose_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
+    scaled, row, mirror = valid.copy(), valid.copy(), valid.copy()
+    scaled[1, :3, :3] *= 1.01
+    row[2, 3] = [0.0, 0.0, 0.5, 1.0]
+    mirror[3, :3, 2] *= -1
+    degenerate_g, _ = hand_eye_stations(len(valid), one_axis=True)
+    return st.one_of(
+        arrays(valid),
+        st.sampled_from([V(scaled, INVALID, "scaled rotation"), V(row, INVALID, "last row"),
+                         V(mirror, INVALID, "reflection"), V(degenerate_g, ANY, "one-axis gripper")]),
+    )
+
+
+def hand_eye_digest(out: Any) -> Any:
+    if isinstance(out, vsinv.HandEyeAgreement):
+        return {k: hand_eye_digest(v) for k, v in out.calibrations.items()}
+    return (out.matrix, out.residuals, out.pairs, out.axis_spread_deg, out.method)
+
+
+def check_hand_eye(out: Any) -> None:
+    cals = list(out.calibrations.values()) if isinstance(out, vsinv.HandEyeAgreement) else [out]
+    for cal in cals:
+        m = cal.matrix
+        assert m.shape == (4, 4) and np.allclose(m[3], [0, 0, 0, 1])
+        np.testing.assert_allclose(m[:3, :3] @ m[:3, :3].T, np.eye(3), atol=1e-9)
+        assert cal.residuals.shape == cal.pairs.shape and np.isfinite(cal.residuals).all()
+        assert 0.0 <= cal.axis_spread_deg <= 90.0 and cal.rms_rotation_deg >= 0 and cal.max_translation_m >= 0
+        assert cal.rotating_motions >= 1 and cal.motions_used >= 1 and repr(cal)
+    if isinstance(out, vsinv.HandEyeAgreement):
+        assert out.max_rotation_deg >= 0 and out.max_translation_m >= 0 and isinstance(out.failures, dict)
+        assert repr(out)
+
+
+HAND_EYE_MEMBERS = [
+    f"HandEyeCalibration.{m}" for m in ("matrix", "method", "residuals", "pairs", "axis_spread_deg", "axis_eigenvalues",
+                                         "rotating_motions", "motions_used", "rms_rotation_deg", "rms_translation_m",
+                                         "max_rotation_deg", "max_translation_m")
+] + [f"HandEyeAgreement.{m}" for m in ("calibrations", "failures", "max_rotation_deg", "max_translation_m")]
+
+
+@covers("calibrate_hand_eye", "compare_hand_eye_methods", "HandEyeCalibration", "HandEyeAgreement", *HAND_EYE_MEMBERS)
+@fuzz_settings(150)
+@given(st.data())
+def test_hand_eye_inputs(data: Any) -> None:
+    g, c = hand_eye_stations()
+    which = data.draw(st.sampled_from(["calibrate_hand_eye", "compare_hand_eye_methods"]))
+    args: dict[str, Any] = {"gripper_poses": g, "target_poses": c}
+    strategies = {"gripper_poses": pose_variants(g), "target_poses": pose_variants(c)}
+    if which == "calibrate_hand_eye":
+        args["method"] = "park"
+        strategies["method"] = choices(["tsai", "park", "daniilidis", "Park_Martin", "TSAI"],
+                                       ["horaud", "", 3, 1.5, b"tsai", ["tsai"]])
+    fn = getattr(vsinv, which)
+    ref = fn(**args)
+    fuzz(data, fn, args, strategies, ref=ref, digest=hand_eye_digest, check=check_hand_eye)
+
+
+@covers("calibrate_hand_eye")
+def test_hand_eye_refusals_name_argument_and_pose() -> None:
+    g, c = hand_eye_stations()
+    bad = c.copy()
+    bad[4, 1, 3] = np.nan
+    err = call(vsinv.calibrate_hand_eye, g, bad, _expect=INVALID, _names=("target_poses",))
+    assert err.kind == "invalid_pose" and err.argument == "target_poses" and err.index == 4
+    assert "row 1, column 3" in str(err)
+    g1, c1 = hand_eye_stations(one_axis=True)
+    err = call(vsinv.calibrate_hand_eye, g1, c1)
+    assert isinstance(err, vsinv.DegenerateGeometry) and err.kind == "degenerate_motion" and err.count == 6
+    err = call(vsinv.calibrate_hand_eye, g[:2], c[:2])
+    assert isinstance(err, vsinv.DegenerateGeometry) and "at least 3 poses" in str(err)
+    still = np.array([np.eye(4)] * 4)
+    err = call(vsinv.compare_hand_eye_methods, still, still)
+    assert isinstance(err, vsinv.DegenerateGeometry) and "no gripper motion rotates" in str(err)

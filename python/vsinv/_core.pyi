@@ -66,6 +66,10 @@ __all__ = [
     "IkSolution",
     "fk",
     "ik",
+    "HandEyeCalibration",
+    "HandEyeAgreement",
+    "calibrate_hand_eye",
+    "compare_hand_eye_methods",
     "__version__",
 ]
 
@@ -84,12 +88,12 @@ class VsinvError(Exception):
     """The kind of error: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics',
     'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis',
     'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario',
-    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable' or
-    'not_ready'."""
+    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
+    'invalid_pose', 'degenerate_motion' or 'not_ready'."""
     argument: str | None
     """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
     index: int | None
-    """The flat index of a non-finite value, or the point at fault."""
+    """The flat index of a non-finite value, or the point (or pose) at fault."""
     row: int | None
     """The row (point) of a non-finite entry of a 2-d array."""
     column: int | None
@@ -101,7 +105,7 @@ class VsinvError(Exception):
     needed: int | None
     """The fewest points the task takes."""
     count: int | None
-    """The number of points given."""
+    """The number of points (or poses) given."""
     reason: str | None
     """What is wrong."""
     basis: tuple[int, int, int] | None
@@ -135,7 +139,8 @@ class InvalidInput(VsinvError, ValueError):
 
 class DegenerateGeometry(VsinvError, ValueError):
     """Geometry the method cannot work with: collinear basis points, too few points, a planar
-    object or equal depth estimates, points at or behind the camera."""
+    object or equal depth estimates, points at or behind the camera, robot motions that do not
+    determine a hand-eye calibration."""
 
 class NotReady(VsinvError, RuntimeError):
     """A state read before it exists (kind 'not_ready')."""
@@ -896,3 +901,85 @@ def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution
     redundant arm (the Panda) returns one of its solutions. Raises InvalidInput (kind
     'unreachable', argument 'pose', ``residual`` the best position residual) when no seed
     reaches the pose."""
+
+_HandEyeMethod = Literal["tsai", "park", "daniilidis"]
+
+@final
+class HandEyeCalibration:
+    """A hand-eye calibration: the camera-to-gripper transform and its diagnostics.
+
+    For stations i < j the gripper motion A = G_j^-1 G_i and the camera motion B = C_j C_i^-1
+    satisfy A X = X B; every pair is a motion (as in OpenCV)."""
+
+    @property
+    def matrix(self) -> _F64Array:
+        """The 4x4 camera-to-gripper transform X (the camera frame in the gripper frame)."""
+    @property
+    def method(self) -> _HandEyeMethod:
+        """The method that computed it."""
+    @property
+    def residuals(self) -> _F64Array:
+        """(m, 2): the residual of A X = X B for each pair of stations (rows of ``pairs``):
+        rotation in degrees, translation in metres."""
+    @property
+    def pairs(self) -> npt.NDArray[np.int64]:
+        """(m, 2): the stations (i, j), i < j, of each residual row."""
+    @property
+    def axis_spread_deg(self) -> float:
+        """The spread of the rotation axes of the gripper motions, degrees: 2 atan(sqrt(l2/l1))
+        of the eigenvalues of the mean u u^T of their unit axes (the angle between the axes for
+        two motions; 0 when all are parallel, 90 for axes spread evenly)."""
+    @property
+    def axis_eigenvalues(self) -> _F64Array:
+        """(3,): the eigenvalues l1 >= l2 >= l3 of the mean u u^T, summing to 1."""
+    @property
+    def rotating_motions(self) -> int:
+        """The number of gripper motions that rotate by 0.1 degree or more."""
+    @property
+    def motions_used(self) -> int:
+        """The number of motions the method used (Tsai-Lenz leaves out those rotating outside
+        17.3-116.4 degrees, as OpenCV does)."""
+    @property
+    def rms_rotation_deg(self) -> float:
+        """The RMS of the rotation residuals, degrees."""
+    @property
+    def rms_translation_m(self) -> float:
+        """The RMS of the translation residuals, metres."""
+    @property
+    def max_rotation_deg(self) -> float:
+        """The largest rotation residual, degrees."""
+    @property
+    def max_translation_m(self) -> float:
+        """The largest translation residual, metres."""
+
+@final
+class HandEyeAgreement:
+    """Every method's calibration on the same poses, and how far apart they are."""
+
+    @property
+    def calibrations(self) -> dict[str, HandEyeCalibration]:
+        """{method: calibration} of the methods that succeeded ('tsai', 'park', 'daniilidis')."""
+    @property
+    def failures(self) -> dict[str, str]:
+        """{method: reason} of the methods that refused the poses."""
+    @property
+    def max_rotation_deg(self) -> float:
+        """The largest rotation between two methods' transforms, degrees."""
+    @property
+    def max_translation_m(self) -> float:
+        """The largest distance between two methods' translations, metres."""
+
+def calibrate_hand_eye(
+    gripper_poses: _ArrayLike, target_poses: _ArrayLike, method: _HandEyeMethod | str = "tsai"
+) -> HandEyeCalibration:
+    """The camera-to-gripper transform (OpenCV's ``calibrateHandEye`` convention).
+
+    ``gripper_poses``: (n, 4, 4) gripper-to-base poses reported by the robot;
+    ``target_poses``: (n, 4, 4) target-to-camera poses (e.g. from solvePnP); ``method``:
+    'tsai' (default), 'park' or 'daniilidis'. Raises InvalidInput for a pose that is not a
+    rigid transform (naming the argument and the pose) and DegenerateGeometry (kind
+    'degenerate_motion') for fewer than 3 poses, no rotation, or rotations about (nearly)
+    parallel axes only."""
+
+def compare_hand_eye_methods(gripper_poses: _ArrayLike, target_poses: _ArrayLike) -> HandEyeAgreement:
+    """Runs every method on the same poses: their calibrations and how far apart they are."""

@@ -30,16 +30,16 @@ pub(crate) const ATTRIBUTES: &[(&str, &str)] = &[
          'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points', \
          'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', \
          'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable', \
-         'not_ready'",
+         'invalid_pose', 'degenerate_motion', 'not_ready'",
     ),
     ("argument", "str: the argument or parameter at fault (e.g. 'pixels', 'gain'; an image's file path)"),
-    ("index", "int: the flat index of a non-finite value, or the point at fault"),
+    ("index", "int: the flat index of a non-finite value, or the point (or pose) at fault"),
     ("row", "int: the row of a non-finite entry of a 2-d array (the point)"),
     ("column", "int: the column of a non-finite entry of a 2-d array (the coordinate)"),
     ("expected", "str: what size was expected, in words (e.g. '12 points', 'shape (n, 2)')"),
     ("got", "str: what size was given"),
     ("needed", "int: the fewest points the task takes"),
-    ("count", "int: the number of points given"),
+    ("count", "int: the number of points (or poses) given"),
     ("reason", "str: what is wrong"),
     ("basis", "tuple[int, int, int]: the basis indices of a collinear basis"),
     ("image", "str: 'current' or 'reference', the image of a collinear basis"),
@@ -94,7 +94,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let degenerate = DEGENERATE.get_or_try_init(py, || {
         let bases = PyTuple::new(py, [base.clone(), py.get_type::<PyValueError>()])?;
         let doc = "Geometry the method cannot work with: collinear basis points, fewer than 6 points, \
-                   a planar object or equal depth estimates, points at or behind the camera. \
+                   a planar object or equal depth estimates, points at or behind the camera, robot \
+                   motions that do not determine a hand-eye calibration. \
                    Attributes: see VsinvError.";
         Ok::<_, PyErr>(new_class(py, "DegenerateGeometry", bases, doc)?.unbind())
     })?;
@@ -261,6 +262,12 @@ fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
         Error::RzSingular { a_hat } => ("rz_singular", vec![("a_hat", Float(*a_hat))]),
         Error::Unreachable { position_residual, .. } => {
             ("unreachable", vec![("argument", s("pose")), ("residual", Float(*position_residual))])
+        }
+        Error::InvalidPose { what, index, reason } => {
+            ("invalid_pose", vec![("argument", s(what)), ("index", Int(*index)), ("reason", s(reason))])
+        }
+        Error::DegenerateMotion { poses, reason } => {
+            ("degenerate_motion", vec![("count", Int(*poses)), ("reason", s(reason))])
         }
     }
 }

@@ -11,6 +11,7 @@ mod batch_watch;
 mod camera;
 mod control;
 mod errors;
+mod hand_eye;
 mod image_servo;
 mod invariant;
 mod kinematics;
@@ -48,6 +49,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     se3::register(m)?;
     kinematics::register(m)?;
     lens::register(m)?;
+    hand_eye::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

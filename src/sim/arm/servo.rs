@@ -26,6 +26,10 @@ pub struct ArmRobot {
     pub base: Isometry3<f64>,
     /// Pose of the camera in the end-effector frame.
     pub mount: Isometry3<f64>,
+    /// The mount the controller believes (a hand-eye calibration's result) when it is not
+    /// the true `mount`: camera twists become joint velocities through it, while the camera
+    /// moves with the true mount. `None`: the controller knows the true mount.
+    pub believed_mount: Option<Isometry3<f64>>,
     /// Joint positions at the start (rad, m).
     pub start: Vec<f64>,
     /// Position and speed limits (the model's unless overridden).
@@ -80,6 +84,7 @@ impl ArmRobot {
             model,
             base,
             mount,
+            believed_mount: None,
             start,
             limits,
             damping: DEFAULT_DAMPING,
@@ -113,6 +118,9 @@ impl ArmRobot {
         }
         check_finite("robot.base", self.base.to_homogeneous().as_slice())?;
         check_finite("robot.camera_mount", self.mount.to_homogeneous().as_slice())?;
+        if let Some(believed) = &self.believed_mount {
+            check_finite("robot.mount_error", believed.to_homogeneous().as_slice())?;
+        }
         self.check_start()
     }
 
@@ -143,9 +151,10 @@ impl ArmRobot {
         Ok(self.base * self.model.fk(q)? * self.mount)
     }
 
-    /// The camera twist (camera frame) to the end-effector twist (end-effector frame).
+    /// The camera twist (camera frame) to the end-effector twist (end-effector frame),
+    /// through the mount the controller believes.
     pub fn mount_twist_transform(&self) -> Matrix6<f64> {
-        twist_transform(&self.mount)
+        twist_transform(self.believed_mount.as_ref().unwrap_or(&self.mount))
     }
 
     /// Joint velocities for a camera twist at `q`, before saturation: damped least squares

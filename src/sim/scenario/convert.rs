@@ -329,6 +329,7 @@ impl Scenario {
             ("robot.urdf", r.urdf.is_some()),
             ("robot.end_effector", r.end_effector.is_some()),
             ("robot.camera_mount", r.camera_mount.is_some()),
+            ("robot.mount_error", r.mount_error.is_some()),
             ("robot.base", r.base.is_some()),
             ("robot.joints", r.joints.is_some()),
             ("robot.ik_seed", r.ik_seed.is_some()),

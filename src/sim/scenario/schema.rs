@@ -325,6 +325,11 @@ pub struct RobotSpec {
     /// Arm: pose of the camera in the end-effector frame (default: identity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub camera_mount: Option<PoseSpec>,
+    /// Arm: the error of the mount the controller believes, in the true camera frame
+    /// (`believed = camera_mount * mount_error`; a hand-eye calibration's error); the camera
+    /// moves with the true mount (default: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mount_error: Option<PoseSpec>,
     /// Arm: pose of the arm's base link in F* (default: identity).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub base: Option<PoseSpec>,
@@ -358,6 +363,7 @@ impl Default for RobotSpec {
             urdf: None,
             end_effector: None,
             camera_mount: None,
+            mount_error: None,
             base: None,
             joints: None,
             ik_seed: None,

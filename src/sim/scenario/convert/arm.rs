@@ -26,8 +26,11 @@ pub(super) fn robot(r: &RobotSpec, start: Option<&StartSpec>, files: FileScope<'
         (None, Some(_), _) => vec![0.0; n], // solved below, once the limits are final
         (None, None, _) => return Err(scenario_error("robot.joints", NEITHER_GIVEN)),
     };
-    let mut arm =
-        ArmRobot::new(model, pose("robot.base", &r.base)?, pose("robot.camera_mount", &r.camera_mount)?, joints);
+    let mount = pose("robot.camera_mount", &r.camera_mount)?;
+    let mut arm = ArmRobot::new(model, pose("robot.base", &r.base)?, mount, joints);
+    if r.mount_error.is_some() {
+        arm.believed_mount = Some(mount * pose("robot.mount_error", &r.mount_error)?);
+    }
     override_limits(&mut arm, r, &units)?;
     if let Some(d) = r.damping {
         arm.damping = d;

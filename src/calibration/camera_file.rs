@@ -1,4 +1,4 @@
-//! Camera calibration files (feature `calibration`): ROS `camera_info` YAML and OpenCV
+//! Camera calibration files: ROS `camera_info` YAML and OpenCV
 //! `FileStorage` YAML or XML, read into [`Intrinsics`], [`Distortion`] and the image size.
 //!
 //! | format | recognised by | entries read |

@@ -1,0 +1,131 @@
+"""Hand-eye calibration against OpenCV's ``cv2.calibrateHandEye``, side by side on the same
+synthetic stations (issue 20, item 3: errors against ground truth at several noise levels,
+for each method, beside OpenCV's).
+
+How to run (from the repository root, with the package and ``opencv-python-headless>=4.8,<5``
+installed: OpenCV 5 has no ``calibrateHandEye``)::
+
+    python benches/hand_eye_vs_opencv.py                 # 200 trials per cell, about a minute
+    python benches/hand_eye_vs_opencv.py --trials 50
+    python benches/hand_eye_vs_opencv.py --stations 8    # fewer poses per calibration
+
+Each trial draws a camera-to-gripper transform X (rotation 0.2-2.5 rad about a random axis,
+translation within +-10 cm), a target fixed 0.5 m below the gripper, and ``--stations``
+gripper poses tilted 10-40 degrees about random axes (within +-15 cm); the target-to-camera
+poses are the exact ones times a random perturbation: a rotation vector normal per axis with
+the noise level's degrees, a translation normal per axis with its millimetres (the camera's
+pose estimate; the robot's poses are exact). Both libraries get the same poses (vsinv as
+(n, 4, 4) arrays, OpenCV as lists of rotation matrices and translations, built before timing).
+
+Columns: the rotation error (degrees) and translation error (mm) of X against the truth,
+median and max over the trials, vsinv then OpenCV; the time ratio is vsinv's total time over
+OpenCV's (below 1: vsinv is faster), both single calls in the same loop, same trials.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+import vsinv
+
+try:
+    import cv2
+except ImportError:  # pragma: no cover
+    cv2 = None
+
+NOISE_LEVELS = [(0.0, 0.0), (0.1, 0.001), (0.5, 0.002), (1.0, 0.005)]
+METHODS = {"tsai": "CALIB_HAND_EYE_TSAI", "park": "CALIB_HAND_EYE_PARK", "daniilidis": "CALIB_HAND_EYE_DANIILIDIS"}
+
+
+def rigid(rotvec: np.ndarray, t: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = cv2.Rodrigues(np.asarray(rotvec, dtype=float).reshape(3, 1))[0]
+    m[:3, 3] = t
+    return m
+
+
+def random_rotvec(rng: np.random.Generator, angle: float) -> np.ndarray:
+    axis = rng.normal(size=3)
+    return axis / np.linalg.norm(axis) * angle
+
+
+def stations(rng: np.random.Generator, n: int, noise: tuple[float, float]):
+    x = rigid(random_rotvec(rng, rng.uniform(0.2, 2.5)), rng.uniform(-0.1, 0.1, 3))
+    target_in_base = rigid(random_rotvec(rng, 0.3), np.array([0.6, 0.0, 0.0]))
+    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
+    g, c = [], []
+    for _ in range(n):
+        gi = looking_down @ rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
+        ci = np.linalg.inv(gi @ x) @ target_in_base
+        ci = ci @ rigid(rng.normal(0.0, np.radians(noise[0]), 3), rng.normal(0.0, noise[1], 3))
+        g.append(gi)
+        c.append(ci)
+    return np.array(g), np.array(c), x
+
+
+def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    r = found[:3, :3].T @ truth[:3, :3]
+    # atan2(sin, cos) of the angle: accurate at small angles too (arccos of the trace is not).
+    sin = np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / 2
+    angle = np.degrees(np.arctan2(sin, (np.trace(r) - 1) / 2))
+    return float(angle), float(np.linalg.norm(found[:3, 3] - truth[:3, 3]) * 1000)
+
+
+def cell(method: str, noise: tuple[float, float], trials: int, n: int, seed: int) -> dict[str, float]:
+    rng = np.random.default_rng(seed)
+    ours, theirs = [], []
+    t_ours = t_theirs = 0.0
+    cv_method = getattr(cv2, METHODS[method])
+    for _ in range(trials):
+        g, c, x = stations(rng, n, noise)
+        cv_args = (list(g[:, :3, :3]), list(g[:, :3, 3].copy()), list(c[:, :3, :3]), list(c[:, :3, 3].copy()))
+        t0 = time.perf_counter()
+        cal = vsinv.calibrate_hand_eye(g, c, method=method)
+        t1 = time.perf_counter()
+        r, t = cv2.calibrateHandEye(*cv_args, method=cv_method)
+        t2 = time.perf_counter()
+        t_ours += t1 - t0
+        t_theirs += t2 - t1
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = r, t.ravel()
+        ours.append(errors(cal.matrix, x))
+        theirs.append(errors(m, x))
+    a, b = np.array(ours), np.array(theirs)
+    return {
+        "rot_med": np.median(a[:, 0]), "rot_max": a[:, 0].max(), "cv_rot_med": np.median(b[:, 0]),
+        "cv_rot_max": b[:, 0].max(), "tr_med": np.median(a[:, 1]), "tr_max": a[:, 1].max(),
+        "cv_tr_med": np.median(b[:, 1]), "cv_tr_max": b[:, 1].max(), "ratio": t_ours / t_theirs,
+        "us_ours": t_ours / trials * 1e6, "us_cv": t_theirs / trials * 1e6,
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--trials", type=int, default=200)
+    parser.add_argument("--stations", type=int, default=15)
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args()
+    if cv2 is None or not hasattr(cv2, "calibrateHandEye"):
+        print("needs cv2.calibrateHandEye: pip install 'opencv-python-headless>=4.8,<5'")
+        return 1
+    print(f"vsinv {vsinv.__version__}, OpenCV {cv2.__version__}; {args.trials} trials of {args.stations} stations "
+          f"per cell (noise on the target poses)\n")
+    print("| method | noise (deg, mm) | rotation error, deg: median / max (vsinv) | (OpenCV) "
+          "| translation error, mm: median / max (vsinv) | (OpenCV) | time per call, us (vsinv / OpenCV) | ratio |")
+    print("|---|---|---|---|---|---|---|---|")
+    for method in METHODS:
+        for noise in NOISE_LEVELS:
+            r = cell(method, noise, args.trials, args.stations, args.seed)
+            print(f"| {method} | {noise[0]:g}, {noise[1] * 1000:g} "
+                  f"| {r['rot_med']:.3g} / {r['rot_max']:.3g} | {r['cv_rot_med']:.3g} / {r['cv_rot_max']:.3g} "
+                  f"| {r['tr_med']:.3g} / {r['tr_max']:.3g} | {r['cv_tr_med']:.3g} / {r['cv_tr_max']:.3g} "
+                  f"| {r['us_ours']:.0f} / {r['us_cv']:.0f} | {r['ratio']:.2f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

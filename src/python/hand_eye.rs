@@ -1,0 +1,201 @@
+//! Hand-eye calibration in Python: `calibrate_hand_eye` and `compare_hand_eye_methods` on
+//! `(n, 4, 4)` arrays of gripper-to-base and target-to-camera poses (OpenCV's convention),
+//! returning `HandEyeCalibration` (the camera-to-gripper `matrix` and its diagnostics) and
+//! `HandEyeAgreement`.
+
+use nalgebra::Matrix4;
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::arrays::{f64_array, from_matrix, mat, vec1};
+use super::errors::invalid_argument;
+use crate::calibration::hand_eye::{self, HandEyeAgreement, HandEyeCalibration, HandEyeMethod};
+
+/// Reads an `(n, 4, 4)` array of poses.
+fn poses_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Matrix4<f64>>> {
+    let a = f64_array(obj, what, &[None, Some(4), Some(4)])?;
+    Ok(a.as_slice()?.chunks_exact(16).map(Matrix4::from_row_slice).collect())
+}
+
+fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<HandEyeMethod> {
+    let name: String = obj.extract().map_err(|_| {
+        invalid_argument("method", "method: expected a string: 'tsai', 'park' or 'daniilidis'".to_string())
+    })?;
+    Ok(HandEyeMethod::from_name(&name)?)
+}
+
+/// A hand-eye calibration: the camera-to-gripper transform and its diagnostics.
+#[pyclass(name = "HandEyeCalibration", module = "vsinv._core", frozen)]
+pub struct PyHandEyeCalibration {
+    inner: HandEyeCalibration,
+}
+
+#[pymethods]
+impl PyHandEyeCalibration {
+    /// The 4x4 camera-to-gripper transform X (the camera frame in the gripper frame).
+    #[getter]
+    fn matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        from_matrix(py, &self.inner.transform.to_homogeneous())
+    }
+    /// The method: 'tsai', 'park' or 'daniilidis'.
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.inner.method.name()
+    }
+    /// (m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`):
+    /// rotation in degrees, translation in metres.
+    #[getter]
+    fn residuals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let r = &self.inner.residuals;
+        mat(py, r.len(), 2, r.iter().flat_map(|p| [p.rotation_deg, p.translation_m]).collect())
+    }
+    /// (m, 2) int64: the stations (i, j) of each residual row.
+    #[getter]
+    fn pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let r = &self.inner.residuals;
+        let flat: Vec<i64> = r.iter().flat_map(|p| [p.first as i64, p.second as i64]).collect();
+        PyArray1::from_vec(py, flat).reshape([r.len(), 2])
+    }
+    /// The spread of the rotation axes of the gripper motions, degrees (0: all parallel).
+    #[getter]
+    fn axis_spread_deg(&self) -> f64 {
+        self.inner.axis_spread.spread_deg
+    }
+    /// (3,): the eigenvalues of the mean u u^T of the motions' unit axes, descending, sum 1.
+    #[getter]
+    fn axis_eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec1(py, &self.inner.axis_spread.eigenvalues)
+    }
+    /// The number of gripper motions rotating by 0.1 degree or more.
+    #[getter]
+    fn rotating_motions(&self) -> usize {
+        self.inner.axis_spread.rotating_motions
+    }
+    /// The number of motions (pairs of stations) the method used.
+    #[getter]
+    fn motions_used(&self) -> usize {
+        self.inner.motions_used
+    }
+    /// The RMS of the rotation residuals, degrees.
+    #[getter]
+    fn rms_rotation_deg(&self) -> f64 {
+        self.inner.rms_rotation_deg()
+    }
+    /// The RMS of the translation residuals, metres.
+    #[getter]
+    fn rms_translation_m(&self) -> f64 {
+        self.inner.rms_translation_m()
+    }
+    /// The largest rotation residual, degrees.
+    #[getter]
+    fn max_rotation_deg(&self) -> f64 {
+        self.inner.max_rotation_deg()
+    }
+    /// The largest translation residual, metres.
+    #[getter]
+    fn max_translation_m(&self) -> f64 {
+        self.inner.max_translation_m()
+    }
+    fn __repr__(&self) -> String {
+        let c = &self.inner;
+        let t = c.transform.translation.vector;
+        format!(
+            "HandEyeCalibration(method={:?}, translation_m=[{:.6}, {:.6}, {:.6}], rotation_deg={:.4}, rms_rotation_deg={:.4}, rms_translation_m={:.6}, axis_spread_deg={:.2}, motions_used={})",
+            c.method.name(),
+            t[0],
+            t[1],
+            t[2],
+            c.transform.rotation.angle().to_degrees(),
+            c.rms_rotation_deg(),
+            c.rms_translation_m(),
+            c.axis_spread.spread_deg,
+            c.motions_used
+        )
+    }
+}
+
+/// Every method's calibration on the same poses, and how far apart they are.
+#[pyclass(name = "HandEyeAgreement", module = "vsinv._core", frozen)]
+pub struct PyHandEyeAgreement {
+    inner: HandEyeAgreement,
+}
+
+#[pymethods]
+impl PyHandEyeAgreement {
+    /// {method: HandEyeCalibration} of the methods that succeeded.
+    #[getter]
+    fn calibrations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for c in &self.inner.calibrations {
+            d.set_item(c.method.name(), PyHandEyeCalibration { inner: c.clone() })?;
+        }
+        Ok(d)
+    }
+    /// {method: reason} of the methods that refused the poses.
+    #[getter]
+    fn failures<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (method, reason) in &self.inner.failures {
+            d.set_item(method.name(), reason)?;
+        }
+        Ok(d)
+    }
+    /// The largest rotation between two methods' transforms, degrees.
+    #[getter]
+    fn max_rotation_deg(&self) -> f64 {
+        self.inner.max_rotation_deg
+    }
+    /// The largest distance between two methods' translations, metres.
+    #[getter]
+    fn max_translation_m(&self) -> f64 {
+        self.inner.max_translation_m
+    }
+    fn __repr__(&self) -> String {
+        let names: Vec<&str> = self.inner.calibrations.iter().map(|c| c.method.name()).collect();
+        format!(
+            "HandEyeAgreement(methods={names:?}, max_rotation_deg={:.4}, max_translation_m={:.6}, failures={})",
+            self.inner.max_rotation_deg,
+            self.inner.max_translation_m,
+            self.inner.failures.len()
+        )
+    }
+}
+
+/// The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and
+/// target-to-camera `target_poses` (OpenCV's calibrateHandEye convention), by `method`
+/// ('tsai', 'park' or 'daniilidis').
+#[pyfunction]
+#[pyo3(signature = (gripper_poses, target_poses, method = None), text_signature = "(gripper_poses, target_poses, method='tsai')")]
+pub fn calibrate_hand_eye(
+    py: Python<'_>,
+    gripper_poses: &Bound<'_, PyAny>,
+    target_poses: &Bound<'_, PyAny>,
+    method: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PyHandEyeCalibration> {
+    let (g, c) = (poses_arg(gripper_poses, "gripper_poses")?, poses_arg(target_poses, "target_poses")?);
+    let method = method.map(method_arg).transpose()?.unwrap_or(HandEyeMethod::TsaiLenz);
+    let inner = py.detach(|| hand_eye::calibrate_hand_eye(&g, &c, method))?;
+    Ok(PyHandEyeCalibration { inner })
+}
+
+/// Runs every method on the same poses: their calibrations and how far apart they are.
+#[pyfunction]
+pub fn compare_hand_eye_methods(
+    py: Python<'_>,
+    gripper_poses: &Bound<'_, PyAny>,
+    target_poses: &Bound<'_, PyAny>,
+) -> PyResult<PyHandEyeAgreement> {
+    let (g, c) = (poses_arg(gripper_poses, "gripper_poses")?, poses_arg(target_poses, "target_poses")?);
+    let inner = py.detach(|| hand_eye::compare_hand_eye_methods(&g, &c))?;
+    Ok(PyHandEyeAgreement { inner })
+}
+
+/// Adds hand-eye calibration.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyHandEyeCalibration>()?;
+    m.add_class::<PyHandEyeAgreement>()?;
+    m.add_function(wrap_pyfunction!(calibrate_hand_eye, m)?)?;
+    m.add_function(wrap_pyfunction!(compare_hand_eye_methods, m)?)?;
+    Ok(())
+}
