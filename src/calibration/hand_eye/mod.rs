@@ -9,7 +9,7 @@
 //!
 //! **Result.** `X`, the camera frame in the gripper frame (camera-to-gripper): a point `p_c`
 //! in camera coordinates is `X p_c` in gripper coordinates. For every pair of stations
-//! `i < j`, `A = G_j^-1 G_i` and `B = C_j C_i^-1` satisfy `A X = X B` (module [`motions`]);
+//! `i < j`, `A = G_j^-1 G_i` and `B = C_j C_i^-1` satisfy `A X = X B` (module `motions`);
 //! all pairs are used, as OpenCV does.
 //!
 //! | concept | file | reference |
