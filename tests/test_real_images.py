@@ -5,6 +5,7 @@ test skips, saying how to install it."""
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
 from pathlib import Path
 from typing import Any
@@ -305,3 +306,43 @@ def test_mire2_replays_through_the_image_pipeline(visp: Path, tmp_path: Path, ca
     alone = [tracker.positions.copy()] + [tracker.track(vsinv.load_image(p))[0].copy() for p in frames[1:]]
     np.testing.assert_array_equal(result.pixels, np.array(alone))
     assert result.found.all()
+
+
+def test_mire2_through_the_ros_bridge_session(visp: Path) -> None:
+    """Issue 20 on real frames: the mire-2 frames as the ROS 2 bridge receives them (rgb8
+    sensor_msgs/Image messages, converted to grey by the bridge) through the bridge's session,
+    with no ROS installed: five dots found in each of the 501 frames, at the pixels of a
+    `DotTracker` run alone, a zero twist on the reference frame, and the session running
+    throughout."""
+    cv2 = pytest.importorskip("cv2")
+    from types import SimpleNamespace
+
+    from vsinv.ros.conversions import image_to_grey
+    from vsinv.ros.params import parse_parameters
+    from vsinv.ros.session import BridgeSession
+
+    frames = _mire2(visp)
+    first = vsinv.load_image(frames[0])
+    blobs, _ = _dot_like_blobs(cv2, first)
+    clicks = blobs + np.array([[2.0, -2.0], [-2.5, 1.5], [3.0, 2.0], [-2.0, -3.0], [1.5, 2.5]])
+    flat = [float(x) for x in clicks.ravel()]
+    session = BridgeSession(parse_parameters({
+        "reference_image": str(frames[0]), "target": "dots", "reference_points": flat, "first_points": flat,
+        "K_hat": [600.0, 600.0, 192.0, 144.0], "law": "ibvs", "depth": 0.5,
+        "stop.pixel_error": 1e-9, "stop.max_iterations": 10 * MIRE2_FRAMES,  # keep running through the frames
+    }))
+    assert session.start(0.0) == (True, "running")
+    tracker = vsinv.DotTracker(first, clicks)
+    for i, path in enumerate(frames):
+        grey = vsinv.load_image(path)
+        h, w = grey.shape
+        msg = SimpleNamespace(encoding="rgb8", height=h, width=w, step=3 * w, data=np.repeat(grey[:, :, None], 3, 2).tobytes())
+        out = session.frame(image_to_grey(msg), 0.04 * i)
+        status = json.loads(session.status_json(latency=None))
+        if i:
+            tracker.track(grey)
+        assert status["state"] == "running" and status["points"]["found"] == 5, (i, status["reason"])
+        np.testing.assert_array_equal(np.array(status["points"]["pixels"], dtype=float), tracker.positions)
+        if i == 0:
+            assert out.twist is not None and not out.twist.any()
+    print(f"mire-2 through the ROS bridge session: {len(frames)} rgb8 frames, 5 of 5 dots in each")
