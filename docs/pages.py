@@ -39,6 +39,10 @@ class Block:
     line: int  # of the opening fence, 1-based
 
     @property
+    def first_line(self) -> str:
+        return self.code.split("\n", 1)[0]
+
+    @property
     def runs(self) -> bool:
         return self.lang in ("python", "console") and not self.code.startswith(NOT_RUN)
 

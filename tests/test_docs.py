@@ -7,19 +7,13 @@ Rust API and in mkdocs' strict mode, is built by `make docs`, which `make test` 
 
 from __future__ import annotations
 
-import importlib.util
 import re
-import sys
 from pathlib import Path
 
 import pytest
+from doc_pages import pages
 
 ROOT = Path(__file__).resolve().parent.parent
-_spec = importlib.util.spec_from_file_location("docs_pages", ROOT / "docs" / "pages.py")
-assert _spec is not None and _spec.loader is not None
-pages = importlib.util.module_from_spec(_spec)
-sys.modules["docs_pages"] = pages
-_spec.loader.exec_module(pages)
 
 RUNNABLE = [p for p in pages.pages() if any(b.runs for b in pages.blocks(p))]
 # Pages of prose and reference only; every other page (the tutorial, the concepts) shows code.

@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Callable
 
 import pytest
+from doc_pages import pages
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
@@ -49,23 +50,11 @@ TIME_LIMIT_S = 300
 RUN, SLOW, NOT_RUN = "run", "slow", "not run"
 
 
-@dataclass(frozen=True)
-class Block:
-    lang: str
-    code: str
-    line: int  # of the opening fence, 1-based
-
-    @property
-    def first_line(self) -> str:
-        return self.code.split("\n", 1)[0]
+Block = pages.Block  # a fenced block: lang, code, line of its opening fence
 
 
 def readme_blocks() -> list[Block]:
-    text = README.read_text(encoding="utf-8")
-    blocks = []
-    for m in re.finditer(r"^```(\w*)\n(.*?)^```", text, re.M | re.S):
-        blocks.append(Block(m.group(1), m.group(2), text.count("\n", 0, m.start()) + 1))
-    return blocks
+    return pages.blocks(README)
 
 
 def readme_text() -> str:
