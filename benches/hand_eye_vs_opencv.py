@@ -28,6 +28,8 @@ import argparse
 import sys
 import time
 
+from pathlib import Path
+
 import numpy as np
 
 import vsinv
@@ -36,43 +38,18 @@ try:
     import cv2
 except ImportError:  # pragma: no cover
     cv2 = None
+else:
+    # The synthetic stations of the tests (tests/hand_eye_stations.py), the same draws.
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    from hand_eye_stations import errors, stations
 
 NOISE_LEVELS = [(0.0, 0.0), (0.1, 0.001), (0.5, 0.002), (1.0, 0.005)]
 METHODS = {"tsai": "CALIB_HAND_EYE_TSAI", "park": "CALIB_HAND_EYE_PARK", "daniilidis": "CALIB_HAND_EYE_DANIILIDIS"}
 
 
-def rigid(rotvec: np.ndarray, t: np.ndarray) -> np.ndarray:
-    m = np.eye(4)
-    m[:3, :3] = cv2.Rodrigues(np.asarray(rotvec, dtype=float).reshape(3, 1))[0]
-    m[:3, 3] = t
-    return m
-
-
-def random_rotvec(rng: np.random.Generator, angle: float) -> np.ndarray:
-    axis = rng.normal(size=3)
-    return axis / np.linalg.norm(axis) * angle
-
-
-def stations(rng: np.random.Generator, n: int, noise: tuple[float, float]):
-    x = rigid(random_rotvec(rng, rng.uniform(0.2, 2.5)), rng.uniform(-0.1, 0.1, 3))
-    target_in_base = rigid(random_rotvec(rng, 0.3), np.array([0.6, 0.0, 0.0]))
-    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
-    g, c = [], []
-    for _ in range(n):
-        gi = looking_down @ rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
-        ci = np.linalg.inv(gi @ x) @ target_in_base
-        ci = ci @ rigid(rng.normal(0.0, np.radians(noise[0]), 3), rng.normal(0.0, noise[1], 3))
-        g.append(gi)
-        c.append(ci)
-    return np.array(g), np.array(c), x
-
-
-def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
-    r = found[:3, :3].T @ truth[:3, :3]
-    # atan2(sin, cos) of the angle: accurate at small angles too (arccos of the trace is not).
-    sin = np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / 2
-    angle = np.degrees(np.arctan2(sin, (np.trace(r) - 1) / 2))
-    return float(angle), float(np.linalg.norm(found[:3, 3] - truth[:3, 3]) * 1000)
+def in_mm(error: tuple[float, float]) -> tuple[float, float]:
+    """(degrees, metres) as (degrees, millimetres)."""
+    return error[0], error[1] * 1000
 
 
 def cell(method: str, noise: tuple[float, float], trials: int, n: int, seed: int) -> dict[str, float]:
@@ -92,8 +69,8 @@ def cell(method: str, noise: tuple[float, float], trials: int, n: int, seed: int
         t_theirs += t2 - t1
         m = np.eye(4)
         m[:3, :3], m[:3, 3] = r, t.ravel()
-        ours.append(errors(cal.matrix, x))
-        theirs.append(errors(m, x))
+        ours.append(in_mm(errors(cal.matrix, x)))
+        theirs.append(in_mm(errors(m, x)))
     a, b = np.array(ours), np.array(theirs)
     return {
         "rot_med": np.median(a[:, 0]), "rot_max": a[:, 0].max(), "cv_rot_med": np.median(b[:, 0]),

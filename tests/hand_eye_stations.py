@@ -1,0 +1,49 @@
+"""Synthetic hand-eye stations with a known camera-to-gripper transform X, shared by
+tests/test_hand_eye.py and benches/hand_eye_vs_opencv.py (rotations by OpenCV's Rodrigues)."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+def rigid(rotvec: np.ndarray, t: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3] = cv2.Rodrigues(np.asarray(rotvec, dtype=float).reshape(3, 1))[0]
+    m[:3, 3] = t
+    return m
+
+
+def random_rotvec(rng: np.random.Generator, angle_rad: float) -> np.ndarray:
+    axis = rng.normal(size=3)
+    return axis / np.linalg.norm(axis) * angle_rad
+
+
+def stations(rng: np.random.Generator, n: int, noise: tuple[float, float] = (0.0, 0.0)):
+    """``n`` stations around a target 0.5 m below the gripper: gripper-to-base poses tilted up
+    to 40 degrees about random axes, the exact target-to-camera poses for a random X, then
+    each target pose perturbed by a random rotation of ``noise[0]`` degrees (normal per axis)
+    and a translation of ``noise[1]`` metres (normal per axis). Returns (G, C, X)."""
+    x = rigid(random_rotvec(rng, rng.uniform(0.2, 2.5)), rng.uniform(-0.1, 0.1, 3))
+    target_in_base = rigid(random_rotvec(rng, 0.3), np.array([0.6, 0.0, 0.0]))
+    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
+    g, c = [], []
+    for _ in range(n):
+        tilt = rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
+        gi = looking_down @ tilt
+        ci = np.linalg.inv(gi @ x) @ target_in_base
+        rot_sd, trans_sd = noise
+        if rot_sd > 0 or trans_sd > 0:
+            ci = ci @ rigid(rng.normal(0.0, np.radians(rot_sd), 3), rng.normal(0.0, trans_sd, 3))
+        g.append(gi)
+        c.append(ci)
+    return np.array(g), np.array(c), x
+
+
+def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    """(rotation in degrees, translation in metres) between two transforms."""
+    r = found[:3, :3].T @ truth[:3, :3]
+    # atan2(sin, cos) of the angle: accurate at small angles too (arccos of the trace is not).
+    sin = np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / 2
+    angle = np.degrees(np.arctan2(sin, (np.trace(r) - 1) / 2))
+    return float(angle), float(np.linalg.norm(found[:3, 3] - truth[:3, 3]))
