@@ -1,0 +1,194 @@
+"""The accuracy a lens change leaves (issue 27, "Measured"): two cameras with different lenses
+see the same pose, their detections disagree a little, and the invariant law stops where the
+invariant points of the two detections agree. How far is that from the pose?
+
+(i) ViSP's AprilTag benchmark pair (Debian's visp-images-data, read in place): the same scene
+    at 640x480 (the reference) and 1920x1080 (the servo camera). Per family vsinv decodes, the
+    corners of the tags found in both images (vsinv.detect_tags, decimation 1 or 2, whichever
+    finds more), the invariant error |s - s*| between them, and the pose offset it implies
+    (J^+ (s - s*) of the invariant law, with the tag depths from the benchmark's cMo_*.txt and
+    each image's K fitted to cMo and the 640x480 ground-truth corners).
+(ii) MuJoCo (tests/mujoco_world.py): the box with dots and with tags, reference 45 degrees,
+    servo 60 degrees. (a) Static: both images taken at the reference pose; |s - s*| and the
+    offset it implies (true K, true depths). (b) Closed loop: `vsinv.ImageServo` from N starts
+    (K_hat 30 % off), the status each run ends with and the final pose error against the scene.
+
+Run: `python benches/lens_change_accuracy.py [--starts N] [--iterations M]`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import vsinv
+
+BENCHMARK = Path("/usr/share/visp-images-data/ViSP-images/AprilTag/benchmark")
+FAMILIES = {"tag36h11": "tag36_11", "tag25h9": "tag25_09", "tag16h5": "tag16_05"}
+SQUARE = np.array([(-1.0, 1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)])
+
+
+def implied_offset(ref_px: np.ndarray, px: np.ndarray, K: vsinv.Intrinsics, depths: np.ndarray) -> tuple[float, float, float]:
+    """|s - s*| of the invariant law between two detections, and the displacement (mm, degrees)
+    J^+ (s - s*) it implies at the current detections."""
+    servo = vsinv.Servo(ref_px, K, law="invariant", rz_task="tau21", depths=float(np.median(depths)))  # for its basis
+    servo.step(px)
+    law = vsinv.InvariantController(ref_px, K, basis=servo.basis, rz_task="tau21")
+    law.step(px, depths)
+    offset = law.pose_uncertainty(px, depths, pixel_sigma=1e-9).offset
+    return law.invariant_error, 1e3 * float(np.linalg.norm(offset[:3])), float(np.degrees(np.linalg.norm(offset[3:])))
+
+
+def read_corners(path: Path) -> dict[int, np.ndarray]:
+    rows = [line.split() for line in path.read_text().splitlines() if line.strip()]
+    return {int(rows[i][0]): np.array(rows[i + 1 : i + 5], float) for i in range(0, len(rows), 5)}
+
+
+def fit_tag_model(folder: Path) -> tuple[float, tuple[int, ...]]:
+    """The tag side (m) and corner order that best explain the 640x480 ground truth with cMo."""
+    truth = read_corners(folder / "640x480" / "corners_tag36_11.txt")
+    best: tuple[float, float, tuple[int, ...]] | None = None
+    for perm in itertools.permutations(range(4)):
+        for side in np.linspace(0.02, 0.5, 241):
+            r = fit_k(folder, {k: v for k, v in truth.items()}, side, perm)[1]
+            if best is None or r < best[0]:
+                best = (r, side, perm)
+    assert best is not None
+    return best[1], best[2]
+
+
+def tag_points(folder: Path, tag: int, side: float, perm: tuple[int, ...]) -> np.ndarray:
+    T = np.loadtxt(folder / "640x480" / f"cMo_{tag}.txt")
+    obj = np.c_[SQUARE[list(perm)] * side / 2, np.zeros(4)]
+    return obj @ T[:3, :3].T + T[:3, 3]
+
+
+def fit_k(folder: Path, corners: dict[int, np.ndarray], side: float, perm: tuple[int, ...]) -> tuple[np.ndarray, float]:
+    """K (fx, fy, cx, cy) by linear least squares from camera-frame corners to pixels (matched by
+    nearest after a first fit is not needed: the order is the model's), and the RMS residual."""
+    A, b = [], []
+    for tag, px in corners.items():
+        for (x, y, z), (u, v) in zip(tag_points(folder, tag, side, perm), px):
+            A += [[x / z, 0, 1, 0], [0, y / z, 0, 1]]
+            b += [u, v]
+    sol = np.linalg.lstsq(np.array(A), np.array(b), rcond=None)[0]
+    rms = float(np.sqrt(np.mean((np.array(A) @ sol - np.array(b)) ** 2)))
+    return sol, rms
+
+
+def detect(path: Path, family: str) -> dict[int, np.ndarray]:
+    image = vsinv.load_image(path)
+    best: dict[int, np.ndarray] = {}
+    for decimation in (1, 2):
+        tags = vsinv.detect_tags(image, family, decimation=decimation)  # type: ignore[arg-type]
+        if len(tags) > len(best):
+            best = {int(i): c for i, c in zip(tags.ids, tags.corners)}
+    return best
+
+
+def benchmark_pair() -> list[str]:
+    if not BENCHMARK.is_dir():
+        return [f"(i) skipped: {BENCHMARK} is missing (apt-get install visp-images-data)"]
+    side, perm = fit_tag_model(BENCHMARK)
+    rows = []
+    for family, stem in FAMILIES.items():
+        low = detect(BENCHMARK / "640x480" / f"{stem}_640x480.png", family)
+        high = detect(BENCHMARK / "1920x1080" / f"{stem}_1920x1080.png", family)
+        common = sorted(set(low) & set(high))
+        if len(common) < 2:
+            rows.append(f"  {family:9} found {len(low)}/5 and {len(high)}/5: too few tags in both")
+            continue
+        ref_px = np.concatenate([low[t] for t in common])
+        px = np.concatenate([high[t] for t in common])
+        # Depths and K of the 1920x1080 camera: the corners fitted to cMo (matched by nearest).
+        pts = {t: tag_points(BENCHMARK, t, side, perm) for t in common}
+        # The 1920x1080 camera's K: the 640x480 K (fitted to cMo and the ground-truth corners, in
+        # ViSP's pixel convention: -0.5 px to OpenCV's) mapped by the axis-aligned scale and shift
+        # between the two images' detections (same pose, two pinholes: u' = a u + b, v' = c v + d).
+        K640, rms = fit_k(BENCHMARK, read_corners(BENCHMARK / "640x480" / "corners_tag36_11.txt"), side, perm)
+        (a, b0), fit_u = _axis_map(ref_px[:, 0], px[:, 0])
+        (c, d0), fit_v = _axis_map(ref_px[:, 1], px[:, 1])
+        K0 = vsinv.Intrinsics(a * K640[0], c * K640[1], a * (K640[2] - 0.5) + b0, c * (K640[3] - 0.5) + d0)
+        depths = np.concatenate([_match_depths(pts[t], high[t], K0) for t in common])
+        err, mm, deg = implied_offset(ref_px, px, K0, depths)
+        rows.append(
+            f"  {family:9} tags {len(low)}/5 at 640x480, {len(high)}/5 at 1920x1080, {len(common)} in both: "
+            f"|s-s*| {err:.2e}  implied offset {mm:7.3f} mm {deg:6.3f} deg (K fit rms {rms:.1f} px, pair map residual {max(fit_u, fit_v):.2f} px)"
+        )
+    rows.insert(0, f"(i) ViSP AprilTag benchmark, 640x480 reference -> 1920x1080 (tag side fitted {side:.3f} m)")
+    return rows
+
+
+def _axis_map(x: np.ndarray, y: np.ndarray) -> tuple[tuple[float, float], float]:
+    A = np.column_stack([x, np.ones_like(x)])
+    sol = np.linalg.lstsq(A, y, rcond=None)[0]
+    return (float(sol[0]), float(sol[1])), float(np.abs(A @ sol - y).max())
+
+
+def _match_depths(points: np.ndarray, px: np.ndarray, K: vsinv.Intrinsics) -> np.ndarray:
+    proj = np.column_stack([K.fku * points[:, 0] / points[:, 2] + K.u0, K.fkv * points[:, 1] / points[:, 2] + K.v0])
+    return np.array([points[int(np.argmin(np.linalg.norm(proj - p, axis=1))), 2] for p in px])
+
+
+def mujoco_rows(starts: int, iterations: int) -> list[str]:
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import mujoco_world as mw
+
+    why = mw.available()
+    if why is not None:
+        return [f"(ii) skipped: {why}"]
+    import mujoco_servo as ms
+
+    lens = ms.Lens()
+    rows = [f"(ii) MuJoCo, {lens.fovy_reference:.0f} -> {lens.fovy_servo:.0f} degrees, 400x300"]
+    session = {"gain": 2.5, "dt": 0.04, "stop": {"max_iterations": iterations, "max_translation_uncertainty": 1e-3, "max_rotation_uncertainty_deg": 0.2}}
+    for target in ("dots", "tags"):
+        world = mw.BoxWorld(target)
+        K = vsinv.Intrinsics(*world.intrinsics(lens.fovy_servo))
+        servo, _ = ms.pipeline(world, lens, "invariant", ms.REFERENCE_POSE, session)
+        step = servo.step(world.render(ms.REFERENCE_POSE, lens.fovy_servo))
+        depths = _mujoco_depths(world, ms, mw, servo, lens)
+        found = step.found
+        err, mm, deg = implied_offset(servo.reference_pixels[found], step.pixels[found], K, depths[found])
+        rows.append(f"  {target:5} static pair at the goal: {found.sum()} points, |s-s*| {err:.2e}  implied offset {mm:7.3f} mm {deg:6.3f} deg")
+        ends = [ms.run(world, lens, "invariant", s, k, session) for k, s in enumerate(ms.start_poses(world, lens, starts))]
+        for e in ends:
+            rows.append("    " + e.row())
+        mm_all = np.array([e.error_mm for e in ends])
+        deg_all = np.array([e.error_deg for e in ends])
+        verdicts = {v: sum(e.verdict == v for e in ends) for v in sorted({e.verdict for e in ends})}
+        rows.append(
+            f"  {target:5} closed loop, {starts} starts: {verdicts}; final error median {np.median(mm_all):.3f} mm "
+            f"(max {mm_all.max():.3f}), {np.median(deg_all):.3f} deg (max {deg_all.max():.3f})"
+        )
+        world.close()
+    return rows
+
+
+def _mujoco_depths(world, ms, mw, servo, lens) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """True depths of the session's points at the reference pose (servo camera)."""
+    if world.target == "dots":
+        return mw.project(ms.REFERENCE_POSE, world.intrinsics(lens.fovy_servo), world.dot_centres())[1]
+    _, depths = ms.tag_reference_depths(world, world.render(ms.REFERENCE_POSE, lens.fovy_reference), world.intrinsics(lens.fovy_reference))
+    return depths
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--starts", type=int, default=10)
+    parser.add_argument("--iterations", type=int, default=200)
+    args = parser.parse_args()
+    for row in benchmark_pair():
+        print(row, flush=True)
+    for row in mujoco_rows(args.starts, args.iterations):
+        print(row, flush=True)
+
+
+if __name__ == "__main__":
+    main()
