@@ -63,6 +63,7 @@ bench: install
 	$(PYTHON) benches/dots_vs_opencv.py
 	$(PYTHON) benches/noise_honesty.py
 	$(PYTHON) benches/tracker_mire2.py
+	$(PYTHON) benches/lens_change_accuracy.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
 # and the property tests on new random examples (CI runs a fixed sequence).
