@@ -218,6 +218,35 @@ def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return IMG_LOCK["reference"]
 
 
+@covers("TagTracker", "TagTracker.track", "TagTracker.reset", "TagTracker.read_whole")
+@fuzz_settings(60)
+@given(st.data())
+def test_tag_tracker(data: Any) -> None:
+    image = tag_image()
+    ref = vsinv.TagTracker()
+    families = st.sampled_from([V("tag36h11", SAME, "default"), V("tag16h5", RETURN, "other family"),
+                                V("tag36h12", INVALID, "unknown"), V(None, TYPE, "none")])
+    decimations = st.sampled_from([V(None, SAME, "default"), V(1, RETURN, "full size"), V(8, RETURN, "largest"),
+                                   V(0, INVALID, "zero"), V(9, INVALID, "too large"), V(2**40, INVALID, "huge"),
+                                   V(2.0, TYPE, "float")])
+    refreshes = st.sampled_from([V(15, SAME, "default"), V(0, RETURN, "never"), V(1, RETURN, "every frame"),
+                                 V(-1, INVALID, "negative"), V(2**40, INVALID, "huge"), V(1.5, TYPE, "float")])
+    name, v, out = fuzz(data, vsinv.TagTracker, {"family": "tag36h11", "decimation": None, "refresh": 15},
+                        {"family": families, "decimation": decimations, "refresh": refreshes},
+                        digest=lambda t: t.read_whole, ref=ref)
+    tracker = out if returned(out) else ref
+    for _ in range(2):
+        nxt = data.draw(image_variants(image), label="frame")
+        tags = call(tracker.track, nxt.value, _api="TagTracker.track", _expect=nxt.expect, _names=("image",))
+        if returned(tags):
+            assert isinstance(call(getattr, tracker, "read_whole", _api="TagTracker.read_whole"), bool)
+            if nxt.expect == SAME and tracker is ref:
+                assert list(tags.ids) == [0, 5]
+    call(tracker.reset, _api="TagTracker.reset", _finite=False)
+    call(tracker.track, image, _api="TagTracker.track", _names=("image",))
+    assert call(getattr, tracker, "read_whole", _api="TagTracker.read_whole") is True
+
+
 @covers("ImageServo", "ImageServo.step", "ImageServo.ids", "ImageServo.reference_pixels", "ImageServo.iterations",
         "ImageServo.basis", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.twist",
         "ImageStep.verdict", "ImageStep.reason", "ImageStep.running", "ImageStep.telemetry")

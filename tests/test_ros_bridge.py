@@ -67,6 +67,9 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
     validate_pipeline(c)
     tags = parse_parameters({"reference_image": views["reference"], "tag_ids": [1, 2], "depth": 0.5, "law": "ibvs"})
     assert tags.target == "tags" and tags.servo_options["tag_ids"] == [1, 2] and tags.servo_options["depths"] == 0.5
+    assert "decimation" not in tags.servo_options
+    tags = parse_parameters({"reference_image": views["reference"], "decimation": 3, "depth": 0.5, "law": "ibvs"})
+    assert tags.servo_options["decimation"] == 3
 
 
 @pytest.mark.parametrize(
@@ -98,6 +101,8 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
         ({"twist_topic": " "}, "parameter twist_topic: empty"),
         ({"basis": [0, 1]}, "parameter basis"),
         ({"tag_ids": [1.5]}, "parameter tag_ids: expected an array of integers"),
+        ({"decimation": 3}, "parameter decimation: not a parameter of target 'dots'"),
+        ({"target": "tags", "reference_points": None, "decimation": 2.5}, "parameter decimation: expected an integer"),
     ],
 )
 def test_bad_parameters_are_refused_by_name(views: dict[str, Any], change: dict[str, Any], name: str) -> None:
@@ -115,6 +120,14 @@ def test_bad_law_options_are_refused_at_start(views: dict[str, Any], change: dic
     # the same without K_hat: a stand-in lens checks the options before any CameraInfo
     config = parse_parameters(good(views, K_hat=None, **change))
     with pytest.raises(vsinv.InvalidInput, match=name):
+        validate_pipeline(config)
+
+
+@pytest.mark.parametrize("decimation", [0, 9])
+def test_a_decimation_out_of_range_is_refused_at_start(views: dict[str, Any], decimation: int) -> None:
+    config = parse_parameters({"reference_image": views["reference"], "decimation": decimation, "depth": 0.5,
+                               "law": "ibvs", "K_hat": [600.0, 600.0, 416.0, 312.0]})
+    with pytest.raises(vsinv.InvalidInput, match=r"parameters: .*decimation: must be in 1..=8"):
         validate_pipeline(config)
 
 

@@ -52,6 +52,7 @@ __all__ = [
     "detect_dots",
     "DotTracker",
     "Tags",
+    "TagTracker",
     "detect_tags",
     "load_image",
     "save_image",
@@ -395,9 +396,11 @@ class ImageServo:
     ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
     ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
     ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
-    ``target="tags"``: AprilTags of ``family``, decoded afresh in every frame, the corners of the tags
-    ``tag_ids`` (None: every tag decoded in the reference image), corner c of tag t under identity
-    4 t + c: no clicks, correspondences by identity between any two cameras.
+    ``target="tags"``: AprilTags of ``family``, decoded in every frame (searched near their last
+    corners first, the whole frame when one is lost), the corners of the tags ``tag_ids`` (None:
+    every tag decoded in the reference image), corner c of tag t under identity 4 t + c: no clicks,
+    correspondences by identity between any two cameras. ``decimation`` (1..=8, None: the
+    detector's default) is the quad search's, as in ``detect_tags``.
     ``reference_K`` and ``reference_distortion`` undistort the reference points. Every other keyword
     argument is the ``Servo`` session's (law, reference_depths, depths, basis, gain, ..., dt) and an
     unknown one is refused by name. A point not found in a frame is not visible for that step.
@@ -414,6 +417,7 @@ class ImageServo:
         tracker: dict[str, float | int | str] | None = None,
         family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
         tag_ids: Sequence[int] | None = None,
+        decimation: int | None = None,
         distortion: Distortion | _ArrayLike | None = None,
         reference_K: _IntrinsicsLike | None = None,
         reference_distortion: Distortion | _ArrayLike | None = None,
@@ -777,6 +781,29 @@ class DotTracker:
     def positions(self) -> _F64Array:
         """The last known position of every dot, (n, 2)."""
     def __len__(self) -> int: ...
+
+@final
+class TagTracker:
+    """AprilTags of ``family`` through a sequence of frames: after a frame, each tag is searched in
+    a crop around its last corners (a margin of half its side plus twice its last motion), and the
+    whole frame is read when one is not found there, when the size changes, and every ``refresh``
+    frames (0: only then) to pick up tags coming into view. A tracked frame gives what
+    ``detect_tags`` gives on it, for the tags tracked. ``decimation`` (1..=8, None: the detector's
+    default) is ``detect_tags``'s."""
+
+    def __new__(
+        cls,
+        family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+        decimation: int | None = None,
+        refresh: int = 15,
+    ) -> TagTracker: ...
+    def track(self, image: npt.NDArray[np.uint8]) -> Tags:
+        """The tags in the next frame (a (height, width) uint8 array), sorted by id."""
+    def reset(self) -> None:
+        """Forgets the last frame: the next one is read whole."""
+    @property
+    def read_whole(self) -> bool:
+        """Whether the last frame was read whole (not tracked in crops)."""
 
 @final
 class Tags:

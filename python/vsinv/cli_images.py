@@ -1,6 +1,6 @@
 """The image commands of ``vsinv``: ``render`` (a scenario's views as PNG files with their
-dots' CSVs) and ``invariance`` (dots tracked through image files: the image and invariant
-errors per image, the paper's Fig. 3)."""
+dots' CSVs) and ``invariance`` (dots tracked, or tags decoded, through image files: the image
+and invariant errors per image, the paper's Fig. 3)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,10 @@ from typing import Any, Optional, Sequence
 import numpy as np
 
 from ._core import VsinvError
+from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
+from .tag_invariance import track_tag_invariance
 
 __all__ = ["add_allow_outside_files", "add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
 
@@ -44,22 +46,29 @@ def add_image_commands(sub: Any) -> None:
 
     inv = sub.add_parser(
         "invariance",
-        help="track dots through image files and print the image and invariant errors (Fig. 3)",
+        help="track dots (or decode tags) through image files and print the image and invariant errors (Fig. 3)",
         description="Detect the reference dots near the approximate positions of --points, track them through the "
         "images in order, and print per image and point the image error ||p - p*|| (pixels) and the invariant "
         "error ||q - q*||. Images from another camera (a lens change) see every dot elsewhere: give the dots' "
         "approximate positions in the first image too (--first-points), in the order of --points, as one clicks "
-        "both images in ViSP.",
+        "both images in ViSP. With --target tags, the corners of the AprilTags decoded in REF are matched by "
+        "identity in every image: no clicks.",
     )
     inv.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
     inv.add_argument("images", metavar="IMG", type=Path, nargs="+", help="the images, in tracking order (PNG, PGM/PPM or JPEG)")
-    inv.add_argument("--points", metavar="CSV", type=Path, required=True, help="approximate dot positions in REF (u, v columns)")
+    inv.add_argument(
+        "--target", choices=("dots", "tags"), default="dots",
+        help="what to follow: dots (tracked from clicks) or tags (AprilTag corners, by identity: corner c of tag t is "
+        "point 4 t + c, numbered in identity order) (dots)",
+    )
+    inv.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate dot positions in REF (u, v columns); required")
     inv.add_argument(
         "--first-points", metavar="CSV", type=Path,
-        help="approximate dot positions in the first IMG, in the order of --points (default: those found in REF)",
+        help="dots: approximate dot positions in the first IMG, in the order of --points (default: those found in REF)",
     )
     inv.add_argument("--basis", metavar="I,J,K", help="the three basis points (default: the widest triangle)")
-    add_tracker_options(inv)
+    add_tag_options(inv)
+    add_tracker_options(inv, "dots: ")
     inv.add_argument("--out", metavar="DIR", type=Path, help="write invariance.csv and invariance.png to DIR")
 
 
@@ -124,14 +133,27 @@ def complete(result: InvarianceResult) -> bool:
     return bool(result.found.all()) and bool(np.isfinite(result.invariant_error).all())
 
 
+def _track(args: argparse.Namespace) -> InvarianceResult:
+    """The errors of the target of ``--target`` through the images."""
+    basis = _parse_basis(args.basis)
+    if args.target == "tags":
+        for given, option in ((args.points, "--points"), (args.first_points, "--first-points")):
+            if given is not None:
+                raise ValueError(f"{option}: not an option of --target tags (tags match by identity, no clicks)")
+        return track_tag_invariance(args.reference, args.images, basis, **tag_options(args))
+    if args.points is None:
+        raise ValueError("--points: --target dots needs the dots' approximate positions in REF")
+    return track_invariance(
+        args.reference, args.images, args.points, basis, first_points=args.first_points,
+        labels=("--points", "--first-points"), **tracker_options(args),
+    )
+
+
 def cmd_invariance(args: argparse.Namespace) -> int:
     try:
-        result = track_invariance(
-            args.reference, args.images, args.points, _parse_basis(args.basis), first_points=args.first_points,
-            labels=("--points", "--first-points"), **tracker_options(args),
-        )
+        result = _track(args)
     except VsinvError as e:
-        raise named_as_options(e, {"basis": "--basis"}) from None
+        raise named_as_options(e, {"basis": "--basis", **TAG_OPTION_NAMES}) from None
     print(format_invariance(result))
     if args.out is not None:
         from .plots import _save

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ._core import Intrinsics, VsinvError, load_calibration
+from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import read_points
 from .replaying import read_depths, replay
@@ -19,7 +20,7 @@ __all__ = ["add_replay_command", "cmd_replay"]
 TARGETS = ("dots", "tags")
 
 #: ImageServo's keyword arguments that an error may name, and the options that give them.
-_OPTION_NAMES = {"reference_points": "--points", "first_points": "--first-points"}
+_OPTION_NAMES = {"reference_points": "--points", "first_points": "--first-points", **TAG_OPTION_NAMES}
 
 
 def add_replay_command(sub: Any) -> None:
@@ -37,8 +38,7 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--target", choices=TARGETS, default="dots", help="what to follow: dots (tracked from clicks) or tags (AprilTags, by identity) (dots)")
     p.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate positions in REF (u, v columns)")
     p.add_argument("--first-points", metavar="CSV", type=Path, help="dots: approximate positions in the first frame (default: those found in REF)")
-    p.add_argument("--family", default="tag36h11", help="tags: the AprilTag family (tag36h11)")
-    p.add_argument("--tag-ids", metavar="I,J,...", help="tags: the tags to servo on (default: every tag decoded in REF)")
+    add_tag_options(p)
     camera = p.add_mutually_exclusive_group(required=True)
     camera.add_argument("--calibration", metavar="FILE", type=Path, help="the servo camera's calibration (K_hat and lens): ROS or OpenCV YAML/XML")
     camera.add_argument("--K-hat", metavar="FX,FY,U0,V0", help="the servo camera's intrinsics K_hat, pixels (no lens distortion)")
@@ -94,12 +94,7 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
             options["first_points"] = read_points(args.first_points)
         options["tracker"] = tracker_options(args)
     else:
-        options["family"] = args.family
-        if args.tag_ids is not None:
-            try:
-                options["tag_ids"] = [int(t) for t in args.tag_ids.split(",")]
-            except ValueError:
-                raise ValueError(f"--tag-ids: expected tag ids I,J,..., got {args.tag_ids!r}") from None
+        options.update(tag_options(args))
     return options
 
 

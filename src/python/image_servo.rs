@@ -10,9 +10,9 @@ use super::errors::invalid_argument;
 use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
+use super::tags::{decimation_arg, family_arg};
 use super::vision::{image_arg, polarity_arg};
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
-use crate::vision::tags::TagFamily;
 use crate::vision::tracker::TrackerConfig;
 
 /// The `tracker` dictionary over the default tracker settings; an unknown key is refused by
@@ -67,11 +67,9 @@ fn dots_target(
 }
 
 /// The target of `target="tags"` from its keyword arguments.
-fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>) -> PyResult<ImageTarget> {
-    let family = TagFamily::from_name(family).ok_or_else(|| {
-        let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
-        invalid_argument("family", format!("family: expected one of {names}, got {family:?}"))
-    })?;
+fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>, decimation: Option<i64>) -> PyResult<ImageTarget> {
+    let family = family_arg(family)?;
+    let decimation = decimation.map(decimation_arg).transpose()?;
     let ids = match tag_ids.filter(|t| !t.is_none()) {
         None => None,
         Some(t) => {
@@ -87,7 +85,7 @@ fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>) -> PyResult<Ima
             Some(ids)
         }
     };
-    Ok(ImageTarget::Tags { family, ids })
+    Ok(ImageTarget::Tags { family, ids, decimation })
 }
 
 /// Keyword arguments given that the target does not take, refused by name.
@@ -111,7 +109,7 @@ pub(super) struct PyImageServo {
 impl PyImageServo {
     #[new]
     #[allow(non_snake_case, clippy::too_many_arguments)]
-    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, family = "tag36h11", tag_ids = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
+    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, family = "tag36h11", tag_ids = None, decimation = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
     fn new(
         py: Python<'_>,
         reference_image: &Bound<'_, PyAny>,
@@ -122,6 +120,7 @@ impl PyImageServo {
         tracker: Option<&Bound<'_, PyDict>>,
         family: &str,
         tag_ids: Option<&Bound<'_, PyAny>>,
+        decimation: Option<i64>,
         distortion: Option<&Bound<'_, PyAny>>,
         reference_K: Option<&Bound<'_, PyAny>>,
         reference_distortion: Option<&Bound<'_, PyAny>>,
@@ -132,7 +131,12 @@ impl PyImageServo {
         let given = |o: Option<&Bound<'_, PyAny>>| o.is_some_and(|o| !o.is_none());
         let target = match target {
             "dots" => {
-                refuse_foreign(target, &[("tag_ids", given(tag_ids)), ("family", family != "tag36h11")])?;
+                let tag_args = [
+                    ("tag_ids", given(tag_ids)),
+                    ("family", family != "tag36h11"),
+                    ("decimation", decimation.is_some()),
+                ];
+                refuse_foreign(target, &tag_args)?;
                 dots_target(reference_points, first_points, tracker)?
             }
             "tags" => {
@@ -142,7 +146,7 @@ impl PyImageServo {
                     ("tracker", tracker.is_some()),
                 ];
                 refuse_foreign(target, &dot_args)?;
-                tags_target(family, tag_ids)?
+                tags_target(family, tag_ids, decimation)?
             }
             other => {
                 return Err(invalid_argument(

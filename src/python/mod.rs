@@ -22,6 +22,7 @@ mod se3;
 mod servo;
 mod sim;
 mod stability;
+mod tag_tracker;
 mod tags;
 mod uncertainty;
 mod vision;
@@ -46,6 +47,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     vision::register(m)?;
     image_servo::register(m)?;
     tags::register(m)?;
+    tag_tracker::register(m)?;
     se3::register(m)?;
     kinematics::register(m)?;
     lens::register(m)?;

@@ -68,7 +68,7 @@ impl PyTags {
     }
 }
 
-fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyResult<PyTags> {
+pub(super) fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyResult<PyTags> {
     let m = tags.len();
     let ids = PyArray1::from_vec(py, tags.iter().map(|t| i64::from(t.id)).collect());
     let flat: Vec<f64> = tags.iter().flat_map(|t| t.corners.as_flattened().to_vec()).collect();
@@ -78,7 +78,7 @@ fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyResult<PyTags>
 
 /// `"tag36h11"`, `"tag36h10"`, `"tag25h9"` or `"tag16h5"`; anything else raises
 /// `InvalidInput` naming `family`.
-fn family_arg(name: &str) -> PyResult<TagFamily> {
+pub(super) fn family_arg(name: &str) -> PyResult<TagFamily> {
     TagFamily::from_name(name).ok_or_else(|| {
         let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
         super::errors::invalid_argument("family", format!("family: expected one of {names}, got {name:?}"))
@@ -89,7 +89,7 @@ fn family_arg(name: &str) -> PyResult<TagFamily> {
 const _: () = assert!(DEFAULT_DECIMATION == 2);
 
 /// `1..=8`; anything else raises `InvalidInput` naming `decimation`.
-fn decimation_arg(decimation: i64) -> PyResult<u32> {
+pub(super) fn decimation_arg(decimation: i64) -> PyResult<u32> {
     u32::try_from(decimation).ok().filter(|d| (1..=MAX_DECIMATION).contains(d)).ok_or_else(|| {
         super::errors::invalid_argument(
             "decimation",

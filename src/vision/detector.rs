@@ -7,6 +7,7 @@
 //! detectors.
 
 pub mod dot_tracking;
+mod tag_regions;
 pub mod tags;
 
 use crate::error::Result;

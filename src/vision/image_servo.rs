@@ -13,7 +13,7 @@ use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::{GreyBuffer, GreyView, Pixels, view_of};
-use crate::vision::tags::TagFamily;
+use crate::vision::tags::{TagDecoder, TagFamily};
 use crate::vision::tracker::TrackerConfig;
 
 /// What the pipeline looks for in the images, and how it is found.
@@ -38,16 +38,22 @@ pub enum ImageTarget {
         family: TagFamily,
         /// The tags to servo on (each must be decoded in the reference image).
         ids: Option<Vec<u32>>,
+        /// The quad search's decimation (`1..=8`, [`TagDecoder::with_decimation`]); None:
+        /// the detector's default.
+        decimation: Option<u32>,
     },
 }
 
 impl ImageTarget {
-    /// A detector of this target, not started.
-    fn detector(&self) -> Box<dyn Detector> {
-        match self {
+    /// A detector of this target, not started (an error for a decimation out of range).
+    fn detector(&self) -> Result<Box<dyn Detector>> {
+        Ok(match self {
             ImageTarget::Dots { tracker, .. } => Box::new(DotTracking::new(*tracker)),
-            ImageTarget::Tags { family, .. } => Box::new(TagDetector::new(*family)),
-        }
+            ImageTarget::Tags { family, decimation: None, .. } => Box::new(TagDetector::new(*family)),
+            ImageTarget::Tags { family, decimation: Some(d), .. } => {
+                Box::new(TagDetector::with_decoder(TagDecoder::with_decimation(*family, *d)?))
+            }
+        })
     }
 
     /// The hints for the reference image: every dot's click, identities `0, 1, ...`.
@@ -151,11 +157,11 @@ impl ImageServo {
     ) -> Result<Self> {
         target.validate()?;
         let reference = view_of(reference)?;
-        let found = reference_points(&reference, target.detector().as_mut(), &target.reference_hints())
+        let found = reference_points(&reference, target.detector()?.as_mut(), &target.reference_hints())
             .map_err(|e| hints_named(e, "reference_points"))?;
         let found = target.select(found)?;
         let first = target.first_hints(&found);
-        Self::with_detector(&found, target.detector(), first, config, depths)
+        Self::with_detector(&found, target.detector()?, first, config, depths)
     }
 
     /// The pipeline over any detector: `reference` holds the reference image's points (their
@@ -425,7 +431,7 @@ mod tests {
         let reference = draw(family, 320, 260, &reference_tags);
         let k = Intrinsics::pinhole(800.0, 800.0, 160.0, 130.0).unwrap();
         let config = || ImageServoConfig::new(ServoConfig::new(Law::Observe, k));
-        let target = ImageTarget::Tags { family, ids: None };
+        let target = ImageTarget::Tags { family, ids: None, decimation: None };
         let mut pipeline = ImageServo::new(&reference, &target, config(), ServoDepths::Constant(0.5)).unwrap();
         assert_eq!(pipeline.ids(), [12, 13, 14, 15, 28, 29, 30, 31, 48, 49, 50, 51]);
         let want: Vec<[f64; 2]> = reference_tags.iter().flat_map(|p| corners(family, p)).collect();
@@ -442,11 +448,33 @@ mod tests {
         pipeline.step(&draw(family, 320, 260, &[frame_tags[0], frame_tags[2]])).unwrap();
         assert_eq!(pipeline.found(), [true, true, true, true, false, false, false, false, true, true, true, true]);
         assert_eq!(pipeline.pixels()[4..8], before[4..8], "a missing tag keeps its last corners, not visible");
-        let some = ImageTarget::Tags { family, ids: Some(vec![12, 3]) };
+        let some = ImageTarget::Tags { family, ids: Some(vec![12, 3]), decimation: None };
         let pipeline = ImageServo::new(&reference, &some, config(), ServoDepths::Constant(0.5)).unwrap();
         assert_eq!(pipeline.ids(), [12, 13, 14, 15, 48, 49, 50, 51]);
-        let absent = ImageTarget::Tags { family, ids: Some(vec![3, 5]) };
+        let absent = ImageTarget::Tags { family, ids: Some(vec![3, 5]), decimation: None };
         let err = ImageServo::new(&reference, &absent, config(), ServoDepths::Constant(0.5)).unwrap_err();
         assert!(err.to_string().contains("tag 5"), "{err}");
+    }
+
+    /// The target's decimation reaches the detector: every decimation finds the same tags,
+    /// one out of `1..=8` is refused by name.
+    #[test]
+    fn a_tags_target_takes_a_decimation() {
+        use crate::vision::tags::synthetic::{Placement, draw};
+        let family = TagFamily::Tag36h11;
+        let tags = [Placement { id: 3, centre: [90.0, 80.0], cell: 8.0, quarter_turns: 0 }];
+        let reference = draw(family, 200, 160, &tags);
+        let k = Intrinsics::pinhole(800.0, 800.0, 100.0, 80.0).unwrap();
+        let config = || ImageServoConfig::new(ServoConfig::new(Law::Observe, k));
+        for decimation in [None, Some(1), Some(3)] {
+            let target = ImageTarget::Tags { family, ids: None, decimation };
+            let pipeline = ImageServo::new(&reference, &target, config(), ServoDepths::Constant(0.5)).unwrap();
+            assert_eq!(pipeline.ids(), [12, 13, 14, 15], "{decimation:?}");
+        }
+        for bad in [0, 9] {
+            let target = ImageTarget::Tags { family, ids: None, decimation: Some(bad) };
+            let err = ImageServo::new(&reference, &target, config(), ServoDepths::Constant(0.5)).unwrap_err();
+            assert!(matches!(err, Error::InvalidParameter { name: "decimation", .. }), "{err}");
+        }
     }
 }

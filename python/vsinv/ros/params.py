@@ -49,6 +49,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("target", "str", "tags", "what to servo on: AprilTags by identity, or dots tracked from approximate pixels", ("tags", "dots")),
     _P("family", "str", "tag36h11", "tags: the AprilTag family"),
     _P("tag_ids", "ints", None, "tags: the tags to servo on (unset: every tag decoded in the reference image)"),
+    _P("decimation", "int", None, "tags: the quad search's decimation, 1..=8 (unset: the detector's default)"),
     _P("reference_points", "floats", None, "dots: approximate pixels in the reference image, flat [u0, v0, u1, v1, ...]"),
     _P("reference_points_file", "str", None, "dots: the same as a CSV file with u, v columns"),
     _P("first_points", "floats", None, "dots: approximate pixels in the first frame, flat (unset: near the reference ones)"),
@@ -253,7 +254,7 @@ def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str
     options: dict[str, Any] = {}
     dot_names: tuple[str, ...] = ("reference_points", "reference_points_file", "first_points", "first_points_file")
     dot_names += tuple(p.name for p in PARAMETERS if p.name.startswith("tracker."))
-    foreign = ("family", "tag_ids") if target == "dots" else dot_names
+    foreign = ("family", "tag_ids", "decimation") if target == "dots" else dot_names
     for name in foreign:
         if name in explicit:
             raise _refuse(name, f"not a parameter of target {target!r}")
@@ -261,6 +262,8 @@ def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str
         options["family"] = given["family"]
         if "tag_ids" in given:
             options["tag_ids"] = list(given["tag_ids"])
+        if "decimation" in given:
+            options["decimation"] = given["decimation"]
         return options
     reference = _points(given, "reference_points")
     if reference is None:

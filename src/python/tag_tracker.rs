@@ -1,0 +1,66 @@
+//! `vsinv.TagTracker`: AprilTags through a sequence of frames (the `vision` layer's
+//! `TagDetector`), each searched near its last corners first; the work runs with the GIL
+//! released.
+
+use pyo3::prelude::*;
+
+use super::errors::invalid_argument;
+use super::tags::{PyTags, decimation_arg, family_arg, tags_out};
+use super::vision::image_arg;
+use crate::vision::detector::tags::{DEFAULT_REFRESH, TagDetector};
+use crate::vision::tags::TagDecoder;
+
+// The signature's default, written as a literal for Python's introspection.
+const _: () = assert!(DEFAULT_REFRESH == 15);
+
+/// AprilTags of `family` through a sequence of frames: after a frame, each tag is searched in
+/// a crop around its last corners, and the whole frame is read when one is not found there,
+/// when the size changes, and every `refresh` frames (0: only then) to pick up tags coming
+/// into view. A tracked frame gives what `detect_tags` gives on it, for the tags tracked.
+#[pyclass(name = "TagTracker", module = "vsinv._core")]
+pub(super) struct PyTagTracker {
+    inner: TagDetector,
+}
+
+#[pymethods]
+impl PyTagTracker {
+    #[new]
+    #[pyo3(signature = (family = "tag36h11", decimation = None, refresh = 15))]
+    fn new(family: &str, decimation: Option<i64>, refresh: i64) -> PyResult<Self> {
+        let family = family_arg(family)?;
+        let detector = match decimation.map(decimation_arg).transpose()? {
+            Some(d) => TagDetector::with_decoder(TagDecoder::with_decimation(family, d)?),
+            None => TagDetector::new(family),
+        };
+        let refresh = u32::try_from(refresh).map_err(|_| {
+            invalid_argument("refresh", format!("refresh: expected a whole number of frames >= 0, got {refresh}"))
+        })?;
+        Ok(Self { inner: detector.with_refresh(refresh) })
+    }
+
+    /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id.
+    fn track(&mut self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
+        let image = image_arg(image, "image")?;
+        let buffer = image.buffer("image")?;
+        let detector = &mut self.inner;
+        let tags = py.detach(|| detector.track(&buffer))?;
+        tags_out(py, &tags, self.inner.family())
+    }
+
+    /// Forgets the last frame: the next one is read whole.
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    /// Whether the last frame was read whole (not tracked in crops).
+    #[getter]
+    fn read_whole(&self) -> bool {
+        self.inner.read_whole()
+    }
+}
+
+/// Adds the tag tracker.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyTagTracker>()?;
+    Ok(())
+}
