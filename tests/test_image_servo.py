@@ -285,3 +285,34 @@ def test_replay_follows_tags(tmp_path: Path) -> None:
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert "3 frames, 12 points; 0 point-frames not found" in done.stdout
+
+
+def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsinv.Scenario) -> None:
+    """Issue 27, item 2: a first-frame hint outside the image is not an error (that dot is
+    not visible), and a basis dot painted over from the 20th frame on, for good, makes the
+    session switch to a basis of visible dots and go on: the run converges."""
+    ref, ref_px, start, start_px = views(scenario)
+    first = start_px.copy()
+    first[11] = [-40.0, 25.0]  # a hint outside the image: dot 11 is never tracked
+    pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, first_points=first, **SESSION)
+    pose, image, switches, hidden = start_pose(), start, [], -1
+    for _ in range(3000):
+        if pipeline.iterations >= 20:
+            hidden = pipeline.basis[0] if hidden < 0 else hidden
+            u, v = np.rint(vsinv.render_view(scenario, pose=pose)[1][hidden]).astype(int)
+            image = image.copy()
+            image[max(v - 12, 0) : v + 13, max(u - 12, 0) : u + 13] = 30
+        step = pipeline.step(image)
+        assert not step.found[11]
+        switches.append(step.telemetry["basis_switches"])
+        if not step.running:
+            break
+        pose = pose @ vsinv.exp_twist(step.twist, 0.01)
+        image = vsinv.render_view(scenario, pose=pose)[0]
+    position, thetau = vsinv.thetau_from_pose(pose)
+    error_mm, error_deg = 1e3 * np.linalg.norm(position), np.degrees(np.linalg.norm(thetau))
+    print(f"{step.verdict} after {pipeline.iterations}: {error_mm:.3f} mm, {error_deg:.4f} deg; basis {pipeline.basis}, switches {switches[-1]}")
+    assert step.verdict == "converged", step.reason
+    assert 11 not in pipeline.basis and hidden not in pipeline.basis
+    assert switches[-1] == pipeline.basis_switches >= 1 and step.telemetry["basis"] == pipeline.basis
+    assert error_mm < 2.0 and error_deg < 0.2

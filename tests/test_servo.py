@@ -90,9 +90,13 @@ def test_lost_features_and_the_iteration_limit():
     servo = vsinv.Servo(px, K_HAT, reference_depths=z)
     pixels, _ = view(vsinv.exp_twist(START))
     visible = np.ones(12, bool)
-    visible[list(servo.basis)[0]] = False
+    first = servo.basis
+    visible[first[0]] = False  # a hidden basis point: the basis switches (issue 27)
     step = servo.step(pixels, visible)
-    assert step.verdict == "lost_features" and "basis" in (step.reason or "")
+    assert step.verdict == "running" and first[0] not in servo.basis and servo.basis_switches == 1
+    assert step.telemetry["basis"] == servo.basis and step.telemetry["basis_switches"] == 1
+    step = servo.step(pixels, np.arange(12) < 5)  # five points: fewer than the law's six
+    assert step.verdict == "lost_features" and "5 of 12" in (step.reason or "")
     watch = vsinv.Servo(px, K_HAT, "none", reference_depths=z, stop={"max_iterations": 2})
     verdicts = [watch.step(pixels).verdict for _ in range(3)]
     assert verdicts == ["running", "running", "observed"]

@@ -345,7 +345,10 @@ class Servo:
         """Control steps applied."""
     @property
     def basis(self) -> tuple[int, int, int]:
-        """The basis in use."""
+        """The basis in use (it changes when a basis point is not visible)."""
+    @property
+    def basis_switches(self) -> int:
+        """How many times the basis changed because one of its points was not visible."""
     @property
     def law(self) -> Literal["invariant", "ibvs", "none"]:
         """The law."""
@@ -385,7 +388,8 @@ class ServoStep:
         """Whether the loop goes on."""
     @property
     def telemetry(self) -> dict[str, Any]:
-        """iteration, invariant_error, image_error, tau, eps_z, eps (5,), tracking_error, law_ran."""
+        """iteration, invariant_error, image_error, tau, eps_z, eps (5,), tracking_error, law_ran,
+        basis (the three point indices in use), basis_switches."""
 
 @final
 class ImageServo:
@@ -437,7 +441,10 @@ class ImageServo:
         """Control steps applied."""
     @property
     def basis(self) -> tuple[int, int, int]:
-        """The basis in use."""
+        """The basis in use (it changes when a basis point is not visible)."""
+    @property
+    def basis_switches(self) -> int:
+        """How many times the basis changed because one of its points was not visible."""
     @property
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last frames (None before three), pixels."""

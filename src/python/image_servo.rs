@@ -214,6 +214,11 @@ impl PyImageServo {
         let [a, b, c] = self.inner.servo().basis();
         (a, b, c)
     }
+    /// How many times the basis changed because one of its points was not visible.
+    #[getter]
+    fn basis_switches(&self) -> usize {
+        self.inner.servo().basis_switches()
+    }
     /// The pixel noise measured on the last frames (None before three), pixels.
     #[getter]
     fn pixel_sigma(&self) -> Option<f64> {

@@ -375,11 +375,16 @@ impl PyServo {
     fn iterations(&self) -> usize {
         self.inner.iterations()
     }
-    /// The basis in use (three point indices).
+    /// The basis in use (three point indices; it changes when a basis point is not visible).
     #[getter]
     fn basis(&self) -> (usize, usize, usize) {
         let [a, b, c] = self.inner.basis();
         (a, b, c)
+    }
+    /// How many times the basis changed because one of its points was not visible.
+    #[getter]
+    fn basis_switches(&self) -> usize {
+        self.inner.basis_switches()
     }
     /// The law: "invariant", "ibvs" or "none".
     #[getter]
@@ -484,8 +489,9 @@ impl PyServoStep {
         self.reason.is_none()
     }
     /// The figures of this step: a dict of iteration, invariant_error, image_error (pixels),
-    /// tau (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran; NaN where a
-    /// figure does not apply.
+    /// tau (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran, basis (the
+    /// three point indices in use) and basis_switches (how often a hidden basis point made
+    /// the session change its basis); NaN where a figure does not apply.
     #[getter]
     fn telemetry<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let t = &self.telemetry;
@@ -498,6 +504,8 @@ impl PyServoStep {
         d.set_item("eps", vec1(py, &t.eps))?;
         d.set_item("tracking_error", t.tracking_error)?;
         d.set_item("law_ran", t.law_ran)?;
+        d.set_item("basis", (t.basis[0], t.basis[1], t.basis[2]))?;
+        d.set_item("basis_switches", t.basis_switches)?;
         Ok(d)
     }
     fn __repr__(&self) -> String {

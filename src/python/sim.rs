@@ -275,6 +275,7 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("prop2", s.prop2)?;
     d.set_item("within_tolerance", s.within_tolerance)?;
     d.set_item("basis", s.basis.to_vec())?;
+    d.set_item("basis_switches", s.basis_switches)?;
     for f in &SUMMARY_FIELDS {
         let v = (f.value)(s);
         d.set_item(f.name, v)?;

@@ -18,7 +18,7 @@ use crate::servo::depths::ServoDepths;
 use crate::servo::law::{Law, ServoLaw};
 use crate::servo::measure::{Metrics, measure};
 use crate::servo::path::{PathPlan, PlannedPath};
-use crate::servo::reference::ReferenceImage;
+use crate::servo::reference::{ReferenceImage, choose_visible_basis};
 use crate::servo::stop::{StopRule, StopRules, stop_rule_met};
 use crate::servo::stop_window::StopWindow;
 use crate::servo::telemetry::{ServoStep, Telemetry};
@@ -81,6 +81,10 @@ pub struct ServoReference {
 /// A servo session. See the module documentation for what a step does.
 pub struct Servo {
     law: Box<dyn ServoLaw>,
+    law_config: Law,
+    reference_depths: Option<Vec<f64>>,
+    basis_switches: usize,
+    basis_lost: Option<String>,
     reference: ReferenceImage,
     rule: StopRule,
     stop: StopRules,
@@ -119,16 +123,20 @@ impl Servo {
             check_depths("reference_depths", z, None, n)?;
         }
         let law = config.law.build(&reference_image.pixels, basis, reference_depths.as_deref(), config.k_hat)?;
+        let initial_depths = depths.initial(n, reference_depths.as_deref())?;
         if config.path.is_some() && law.invariant().is_none() {
             return Err(Error::InvalidParameter {
                 name: "path",
                 reason: format!("the {} law follows no path", law.name()),
             });
         }
-        let initial_depths = depths.initial(n, reference_depths.as_deref())?;
         Ok(Self {
             rule: config.stop_rule.unwrap_or(law.default_stop_rule()),
             law,
+            law_config: config.law,
+            reference_depths,
+            basis_switches: 0,
+            basis_lost: None,
             reference: reference_image,
             stop: config.stop,
             k_hat: config.k_hat,
@@ -168,6 +176,7 @@ impl Servo {
         self.take_inputs(pixels, visible, depths)?;
         self.undistort();
         self.noise_meter.push(&self.pixels, Some(&self.visible))?;
+        self.keep_basis_in_view()?;
         let mut row = self.window.next_row();
         self.metrics = measure(&self.pixels, &self.visible, &self.reference, &mut row);
         let m = &self.metrics;
@@ -177,13 +186,56 @@ impl Servo {
             image_error: m.image_error,
             tau: m.tau,
             eps_z: m.eps_z,
+            basis: self.reference.basis,
+            basis_switches: self.basis_switches,
             ..Telemetry::empty()
         };
         let (rule, n_others, tau, moves) = (self.rule, self.reference.others.len(), m.tau, self.law.moves());
+        let min_points = self.law.min_points();
         self.rule_met = match self.window.push(row) {
-            Some(mean) if moves => stop_rule_met(rule, &self.stop, mean, n_others, tau),
+            Some(mean) if moves => stop_rule_met(rule, &self.stop, mean, n_others, tau, min_points),
             _ => false,
         };
+        Ok(())
+    }
+
+    /// Keeps the basis of a law that needs one in view: when a basis point is not visible,
+    /// the basis becomes the widest triangle of the *reference* pixels of the visible points
+    /// (s* of the new basis comes from the reference image, so nothing is lost) and what
+    /// depends on it is rebuilt: the reference measurements, the law's controller (its
+    /// state starts afresh), the stop window (its rows are laid out by the basis). A planned
+    /// path (sec. 3) is dropped: it was planned in the old basis's invariant space, and
+    /// re-planning needs every point in view; the law then servos straight to s*. With
+    /// fewer visible points than the law needs, or no well-spread triangle among them, the
+    /// basis stays and [`verdict`](Self::verdict) says `lost_features`.
+    fn keep_basis_in_view(&mut self) -> Result<()> {
+        self.basis_lost = None;
+        let visible = &self.visible;
+        if !self.law.needs_basis() || self.reference.basis.iter().all(|&b| visible[b]) {
+            return Ok(());
+        }
+        let seen = visible.iter().filter(|&&v| v).count();
+        if seen < self.law.min_points() {
+            return Ok(()); // lost_features reports the count
+        }
+        let basis = match choose_visible_basis(&self.reference.pixels, visible) {
+            Ok(b) => b,
+            Err(e) => {
+                let why = format!(
+                    "basis {:?} not visible and no new basis among the visible points: {e}",
+                    self.reference.basis
+                );
+                self.basis_lost = Some(why);
+                return Ok(());
+            }
+        };
+        let pixels = std::mem::take(&mut self.reference.pixels);
+        self.reference = ReferenceImage::new(pixels, basis)?;
+        self.law =
+            self.law_config.build(&self.reference.pixels, basis, self.reference_depths.as_deref(), self.k_hat)?;
+        self.window = StopWindow::new(self.stop.window);
+        (self.plan, self.path) = (None, None);
+        self.basis_switches += 1;
         Ok(())
     }
 
@@ -260,6 +312,9 @@ impl Servo {
     }
 
     fn lost_features(&self) -> Option<Verdict> {
+        if let Some(why) = &self.basis_lost {
+            return Some(Verdict::stop(Status::LostFeatures, why.clone()));
+        }
         let (visible, basis) = (&self.visible, self.reference.basis);
         let seen = visible.iter().filter(|&&v| v).count();
         if seen >= self.law.min_points() && (!self.law.needs_basis() || basis.iter().all(|&b| visible[b])) {
@@ -273,10 +328,10 @@ impl Servo {
 
     /// The image rule is met: `converged` if the pose uncertainty the averaged images allow is
     /// within the tolerance, `settled` if not; `None` (carry on) until the noise can be
-    /// measured (three images).
+    /// measured (three images) and while too few points were in view throughout the window.
     fn certify(&mut self) -> Option<Verdict> {
-        let pixels = self.window_mean_pixels()?;
-        let certainty = self.certainty_of(&pixels, self.stop.window)?;
+        let (pixels, seen) = self.window_mean_pixels(&self.window)?;
+        let certainty = self.certainty_of(&pixels, &seen, self.stop.window)?;
         self.certainty = Some(certainty);
         Some(match certainty.within(&self.stop) {
             true => Verdict::stop(Status::Converged, "stop rule met"),
@@ -284,21 +339,24 @@ impl Servo {
         })
     }
 
-    /// The pixels averaged over the stop window: `p* + mean(p - p*)` (every point is in view
-    /// when a rule is met).
-    fn window_mean_pixels(&self) -> Option<Vec<[f64; 2]>> {
-        let mean = self.window.mean()?;
+    /// The pixels averaged over the stop window, `p* + mean(p - p*)`, and which points were
+    /// in view throughout it (the others' mean is NaN): the points the rule was judged on.
+    fn window_mean_pixels(&self, window: &StopWindow) -> Option<(Vec<[f64; 2]>, Vec<bool>)> {
+        let mean = window.mean()?;
         let offset = 1 + 3 * self.reference.others.len();
         let errors = mean[offset..].chunks_exact(2);
-        Some(self.reference.pixels.iter().zip(errors).map(|(p, e)| [p[0] + e[0], p[1] + e[1]]).collect())
+        let pixels: Vec<[f64; 2]> =
+            self.reference.pixels.iter().zip(errors).map(|(p, e)| [p[0] + e[0], p[1] + e[1]]).collect();
+        let seen = pixels.iter().map(|p| p[0].is_finite() && p[1].is_finite()).collect();
+        Some((pixels, seen))
     }
 
-    fn certainty_of(&self, pixels: &[[f64; 2]], averaged: usize) -> Option<Certainty> {
+    fn certainty_of(&self, pixels: &[[f64; 2]], visible: &[bool], averaged: usize) -> Option<Certainty> {
         let m = Measurement {
             pixels,
             depths: &self.depths,
             reference_pixels: &self.reference.pixels,
-            visible: Some(&self.visible),
+            visible: Some(visible),
             k_hat: &self.k_hat,
         };
         Certainty::of(self.law.as_ref(), &self.noise_meter, &self.stop, &m, self.reference.basis, averaged)
@@ -402,9 +460,14 @@ impl Servo {
     pub fn reference_pixels(&self) -> &[[f64; 2]] {
         &self.reference.pixels
     }
-    /// The basis in use.
+    /// The basis in use (it changes when a basis point leaves the view, see
+    /// [`Servo::observe`]).
     pub fn basis(&self) -> [usize; 3] {
         self.reference.basis
+    }
+    /// How many times the basis changed because one of its points was not visible.
+    pub fn basis_switches(&self) -> usize {
+        self.basis_switches
     }
     /// The image rule that decides convergence.
     pub fn stop_rule(&self) -> StopRule {
@@ -445,7 +508,7 @@ impl Servo {
         match self.certainty {
             Some(c) => Some(c),
             None if !self.law.moves() => None,
-            None => self.certainty_of(&self.pixels, 1),
+            None => self.certainty_of(&self.pixels, &self.visible, 1),
         }
     }
 }

@@ -85,22 +85,40 @@ impl StopRule {
 }
 
 /// Whether the window-averaged errors (`mean`, laid out as [`super::measure::measure`] writes
-/// its rows) meet the stop rule; `tau` are the current image's tau_11, tau_21, tau_22. NaN (a
-/// point hidden in the window) never passes a comparison.
-pub(crate) fn stop_rule_met(rule: StopRule, stop: &StopRules, mean: &[f64], n_others: usize, tau: [f64; 3]) -> bool {
+/// its rows) meet the stop rule; `tau` are the current image's tau_11, tau_21, tau_22.
+///
+/// Points hidden for good must not block the rule forever, so it is judged on the points in
+/// view throughout the window (their mean is finite; a point hidden in any image of the
+/// window has a NaN mean and is left out), and only when at least `min_points` of them
+/// remain (the law's minimum; the basis counts for three under the invariant rule, and the
+/// session switches to a visible basis and restarts the window when a basis point leaves).
+pub(crate) fn stop_rule_met(
+    rule: StopRule,
+    stop: &StopRules,
+    mean: &[f64],
+    n_others: usize,
+    tau: [f64; 3],
+    min_points: usize,
+) -> bool {
     let m_inv = 3 * n_others;
     match rule {
         StopRule::Pixel => {
-            let image = mean[1 + m_inv..]
+            let seen: Vec<f64> = mean[1 + m_inv..]
                 .chunks_exact(2)
+                .filter(|c| c[0].is_finite() && c[1].is_finite())
                 .map(|c| (c[0] * c[0] + c[1] * c[1]).sqrt())
-                .fold(0.0, |a: f64, b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
-            image < stop.pixel_error
+                .collect();
+            seen.len() >= min_points && seen.iter().fold(0.0, |a: f64, &b| a.max(b)) < stop.pixel_error
         }
         // correction 8: tau_21 near zero alone also admits the rz = pi equilibrium.
         StopRule::Invariant => {
-            let invariant = mean[1..1 + m_inv].iter().map(|v| v * v).sum::<f64>().sqrt();
-            invariant < stop.invariant_error && mean[0].abs() < stop.tau21 && tau[0] > 0.0 && tau[2] > 0.0
+            let blocks = mean[1..1 + m_inv].chunks_exact(3).filter(|c| c.iter().all(|v| v.is_finite()));
+            let (count, sum2) = blocks.fold((0, 0.0), |(n, s), c| (n + 1, s + c.iter().map(|v| v * v).sum::<f64>()));
+            3 + count >= min_points
+                && sum2.sqrt() < stop.invariant_error
+                && mean[0].abs() < stop.tau21
+                && tau[0] > 0.0
+                && tau[2] > 0.0
         }
     }
 }

@@ -36,6 +36,11 @@ pub struct Telemetry {
     pub tracking_error: f64,
     /// Whether the law computed this step's twist.
     pub law_ran: bool,
+    /// The basis the step was measured and controlled with (it changes when a basis point
+    /// leaves the view).
+    pub basis: [usize; 3],
+    /// How many times the basis has changed so far.
+    pub basis_switches: usize,
 }
 
 impl Telemetry {
@@ -49,6 +54,8 @@ impl Telemetry {
             eps: [f64::NAN; 5],
             tracking_error: f64::NAN,
             law_ran: false,
+            basis: [0, 1, 2],
+            basis_switches: 0,
         }
     }
 }

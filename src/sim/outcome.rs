@@ -31,8 +31,10 @@ pub struct Summary {
     pub stop_rule: StopRule,
     /// Start distance and angle from the reference pose (metres, radians).
     pub start_error: (f64, f64),
-    /// Basis used.
+    /// Basis used at the end (the session switches when a basis point leaves the view).
     pub basis: [usize; 3],
+    /// How many times the basis changed because one of its points was not visible.
+    pub basis_switches: usize,
     /// Largest distance of the camera centre from the segment between start and goal, metres.
     pub max_line_deviation: f64,
     /// Largest commanded linear (m/s) and angular (rad/s) speeds (the law's twist, after its

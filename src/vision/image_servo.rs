@@ -188,14 +188,19 @@ impl ImageServo {
     }
 
     /// One frame: detect (the first frame starts the detector on its hints), match by
-    /// identity, step the session. A frame in which the detector cannot start is an error
-    /// and the next frame starts it again.
+    /// identity, step the session. A first-frame hint outside the image is not an error: its
+    /// point is not visible (the session works with the others, switching its basis if need
+    /// be). A frame in which the detector cannot start is an error and the next frame starts
+    /// it again.
     pub fn step<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<ServoStep> {
         let image = view_of(image)?;
         let detections = if self.started {
             self.detector.detect(&image)?
         } else {
-            let d = self.detector.start(&image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
+            let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+            let inside = |e: &&Expected| (0.0..w).contains(&e.pixel[0]) && (0.0..h).contains(&e.pixel[1]);
+            let hints: Vec<Expected> = self.first.iter().filter(inside).copied().collect();
+            let d = self.detector.start(&image, &hints).map_err(|e| hints_named(e, "first_points"))?;
             self.started = true;
             d
         };

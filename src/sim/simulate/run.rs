@@ -267,6 +267,7 @@ impl<'a> Run<'a> {
             stop_rule: servo.stop_rule(),
             start_error: pose_error(&goal, &self.config.start),
             basis: servo.basis(),
+            basis_switches: servo.basis_switches(),
             max_line_deviation: self.max_line_deviation,
             peak_speeds: self.peak_speeds,
             tracking: servo.path().map(|path| self.prop3.summary(servo.law().gain(), path)),
