@@ -11,6 +11,7 @@ ground truth by the same map.
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -170,13 +171,21 @@ def opencv(family: str, refine: str = "subpix") -> Callable[[np.ndarray], Corner
     return detect
 
 
+@functools.cache
+def _pupil_detector(family: str):  # type: ignore[no-untyped-def]
+    # One detector per family for the process: pupil-apriltags aborts when detectors of one
+    # family are made and freed again and again.
+    import pupil_apriltags
+
+    return pupil_apriltags.Detector(families=family, nthreads=1)
+
+
 def pupil(family: str) -> Callable[[np.ndarray], Corners] | None:
     """The reference AprilTag library (pupil-apriltags; None when not installed)."""
     try:
-        import pupil_apriltags
+        detector = _pupil_detector(family)
     except ImportError:
         return None
-    detector = pupil_apriltags.Detector(families=family, nthreads=1)
 
     def detect(image: np.ndarray) -> Corners:
         return {int(t.tag_id): np.asarray(t.corners, np.float64)[VISP_TO_OPENCV] - 0.5 for t in detector.detect(image)}

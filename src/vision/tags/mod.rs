@@ -29,6 +29,7 @@
 
 mod edges;
 mod pyramid;
+mod smoothed;
 
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
@@ -86,6 +87,16 @@ impl TagFamily {
         }
     }
 
+    /// The most bit errors a decoded tag may have: two (the AprilTag library's default), one
+    /// for tag16h5, whose codes are only five bits apart (with two, random squares of the
+    /// coarse levels decode as tags).
+    pub fn max_bit_errors(self) -> u8 {
+        match self {
+            Self::Tag16h5 => 1,
+            _ => 2,
+        }
+    }
+
     fn kind(self) -> TagFamilyKind {
         match self {
             Self::Tag36h11 => TagFamilyKind::Tag36H11,
@@ -130,14 +141,29 @@ pub fn detect_tags<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Resul
 /// the full image's edges.
 pub struct TagDecoder {
     family: TagFamily,
-    decimation: u32,
+    /// `None`: chosen per image ([`automatic_decimation`]).
+    decimation: Option<u32>,
     /// One detector per level: the size it reads and its own decimation.
     levels: Vec<(ImageSize, usize, AprilTagDecoder)>,
 }
 
-/// The detector's default decimation (AprilTag's): the finest quad search is in the image
-/// shrunk by 2 (coarser levels follow, see [`TagDecoder`]).
+/// AprilTag's own default decimation, for callers that fix one ([`TagDecoder::new`] chooses it
+/// per image: [`automatic_decimation`]).
 pub const DEFAULT_DECIMATION: u32 = 2;
+/// [`automatic_decimation`] keeps the finest search's shorter side at least this long.
+pub const AUTOMATIC_MIN_SIDE: u32 = 480;
+/// Where the adaptive threshold splits black from white between a tile's darkest and
+/// brightest pixels: the AprilTag library's midpoint (kornia's default, a third, breaks the
+/// black border of blurred tags into white).
+const THRESHOLD_SPLIT: f32 = 0.5;
+
+/// The decimation [`TagDecoder::new`] chooses for a `width x height` image: the largest that
+/// keeps the finest search's shorter side at least [`AUTOMATIC_MIN_SIDE`] pixels (1 up to
+/// 959 pixels, 2 at 1920 x 1080, 4 at 3840 x 2160), so the smallest tag it finds is about the
+/// same share of the image at any resolution (larger tags are found on the coarser levels).
+pub fn automatic_decimation(width: u32, height: u32) -> u32 {
+    (width.min(height) / AUTOMATIC_MIN_SIDE).clamp(1, MAX_DECIMATION)
+}
 /// The largest decimation accepted.
 pub const MAX_DECIMATION: u32 = 8;
 /// The coarsest level searched has no side shorter than this (pixels): a tag filling most
@@ -161,14 +187,15 @@ fn decoder_error(reason: impl std::fmt::Display) -> Error {
 /// image decimated by 2. A smaller image cannot hold a readable tag and gives none.
 const MIN_SIDE: u32 = 8;
 
-/// A decoded tag: its decoding margin and its corners as the detector puts them, in
+/// A decoded tag: its bit errors and decoding margin, its id and its corners as the detector puts them, in
 /// OpenCV's order and convention (before they are measured on the edges).
-type Candidate = (f32, u32, [[f64; 2]; 4]);
+type Candidate = ((u8, f32), u32, [[f64; 2]; 4]);
 
 impl TagDecoder {
-    /// A detector of `family`'s tags, with the default decimation.
+    /// A detector of `family`'s tags, which chooses the decimation per image
+    /// ([`automatic_decimation`]).
     pub fn new(family: TagFamily) -> Self {
-        Self { family, decimation: DEFAULT_DECIMATION, levels: Vec::new() }
+        Self { family, decimation: None, levels: Vec::new() }
     }
 
     /// A detector whose finest quad search is in the image shrunk by `decimation` (`1..=8`;
@@ -181,11 +208,11 @@ impl TagDecoder {
                 reason: format!("must be in 1..={MAX_DECIMATION}, got {decimation}"),
             });
         }
-        Ok(Self { family, decimation, levels: Vec::new() })
+        Ok(Self { family, decimation: Some(decimation), levels: Vec::new() })
     }
 
-    /// The decimation of the finest quad search.
-    pub fn decimation(&self) -> u32 {
+    /// The decimation of the finest quad search, `None` when chosen per image.
+    pub fn decimation(&self) -> Option<u32> {
         self.decimation
     }
 
@@ -200,7 +227,8 @@ impl TagDecoder {
         if image.width() < MIN_SIDE || image.height() < MIN_SIDE {
             return Ok(Vec::new());
         }
-        let mut candidates = self.search(0, image, self.decimation, 1.0)?;
+        let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(image.width(), image.height()));
+        let mut candidates = self.search(0, image, decimation, 1.0)?;
         let (mut scale, mut level, mut half) = (1u32, 0, None::<GreyImage>);
         loop {
             let next = match &half {
@@ -211,21 +239,25 @@ impl TagDecoder {
             if next.width().min(next.height()) < MIN_LEVEL_SIDE {
                 break;
             }
-            if scale > self.decimation {
+            if scale > decimation {
                 level += 1;
                 candidates.extend(self.search(level, &next, 1, f64::from(scale))?);
             }
             half = Some(next);
         }
         let border_cells = f64::from(self.family.border_cells());
-        let mut tags: Vec<(f32, Tag)> = candidates
+        let max_errors = self.family.max_bit_errors();
+        let mut tags: Vec<((u8, f32), Tag)> = candidates
             .into_iter()
+            .filter(|&((errors, _), _, _)| errors <= max_errors)
             .filter_map(|(margin, id, corners)| {
-                let corners = edges::refine_corners(image, &corners, border_cells)?;
+                let corners = edges::refine_corners(image, &corners, border_cells)
+                    .or_else(|| smoothed::refine_corners(image, &corners, border_cells))?;
                 Some((margin, Tag { id, corners }))
             })
             .collect();
-        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(b.0.total_cmp(&a.0)));
+        // The fewest bit errors first, then the best decoding margin.
+        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(a.0.0.cmp(&b.0.0)).then(b.0.1.total_cmp(&a.0.1)));
         tags.dedup_by_key(|t| t.1.id);
         Ok(tags.into_iter().map(|(_, tag)| tag).collect())
     }
@@ -259,7 +291,7 @@ impl TagDecoder {
                     [f64::from(p.x) * scale - 0.5, f64::from(p.y) * scale - 0.5]
                 };
                 let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)].map(corner);
-                (d.decision_margin, u32::from(d.id), corners)
+                ((d.hamming, d.decision_margin), u32::from(d.id), corners)
             })
             .collect())
     }
@@ -271,6 +303,7 @@ impl TagDecoder {
             let mut config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
             config.downscale_factor = factor;
             config.min_tag_width = (self.family.border_cells() / decimation).max(3) as usize;
+            config.threshold_split = THRESHOLD_SPLIT;
             let decoder = AprilTagDecoder::new(config, size).map_err(decoder_error)?;
             self.levels.truncate(level);
             self.levels.push((size, factor, decoder));
@@ -443,14 +476,18 @@ mod tests {
         let image = draw(TagFamily::Tag36h11, 240, 120, &placed);
         for decimation in 1..=4 {
             let mut decoder = TagDecoder::with_decimation(TagFamily::Tag36h11, decimation).unwrap();
-            assert_eq!(decoder.decimation(), decimation);
+            assert_eq!(decoder.decimation(), Some(decimation));
             let tags = decoder.detect(&image).unwrap();
             assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [4, 8], "decimation {decimation}");
             for (tag, p) in tags.iter().zip(&placed) {
                 assert!(worst_error(&tag.corners, &corners(TagFamily::Tag36h11, p)) < SHARP_TOLERANCE, "{decimation}");
             }
         }
-        assert_eq!(TagDecoder::new(TagFamily::Tag16h5).decimation(), DEFAULT_DECIMATION);
+        assert_eq!(TagDecoder::new(TagFamily::Tag16h5).decimation(), None);
+        assert_eq!(
+            [(320, 240), (640, 480), (1920, 1080), (3840, 2160), (1, 100_000)].map(|(w, h)| automatic_decimation(w, h)),
+            [1, 1, 2, 4, 1]
+        );
         for bad in [0, MAX_DECIMATION + 1, u32::MAX] {
             let err = TagDecoder::with_decimation(TagFamily::Tag36h11, bad).unwrap_err();
             assert!(err.to_string().contains("decimation"), "{err}");
