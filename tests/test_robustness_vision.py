@@ -350,12 +350,12 @@ def test_detect_tags(data: Any) -> None:
                                 V("tag25h9", RETURN, "other"), V("tag36h10", RETURN, "other"),
                                 V("tag36h12", INVALID, "unknown"), V("TAG36H11", INVALID, "case"),
                                 V("", INVALID, "empty"), V(None, TYPE, "none"), V(36, TYPE, "int")])
-    decimations = st.sampled_from([V(2, SAME, "default"), V(1, RETURN, "full size"), V(4, RETURN, "coarse"),
+    decimations = st.sampled_from([V(None, SAME, "default (per image)"), V(2, RETURN, "AprilTag's"), V(1, RETURN, "full size"), V(4, RETURN, "coarse"),
                                    V(8, RETURN, "largest"), V(0, INVALID, "zero"), V(9, INVALID, "too large"),
                                    V(-1, INVALID, "negative"), V(2**40, INVALID, "huge"), V(2.0, TYPE, "float"),
-                                   V(None, TYPE, "none")])
+                                   V("2", TYPE, "str")])
     digest = lambda t: (t.ids, t.corners)  # noqa: E731
-    name, v, out = fuzz(data, vsinv.detect_tags, {"image": image, "family": "tag36h11", "decimation": 2},
+    name, v, out = fuzz(data, vsinv.detect_tags, {"image": image, "family": "tag36h11", "decimation": None},
                         {"image": image_variants(image), "family": families, "decimation": decimations},
                         digest=digest, ref=ref)
     if returned(out):

@@ -832,14 +832,15 @@ class Tags:
 def detect_tags(
     image: _U8Image,
     family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
-    decimation: int = 2,
+    decimation: int | None = None,
 ) -> Tags:
     """The AprilTags of `family` in a (height, width) uint8 image, sorted by id, with the corners
     of each black square in OpenCV's aruco order and pixel convention (the same numbers as
     cv2.aruco.ArucoDetector with DICT_APRILTAG_36h11, within noise), measured on the square's
     outer edges; a tag whose edges do not support its corners is left out. Quads are searched
-    in the image shrunk by `decimation` (1..=8: larger is faster and finds large tags whose
-    quiet zone touches clutter, smaller finds smaller tags). An empty image raises
+    in the image shrunk by `decimation` (1..=8: larger is faster, smaller finds smaller tags;
+    None: chosen per image, 1 below 960 pixels on the shorter side, 2 at 1920 x 1080) and on
+    the image halved again and again, so large tags are found too. An empty image raises
     InvalidInput; an image without tags gives an empty result."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:

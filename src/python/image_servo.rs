@@ -69,7 +69,7 @@ fn dots_target(
 /// The target of `target="tags"` from its keyword arguments.
 fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>, decimation: Option<i64>) -> PyResult<ImageTarget> {
     let family = family_arg(family)?;
-    let decimation = decimation.map(decimation_arg).transpose()?;
+    let decimation = decimation_arg(decimation)?;
     let ids = match tag_ids.filter(|t| !t.is_none()) {
         None => None,
         Some(t) => {

@@ -28,7 +28,7 @@ impl PyTagTracker {
     #[pyo3(signature = (family = "tag36h11", decimation = None, refresh = 15))]
     fn new(family: &str, decimation: Option<i64>, refresh: i64) -> PyResult<Self> {
         let family = family_arg(family)?;
-        let detector = match decimation.map(decimation_arg).transpose()? {
+        let detector = match decimation_arg(decimation)? {
             Some(d) => TagDetector::with_decoder(TagDecoder::with_decimation(family, d)?),
             None => TagDetector::new(family),
         };

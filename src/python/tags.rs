@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use super::vision::image_arg;
 use crate::error::Result;
 use crate::vision::image::{GreyBuffer, Pixels};
-use crate::vision::tags::{DEFAULT_DECIMATION, MAX_DECIMATION, Tag, TagDecoder, TagFamily};
+use crate::vision::tags::{MAX_DECIMATION, Tag, TagDecoder, TagFamily};
 
 /// Images up to this many pixels keep their decoder (its buffers) for the next call on the
 /// same thread; a larger one gets a decoder of its own, freed after the call.
@@ -21,8 +21,11 @@ thread_local! {
 }
 
 /// The tags in `image`, with this thread's last decoder when it fits.
-fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: u32) -> Result<Vec<Tag>> {
-    let fresh = || TagDecoder::with_decimation(family, decimation);
+fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: Option<u32>) -> Result<Vec<Tag>> {
+    let fresh = || match decimation {
+        Some(d) => TagDecoder::with_decimation(family, d),
+        None => Ok(TagDecoder::new(family)),
+    };
     if u64::from(image.width()) * u64::from(image.height()) > KEPT_DECODER_PIXELS {
         return fresh()?.detect(image);
     }
@@ -85,12 +88,10 @@ pub(super) fn family_arg(name: &str) -> PyResult<TagFamily> {
     })
 }
 
-// The signature's default, written as a literal for Python's introspection.
-const _: () = assert!(DEFAULT_DECIMATION == 2);
-
-/// `1..=8`; anything else raises `InvalidInput` naming `decimation`.
-pub(super) fn decimation_arg(decimation: i64) -> PyResult<u32> {
-    u32::try_from(decimation).ok().filter(|d| (1..=MAX_DECIMATION).contains(d)).ok_or_else(|| {
+/// `None` (chosen per image) or `1..=8`; anything else raises `InvalidInput` naming `decimation`.
+pub(super) fn decimation_arg(decimation: Option<i64>) -> PyResult<Option<u32>> {
+    let Some(decimation) = decimation else { return Ok(None) };
+    u32::try_from(decimation).ok().filter(|d| (1..=MAX_DECIMATION).contains(d)).map(Some).ok_or_else(|| {
         super::errors::invalid_argument(
             "decimation",
             format!("decimation: must be in 1..={MAX_DECIMATION}, got {decimation}"),
@@ -103,10 +104,17 @@ pub(super) fn decimation_arg(decimation: i64) -> PyResult<u32> {
 /// bottom-right, bottom-left of the marker as OpenCV's aruco module draws it, clockwise in
 /// the image) and pixel convention (pixel `(u, v)` centred at integer coordinates). An empty
 /// image raises `InvalidInput`; an image without tags gives an empty result. Quads are
-/// searched in the image shrunk by `decimation` (1..=8); corners are measured at full size.
+/// searched in the image shrunk by `decimation` (1..=8; `None`: chosen per image, 1 below
+/// 960 pixels on the shorter side, 2 at 1920 x 1080) and on coarser levels; corners are
+/// measured at full size.
 #[pyfunction]
-#[pyo3(signature = (image, family = "tag36h11", decimation = 2))]
-pub fn detect_tags(py: Python<'_>, image: &Bound<'_, PyAny>, family: &str, decimation: i64) -> PyResult<PyTags> {
+#[pyo3(signature = (image, family = "tag36h11", decimation = None))]
+pub fn detect_tags(
+    py: Python<'_>,
+    image: &Bound<'_, PyAny>,
+    family: &str,
+    decimation: Option<i64>,
+) -> PyResult<PyTags> {
     let family = family_arg(family)?;
     let decimation = decimation_arg(decimation)?;
     let image = image_arg(image, "image")?;

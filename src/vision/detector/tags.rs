@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::vision::detector::tag_regions::{Region, merged};
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::{GreyBuffer, GreyView, Pixels, view};
-use crate::vision::tags::{Tag, TagDecoder, TagFamily};
+use crate::vision::tags::{Tag, TagDecoder, TagFamily, automatic_decimation};
 
 /// A whole-frame search every this many frames by default, so that tags coming into view (or
 /// out from behind an occluder) are picked up while the others are tracked (half a second at
@@ -54,7 +54,7 @@ impl TagDetector {
 
     /// A detector reading tags with `decoder` (e.g. [`TagDecoder::with_decimation`]).
     pub fn with_decoder(decoder: TagDecoder) -> Self {
-        let decimation = Some(decoder.decimation());
+        let decimation = decoder.decimation();
         Self::build(decoder, decimation)
     }
 
@@ -135,7 +135,9 @@ impl TagDetector {
     /// there, two share an id, or the crops would cover too much of the frame.
     fn in_crops<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Option<Vec<Tag>>> {
         let (width, height) = image.dimensions();
-        let align = 4 * self.decoder.decimation();
+        // The crops are read at the decimation the whole frame is read at.
+        let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(width, height));
+        let align = 4 * decimation;
         let regions: Option<Vec<Region>> =
             self.last.iter().map(|(tag, motion)| Region::around(tag, *motion, width, height, align)).collect();
         let Some(regions) = regions.map(merged) else { return Ok(None) };
@@ -145,7 +147,7 @@ impl TagDetector {
         }
         let mut tags = Vec::new();
         for region in &regions {
-            let found = self.read_crop(image, region)?;
+            let found = self.read_crop(image, region, decimation)?;
             tags.extend(
                 found.into_iter().filter(|t| t.corners.iter().all(|&c| region.holds(c, CROP_GUARD, width, height))),
             );
@@ -157,7 +159,7 @@ impl TagDetector {
     }
 
     /// The tags decoded in a copy of `region`, their corners in the whole image's pixels.
-    fn read_crop<C: Pixels>(&mut self, image: &GreyBuffer<C>, region: &Region) -> Result<Vec<Tag>> {
+    fn read_crop<C: Pixels>(&mut self, image: &GreyBuffer<C>, region: &Region, decimation: u32) -> Result<Vec<Tag>> {
         let (w, h) = (region.x1 - region.x0, region.y1 - region.y0);
         self.buffer.clear();
         let raw: &[u8] = image.as_raw();
@@ -168,7 +170,7 @@ impl TagDetector {
             self.buffer.extend_from_slice(row);
         }
         let crop = view("crop", w, h, &self.buffer)?;
-        let decoder = crop_decoder(&mut self.crops, (w, h), self.decoder.family(), self.decimation)?;
+        let decoder = crop_decoder(&mut self.crops, (w, h), self.decoder.family(), decimation)?;
         let mut tags = decoder.detect(&crop)?;
         let offset = [f64::from(region.x0), f64::from(region.y0)];
         for tag in &mut tags {
@@ -212,19 +214,15 @@ fn crop_decoder(
     crops: &mut Vec<((u32, u32), TagDecoder)>,
     size: (u32, u32),
     family: TagFamily,
-    decimation: Option<u32>,
+    decimation: u32,
 ) -> Result<&mut TagDecoder> {
-    let k = match crops.iter().position(|(s, _)| *s == size) {
+    let k = match crops.iter().position(|(s, d)| *s == size && d.decimation() == Some(decimation)) {
         Some(k) => k,
         None => {
             if crops.len() >= KEPT_CROP_DECODERS {
                 crops.remove(0);
             }
-            let decoder = match decimation {
-                Some(d) => TagDecoder::with_decimation(family, d)?,
-                None => TagDecoder::new(family),
-            };
-            crops.push((size, decoder));
+            crops.push((size, TagDecoder::with_decimation(family, decimation)?));
             crops.len() - 1
         }
     };

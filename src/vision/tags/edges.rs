@@ -20,6 +20,10 @@ use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];
 
+/// The profiles reach half a cell on each side of the edge, and at least this far (pixels):
+/// the detector's corners of a small tag are a third of a pixel off, and a crossing is only
+/// taken a pixel inside the profile's ends.
+const MIN_REACH: f64 = 1.5;
 /// Half-pixel steps across the edge.
 const STEP: f64 = 0.5;
 /// Least contrast between the border and the quiet zone, grey levels.
@@ -96,7 +100,7 @@ fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P
     }
     // A cell measured across this edge: the square's depth from this edge to the opposite one.
     let cell = dot(out, sub(a, opposite)).abs() / border_cells;
-    let reach = (0.5 * cell).clamp(1.0, 6.0);
+    let reach = (0.5 * cell).clamp(MIN_REACH, 6.0);
     let skip = reach + 1.0;
     if !length.is_finite() || length < 2.0 * skip + 2.0 {
         return None;

@@ -28,13 +28,15 @@
 //! do not support its corners is not reported (never reported with a wrong corner).
 
 mod edges;
+mod pyramid;
+mod smoothed;
 
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
 use kornia_image::{Image, ImageSize};
 
 use crate::error::{Error, Result};
-use crate::vision::image::{GreyBuffer, Pixels, check_image};
+use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
 
 /// The tag families [`detect_tags`] reads: those OpenCV's aruco module has too (its
 /// `DICT_APRILTAG_*` dictionaries), whose corner order is checked against it.
@@ -85,6 +87,16 @@ impl TagFamily {
         }
     }
 
+    /// The most bit errors a decoded tag may have: two (the AprilTag library's default), one
+    /// for tag16h5, whose codes are only five bits apart (with two, random squares of the
+    /// coarse levels decode as tags).
+    pub fn max_bit_errors(self) -> u8 {
+        match self {
+            Self::Tag16h5 => 1,
+            _ => 2,
+        }
+    }
+
     fn kind(self) -> TagFamilyKind {
         match self {
             Self::Tag36h11 => TagFamilyKind::Tag36H11,
@@ -121,16 +133,42 @@ pub fn detect_tags<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Resul
 
 /// A tag detector kept from image to image: its buffers are reused while the image size
 /// stays the same ([`detect_tags`] makes a new one each call).
+///
+/// Quads are searched at several scales: in the image shrunk by the decimation (by the
+/// AprilTag detector's own decimation), then in the image halved again and again (each
+/// pixel the mean of those it covers, see `pyramid.rs`) down to [`MIN_LEVEL_SIDE`] pixels,
+/// so a tag is found whatever its size in the image, and its corners are always measured on
+/// the full image's edges.
 pub struct TagDecoder {
     family: TagFamily,
-    decimation: u32,
-    decoder: Option<(ImageSize, AprilTagDecoder)>,
+    /// `None`: chosen per image ([`automatic_decimation`]).
+    decimation: Option<u32>,
+    /// One detector per level: the size it reads and its own decimation.
+    levels: Vec<(ImageSize, usize, AprilTagDecoder)>,
 }
 
-/// The detector's default decimation (AprilTag's): quads are searched in the image shrunk by 2.
+/// AprilTag's own default decimation, for callers that fix one ([`TagDecoder::new`] chooses it
+/// per image: [`automatic_decimation`]).
 pub const DEFAULT_DECIMATION: u32 = 2;
+/// [`automatic_decimation`] keeps the finest search's shorter side at least this long.
+pub const AUTOMATIC_MIN_SIDE: u32 = 480;
+/// Where the adaptive threshold splits black from white between a tile's darkest and
+/// brightest pixels: the AprilTag library's midpoint (kornia's default, a third, breaks the
+/// black border of blurred tags into white).
+const THRESHOLD_SPLIT: f32 = 0.5;
+
+/// The decimation [`TagDecoder::new`] chooses for a `width x height` image: the largest that
+/// keeps the finest search's shorter side at least [`AUTOMATIC_MIN_SIDE`] pixels (1 up to
+/// 959 pixels, 2 at 1920 x 1080, 4 at 3840 x 2160), so the smallest tag it finds is about the
+/// same share of the image at any resolution (larger tags are found on the coarser levels).
+pub fn automatic_decimation(width: u32, height: u32) -> u32 {
+    (width.min(height) / AUTOMATIC_MIN_SIDE).clamp(1, MAX_DECIMATION)
+}
 /// The largest decimation accepted.
 pub const MAX_DECIMATION: u32 = 8;
+/// The coarsest level searched has no side shorter than this (pixels): a tag filling most
+/// of the image is some 30 to 60 pixels wide there, a size the quad fit reads.
+pub const MIN_LEVEL_SIDE: u32 = 40;
 
 impl std::fmt::Debug for TagDecoder {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -149,15 +187,20 @@ fn decoder_error(reason: impl std::fmt::Display) -> Error {
 /// image decimated by 2. A smaller image cannot hold a readable tag and gives none.
 const MIN_SIDE: u32 = 8;
 
+/// A decoded tag: its bit errors and decoding margin, its id and its corners as the detector puts them, in
+/// OpenCV's order and convention (before they are measured on the edges).
+type Candidate = ((u8, f32), u32, [[f64; 2]; 4]);
+
 impl TagDecoder {
-    /// A detector of `family`'s tags, with the default decimation.
+    /// A detector of `family`'s tags, which chooses the decimation per image
+    /// ([`automatic_decimation`]).
     pub fn new(family: TagFamily) -> Self {
-        Self { family, decimation: DEFAULT_DECIMATION, decoder: None }
+        Self { family, decimation: None, levels: Vec::new() }
     }
 
-    /// A detector that searches quads in the image shrunk by `decimation` (`1..=8`; the
-    /// corners are always measured at full resolution). A larger decimation is faster and
-    /// finds large tags whose quiet zone touches clutter; a smaller one finds smaller tags.
+    /// A detector whose finest quad search is in the image shrunk by `decimation` (`1..=8`;
+    /// coarser levels follow, and the corners are always measured at full resolution). A
+    /// larger decimation is faster; a smaller one finds smaller tags.
     pub fn with_decimation(family: TagFamily, decimation: u32) -> Result<Self> {
         if !(1..=MAX_DECIMATION).contains(&decimation) {
             return Err(Error::InvalidParameter {
@@ -165,11 +208,11 @@ impl TagDecoder {
                 reason: format!("must be in 1..={MAX_DECIMATION}, got {decimation}"),
             });
         }
-        Ok(Self { family, decimation, decoder: None })
+        Ok(Self { family, decimation: Some(decimation), levels: Vec::new() })
     }
 
-    /// The decimation of the quad search.
-    pub fn decimation(&self) -> u32 {
+    /// The decimation of the finest quad search, `None` when chosen per image.
+    pub fn decimation(&self) -> Option<u32> {
         self.decimation
     }
 
@@ -184,44 +227,89 @@ impl TagDecoder {
         if image.width() < MIN_SIDE || image.height() < MIN_SIDE {
             return Ok(Vec::new());
         }
-        let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
-        let pixels: &[u8] = image.as_raw();
-        let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
-        let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
-        let decoder = self.decoder_for(size)?;
-        // kornia decodes with rayon: on vsinv's pool, never rayon's global one (see `parallel`).
-        let detections = crate::parallel::install(|| decoder.decode(&source))?.map_err(decoder_error);
-        decoder.clear();
+        let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(image.width(), image.height()));
+        let mut candidates = self.search(0, image, decimation, 1.0)?;
+        let (mut scale, mut level, mut half) = (1u32, 0, None::<GreyImage>);
+        loop {
+            let next = match &half {
+                Some(h) => pyramid::halve(h),
+                None => pyramid::halve(image),
+            };
+            scale *= 2;
+            if next.width().min(next.height()) < MIN_LEVEL_SIDE {
+                break;
+            }
+            if scale > decimation {
+                level += 1;
+                candidates.extend(self.search(level, &next, 1, f64::from(scale))?);
+            }
+            half = Some(next);
+        }
         let border_cells = f64::from(self.family.border_cells());
-        let mut tags: Vec<(f32, Tag)> = detections?
-            .iter()
-            .filter_map(|d| {
-                // The decoded homography maps the tag frame (x right, y down in the AprilTag
-                // layout, the black square at -1..1) to the image, with pixel centres at +0.5;
-                // OpenCV's order is the layout's bottom-right, bottom-left, top-left, top-right.
-                let corner = |(x, y): (f32, f32)| {
-                    let p = d.quad.homography_project(x, y);
-                    [f64::from(p.x) - 0.5, f64::from(p.y) - 0.5]
-                };
-                let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)].map(corner);
-                let corners = edges::refine_corners(image, &corners, border_cells)?;
-                Some((d.decision_margin, Tag { id: u32::from(d.id), corners }))
+        let max_errors = self.family.max_bit_errors();
+        let mut tags: Vec<((u8, f32), Tag)> = candidates
+            .into_iter()
+            .filter(|&((errors, _), _, _)| errors <= max_errors)
+            .filter_map(|(margin, id, corners)| {
+                let corners = edges::refine_corners(image, &corners, border_cells)
+                    .or_else(|| smoothed::refine_corners(image, &corners, border_cells))?;
+                Some((margin, Tag { id, corners }))
             })
             .collect();
-        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(b.0.total_cmp(&a.0)));
+        // The fewest bit errors first, then the best decoding margin.
+        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(a.0.0.cmp(&b.0.0)).then(b.0.1.total_cmp(&a.0.1)));
         tags.dedup_by_key(|t| t.1.id);
         Ok(tags.into_iter().map(|(_, tag)| tag).collect())
     }
 
-    fn decoder_for(&mut self, size: ImageSize) -> Result<&mut AprilTagDecoder> {
-        if self.decoder.as_ref().is_none_or(|(s, _)| *s != size) {
+    /// The tags the detector decodes in `image` (a level `scale` times smaller than the
+    /// full image), with their corners in the full image.
+    fn search<C: Pixels>(
+        &mut self,
+        level: usize,
+        image: &GreyBuffer<C>,
+        decimation: u32,
+        scale: f64,
+    ) -> Result<Vec<Candidate>> {
+        let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
+        let pixels: &[u8] = image.as_raw();
+        let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
+        let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
+        let decoder = self.decoder_for(level, size, decimation)?;
+        // kornia decodes with rayon: on vsinv's pool, never rayon's global one (see `parallel`).
+        let detections = crate::parallel::install(|| decoder.decode(&source))?.map_err(decoder_error);
+        decoder.clear();
+        Ok(detections?
+            .iter()
+            .map(|d| {
+                // The decoded homography maps the tag frame (x right, y down in the AprilTag
+                // layout, the black square at -1..1) to the level, with pixel centres at +0.5
+                // (so a level point p is at scale * p in the full image); OpenCV's order is the
+                // layout's bottom-right, bottom-left, top-left, top-right.
+                let corner = |(x, y): (f32, f32)| {
+                    let p = d.quad.homography_project(x, y);
+                    [f64::from(p.x) * scale - 0.5, f64::from(p.y) * scale - 0.5]
+                };
+                let corners = [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)].map(corner);
+                ((d.hamming, d.decision_margin), u32::from(d.id), corners)
+            })
+            .collect())
+    }
+
+    fn decoder_for(&mut self, level: usize, size: ImageSize, decimation: u32) -> Result<&mut AprilTagDecoder> {
+        let factor = decimation as usize;
+        let stale = self.levels.get(level).is_none_or(|(s, f, _)| *s != size || *f != factor);
+        if stale {
             let mut config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
-            config.downscale_factor = self.decimation as usize;
-            config.min_tag_width = (self.family.border_cells() / self.decimation).max(3) as usize;
-            self.decoder = Some((size, AprilTagDecoder::new(config, size).map_err(decoder_error)?));
+            config.downscale_factor = factor;
+            config.min_tag_width = (self.family.border_cells() / decimation).max(3) as usize;
+            config.threshold_split = THRESHOLD_SPLIT;
+            let decoder = AprilTagDecoder::new(config, size).map_err(decoder_error)?;
+            self.levels.truncate(level);
+            self.levels.push((size, factor, decoder));
         }
-        match self.decoder.as_mut() {
-            Some((_, decoder)) => Ok(decoder),
+        match self.levels.get_mut(level) {
+            Some((_, _, decoder)) => Ok(decoder),
             None => Err(decoder_error("no decoder")),
         }
     }
@@ -388,17 +476,40 @@ mod tests {
         let image = draw(TagFamily::Tag36h11, 240, 120, &placed);
         for decimation in 1..=4 {
             let mut decoder = TagDecoder::with_decimation(TagFamily::Tag36h11, decimation).unwrap();
-            assert_eq!(decoder.decimation(), decimation);
+            assert_eq!(decoder.decimation(), Some(decimation));
             let tags = decoder.detect(&image).unwrap();
             assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [4, 8], "decimation {decimation}");
             for (tag, p) in tags.iter().zip(&placed) {
                 assert!(worst_error(&tag.corners, &corners(TagFamily::Tag36h11, p)) < SHARP_TOLERANCE, "{decimation}");
             }
         }
-        assert_eq!(TagDecoder::new(TagFamily::Tag16h5).decimation(), DEFAULT_DECIMATION);
+        assert_eq!(TagDecoder::new(TagFamily::Tag16h5).decimation(), None);
+        assert_eq!(
+            [(320, 240), (640, 480), (1920, 1080), (3840, 2160), (1, 100_000)].map(|(w, h)| automatic_decimation(w, h)),
+            [1, 1, 2, 4, 1]
+        );
         for bad in [0, MAX_DECIMATION + 1, u32::MAX] {
             let err = TagDecoder::with_decimation(TagFamily::Tag36h11, bad).unwrap_err();
             assert!(err.to_string().contains("decimation"), "{err}");
+        }
+    }
+
+    /// Large tags far from the image's origin: the quad fit of the finest level alone loses
+    /// them (its single-precision sums); a coarser level finds them, at every decimation.
+    #[test]
+    fn tags_of_every_size_are_found_anywhere_at_every_decimation() {
+        for decimation in [1, 2] {
+            let mut decoder = TagDecoder::with_decimation(TagFamily::Tag36h11, decimation).unwrap();
+            for (cell, centre) in
+                [(5.0, [1050.3, 770.6]), (16.0, [900.2, 600.7]), (30.0, [700.4, 450.1]), (52.0, [620.5, 430.5])]
+            {
+                let p = Placement { id: 33, centre, cell, quarter_turns: 1 };
+                let image = draw(TagFamily::Tag36h11, 1200, 880, &[p]);
+                let tags = decoder.detect(&image).unwrap();
+                assert_eq!(tags.iter().map(|t| t.id).collect::<Vec<_>>(), [33], "cell {cell}, decimation {decimation}");
+                let error = worst_error(&tags[0].corners, &corners(TagFamily::Tag36h11, &p));
+                assert!(error < SHARP_TOLERANCE, "cell {cell}, decimation {decimation}: {error}");
+            }
         }
     }
 
