@@ -15,8 +15,8 @@ The frames are ViSP's ``AprilTag/benchmark/{640x480,1920x1080}/tag36_11_*.png`` 
 package's folder, never copied). "still": the same frame again and again; "moving": the frame
 shifted by (0, 0), (2, 1), (4, 2), (2, 1) pixels in turn (the uncovered border white), about
 2 px a frame. The tracker reads no whole frame while timed (``refresh=0``; the run checks that
-every timed frame was tracked, and that its tags are ``detect_tags``'s on the same frame, corners
-within 1e-3 px: see tests/test_tag_tracking.py);
+every timed frame was tracked, and reports how far the tracked corners are from ``detect_tags``'s
+on the same frames, "max diff px", and how many tags one found and not the other, "odd");
 "amortized" adds one whole read every 15 frames, the tracker's default ``refresh``. Timing as
 ``benches/tags_vs_opencv.py`` (minimum over rounds of the median time per call); the ratios are
 vsinv's time over OpenCV's (``ArucoDetector(DICT_APRILTAG_36h11)``, subpixel refinement) on the
@@ -68,21 +68,28 @@ class Row:
     amortized_ms: float
     opencv_ms: float
     opencv_tags: int
+    max_diff_px: float  # largest distance of a tracked corner from the whole frame's
+    odd_tags: int  # tags found by one of tracked and whole frame but not the other
 
     def ratio(self, ms: float) -> float:
         return ms / self.opencv_ms
 
 
-def checked_tracker(frames: list[np.ndarray], decimation: int) -> vsinv.TagTracker:
-    """A tracker run once through ``frames``: every frame after the first tracked, with the
-    tags ``detect_tags`` finds on it."""
+def checked_tracker(frames: list[np.ndarray], decimation: int) -> tuple[vsinv.TagTracker, float, int]:
+    """A tracker run twice through ``frames``, every frame after the first tracked; with the
+    largest distance of a tracked corner from ``detect_tags``'s on the same frame (pixels), and
+    the number of tags found in one but not the other over the frames."""
     tracker = vsinv.TagTracker(decimation=decimation, refresh=0)
+    worst, odd = 0.0, 0
     for k, frame in enumerate(frames + frames):
         got, whole = tracker.track(frame), vsinv.detect_tags(frame, decimation=decimation)
-        assert list(got.ids) == list(whole.ids), f"frame {k}: {got.ids} vs {whole.ids}"
-        assert len(whole) == 0 or np.abs(got.corners - whole.corners).max() < 1e-3, f"frame {k}"
         assert tracker.read_whole == (k == 0), f"frame {k} read whole"
-    return tracker
+        index = {int(t): j for j, t in enumerate(whole.ids)}
+        odd += len(set(got.ids) ^ set(whole.ids))
+        for j, t in enumerate(got.ids):
+            if int(t) in index:
+                worst = max(worst, float(np.abs(got.corners[j] - whole.corners[index[int(t)]]).max()))
+    return tracker, worst, odd
 
 
 def measure(rounds: int) -> list[Row]:
@@ -94,8 +101,8 @@ def measure(rounds: int) -> list[Row]:
         image = cv2.imread(str(VISP / size / f"tag36_11_{size}.png"), cv2.IMREAD_GRAYSCALE)
         frames = [shifted(image, du, dv) for du, dv in SHIFTS]
         for decimation in decimations:
-            still = checked_tracker([image], decimation)
-            moving = checked_tracker(frames, decimation)
+            still, worst_still, odd_still = checked_tracker([image], decimation)
+            moving, worst, odd = checked_tracker(frames, decimation)
             cycle = itertools.cycle(frames)
             t = timed_min_of_medians(
                 {
@@ -119,6 +126,8 @@ def measure(rounds: int) -> list[Row]:
                     amortized_ms=((REFRESH - 1) * t["moving"] + t["whole"]) / REFRESH * 1e3,
                     opencv_ms=t["opencv"] * 1e3,
                     opencv_tags=0 if ids is None else len(ids),
+                    max_diff_px=max(worst, worst_still),
+                    odd_tags=odd + odd_still,
                 )
             )
     return rows
@@ -127,14 +136,15 @@ def measure(rounds: int) -> list[Row]:
 def print_table(rows: list[Row]) -> None:
     head = (
         f"{'frames':<20} {'dec':>3} {'tags':>4} {'whole ms':>9} {'still ms':>9} {'moving ms':>9} "
-        f"{'amortized':>9} {'OpenCV ms':>9} {'CV tags':>7}  ratios to OpenCV: whole / still / moving"
+        f"{'amortized':>9} {'OpenCV ms':>9} {'CV tags':>7} {'max diff px':>11} {'odd':>3}  "
+        "ratios to OpenCV: whole / still / moving"
     )
     print(head)
     print("-" * len(head))
     for r in rows:
         print(
             f"{r.image:<20} {r.decimation:>3} {r.tags:>4} {r.whole_ms:>9.2f} {r.still_ms:>9.3f} {r.moving_ms:>9.3f} "
-            f"{r.amortized_ms:>9.2f} {r.opencv_ms:>9.2f} {r.opencv_tags:>7}  "
+            f"{r.amortized_ms:>9.2f} {r.opencv_ms:>9.2f} {r.opencv_tags:>7} {r.max_diff_px:>11.1e} {r.odd_tags:>3}  "
             f"{r.ratio(r.whole_ms):.2f} / {r.ratio(r.still_ms):.3f} / {r.ratio(r.moving_ms):.3f}"
         )
 

@@ -11,7 +11,7 @@
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
-//! | AprilTags as a detector: four corners a tag ([`TagDetector`]) | [`detector::tags`] |
+//! | AprilTags as a detector: four corners a tag, tracked between frames ([`TagDetector`]) | [`detector::tags`] |
 //! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
 //! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
 //! | the local threshold: a background model on tiles | [`background`] |

@@ -15,13 +15,16 @@ pub(crate) struct Region {
     pub y1: u32,
 }
 
-/// The margin around a tag's last corners, in tag sides: half a side covers its quiet zone
-/// (one cell, an eighth of a side for tag36h11) with room for the threshold's tiles.
-const MARGIN_SIDES: f64 = 0.5;
+/// The margin around a tag's last corners, in tag sides: a quarter of a side covers its quiet
+/// zone (one cell, an eighth of a side for tag36h11) with room for the threshold's tiles.
+const MARGIN_SIDES: f64 = 0.25;
 /// The margin's motion term: this many times the largest corner move since the frame before.
 const MARGIN_MOTIONS: f64 = 2.0;
 /// The least margin, pixels.
 const MIN_MARGIN: f64 = 16.0;
+/// A crop's sides are whole multiples of this many grid steps, so that its size (and the
+/// decoder kept for it) comes back from frame to frame while the tag moves.
+const SIZE_STEPS: u32 = 4;
 
 impl Region {
     /// The region to search a tag seen at `tag`'s corners that last moved by `motion` pixels,
@@ -39,10 +42,13 @@ impl Region {
         if !(lo.iter().chain(&hi).all(|x| x.is_finite()) && margin.is_finite()) {
             return None;
         }
-        let align = f64::from(align.max(1));
-        let low = |x: f64, size: u32| clamp(((x - margin) / align).floor() * align, size);
-        let high = |x: f64, size: u32| clamp(((x + margin + 1.0) / align).ceil() * align, size);
-        let r = Self { x0: low(lo[0], width), y0: low(lo[1], height), x1: high(hi[0], width), y1: high(hi[1], height) };
+        let step = align.max(1);
+        let grid = f64::from(step);
+        let low = |x: f64, size: u32| clamp(((x - margin) / grid).floor() * grid, size);
+        let high = |x: f64, size: u32| clamp(((x + margin + 1.0) / grid).ceil() * grid, size);
+        let (x0, x1) = sized(low(lo[0], width), high(hi[0], width), width, step);
+        let (y0, y1) = sized(low(lo[1], height), high(hi[1], height), height, step);
+        let r = Self { x0, y0, x1, y1 };
         (r.x0 < r.x1 && r.y0 < r.y1).then_some(r)
     }
 
@@ -86,6 +92,16 @@ pub(crate) fn merged(mut regions: Vec<Region>) -> Vec<Region> {
     regions
 }
 
+/// `a..b` grown to a whole multiple of `SIZE_STEPS * step` (at its far end, or at its near end
+/// on the grid where the image ends), within `0..size`.
+fn sized(a: u32, b: u32, size: u32, step: u32) -> (u32, u32) {
+    let quantum = SIZE_STEPS * step;
+    let want = (b - a).div_ceil(quantum) * quantum;
+    let b = a.saturating_add(want).min(size);
+    let a = if b - a < want { (b.saturating_sub(want) / step) * step } else { a };
+    (a, b)
+}
+
 fn clamp(x: f64, size: u32) -> u32 {
     // `x` is finite here; the cast saturates at 0 and is bounded by `size`.
     (x.max(0.0) as u32).min(size)
@@ -107,12 +123,16 @@ mod tests {
     #[test]
     fn a_region_holds_the_tag_and_its_margin_on_the_grid() {
         let r = Region::around(&square(100.3, 50.2, 40.0), 3.0, 640, 480, 8).unwrap();
-        // margin = 0.5 * 40 + 2 * 3 = 26 px each side, then out to the 8 px grid.
-        assert_eq!(r, Region { x0: 72, y0: 24, x1: 168, y1: 120 });
+        // margin = 0.25 * 40 + 2 * 3 = 16 px each side, out to the 8 px grid (80..160 and
+        // 32..112), then 80 px grown to a multiple of 4 steps (96 px).
+        assert_eq!(r, Region { x0: 80, y0: 32, x1: 176, y1: 128 });
         assert!([r.x0, r.y0, r.x1, r.y1].iter().all(|x| x % 8 == 0));
-        // A small tag still gets the least margin; an edge of the image clips.
+        // A small tag still gets the least margin; at an edge of the image the crop grows
+        // inwards: 0..28 -> 0..32, and 452..480 -> 448..480.
         let small = Region::around(&square(2.0, 470.0, 6.0), 0.0, 640, 480, 4).unwrap();
-        assert_eq!(small, Region { x0: 0, y0: 452, x1: 28, y1: 480 });
+        assert_eq!(small, Region { x0: 0, y0: 448, x1: 32, y1: 480 });
+        // An image smaller than the quantum is taken whole.
+        assert_eq!(sized(4, 12, 10, 4), (0, 10));
         assert_eq!(Region::around(&square(f64::NAN, 0.0, 6.0), 0.0, 640, 480, 4), None);
         assert_eq!(Region::around(&square(700.0, 10.0, 6.0), 0.0, 640, 480, 4), None);
     }
