@@ -140,7 +140,7 @@ def test_no_tags_and_bad_arguments() -> None:
     tags = vsinv.detect_tags(blank)
     assert len(tags) == 0 and tags.ids.shape == (0,) and tags.corners.shape == (0, 4, 2)
     image, _ = draw_markers({3: (20, 20, 0)}, cell=5)
-    with pytest.raises(vsinv.InvalidInput, match=r'family.*"tag36h11".*"tag16h5", got "tag36h12"'):
+    with pytest.raises(vsinv.InvalidInput, match=r'family.*"tag36h11".*"tagCustom48h12", got "tag36h12"'):
         vsinv.detect_tags(image, family="tag36h12")
     for bad in (image.astype(np.float64), np.stack([image] * 3, axis=-1), np.zeros((0, 5), np.uint8), [[1, 2]]):
         with pytest.raises(vsinv.InvalidInput, match="image"):

@@ -31,6 +31,13 @@ CASES = [
     ("tag25h9", "640x480", ["clean", "blur2", "noise20", "320x240", "rot45"]),
     ("tag16h5", "640x480", ["clean", "blur2", "noise10", "320x240", "rot15", "jpeg20"]),
     ("tag16h5", "1920x1080", ["clean", "noise20"]),
+    # AprilTag 3's families (a bright square in a dark ring): pupil-apriltags only.
+    ("tagStandard41h12", "640x480", ["clean", "noise10", "320x240", "rot90"]),
+    ("tagStandard41h12", "1920x1080", ["clean"]),
+    ("tagStandard52h13", "640x480", ["clean", "blur1"]),
+    ("tagCircle21h7", "640x480", ["clean", "rot30"]),
+    ("tagCircle49h12", "640x480", ["clean", "jpeg20"]),
+    ("tagCustom48h12", "640x480", ["clean", "noise5"]),
 ]
 
 
@@ -38,6 +45,13 @@ CASES = [
 # decodes (OpenCV does not): the edges refuse the detector's quad (the blur reaches the data
 # cells next to the border).
 KNOWN_GAPS = {("tag36h11", "640x480", "blur2")}
+
+
+# pupil-apriltags takes 15-25 s to build its decoding table of these large families: for them
+# the ground truth's tags stand for the references (all of them must be found), and the
+# corners' median against the truth must be below 0.1 px (pupil-apriltags: 0.026, 0.060 and
+# 0.041 px on the clean images, measured by benches/tags_robustness.py).
+SLOW_REFERENCE = {"tagStandard52h13", "tagCircle49h12", "tagCustom48h12"}
 
 
 def params() -> list:
@@ -55,8 +69,11 @@ def params() -> list:
 def test_every_tag_the_references_decode_is_decoded_with_no_wrong_id(family: str, resolution: str, degradation: str) -> None:
     case = tag_sets.DEGRADATIONS[degradation](tag_sets.benchmark(family, resolution))
     ours = tag_sets.vsinv_detector(family)(case.image)
-    references = [d for d in (tag_sets.opencv(family), tag_sets.pupil(family)) if d is not None]
-    theirs = set().union(*(set(d(case.image)) & case.ids for d in references))
+    if family in SLOW_REFERENCE:
+        theirs = case.ids
+    else:
+        references = [d for d in (tag_sets.opencv(family), tag_sets.pupil(family)) if d is not None]
+        theirs = set().union(*(set(d(case.image)) & case.ids for d in references))
     assert not set(ours) - case.ids, f"{case.name}: wrong ids {sorted(set(ours) - case.ids)}"
     assert theirs <= set(ours), f"{case.name}: missed {sorted(theirs - set(ours))} (references found {sorted(theirs)})"
     if case.truth is not None:
@@ -65,10 +82,14 @@ def test_every_tag_the_references_decode_is_decoded_with_no_wrong_id(family: str
         assert errors.max() < (1.5 if degradation in ("blur2", "blur3") else 0.75), case.name
 
 
-@pytest.mark.parametrize("family", ["tag36h11", "tag25h9", "tag16h5"])
+@pytest.mark.parametrize("family", list(tag_sets.FAMILIES))
 def test_clean_corners_are_as_accurate_as_the_reference_librarys(family: str) -> None:
     case = tag_sets.benchmark(family, "640x480")
     ours = tag_sets.corner_errors(tag_sets.vsinv_detector(family)(case.image), case.truth)
+    if family in SLOW_REFERENCE:
+        print(f"{family}: vsinv median {np.median(ours):.3f} px")
+        assert ours.size == 4 * len(case.truth) and np.median(ours) < 0.1  # type: ignore[arg-type]
+        return
     reference = tag_sets.corner_errors(tag_sets.pupil(family)(case.image), case.truth)  # type: ignore[misc]
     print(f"{family}: vsinv median {np.median(ours):.3f} px, pupil-apriltags {np.median(reference):.3f} px")
     assert ours.size == reference.size == 4 * len(case.truth)  # type: ignore[arg-type]

@@ -831,7 +831,17 @@ class Tags:
 
 def detect_tags(
     image: _U8Image,
-    family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+    family: Literal[
+        "tag36h11",
+        "tag36h10",
+        "tag25h9",
+        "tag16h5",
+        "tagStandard41h12",
+        "tagStandard52h13",
+        "tagCircle21h7",
+        "tagCircle49h12",
+        "tagCustom48h12",
+    ] = "tag36h11",
     decimation: int | None = None,
 ) -> Tags:
     """The AprilTags of `family` in a (height, width) uint8 image, sorted by id, with the corners

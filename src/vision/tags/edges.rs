@@ -44,15 +44,26 @@ const MAX_PASSES: usize = 4;
 /// line's accuracy and cost time on large tags.
 const MAX_PROFILES: usize = 200;
 
+/// The square whose edges are read: its side in cells, and its polarity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Border {
+    /// The square's side in cells (the layout's `width_at_border`).
+    pub cells: f64,
+    /// `false`: a dark square in a bright surround (the classic families); `true`: a bright
+    /// square in a dark ring (AprilTag 3's families).
+    pub reversed: bool,
+}
+
 /// The corners moved onto the four outer edges, or `None` when the edges do not support
 /// them. `corners` are in [`Tag::corners`](super::Tag)'s order and convention (a closed
-/// quadrilateral, either winding); `border_cells` is the black square's side in cells.
-pub(super) fn refine_corners<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border_cells: f64) -> Option<[P; 4]> {
+/// quadrilateral, either winding).
+pub(super) fn refine_corners<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border: Border) -> Option<[P; 4]> {
+    let border_cells = border.cells;
     let cell = (0..4).map(|i| dist(corners[i], corners[(i + 1) % 4])).sum::<f64>() / (4.0 * border_cells);
     let limit = MAX_MOVE_PX.max(MAX_MOVE_CELLS * cell);
     let mut current = *corners;
     for _ in 0..MAX_PASSES {
-        let next = intersect_all(&fit_edges(image, &current, border_cells)?)?;
+        let next = intersect_all(&fit_edges(image, &current, border)?)?;
         if next.iter().zip(corners).any(|(n, c)| dist(*n, *c) > limit) {
             return None;
         }
@@ -79,19 +90,19 @@ impl Line {
     }
 }
 
-fn fit_edges<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border_cells: f64) -> Option<[Line; 4]> {
+fn fit_edges<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border: Border) -> Option<[Line; 4]> {
     let centre = [0, 1].map(|k| corners.iter().map(|c| c[k]).sum::<f64>() / 4.0);
     let mut lines = [Line { normal: [0.0, 0.0], offset: 0.0 }; 4];
     for (i, line) in lines.iter_mut().enumerate() {
         let (a, b) = (corners[i], corners[(i + 1) % 4]);
         let opposite = mid(corners[(i + 2) % 4], corners[(i + 3) % 4]);
-        *line = fit_edge(image, a, b, centre, opposite, border_cells)?;
+        *line = fit_edge(image, a, b, centre, opposite, border)?;
     }
     Some(lines)
 }
 
 /// The outer edge from `a` to `b`: crossings of the profiles across it, fitted by a line.
-fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P, border_cells: f64) -> Option<Line> {
+fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P, border: Border) -> Option<Line> {
     let length = dist(a, b);
     let along = [(b[0] - a[0]) / length, (b[1] - a[1]) / length];
     let mut out = [along[1], -along[0]];
@@ -99,7 +110,7 @@ fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P
         out = [-out[0], -out[1]];
     }
     // A cell measured across this edge: the square's depth from this edge to the opposite one.
-    let cell = dot(out, sub(a, opposite)).abs() / border_cells;
+    let cell = dot(out, sub(a, opposite)).abs() / border.cells;
     let reach = (0.5 * cell).clamp(MIN_REACH, 6.0);
     let skip = reach + 1.0;
     if !length.is_finite() || length < 2.0 * skip + 2.0 {
@@ -111,7 +122,7 @@ fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P
         .filter_map(|k| {
             let s = skip + spacing * k as f64;
             let p = [a[0] + along[0] * s, a[1] + along[1] * s];
-            let e = crossing(image, p, out, reach)?;
+            let e = crossing(image, p, out, reach, border.reversed)?;
             Some([p[0] + out[0] * e, p[1] + out[1] * e])
         })
         .collect();
@@ -121,20 +132,22 @@ fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P
     fit_line(&crossings)
 }
 
-/// Where the edge crosses the profile through `p` along `out` (from the black border
-/// outwards), as a signed distance from `p`. The profile, scaled from its black end (0) to
+/// Where the edge crosses the profile through `p` along `out` (from the square outwards;
+/// `reversed`: a bright square, whose grey levels are read as `255 - g`), as a signed
+/// distance from `p`. The profile, scaled from its black end (0) to
 /// its white end (1), is a step blurred by the lens and the pixels' area: its integral over
 /// the profile is the length on the white side of the edge, exactly so for a pixel-area or a
 /// symmetric blur (the level-crossing of a pixel-sampled step is off by up to a tenth of a
 /// pixel). `None` without contrast or when the edge is not inside the profile.
-fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64) -> Option<f64> {
+fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64, reversed: bool) -> Option<f64> {
     let steps = (2.0 * reach / STEP).round() as usize;
     let start = -(steps as f64) * STEP / 2.0;
     let mut profile = [0.0f64; 32];
     let profile = profile.get_mut(..=steps)?;
     for (k, value) in profile.iter_mut().enumerate() {
         let o = start + STEP * k as f64;
-        *value = bilinear(image, p[0] + out[0] * o, p[1] + out[1] * o)?;
+        let g = bilinear(image, p[0] + out[0] * o, p[1] + out[1] * o)?;
+        *value = if reversed { 255.0 - g } else { g };
     }
     let (black, white) = ((profile[0] + profile[1]) / 2.0, (profile[steps] + profile[steps - 1]) / 2.0);
     if white - black < MIN_CONTRAST {
@@ -234,7 +247,7 @@ fn mid(a: P, b: P) -> P {
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used)]
-mod tests {
+pub(super) mod tests {
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
     use super::*;
@@ -246,6 +259,8 @@ mod tests {
     use crate::vision::target::tags::{RigTag, TagRig};
 
     const FAMILY: TagFamily = TagFamily::Tag36h11;
+    /// tag36h11's black square: 8 cells.
+    pub(crate) const BORDER: Border = Border { cells: 8.0, reversed: false };
 
     fn worst(a: &[P; 4], b: &[P; 4]) -> f64 {
         a.iter().zip(b).map(|(p, q)| dist(*p, *q)).fold(0.0, f64::max)
@@ -258,7 +273,7 @@ mod tests {
         let truth = corners(FAMILY, &p);
         let shifts = [[0.5, -0.3], [-0.4, 0.2], [0.1, 0.45], [-0.35, -0.35]];
         let start: [P; 4] = std::array::from_fn(|k| [truth[k][0] + shifts[k][0], truth[k][1] + shifts[k][1]]);
-        let refined = refine_corners(&image, &start, 8.0).unwrap();
+        let refined = refine_corners(&image, &start, BORDER).unwrap();
         assert!(worst(&refined, &truth) < 0.01, "{refined:?} vs {truth:?}");
     }
 
@@ -273,7 +288,7 @@ mod tests {
         for (k, shift, back) in cases.into_iter().chain([(0, [0.0, -12.8], false), (2, [9.0, 9.0], false)]) {
             let mut wrong = truth;
             wrong[k] = [truth[k][0] + shift[0], truth[k][1] + shift[1]];
-            match refine_corners(&image, &wrong, 8.0) {
+            match refine_corners(&image, &wrong, BORDER) {
                 Some(found) => {
                     assert!(back, "corner {k} moved by {shift:?}: reported");
                     assert!(worst(&found, &truth) < 0.01, "corner {k} moved by {shift:?}: {found:?}");
@@ -286,14 +301,33 @@ mod tests {
         let centre = p.centre;
         for scale in [6.0 / 8.0, 10.0 / 8.0] {
             let quad = truth.map(|c| [centre[0] + scale * (c[0] - centre[0]), centre[1] + scale * (c[1] - centre[1])]);
-            assert_eq!(refine_corners(&image, &quad, 8.0), None, "scaled by {scale}");
+            assert_eq!(refine_corners(&image, &quad, BORDER), None, "scaled by {scale}");
         }
         // Edges without a step (a blank image) support nothing.
         let blank = GreyBuffer::from_pixel(180, 140, ::image::Luma([200u8]));
-        assert_eq!(refine_corners(&blank, &truth, 8.0), None);
+        assert_eq!(refine_corners(&blank, &truth, BORDER), None);
         // A quad too small to read, or reaching out of the image.
-        assert_eq!(refine_corners(&image, &[[10.0, 10.0], [12.0, 10.0], [12.0, 12.0], [10.0, 12.0]], 8.0), None);
-        assert_eq!(refine_corners(&image, &[[-50.0, 10.0], [100.0, 10.0], [100.0, 100.0], [-50.0, 100.0]], 8.0), None);
+        assert_eq!(refine_corners(&image, &[[10.0, 10.0], [12.0, 10.0], [12.0, 12.0], [10.0, 12.0]], BORDER), None);
+        assert_eq!(
+            refine_corners(&image, &[[-50.0, 10.0], [100.0, 10.0], [100.0, 100.0], [-50.0, 100.0]], BORDER),
+            None
+        );
+    }
+
+    /// A bright square in a dark ring (AprilTag 3's families): the drawn tag with its grey
+    /// levels inverted has the same corners, read with the reversed polarity only.
+    #[test]
+    fn a_reversed_border_is_read_with_its_polarity() {
+        let p = Placement { id: 7, centre: [90.3, 70.6], cell: 9.2, quarter_turns: 3 };
+        let mut image = draw(FAMILY, 180, 140, &[p]);
+        image.pixels_mut().for_each(|g| g[0] = 255 - g[0]);
+        let truth = corners(FAMILY, &p);
+        let start = truth.map(|c| [c[0] + 0.3, c[1] - 0.25]);
+        let reversed = Border { reversed: true, ..BORDER };
+        let found = refine_corners(&image, &start, reversed).unwrap();
+        assert!(worst(&found, &truth) < 0.01, "{found:?} vs {truth:?}");
+        assert_eq!(refine_corners(&image, &start, BORDER), None);
+        assert_eq!(refine_corners(&draw(FAMILY, 180, 140, &[p]), &start, reversed), None);
     }
 
     /// Tags seen in perspective (the renderer's exact pixel areas, blur and noise as in the

@@ -51,21 +51,47 @@ pub enum TagFamily {
     Tag25h9,
     /// tag16h5: 30 ids, 4 x 4 data bits, minimum Hamming distance 5 (false positives likely).
     Tag16h5,
+    /// tagStandard41h12 (AprilTag 3's recommended family): 2115 ids, 41 bits, minimum Hamming
+    /// distance 12; its square is white inside a black ring, with data bits inside and outside.
+    TagStandard41h12,
+    /// tagStandard52h13: 48714 ids (those up to 65534 are read), 52 bits, distance 13.
+    TagStandard52h13,
+    /// tagCircle21h7: 38 ids, 21 bits, distance 7 (a round tag around a white square).
+    TagCircle21h7,
+    /// tagCircle49h12: 65535 ids (those up to 65534 are read), 49 bits, distance 12.
+    TagCircle49h12,
+    /// tagCustom48h12: 42211 ids, 48 bits, distance 12 (a square hole for a custom pattern).
+    TagCustom48h12,
 }
 
 impl TagFamily {
     /// The names, as Python spells them (AprilTag's names).
-    pub const NAMES: [&'static str; 4] = ["tag36h11", "tag36h10", "tag25h9", "tag16h5"];
+    pub const NAMES: [&'static str; 9] = [
+        "tag36h11",
+        "tag36h10",
+        "tag25h9",
+        "tag16h5",
+        "tagStandard41h12",
+        "tagStandard52h13",
+        "tagCircle21h7",
+        "tagCircle49h12",
+        "tagCustom48h12",
+    ];
+    const ALL: [Self; 9] = [
+        Self::Tag36h11,
+        Self::Tag36h10,
+        Self::Tag25h9,
+        Self::Tag16h5,
+        Self::TagStandard41h12,
+        Self::TagStandard52h13,
+        Self::TagCircle21h7,
+        Self::TagCircle49h12,
+        Self::TagCustom48h12,
+    ];
 
     /// The family of a name (`"tag36h11"`, ...), `None` for another name.
     pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "tag36h11" => Some(Self::Tag36h11),
-            "tag36h10" => Some(Self::Tag36h10),
-            "tag25h9" => Some(Self::Tag25h9),
-            "tag16h5" => Some(Self::Tag16h5),
-            _ => None,
-        }
+        Self::ALL.into_iter().find(|f| f.name() == name)
     }
 
     /// The name of a family.
@@ -75,15 +101,34 @@ impl TagFamily {
             Self::Tag36h10 => "tag36h10",
             Self::Tag25h9 => "tag25h9",
             Self::Tag16h5 => "tag16h5",
+            Self::TagStandard41h12 => "tagStandard41h12",
+            Self::TagStandard52h13 => "tagStandard52h13",
+            Self::TagCircle21h7 => "tagCircle21h7",
+            Self::TagCircle49h12 => "tagCircle49h12",
+            Self::TagCustom48h12 => "tagCustom48h12",
         }
     }
 
-    /// Cells across the black square (the layout's `width_at_border`).
+    /// Whether the family's square is white inside a black ring (AprilTag 3's families), not
+    /// black inside the white quiet zone.
+    pub fn reversed_border(self) -> bool {
+        matches!(
+            self,
+            Self::TagStandard41h12
+                | Self::TagStandard52h13
+                | Self::TagCircle21h7
+                | Self::TagCircle49h12
+                | Self::TagCustom48h12
+        )
+    }
+
+    /// Cells across the square whose corners are reported (the layout's `width_at_border`).
     pub fn border_cells(self) -> u32 {
         match self {
             Self::Tag36h11 | Self::Tag36h10 => 8,
             Self::Tag25h9 => 7,
-            Self::Tag16h5 => 6,
+            Self::Tag16h5 | Self::TagStandard52h13 | Self::TagCustom48h12 => 6,
+            Self::TagStandard41h12 | Self::TagCircle21h7 | Self::TagCircle49h12 => 5,
         }
     }
 
@@ -103,6 +148,11 @@ impl TagFamily {
             Self::Tag36h10 => TagFamilyKind::Tag36H10,
             Self::Tag25h9 => TagFamilyKind::Tag25H9,
             Self::Tag16h5 => TagFamilyKind::Tag16H5,
+            Self::TagStandard41h12 => TagFamilyKind::TagStandard41H12,
+            Self::TagStandard52h13 => TagFamilyKind::TagStandard52H13,
+            Self::TagCircle21h7 => TagFamilyKind::TagCircle21H7,
+            Self::TagCircle49h12 => TagFamilyKind::TagCircle49H12,
+            Self::TagCustom48h12 => TagFamilyKind::TagCustom48H12,
         }
     }
 }
@@ -245,14 +295,15 @@ impl TagDecoder {
             }
             half = Some(next);
         }
-        let border_cells = f64::from(self.family.border_cells());
+        let border =
+            edges::Border { cells: f64::from(self.family.border_cells()), reversed: self.family.reversed_border() };
         let max_errors = self.family.max_bit_errors();
         let mut tags: Vec<((u8, f32), Tag)> = candidates
             .into_iter()
             .filter(|&((errors, _), _, _)| errors <= max_errors)
             .filter_map(|(margin, id, corners)| {
-                let corners = edges::refine_corners(image, &corners, border_cells)
-                    .or_else(|| smoothed::refine_corners(image, &corners, border_cells))?;
+                let corners = edges::refine_corners(image, &corners, border)
+                    .or_else(|| smoothed::refine_corners(image, &corners, border))?;
                 Some((margin, Tag { id, corners }))
             })
             .collect();

@@ -19,9 +19,13 @@ const MAX_SIGMA: f64 = 2.0;
 
 /// The corners measured on a blurred crop around the quad, or `None` (as
 /// [`edges::refine_corners`]).
-pub(super) fn refine_corners<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border_cells: f64) -> Option<[P; 4]> {
+pub(super) fn refine_corners<C: Pixels>(
+    image: &GreyBuffer<C>,
+    corners: &[P; 4],
+    border: edges::Border,
+) -> Option<[P; 4]> {
     let side = (0..4).map(|i| dist(corners[i], corners[(i + 1) % 4])).sum::<f64>() / 4.0;
-    let cell = side / border_cells;
+    let cell = side / border.cells;
     let sigma = (cell / 3.0).min(MAX_SIGMA);
     if sigma < MIN_SIGMA {
         return None;
@@ -42,7 +46,7 @@ pub(super) fn refine_corners<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4],
     let blurred = imageproc::filter::gaussian_blur_f32(&crop, sigma as f32);
     let shift = [f64::from(u0), f64::from(v0)];
     let local = corners.map(|c| [c[0] - shift[0], c[1] - shift[1]]);
-    let found = edges::refine_corners(&blurred, &local, border_cells)?;
+    let found = edges::refine_corners(&blurred, &local, border)?;
     Some(found.map(|c| [c[0] + shift[0], c[1] + shift[1]]))
 }
 
@@ -65,6 +69,7 @@ fn dist(a: P, b: P) -> f64 {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::vision::tags::edges::tests::BORDER;
     use crate::vision::tags::synthetic::{Placement, corners, draw};
     use crate::vision::tags::{TagFamily, detect_tags};
 
@@ -95,8 +100,8 @@ mod tests {
         let image = noisy(&draw(TagFamily::Tag36h11, 300, 240, &[p]), 30.0);
         let start = truth.map(|c| [c[0] + 0.3, c[1] - 0.3]);
         // In the image itself the crossings scatter too much: refused.
-        assert_eq!(edges::refine_corners(&image, &start, 8.0), None);
-        let found = refine_corners(&image, &start, 8.0).unwrap();
+        assert_eq!(edges::refine_corners(&image, &start, BORDER), None);
+        let found = refine_corners(&image, &start, BORDER).unwrap();
         assert!(worst(&found, &truth) < 0.15, "{found:?} vs {truth:?}");
         // The whole detector reports the tag, at those corners.
         let tags = detect_tags(&image, TagFamily::Tag36h11).unwrap();
@@ -112,10 +117,13 @@ mod tests {
         // On the border's inner edge (a cell in): no black-to-white step there.
         let inner =
             truth.map(|c| [p.centre[0] + 0.75 * (c[0] - p.centre[0]), p.centre[1] + 0.75 * (c[1] - p.centre[1])]);
-        assert_eq!(refine_corners(&image, &inner, 8.0), None);
+        assert_eq!(refine_corners(&image, &inner, BORDER), None);
         // Cells under 2.4 px: no blur fits in a third of a cell.
-        assert_eq!(refine_corners(&image, &[[10.0, 10.0], [28.0, 10.0], [28.0, 28.0], [10.0, 28.0]], 8.0), None);
+        assert_eq!(refine_corners(&image, &[[10.0, 10.0], [28.0, 10.0], [28.0, 28.0], [10.0, 28.0]], BORDER), None);
         // Reaching out of the image.
-        assert_eq!(refine_corners(&image, &[[-50.0, 10.0], [100.0, 10.0], [100.0, 100.0], [-50.0, 100.0]], 8.0), None);
+        assert_eq!(
+            refine_corners(&image, &[[-50.0, 10.0], [100.0, 10.0], [100.0, 100.0], [-50.0, 100.0]], BORDER),
+            None
+        );
     }
 }
