@@ -7,6 +7,19 @@ import numpy as np
 import numpy.typing as npt
 from typing_extensions import disjoint_base
 
+#: The AprilTag families `detect_tags`, `TagTracker` and `ImageServo` read (Rust `TagFamily::NAMES`).
+_TagFamily = Literal[
+    "tag36h11",
+    "tag36h10",
+    "tag25h9",
+    "tag16h5",
+    "tagStandard41h12",
+    "tagStandard52h13",
+    "tagCircle21h7",
+    "tagCircle49h12",
+    "tagCustom48h12",
+]
+
 __version__: str
 __all__ = [
     "ImageServo",
@@ -419,7 +432,7 @@ class ImageServo:
         reference_points: _ArrayLike | None = None,
         first_points: _ArrayLike | None = None,
         tracker: dict[str, float | int | str] | None = None,
-        family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+        family: _TagFamily = "tag36h11",
         tag_ids: Sequence[int] | None = None,
         decimation: int | None = None,
         distortion: Distortion | _ArrayLike | None = None,
@@ -800,7 +813,7 @@ class TagTracker:
 
     def __new__(
         cls,
-        family: Literal["tag36h11", "tag36h10", "tag25h9", "tag16h5"] = "tag36h11",
+        family: _TagFamily = "tag36h11",
         decimation: int | None = None,
         refresh: int = 15,
     ) -> TagTracker: ...
@@ -831,17 +844,7 @@ class Tags:
 
 def detect_tags(
     image: _U8Image,
-    family: Literal[
-        "tag36h11",
-        "tag36h10",
-        "tag25h9",
-        "tag16h5",
-        "tagStandard41h12",
-        "tagStandard52h13",
-        "tagCircle21h7",
-        "tagCircle49h12",
-        "tagCustom48h12",
-    ] = "tag36h11",
+    family: _TagFamily = "tag36h11",
     decimation: int | None = None,
 ) -> Tags:
     """The AprilTags of `family` in a (height, width) uint8 image, sorted by id, with the corners
