@@ -8,11 +8,17 @@ use super::shape::Shape;
 use super::window_search::{Component, Level, WindowSearch};
 use super::{TrackedDot, TrackerConfig, distance};
 use crate::error::{Error, Result, Short, fixed_or_short};
-use crate::vision::dots::Window;
+use crate::vision::dots::{DIGITISATION_SLACK, Window};
 use crate::vision::image::{GreyBuffer, Pixels};
 
 /// Grey levels by which a dot must stand out from its background.
 pub(super) const MIN_CONTRAST: u8 = 24;
+
+/// Smallest fill ratio of a dot when it starts (as [`detect_dots`]'s default `min_fill`,
+/// with the same allowance for small dots): a notched disc, a bar or a ring is not a dot.
+///
+/// [`detect_dots`]: crate::vision::dots::detect_dots
+const MIN_FILL: f64 = 0.95;
 
 /// The dot around click `i`, or an error naming it.
 pub(super) fn initial_dot<C: Pixels>(
@@ -56,6 +62,10 @@ pub(super) fn initial_dot<C: Pixels>(
                 Some(c) if !c.touches_window || whole => {
                     if c.touches_image {
                         return Err(not_found("the dot is cut by the image's border"));
+                    }
+                    let fill = c.fill_ratio();
+                    if fill < MIN_FILL - DIGITISATION_SLACK / (c.area as f64).sqrt() {
+                        return Err(not_found(&format!("not a dot (fill ratio {fill:.3}: not a filled ellipse)")));
                     }
                     let centroid = search.weighted_centroid(image, level, &c).centroid;
                     return Ok(TrackedDot::started(centroid, level.threshold, Shape::of(&c)));
@@ -103,4 +113,32 @@ fn window_levels<C: Pixels>(image: &GreyBuffer<C>, w: Window, flip: u8) -> (u8, 
     });
     let peak = histogram.iter().rposition(|&n| n > 0);
     (median.unwrap_or(0) as u8, peak.unwrap_or(0) as u8)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use crate::vision::image::GreyImage;
+    use crate::vision::tracker::{DotTracker, TrackerConfig};
+
+    /// A disc of radius 15 at (40, 40) on 30, less a notch `notch` px wide and 10 px high on
+    /// its right side (0: the whole disc).
+    fn notched(notch: u32) -> GreyImage {
+        GreyImage::from_fn(80, 80, |u, v| {
+            let disc = (f64::from(u) - 40.0).hypot(f64::from(v) - 40.0) < 15.0;
+            let cut = u + notch > 55 && (35..45).contains(&v);
+            image::Luma([if disc && !cut { 220 } else { 30 }])
+        })
+    }
+
+    #[test]
+    fn a_notched_disc_is_not_a_dot() {
+        let whole = DotTracker::new(&notched(0), &[[41.0, 39.0]], TrackerConfig::default()).unwrap();
+        let p = whole.positions()[0];
+        assert!((p[0] - 40.0).hypot(p[1] - 40.0) < 0.05, "{p:?}");
+        for notch in [12, 16] {
+            let e = DotTracker::new(&notched(notch), &[[41.0, 39.0]], TrackerConfig::default()).unwrap_err();
+            assert!(e.to_string().contains("not a dot"), "{notch}: {e}");
+        }
+    }
 }

@@ -43,6 +43,14 @@ impl Component {
         let [cu, cv] = self.centroid();
         [self.moments[2] / n - cu * cu, self.moments[3] / n - cv * cv, self.moments[4] / n - cu * cv]
     }
+
+    /// The area over that of the ellipse of its second moments, each pixel a unit square
+    /// (as [`Component::fill_ratio`](crate::vision::runs::Component::fill_ratio)).
+    pub(super) fn fill_ratio(&self) -> f64 {
+        let [uu, vv, uv] = self.covariance();
+        let det = (uu + 1.0 / 12.0) * (vv + 1.0 / 12.0) - uv * uv;
+        self.area as f64 / (4.0 * std::f64::consts::PI * det.max(0.0).sqrt())
+    }
 }
 
 /// A component's grey-weighted centroid, with the grey levels it was weighted against (of
