@@ -324,7 +324,7 @@ def test_the_stall_rule_ends_a_lens_change_on_real_detections(scenario: vsinv.Sc
     run, and the accuracy it reports (the bound, with the measured disagreement floor) holds
     the true pose error. With the stall rule off the same run does not end."""
     ref, ref_px, start, start_px = views(scenario)
-    stop = {"max_iterations": 1500, "window": 50}
+    stop = {"max_iterations": 1200, "window": 50}
     session = {**SESSION, "stop": stop}
     results = {}
     for stall in (True, False):
