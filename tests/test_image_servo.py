@@ -316,3 +316,35 @@ def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsin
     assert 11 not in pipeline.basis and hidden not in pipeline.basis
     assert switches[-1] == pipeline.basis_switches >= 1 and step.telemetry["basis"] == pipeline.basis
     assert error_mm < 2.0 and error_deg < 0.2
+
+
+def test_the_stall_rule_ends_a_lens_change_on_real_detections(scenario: vsinv.Scenario) -> None:
+    """Issue 27, item 3: with the default invariant threshold (1e-4), which two lenses'
+    detections of one pose never meet, ImageServo (stall rule on by default) still ends the
+    run, and the accuracy it reports (the bound, with the measured disagreement floor) holds
+    the true pose error. With the stall rule off the same run does not end."""
+    ref, ref_px, start, start_px = views(scenario)
+    stop = {"max_iterations": 1200, "window": 50}
+    session = {**SESSION, "stop": stop}
+    results = {}
+    for stall in (True, False):
+        kwargs = {**session, "stop": {**stop, "stall": False}} if not stall else session
+        pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, first_points=start_px, **kwargs)
+        pose, image = start_pose(), start
+        for _ in range(1500):
+            step = pipeline.step(image)
+            if not step.running:
+                break
+            pose = pose @ vsinv.exp_twist(step.twist, 0.01)
+            image = vsinv.render_view(scenario, pose=pose)[0]
+        position, thetau = vsinv.thetau_from_pose(pose)
+        results[stall] = (step, pipeline.certainty(), np.linalg.norm(position), np.linalg.norm(thetau), pipeline.iterations)
+    step, c, t, r, iterations = results[True]
+    assert c is not None
+    print(f"stall: {step.verdict} after {iterations}: true {1e3 * t:.3f} mm {np.degrees(r):.4f} deg, "
+          f"bound {1e3 * c['translation_bound']:.3f} mm {np.degrees(c['rotation_bound']):.4f} deg, "
+          f"floor {c['floor_pixel_sigma']:.3f} px; {step.reason}")
+    assert step.verdict in ("converged", "settled") and "stalled" in (step.reason or "")
+    assert t <= c["translation_bound"] and r <= c["rotation_bound"]
+    assert c["floor_pixel_sigma"] > 0.0
+    assert results[False][0].verdict == "max_iterations", results[False][0].reason

@@ -374,10 +374,10 @@ class Servo:
     @property
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last images (None before three), pixels."""
-    def certainty(self) -> dict[str, float] | None:
+    def certainty(self) -> dict[str, float | None] | None:
         """What the images say about the pose (pixel_sigma, reference_pixel_sigma, translation_sigma,
-        translation_bound in metres, rotation_sigma, rotation_bound in radians); None when it cannot
-        be computed."""
+        translation_bound in metres, rotation_sigma, rotation_bound in radians, floor_pixel_sigma in
+        pixels: the disagreement floor, None with the stall rule off); None when it cannot be computed."""
 
 @disjoint_base
 class ServoStep:
@@ -421,6 +421,9 @@ class ImageServo:
     ``reference_K`` and ``reference_distortion`` undistort the reference points. Every other keyword
     argument is the ``Servo`` session's (law, reference_depths, depths, basis, gain, ..., dt) and an
     unknown one is refused by name. A point not found in a frame is not visible for that step.
+    The stall rule is on unless ``stop={"stall": False}``: real detections of one pose by two
+    lenses disagree, so the run ends when the error stopped decreasing and the camera is still,
+    ``converged`` if the bound (with the measured disagreement floor) is within the tolerance.
     """
 
     def __new__(
@@ -461,10 +464,11 @@ class ImageServo:
     @property
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last frames (None before three), pixels."""
-    def certainty(self) -> dict[str, float] | None:
+    def certainty(self) -> dict[str, float | None] | None:
         """What the frames say about the pose, as ``Servo.certainty()`` (pixel_sigma,
         reference_pixel_sigma, translation_sigma, translation_bound in metres, rotation_sigma,
-        rotation_bound in radians); None when it cannot be computed."""
+        rotation_bound in radians: the accuracy ceiling, floor_pixel_sigma: the measured
+        disagreement between reference and frame detections, pixels); None when it cannot be computed."""
 
 @final
 class ImageStep(ServoStep):

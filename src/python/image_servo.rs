@@ -156,7 +156,11 @@ impl PyImageServo {
             }
         };
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let (mut servo_config, reference_depths, depths) = ServoOptions::from_kwargs(servo)?.session(k_hat)?;
+        let options = ServoOptions::from_kwargs(servo)?;
+        // Real cameras: the stall rule is on unless `stop` says otherwise (issue 27).
+        let stall_unset = !options.stop_sets("stall");
+        let (mut servo_config, reference_depths, depths) = options.session(k_hat)?;
+        servo_config.stop.stall |= stall_unset;
         if let Some(d) = distortion.filter(|d| !d.is_none()) {
             servo_config.distortion = distortion_arg(d)?;
         }

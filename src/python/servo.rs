@@ -92,9 +92,13 @@ fn stop_rules(stop: Option<&Bound<'_, PyDict>>) -> PyResult<StopRules> {
             "max_translation_uncertainty" => rules.max_translation_uncertainty = value.extract().map_err(bad)?,
             "max_rotation_uncertainty_deg" => rules.max_rotation_uncertainty_deg = value.extract().map_err(bad)?,
             "reference_pixel_sigma" => rules.reference_pixel_sigma = value.extract().map_err(bad)?,
+            "stall" => rules.stall = value.extract().map_err(bad)?,
+            "stall_window" => rules.stall_window = value.extract().map_err(bad)?,
+            "stall_motion" => rules.stall_motion = value.extract().map_err(bad)?,
             _ => {
                 let known = "max_iterations, window, pixel_error, invariant_error, tau21, \
-                             max_translation_uncertainty, max_rotation_uncertainty_deg, reference_pixel_sigma";
+                             max_translation_uncertainty, max_rotation_uncertainty_deg, reference_pixel_sigma, \
+                             stall, stall_window, stall_motion";
                 return Err(invalid_argument(
                     &format!("stop.{key}"),
                     format!("stop.{key}: unknown key; known: {known}"),
@@ -245,6 +249,11 @@ impl<'py> ServoOptions<'py> {
             }
         }
         Ok(())
+    }
+
+    /// Whether the `stop` dictionary sets `key`.
+    pub(super) fn stop_sets(&self, key: &str) -> bool {
+        self.stop.as_ref().is_some_and(|d| d.contains(key).unwrap_or(false))
     }
 
     /// The session's configuration, the reference depths and the depth source.
@@ -431,7 +440,8 @@ impl PyServo {
 
 /// A session's `certainty()` as the dict Python sees: pixel_sigma, reference_pixel_sigma
 /// (pixels), translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound
-/// (radians); None when it cannot be computed.
+/// (radians; the accuracy ceiling, with the disagreement floor when the stall rule is on),
+/// floor_pixel_sigma (pixels, None with the stall rule off); None when it cannot be computed.
 pub(super) fn certainty_dict<'py>(py: Python<'py>, servo: &Servo) -> PyResult<Option<Bound<'py, PyDict>>> {
     let Some(c) = servo.certainty() else { return Ok(None) };
     let d = PyDict::new(py);
@@ -441,6 +451,7 @@ pub(super) fn certainty_dict<'py>(py: Python<'py>, servo: &Servo) -> PyResult<Op
     d.set_item("rotation_sigma", c.sigma.1)?;
     d.set_item("translation_bound", c.bound.0)?;
     d.set_item("rotation_bound", c.bound.1)?;
+    d.set_item("floor_pixel_sigma", c.floor_pixel_sigma)?;
     Ok(Some(d))
 }
 

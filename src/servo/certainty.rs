@@ -16,8 +16,12 @@ pub struct Certainty {
     /// RMS translation and rotation (metres, radians) the noise leaves.
     pub sigma: (f64, f64),
     /// 3 sigma plus the offset the mean error implies: how far from the goal the camera may
-    /// be (metres, radians).
+    /// be (metres, radians); with the stall rule on, the sigma includes the disagreement floor.
     pub bound: (f64, f64),
+    /// The disagreement floor between the reference and the current detections: the
+    /// per-coordinate pixel RMS of the systematic error that explains what the pose cannot
+    /// remove ([`crate::core::uncertainty`]); None when the stall rule is off (not counted).
+    pub floor_pixel_sigma: Option<f64>,
 }
 
 impl Certainty {
@@ -43,22 +47,29 @@ impl Certainty {
         let noise = ImageNoise { current: pixel_sigma, reference: reference_pixel_sigma, averaged_images: averaged };
         let u = law.pose_uncertainty(m, basis, noise).ok()?;
         let sigma = (u.translation_sigma(), u.rotation_sigma());
-        let bound = (u.translation_bound(DEFAULT_SIGMAS), u.rotation_bound(DEFAULT_SIGMAS));
-        Some(Certainty { pixel_sigma, reference_pixel_sigma, sigma, bound })
+        let (bound, floor_pixel_sigma) = match stop.stall {
+            true => {
+                let b = (u.translation_bound_with_floor(DEFAULT_SIGMAS), u.rotation_bound_with_floor(DEFAULT_SIGMAS));
+                (b, Some(u.floor_pixel_sigma))
+            }
+            false => ((u.translation_bound(DEFAULT_SIGMAS), u.rotation_bound(DEFAULT_SIGMAS)), None),
+        };
+        Some(Certainty { pixel_sigma, reference_pixel_sigma, sigma, bound, floor_pixel_sigma })
     }
 
-    /// The reason a met image rule ends as `settled`.
-    pub(crate) fn settled_reason(&self, stop: &StopRules) -> String {
+    /// The reason a met image rule (`rule`: what was met) ends as `settled`.
+    pub(crate) fn settled_reason(&self, stop: &StopRules, rule: &str) -> String {
         let (t, r) = self.bound;
+        let floor = self.floor_pixel_sigma.map_or(String::new(), |f| format!(", disagreement floor {f:.3} px"));
         format!(
-            "stop rule met, but the images allow {:.3} mm and {:.3} deg from the goal (tolerance {:.3} mm, {:.3} deg; \
-             pixel noise {:.3} px measured, reference {:.3} px)",
+            "{rule}, but the images allow {:.3} mm and {:.3} deg from the goal (tolerance {:.3} mm, {:.3} deg; \
+             pixel noise {:.3} px measured, reference {:.3} px{floor})",
             t * 1e3,
             r.to_degrees(),
             stop.max_translation_uncertainty * 1e3,
             stop.max_rotation_uncertainty_deg,
             self.pixel_sigma,
-            self.reference_pixel_sigma
+            self.reference_pixel_sigma,
         )
     }
 }

@@ -10,6 +10,7 @@
 //! | measurements of an image against the reference: tau (eq. 21), errors | `measure` |
 //! | stop thresholds and the pixel and invariant rules (correction 8) | [`stop`] |
 //! | the stop rules' averaging window | `stop_window` |
+//! | the stall rule: the error stopped decreasing, the camera still (issue 27) | [`stall`] |
 //! | the pose uncertainty the images allow when the rule is met | [`certainty`] |
 //! | where the law's depths come from | [`depths`] |
 //! | the planned path of sec. 3, followed step by step | [`path`] |
@@ -39,6 +40,7 @@ pub(crate) mod measure;
 pub mod path;
 pub(crate) mod reference;
 pub mod session;
+pub mod stall;
 pub mod stop;
 pub(crate) mod stop_window;
 pub mod telemetry;

@@ -19,6 +19,7 @@ use crate::servo::law::{Law, ServoLaw};
 use crate::servo::measure::{Metrics, measure};
 use crate::servo::path::{PathPlan, PlannedPath};
 use crate::servo::reference::{ReferenceImage, choose_visible_basis};
+use crate::servo::stall::StallWatch;
 use crate::servo::stop::{StopRule, StopRules, stop_rule_met};
 use crate::servo::stop_window::StopWindow;
 use crate::servo::telemetry::{ServoStep, Telemetry};
@@ -98,6 +99,7 @@ pub struct Servo {
     pixels: Vec<[f64; 2]>,
     visible: Vec<bool>,
     window: StopWindow,
+    stall: StallWatch,
     rule_met: bool,
     metrics: Metrics,
     noise_meter: PixelNoiseMeter,
@@ -149,6 +151,7 @@ impl Servo {
             pixels: vec![[0.0; 2]; n],
             visible: vec![false; n],
             window: StopWindow::new(config.stop.window),
+            stall: StallWatch::new(config.stop.stall_window),
             rule_met: false,
             metrics: Metrics { invariant_error: f64::NAN, tau: [f64::NAN; 3], eps_z: f64::NAN, image_error: f64::NAN },
             noise_meter: PixelNoiseMeter::new(NOISE_IMAGES)?,
@@ -192,6 +195,13 @@ impl Servo {
         };
         let (rule, n_others, tau, moves) = (self.rule, self.reference.others.len(), m.tau, self.law.moves());
         let min_points = self.law.min_points();
+        if self.stop.stall {
+            let error = if rule == StopRule::Pixel { m.image_error } else { m.invariant_error };
+            self.stall.push_error(error);
+            let mut copy = self.stall.rows.next_row();
+            copy.extend_from_slice(&row);
+            self.stall.rows.push(copy);
+        }
         self.rule_met = match self.window.push(row) {
             Some(mean) if moves => stop_rule_met(rule, &self.stop, mean, n_others, tau, min_points),
             _ => false,
@@ -234,6 +244,7 @@ impl Servo {
         self.law =
             self.law_config.build(&self.reference.pixels, basis, self.reference_depths.as_deref(), self.k_hat)?;
         self.window = StopWindow::new(self.stop.window);
+        self.stall.reset();
         (self.plan, self.path) = (None, None);
         self.basis_switches += 1;
         Ok(())
@@ -292,7 +303,14 @@ impl Servo {
             return lost;
         }
         if self.rule_met
-            && let Some(end) = self.certify()
+            && let Some(end) = self.certify(false)
+        {
+            return end;
+        }
+        if self.stop.stall
+            && self.law.moves()
+            && self.stall.stalled(&self.stop, self.dt)
+            && let Some(end) = self.certify(true)
         {
             return end;
         }
@@ -326,16 +344,30 @@ impl Servo {
         Some(Verdict::stop(Status::LostFeatures, why))
     }
 
-    /// The image rule is met: `converged` if the pose uncertainty the averaged images allow is
-    /// within the tolerance, `settled` if not; `None` (carry on) until the noise can be
-    /// measured (three images) and while too few points were in view throughout the window.
-    fn certify(&mut self) -> Option<Verdict> {
-        let (pixels, seen) = self.window_mean_pixels(&self.window)?;
-        let certainty = self.certainty_of(&pixels, &seen, self.stop.window)?;
+    /// The image rule is met (or, `stalled`, the stall rule): `converged` if the pose
+    /// uncertainty the images averaged over the rule's window allow is within the tolerance,
+    /// `settled` if not; `None` (carry on) until the noise can be measured (three images) and
+    /// while too few points were in view throughout the window.
+    fn certify(&mut self, stalled: bool) -> Option<Verdict> {
+        let (window, size) = match stalled {
+            true => (&self.stall.rows, self.stop.stall_window),
+            false => (&self.window, self.stop.window),
+        };
+        let (pixels, seen) = self.window_mean_pixels(window)?;
+        let certainty = self.certainty_of(&pixels, &seen, size)?;
         self.certainty = Some(certainty);
+        let rule = match stalled {
+            true => format!("stalled (the error stopped decreasing over {size} images, the camera still)"),
+            false => "stop rule met".to_string(),
+        };
         Some(match certainty.within(&self.stop) {
-            true => Verdict::stop(Status::Converged, "stop rule met"),
-            false => Verdict::stop(Status::Settled, certainty.settled_reason(&self.stop)),
+            true if stalled => {
+                let (t, r) = certainty.bound;
+                let why = format!("{rule}; the images certify {:.3} mm and {:.3} deg", t * 1e3, r.to_degrees());
+                Verdict::stop(Status::Converged, why)
+            }
+            true => Verdict::stop(Status::Converged, rule),
+            false => Verdict::stop(Status::Settled, certainty.settled_reason(&self.stop, &rule)),
         })
     }
 
@@ -386,6 +418,9 @@ impl Servo {
         match self.try_control() {
             Ok(twist) => {
                 self.iteration += 1;
+                if self.stop.stall {
+                    self.stall.push_twist(twist);
+                }
                 ServoStep { twist, verdict: Verdict::Running, telemetry: self.telemetry }
             }
             Err(verdict) => ServoStep { twist: Vector6::zeros(), verdict, telemetry: self.telemetry },

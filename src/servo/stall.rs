@@ -50,7 +50,10 @@ impl StallWatch {
     /// Whether the loop has stalled: a full window of finite errors that stopped decreasing
     /// ([`STALL_DECREASE`]), and a mean commanded twist that would move the camera, over the
     /// window (`window * dt` seconds), by less than `stall_motion` times the pose tolerance in
-    /// translation and in rotation.
+    /// translation and in rotation. The mean twist, not each twist: pixel noise makes the
+    /// twists jitter with zero mean, which moves the camera nowhere; a tenth of the tolerance
+    /// (the default) means that going on could gain at most a tenth of what the tolerance
+    /// allows per window, while the floor keeps the error where it is.
     pub(crate) fn stalled(&self, stop: &StopRules, dt: f64) -> bool {
         let w = self.window;
         if self.errors.len() < w || self.twists.len() < w || self.errors.iter().any(|e| !e.is_finite()) {

@@ -33,6 +33,41 @@ pub struct StopRules {
     /// The reference image's pixel noise, pixels; `None`: assumed equal to the noise measured
     /// on the servo camera's images (one image cannot show its own noise).
     pub reference_pixel_sigma: Option<f64>,
+    /// The stall rule (issue 27), for real cameras whose detections of one pose disagree
+    /// between the reference and the servo lens (the invariant error then settles above
+    /// `invariant_error`): the run ends when, over the last `stall_window` images, the error
+    /// has stopped decreasing and the mean commanded twist would move the camera by less
+    /// than `stall_motion` times the pose tolerance; `converged` if the pose uncertainty,
+    /// with the measured disagreement floor, is within the tolerance, else `settled`. Off by
+    /// default here (the simulator's exact projections meet the image rules); on by default
+    /// in `ImageServo` and the ROS bridge. (The three stall keys are written to a scenario
+    /// file only when they differ from their defaults.)
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "is_false"))]
+    pub stall: bool,
+    /// Images the stall rule looks back over (at least 4).
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "is_default_stall_window"))]
+    pub stall_window: usize,
+    /// The stall rule's motion threshold, as a fraction of `max_translation_uncertainty` and
+    /// `max_rotation_uncertainty_deg`: the motion the mean twist would make over the window.
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "is_default_stall_motion"))]
+    pub stall_motion: f64,
+}
+
+/// The stall rule's defaults (off, 50 images, a tenth of the tolerance).
+const STALL_WINDOW: usize = 50;
+const STALL_MOTION: f64 = 0.1;
+
+#[cfg(feature = "serde")]
+fn is_false(v: &bool) -> bool {
+    !*v
+}
+#[cfg(feature = "serde")]
+fn is_default_stall_window(v: &usize) -> bool {
+    *v == STALL_WINDOW
+}
+#[cfg(feature = "serde")]
+fn is_default_stall_motion(v: &f64) -> bool {
+    *v == STALL_MOTION
 }
 
 impl Default for StopRules {
@@ -47,6 +82,9 @@ impl Default for StopRules {
             max_translation_uncertainty: 0.005,
             max_rotation_uncertainty_deg: 0.5,
             reference_pixel_sigma: None,
+            stall: false,
+            stall_window: STALL_WINDOW,
+            stall_motion: STALL_MOTION,
         }
     }
 }
@@ -59,6 +97,14 @@ impl StopRules {
                 name: "stop",
                 reason: "window and max_iterations must be >= 1".into(),
             });
+        }
+        if self.stall_window < 4 {
+            let reason = format!("must be >= 4 images, got {}", self.stall_window);
+            return Err(Error::InvalidParameter { name: "stop.stall_window", reason });
+        }
+        if !(self.stall_motion > 0.0 && self.stall_motion <= 1.0) {
+            let reason = format!("a fraction of the pose tolerance in (0, 1], got {}", self.stall_motion);
+            return Err(Error::InvalidParameter { name: "stop.stall_motion", reason });
         }
         Ok(())
     }

@@ -340,7 +340,7 @@ const fn field(
 use Legacy::{Degrees, Milli, Same};
 
 /// The numbers of the summary: the one declaration of their names and units.
-pub const SUMMARY_FIELDS: [SummaryField; 28] = [
+pub const SUMMARY_FIELDS: [SummaryField; 29] = [
     field(
         "final_translation_error",
         "m",
@@ -500,6 +500,14 @@ pub const SUMMARY_FIELDS: [SummaryField; 28] = [
         |s| s.certainty.map(|c| c.bound.1),
         Some(Degrees("rotation_uncertainty_deg")),
         "3 sigma plus the offset the mean error implies, orientation",
+    ),
+    field(
+        "floor_pixel_sigma",
+        "px",
+        |s| s.certainty.and_then(|c| c.floor_pixel_sigma),
+        None,
+        "the disagreement floor between the reference and the current detections the stall rule measured \
+         (included in the uncertainty bounds; none with the stall rule off)",
     ),
 ];
 

@@ -252,6 +252,18 @@ impl Scenario {
         ] {
             check_positive(key, v)?;
         }
+        if s.stall_window < 4 || s.stall_window > MAX_ITERATIONS {
+            return Err(scenario_error(
+                "stop.stall_window",
+                format!("from 4 to {MAX_ITERATIONS}, got {}", s.stall_window),
+            ));
+        }
+        if !(s.stall_motion > 0.0 && s.stall_motion <= 1.0) {
+            return Err(scenario_error(
+                "stop.stall_motion",
+                format!("a fraction of the pose tolerance in (0, 1], got {}", Short(s.stall_motion)),
+            ));
+        }
         if let Some(sigma) = s.reference_pixel_sigma
             && !(0.0..=1000.0).contains(&sigma)
         {
