@@ -37,7 +37,9 @@ GOAL_MM, GOAL_DEG = 1.0, 0.2
 SESSION = {
     "gain": 2.5,
     "dt": 0.04,
-    "stop": {"max_iterations": 200, "max_translation_uncertainty": GOAL_MM * 1e-3, "max_rotation_uncertainty_deg": GOAL_DEG},
+    # The stall rule looks back over 50 images once the error stops decreasing (70-110
+    # iterations here): 300 leaves room for both.
+    "stop": {"max_iterations": 300, "max_translation_uncertainty": GOAL_MM * 1e-3, "max_rotation_uncertainty_deg": GOAL_DEG},
 }
 # IBVS is given fewer iterations: it reaches its own (wrong) equilibrium well within them.
 IBVS_SESSION = {**SESSION, "stop": {**SESSION["stop"], "max_iterations": 120}}
@@ -141,6 +143,20 @@ def test_the_scene_is_what_it_says(world: mw.BoxWorld) -> None:
 
 def _runs(world: mw.BoxWorld, law: str, session: dict) -> list[ms.RunEnd]:
     return [ms.run(world, LENS, law, start, k, session) for k, start in enumerate(ms.start_poses(world, LENS, STARTS))]
+
+
+def test_invariant_law_converges_through_mujoco_images(world: mw.BoxWorld, request: pytest.FixtureRequest) -> None:
+    """The issue's requirement: from every start the invariant law ends `converged`, and the
+    camera is within 1 mm and 0.2 degrees of the reference pose."""
+    if world.target == "dots":
+        # Issue 27, item 4 (open): the tracker's shape check at start refuses the dots on the
+        # box's sphere face (MuJoCo's light leaves a lit part that is not a filled ellipse).
+        request.applymarker(pytest.mark.xfail(strict=True, reason="shaded spheres: issue 27, item 4"))
+    ends = _runs(world, "invariant", SESSION)
+    table = "\n".join(e.row() + f" ({e.reason})" for e in ends)
+    print(table)
+    assert all(e.verdict == "converged" for e in ends), table
+    assert all(e.error_mm < GOAL_MM and e.error_deg < GOAL_DEG for e in ends), table
 
 
 def test_ibvs_never_claims_converged_on_the_lens_change(world: mw.BoxWorld) -> None:

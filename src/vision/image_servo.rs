@@ -45,9 +45,12 @@ pub enum ImageTarget {
 }
 
 impl ImageTarget {
-    /// A detector of this target, not started (an error for a decimation out of range).
-    fn detector(&self) -> Result<Box<dyn Detector>> {
+    /// A detector of this target, not started (an error for a decimation out of range). In
+    /// the reference image every dot must start; in the frames (`frames`), a dot that cannot
+    /// start is not visible.
+    fn detector(&self, frames: bool) -> Result<Box<dyn Detector>> {
         Ok(match self {
+            ImageTarget::Dots { tracker, .. } if frames => Box::new(DotTracking::partial(*tracker)),
             ImageTarget::Dots { tracker, .. } => Box::new(DotTracking::new(*tracker)),
             ImageTarget::Tags { family, decimation: None, .. } => Box::new(TagDetector::new(*family)),
             ImageTarget::Tags { family, decimation: Some(d), .. } => {
@@ -157,11 +160,11 @@ impl ImageServo {
     ) -> Result<Self> {
         target.validate()?;
         let reference = view_of(reference)?;
-        let found = reference_points(&reference, target.detector()?.as_mut(), &target.reference_hints())
+        let found = reference_points(&reference, target.detector(false)?.as_mut(), &target.reference_hints())
             .map_err(|e| hints_named(e, "reference_points"))?;
         let found = target.select(found)?;
         let first = target.first_hints(&found);
-        Self::with_detector(&found, target.detector()?, first, config, depths)
+        Self::with_detector(&found, target.detector(true)?, first, config, depths)
     }
 
     /// The pipeline over any detector: `reference` holds the reference image's points (their

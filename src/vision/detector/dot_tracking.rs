@@ -12,12 +12,42 @@ pub struct DotTracking {
     config: TrackerConfig,
     ids: Vec<u32>,
     tracker: Option<DotTracker>,
+    partial: bool,
 }
 
 impl DotTracking {
-    /// A detector that will track with `config` once started.
+    /// A detector that will track with `config` once started; every expected dot must start.
     pub fn new(config: TrackerConfig) -> Self {
-        Self { config, ids: Vec::new(), tracker: None }
+        Self { config, ids: Vec::new(), tracker: None, partial: false }
+    }
+
+    /// The same, started on the expected dots that can be started: a hint outside the image,
+    /// on a dot cut by the border or on a blob that is not a dot leaves that dot out (not
+    /// reported, so not visible); an error only when no dot starts (the first dot's error).
+    pub fn partial(config: TrackerConfig) -> Self {
+        Self { partial: true, ..Self::new(config) }
+    }
+
+    /// The expected dots the tracker can start on, each tried alone (all of them when every
+    /// dot must start).
+    fn startable<'a>(&self, image: &GreyView<'_>, expected: &'a [Expected]) -> Result<Vec<&'a Expected>> {
+        if !self.partial {
+            return Ok(expected.iter().collect());
+        }
+        let mut first_error = None;
+        let mut kept = Vec::with_capacity(expected.len());
+        for e in expected {
+            match DotTracker::new(image, &[e.pixel], self.config) {
+                Ok(_) => kept.push(e),
+                Err(err) => {
+                    first_error.get_or_insert(err);
+                }
+            }
+        }
+        match (kept.is_empty(), first_error) {
+            (true, Some(err)) => Err(err),
+            _ => Ok(kept),
+        }
     }
 
     fn detections(&self, pixels: &[[f64; 2]], found: impl Fn(usize) -> bool) -> Vec<Detection> {
@@ -31,8 +61,10 @@ impl DotTracking {
 }
 
 impl Detector for DotTracking {
-    /// Finds each dot near its expected pixel (every dot must be there).
+    /// Finds each dot near its expected pixel (every dot must be there, unless
+    /// [`partial`](DotTracking::partial)).
     fn start(&mut self, image: &GreyView<'_>, expected: &[Expected]) -> Result<Vec<Detection>> {
+        let expected = self.startable(image, expected)?;
         let clicks: Vec<[f64; 2]> = expected.iter().map(|e| e.pixel).collect();
         let tracker = DotTracker::new(image, &clicks, self.config)?;
         self.ids = expected.iter().map(|e| e.id).collect();
