@@ -5,21 +5,15 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use vsinv::core::se3::{exp_twist, pose_error};
-use vsinv::nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use vsinv::nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vsinv::servo::{Law, Servo, ServoConfig, ServoDepths, ServoReference, Status};
 use vsinv::{Intrinsics, InvariantControllerConfig};
 
+mod common;
+
+use common::{grid_object as object, grid_view as view};
+
 const DT: f64 = 0.04;
-
-fn object() -> Vec<[f64; 3]> {
-    let relief = [0.0, 0.06, -0.04, 0.03, -0.06, 0.05, 0.02, -0.03, 0.04, -0.05, 0.01, -0.02];
-    (0..12).map(|i| [-0.15 + 0.1 * (i % 4) as f64, -0.12 + 0.12 * (i / 4) as f64, 0.6 + relief[i]]).collect()
-}
-
-fn view(pose: &Isometry3<f64>, k: &Intrinsics) -> Vec<[f64; 2]> {
-    let inv = pose.inverse();
-    object().iter().map(|p| k.project(&(inv * Point3::from(*p))).unwrap().0).collect()
-}
 
 /// A seeded Gaussian (xorshift + Box-Muller), so that the cases are the same every run.
 struct Gauss(u64);

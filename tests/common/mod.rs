@@ -93,3 +93,16 @@ where
     }
     (pose, iterations)
 }
+
+/// Twelve points on a 4 x 3 grid, 300 x 240 mm, about 600 mm in front of F*, with +-60 mm of
+/// relief: the servo session's tests of partial targets and of the stall rule.
+pub fn grid_object() -> Vec<[f64; 3]> {
+    let relief = [0.0, 0.06, -0.04, 0.03, -0.06, 0.05, 0.02, -0.03, 0.04, -0.05, 0.01, -0.02];
+    (0..12).map(|i| [-0.15 + 0.1 * (i % 4) as f64, -0.12 + 0.12 * (i / 4) as f64, 0.6 + relief[i]]).collect()
+}
+
+/// The pixels of [`grid_object`] seen from `pose` (camera in the object's frame) through `k`.
+pub fn grid_view(pose: &Isometry3<f64>, k: &Intrinsics) -> Vec<[f64; 2]> {
+    let inv = pose.inverse();
+    grid_object().iter().map(|p| k.project(&(inv * Point3::from(*p))).unwrap().0).collect()
+}
