@@ -200,10 +200,9 @@ impl ImageServo {
         let detections = if self.started {
             self.detector.detect(&image)?
         } else {
-            let (w, h) = (f64::from(image.width()), f64::from(image.height()));
-            let inside = |e: &&Expected| (0.0..w).contains(&e.pixel[0]) && (0.0..h).contains(&e.pixel[1]);
-            let hints: Vec<Expected> = self.first.iter().filter(inside).copied().collect();
-            let d = self.detector.start(&image, &hints).map_err(|e| hints_named(e, "first_points"))?;
+            // A hint outside the image, like any dot that cannot start, is left out by the
+            // frames' detector (`DotTracking::partial`): its point is not visible.
+            let d = self.detector.start(&image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
             self.started = true;
             d
         };
