@@ -9,11 +9,13 @@ invariant points of the two detections agree. How far is that from the pose?
     (J^+ (s - s*) of the invariant law, with the tag depths from the benchmark's cMo_*.txt and
     each image's K fitted to cMo and the 640x480 ground-truth corners).
 (ii) MuJoCo (tests/mujoco_world.py): the box with dots and with tags, reference 45 degrees,
-    servo 60 degrees. (a) Static: both images taken at the reference pose; |s - s*| and the
+    servo 60 degrees, 400x300, each pixel MuJoCo's own (supersample 1: 4 samples, edge
+    coverage in quarters) or the mean of a 3 x 3 block (supersample 3, a sensor's pixel
+    integrating light, as tests/test_mujoco_world.py renders). (a) Static: both images taken at the reference pose; |s - s*| and the
     offset it implies (true K, true depths). (b) Closed loop: `vsinv.ImageServo` from N starts
     (K_hat 30 % off), the status each run ends with and the final pose error against the scene.
 
-Run: `python benches/lens_change_accuracy.py [--starts N] [--iterations M]`.
+Run: `python benches/lens_change_accuracy.py [--starts N] [--iterations M] [--supersample 1,3]`.
 """
 
 from __future__ import annotations
@@ -114,7 +116,7 @@ def _axis_map(x: np.ndarray, y: np.ndarray) -> tuple[tuple[float, float], float]
     return (float(sol[0]), float(sol[1])), float(np.abs(A @ sol - y).max())
 
 
-def mujoco_rows(starts: int, iterations: int) -> list[str]:
+def mujoco_rows(starts: int, iterations: int, supersample: int = 1) -> list[str]:
     sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
     os.environ.setdefault("MUJOCO_GL", "egl")
     import mujoco_world as mw
@@ -125,10 +127,10 @@ def mujoco_rows(starts: int, iterations: int) -> list[str]:
     import mujoco_servo as ms
 
     lens = ms.Lens()
-    rows = [f"(ii) MuJoCo, {lens.fovy_reference:.0f} -> {lens.fovy_servo:.0f} degrees, 400x300"]
+    rows = [f"(ii) MuJoCo, {lens.fovy_reference:.0f} -> {lens.fovy_servo:.0f} degrees, 400x300, supersample {supersample}"]
     session = {"gain": 2.5, "dt": 0.04, "stop": {"max_iterations": iterations, "max_translation_uncertainty": 1e-3, "max_rotation_uncertainty_deg": 0.2}}
     for target in ("dots", "tags"):
-        world = mw.BoxWorld(target)
+        world = mw.BoxWorld(target, supersample=supersample)
         K = vsinv.Intrinsics(*world.intrinsics(lens.fovy_servo))
         servo, _ = ms.pipeline(world, lens, "invariant", ms.REFERENCE_POSE, session)
         step = servo.step(world.render(ms.REFERENCE_POSE, lens.fovy_servo))
@@ -162,11 +164,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=10)
     parser.add_argument("--iterations", type=int, default=200)
+    parser.add_argument("--supersample", default="1,3", help="comma-separated MuJoCo supersampling factors")
     args = parser.parse_args()
     for row in benchmark_pair():
         print(row, flush=True)
-    for row in mujoco_rows(args.starts, args.iterations):
-        print(row, flush=True)
+    for supersample in (int(k) for k in args.supersample.split(",")):
+        for row in mujoco_rows(args.starts, args.iterations, supersample):
+            print(row, flush=True)
 
 
 if __name__ == "__main__":

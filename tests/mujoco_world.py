@@ -42,7 +42,7 @@ FACES = {  # face name: (centre, in-face axis a, in-face axis b, outward normal)
 }
 DOT_OFFSETS = [(-0.05, -0.05), (0.05, -0.05), (0.05, 0.05), (-0.05, 0.05)]
 DOT_RADIUS = 0.012
-TAG_SIDE = 0.11  # the black square, metres
+TAG_SIDE = 0.15  # the black square, metres: the tile with its quiet zone nearly fills the 0.2 m face
 TAG_IDS = {"+x": 3, "+y": 7, "+z": 12}  # tag36h11 identities
 
 
@@ -125,6 +125,11 @@ class BoxWorld:
     width: int = 400
     height: int = 300
     sphere_faces: tuple[str, ...] = ("+z",)  # dots on these faces are spheres, the others flat discs
+    # A sensor's pixel integrates the light over its area; MuJoCo samples each pixel at 4 points
+    # (llvmpipe's most), which quantizes a small dot's edge coverage in quarters and moves its
+    # centroid by a few hundredths of a pixel, differently at each lens. The frame is rendered
+    # `supersample` times larger and averaged over blocks, as a sensor would.
+    supersample: int = 1
     model: Any = field(init=False)
     data: Any = field(init=False)
     renderer: Any = field(init=False)
@@ -135,7 +140,9 @@ class BoxWorld:
         xml, assets = self.mjcf()
         self.model = mujoco.MjModel.from_xml_string(xml, assets)
         self.data = mujoco.MjData(self.model)
-        self.renderer = mujoco.Renderer(self.model, self.height, self.width)
+        if not 1 <= self.supersample <= 4:
+            raise ValueError(f"supersample: expected 1 to 4, got {self.supersample!r}")
+        self.renderer = mujoco.Renderer(self.model, self.height * self.supersample, self.width * self.supersample)
 
     def close(self) -> None:
         self.renderer.close()
@@ -155,7 +162,7 @@ class BoxWorld:
                 geoms.append(name)
         return (
             f"""<mujoco model="vsinv-box-{self.target}">
-  <visual><global offwidth="{self.width}" offheight="{self.height}"/>
+  <visual><global offwidth="{self.width * self.supersample}" offheight="{self.height * self.supersample}"/>
     <headlight ambient="0.25 0.25 0.25" diffuse="0.3 0.3 0.3" specular="0.05 0.05 0.05"/></visual>
   <asset>{"".join(asset_xml)}</asset>
   <worldbody>
@@ -235,11 +242,19 @@ class BoxWorld:
 
     # -- rendering ---------------------------------------------------------------------------
     def render(self, pose: np.ndarray, fovy_deg: float) -> np.ndarray:
-        """The (height, width) uint8 grey image seen from `pose` with vertical field of view `fovy_deg`."""
-        return render_grey(self.model, self.data, self.renderer, pose, fovy_deg)
+        """The (height, width) uint8 grey image seen from `pose` with vertical field of view
+        `fovy_deg` (each pixel the mean of its `supersample` x `supersample` rendered block)."""
+        k = self.supersample
+        if k == 1:
+            return render_grey(self.model, self.data, self.renderer, pose, fovy_deg)
+        fine = render_grey(self.model, self.data, self.renderer, pose, fovy_deg, rounded=False)
+        block = fine.reshape(self.height, k, self.width, k).mean(axis=(1, 3))
+        return np.clip(np.rint(block), 0, 255).astype(np.uint8)
 
 
-def render_grey(model: Any, data: Any, renderer: Any, pose: np.ndarray, fovy_deg: float, camera: str = "eye") -> np.ndarray:
+def render_grey(
+    model: Any, data: Any, renderer: Any, pose: np.ndarray, fovy_deg: float, camera: str = "eye", rounded: bool = True
+) -> np.ndarray:
     """Puts the model's camera `camera` (a child of the world body) at the vsinv pose `pose` with
     vertical field of view `fovy_deg` and renders it as (height, width) uint8 grey (Rec. 601 luma)."""
     cam = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
@@ -252,7 +267,7 @@ def render_grey(model: Any, data: Any, renderer: Any, pose: np.ndarray, fovy_deg
     renderer.update_scene(data, camera=camera)
     rgb = renderer.render().astype(np.float64)
     grey = rgb[:, :, 0] * 0.299 + rgb[:, :, 1] * 0.587 + rgb[:, :, 2] * 0.114
-    return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
+    return np.clip(np.rint(grey), 0, 255).astype(np.uint8) if rounded else grey
 
 
 def _v(x: Any) -> str:
@@ -264,3 +279,37 @@ def pose_error(pose: np.ndarray, goal: np.ndarray) -> tuple[float, float]:
     delta = np.linalg.inv(goal) @ pose
     angle = np.arccos(np.clip((np.trace(delta[:3, :3]) - 1.0) / 2.0, -1.0, 1.0))
     return 1e3 * float(np.linalg.norm(delta[:3, 3])), float(np.degrees(angle))
+
+
+# -- dots under real light (issue 27, item 4) ------------------------------------------------
+# White spheres (centre, radius) and tilted white discs (centre, radius, normal) over a grey
+# floor, lit by one directional light and a dim ambient, seen from LIT_EYE.
+LIT_SPHERES = [
+    ((-0.12, -0.07, 0.0), 0.018),
+    ((0.0, -0.08, 0.01), 0.02),
+    ((0.12, -0.07, 0.0), 0.022),
+    ((-0.12, 0.07, 0.02), 0.02),
+    ((0.01, 0.06, -0.01), 0.016),
+    ((0.13, 0.08, 0.0), 0.02),
+]
+LIT_DISCS = [((-0.06, 0.0, -0.02), 0.015, (0.3, 0.2, 1.0)), ((0.07, 0.0, -0.02), 0.015, (-0.4, 0.1, 1.0))]
+LIT_EYE = ((0.05, -0.25, 0.45), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))  # eye, target, up
+
+
+def lit_dots(width: int, height: int, light: tuple[float, float, float], specular: float, shininess: float) -> tuple[Any, Any, Any]:
+    """The MuJoCo model, data and renderer of the lit dots: `light` is the directional light's
+    direction, `specular` and `shininess` the white material's (a highlight when specular > 0)."""
+    geoms = "".join(f'<geom type="sphere" size="{r}" pos="{_v(c)}" material="white"/>' for c, r in LIT_SPHERES)
+    geoms += "".join(
+        f'<geom type="cylinder" size="{r} 0.0005" pos="{_v(c)}" zaxis="{_v(n)}" material="white"/>' for c, r, n in LIT_DISCS
+    )
+    xml = f"""<mujoco><visual><global offwidth="{width}" offheight="{height}"/>
+      <headlight ambient="0.15 0.15 0.15" diffuse="0 0 0" specular="0 0 0"/></visual>
+      <asset><material name="white" rgba="1 1 1 1" specular="{specular}" shininess="{shininess}"/></asset>
+      <worldbody>
+        <light directional="true" dir="{_v(light)}" diffuse="0.8 0.8 0.8" specular="0.9 0.9 0.9" castshadow="false"/>
+        <geom type="plane" size="1 1 0.01" pos="0 0 -0.05" rgba="0.25 0.25 0.27 1"/>{geoms}
+        <camera name="eye" pos="1 1 1"/>
+      </worldbody></mujoco>"""
+    model = mujoco.MjModel.from_xml_string(xml)
+    return model, mujoco.MjData(model), mujoco.Renderer(model, height, width)

@@ -38,17 +38,32 @@ def test_fill_ratio_and_contrast_reject_what_is_not_a_dot() -> None:
     assert _columns(vsinv.detect_dots(255 - image, polarity="dark")) == [20]
 
 
-def test_a_dot_in_texture_fails_the_ring_check() -> None:
+@pytest.mark.parametrize("reach", [9, 39])
+def test_a_dot_in_texture_fails_the_ring_check(reach: int) -> None:
+    """A speck in texture all round it (`reach` 39: the texture fills the image) fails the ring
+    check; a dot in a small textured patch (`reach` 9) fails it near, and is measured against a
+    ring farther out only when it is large enough to be a shaded sphere (100 px or more: this
+    one has 113, so the patch must reach past twice its size to keep it out)."""
     rng = np.random.default_rng(3)
     v, u = np.mgrid[0:80, 0:80].astype(float)
     image = np.where(np.hypot(u - 40, v - 40) < 6, 200.0, 40.0)
     textured = image.copy()
-    ring = (np.abs(u - 40) <= 9) & (np.abs(v - 40) <= 9) & (np.hypot(u - 40, v - 40) >= 7)
+    ring = (np.abs(u - 40) <= reach) & (np.abs(v - 40) <= reach) & (np.hypot(u - 40, v - 40) >= 7)
     textured[ring] += rng.choice([-30.0, 30.0], size=ring.sum())
     plain, busy = image.astype(np.uint8), textured.astype(np.uint8)
     assert len(vsinv.detect_dots(plain)) == 1
-    assert len(vsinv.detect_dots(busy, threshold=120)) == 0
+    assert len(vsinv.detect_dots(busy, threshold=120)) == (1 if reach < 12 else 0)
     assert len(vsinv.detect_dots(busy, threshold=120, max_ring_residual=np.inf)) == 1
+
+
+def test_a_small_speck_in_a_textured_patch_fails_the_ring_check() -> None:
+    """Under 100 px a blob gets no grown ring: a speck in a patch of texture stays out."""
+    rng = np.random.default_rng(4)
+    v, u = np.mgrid[0:80, 0:80].astype(float)
+    image = np.where(np.hypot(u - 40, v - 40) < 4, 200.0, 40.0)  # 49 px
+    ring = (np.abs(u - 40) <= 7) & (np.abs(v - 40) <= 7) & (np.hypot(u - 40, v - 40) >= 5)
+    image[ring] += rng.choice([-30.0, 30.0], size=ring.sum())
+    assert len(vsinv.detect_dots(image.astype(np.uint8), threshold=120)) == 0
 
 
 def test_dots_under_a_strong_lighting_gradient_are_all_found_at_their_centres() -> None:

@@ -31,6 +31,11 @@ import mujoco_servo as ms  # noqa: E402
 import vsinv  # noqa: E402
 
 LENS = ms.Lens()  # 45 -> 60 degrees, K_hat 30 % off
+# Each pixel is the mean of a 3 x 3 block of MuJoCo's pixels, as a sensor's pixel integrates
+# light over its area. MuJoCo's own pixels (4 samples: edge coverage in quarters) move a small
+# dot's centroid by 0.02-0.04 px differently at each lens; the dots' runs then settle 0.4-1.1 mm
+# from the goal with 3.4-5.1 mm allowed (`settled`), benches/lens_change_accuracy.py.
+SUPERSAMPLE = 3
 STARTS = 10
 # The issue's requirement: `converged` within 1 mm and 0.2 degrees of the goal.
 GOAL_MM, GOAL_DEG = 1.0, 0.2
@@ -47,7 +52,7 @@ IBVS_SESSION = {**SESSION, "stop": {**SESSION["stop"], "max_iterations": 120}}
 
 @pytest.fixture(scope="module", params=["dots", "tags"])
 def world(request: pytest.FixtureRequest):
-    w = mw.BoxWorld(request.param, width=400, height=300)
+    w = mw.BoxWorld(request.param, width=400, height=300, supersample=SUPERSAMPLE)
     yield w
     w.close()
 
@@ -141,17 +146,51 @@ def test_the_scene_is_what_it_says(world: mw.BoxWorld) -> None:
             assert gap[~flat].max() < 2.0, gap  # a sphere's lit part is off its centre by a pixel or so
 
 
+# Lights of the lit dots: from above, and oblique from the left and behind; each without and
+# with a specular highlight.
+LIGHTS = [((0, 0, -1), 0.0, 0.5), ((0, 0, -1), 0.8, 0.9), ((-0.6, 0.3, -1), 0.0, 0.5), ((-0.6, 0.3, -1), 0.8, 0.9)]
+
+
+@pytest.mark.parametrize(("light", "specular", "shininess"), LIGHTS, ids=["above", "above-highlight", "oblique", "oblique-highlight"])
+def test_detect_dots_and_the_tracker_find_shaded_spheres_and_lit_discs(light, specular: float, shininess: float) -> None:
+    """Issue 27, item 4: white spheres shaded by a directional light (their far side dim, a
+    highlight on the near one) and tilted discs, rendered by MuJoCo. detect_dots finds every
+    one and nothing else: a disc within 0.3 px of its centre's projection (the perspective
+    bias of an ellipse's centre), a sphere within 0.35 of its radius (its weighted centroid
+    leans towards the light); the DotTracker starts on every one from the projections (the
+    shape check passes) and follows them while the camera moves, within half a radius."""
+    width, height, fovy = 640, 480, 50.0
+    model, data, renderer = mw.lit_dots(width, height, light, specular, shininess)
+    K = mw.intrinsics(fovy, width, height)
+    centres = np.array([c for c, _ in mw.LIT_SPHERES] + [c for c, _, _ in mw.LIT_DISCS])
+    pose = mw.look_at(*mw.LIT_EYE)
+    image = mw.render_grey(model, data, renderer, pose, fovy)
+    truth, depth = mw.project(pose, K, centres)
+    radius = np.array([r for _, r in mw.LIT_SPHERES]) * K[0] / depth[: len(mw.LIT_SPHERES)]
+    spheres = slice(0, len(mw.LIT_SPHERES))
+    found = vsinv.detect_dots(image).centroids
+    assert len(found) == len(centres), found
+    gap = np.linalg.norm(found[None, :, :] - truth[:, None, :], axis=2).min(axis=1)
+    assert (gap[spheres] < 0.35 * radius).all(), gap[spheres] / radius
+    assert (gap[len(mw.LIT_SPHERES) :] < 0.3).all(), gap
+    tracker = vsinv.DotTracker(image, truth)
+    for step in range(1, 6):
+        moved = pose @ vsinv.pose_from_position_thetau([0.002 * step, -0.001 * step, 0.0], [0.0, 0.002 * step, 0.0])
+        pixels, ok = tracker.track(mw.render_grey(model, data, renderer, moved, fovy))
+        want, _ = mw.project(moved, K, centres)
+        assert ok.all(), step
+        miss = np.linalg.norm(pixels - want, axis=1)
+        assert (miss[spheres] < 0.5 * radius).all() and (miss[len(mw.LIT_SPHERES) :] < 0.3).all(), miss
+    renderer.close()
+
+
 def _runs(world: mw.BoxWorld, law: str, session: dict) -> list[ms.RunEnd]:
     return [ms.run(world, LENS, law, start, k, session) for k, start in enumerate(ms.start_poses(world, LENS, STARTS))]
 
 
-def test_invariant_law_converges_through_mujoco_images(world: mw.BoxWorld, request: pytest.FixtureRequest) -> None:
+def test_invariant_law_converges_through_mujoco_images(world: mw.BoxWorld) -> None:
     """The issue's requirement: from every start the invariant law ends `converged`, and the
     camera is within 1 mm and 0.2 degrees of the reference pose."""
-    if world.target == "dots":
-        # Issue 27, item 4 (open): the tracker's shape check at start refuses the dots on the
-        # box's sphere face (MuJoCo's light leaves a lit part that is not a filled ellipse).
-        request.applymarker(pytest.mark.xfail(strict=True, reason="shaded spheres: issue 27, item 4"))
     ends = _runs(world, "invariant", SESSION)
     table = "\n".join(e.row() + f" ({e.reason})" for e in ends)
     print(table)

@@ -112,12 +112,15 @@ def test_mire2_gives_its_five_dots_in_every_frame_with_default_settings(visp: Pa
     # the default filters too: 392 (at most 3 a frame), 369 of them under 40 px (in 325
     # frames), most a white window of about 30 px in a black square printed on the poster (a
     # bright filled ellipse on a plain dark ring: a dot by every measure but its size), and 8
-    # of 60 px or more (in 8 frames).
+    # of 60 px or more (in 8 frames). Since shaded spheres are dots (issue 27, item 4: a blob
+    # whose near surround is not plain is measured against a ring farther out), the alien's
+    # head at the right of the scene is one too: a bright bulb of about 1,300 px shaded by the
+    # room's light, in 326 frames (the blobs of 500 px or more).
     frames = _mire2(visp)
     first = vsinv.detect_dots(vsinv.load_image(frames[0]), min_area=50, min_fill=0.97)
     assert len(first) == 5, f"{frames[0].name}: {len(first)}"
     previous = first.centroids
-    extra_blobs = 0
+    extra_blobs, bulbs = 0, 0
     for path in frames:
         dots = vsinv.detect_dots(vsinv.load_image(path))
         distances = np.linalg.norm(dots.centroids[None, :, :] - previous[:, None, :], axis=2)
@@ -126,9 +129,13 @@ def test_mire2_gives_its_five_dots_in_every_frame_with_default_settings(visp: Pa
         assert len(set(nearest)) == 5, f"{path.name}: two dots on one detection"
         assert (dots.areas[nearest] >= 60).all(), f"{path.name}: {dots.areas[nearest]}"
         previous = dots.centroids[nearest]
-        extra_blobs += len(dots) - 5
-    print(f"mire-2: the 5 dots in all {len(frames)} frames; {extra_blobs} other blobs besides")
-    assert extra_blobs <= 400
+        others = np.setdiff1d(np.arange(len(dots)), nearest)
+        assert len(others) <= 4, f"{path.name}: {len(others)} other blobs"
+        bulbs += int((dots.areas[others] >= 500).sum())
+        extra_blobs += len(others)
+    print(f"mire-2: the 5 dots in all {len(frames)} frames; {extra_blobs} other blobs besides, {bulbs} of 500 px or more")
+    assert extra_blobs - bulbs <= 400
+    assert bulbs <= 340
 
 
 def test_mire2_centroids_agree_with_opencv_moments(visp: Path) -> None:

@@ -41,20 +41,34 @@ pub struct Weighted {
     pub ring_residual: f64,
 }
 
+/// Which ring around a dot its background plane is fitted to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RingFit {
+    /// The border of the dot's box grown by [`MARGIN`].
+    Near,
+    /// The plainest of the borders of its box grown by twice, four times... [`MARGIN`], up to
+    /// twice the box's size and inside the image (the centroid then weighs that whole box): a
+    /// shaded sphere's dim limb reaches past its lit part, and its surround is plain only
+    /// outside its outline. A blob in clutter stays in clutter at every size.
+    Grown,
+}
+
 /// The centroid of component `index` of `labelling`.
-pub fn weighted_centroid<C: Pixels>(image: &GreyBuffer<C>, labelling: &Labelling, index: u32, dark: bool) -> Weighted {
+pub fn weighted_centroid<C: Pixels>(
+    image: &GreyBuffer<C>,
+    labelling: &Labelling,
+    index: u32,
+    dark: bool,
+    fit: RingFit,
+) -> Weighted {
     let c: &Component = &labelling.components[index as usize];
     let (w, h) = (image.width(), image.height());
-    let bbox = [
-        c.bbox[0].saturating_sub(MARGIN),
-        c.bbox[1].saturating_sub(MARGIN),
-        (c.bbox[2] + MARGIN).min(w - 1),
-        (c.bbox[3] + MARGIN).min(h - 1),
-    ];
     let flip = if dark { 255u8 } else { 0 };
     let level = |u: u32, v: u32| f64::from(image.as_raw()[v as usize * w as usize + u as usize] ^ flip);
-    let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
-    let (plane, ring_residual) = ring_plane(labelling, index, bbox, centre, &level);
+    let Ring { bbox, centre, plane, residual: ring_residual } = match fit {
+        RingFit::Near => Ring::fit(labelling, index, grow(c.bbox, MARGIN, w, h), &level),
+        RingFit::Grown => grown_ring(labelling, index, c.bbox, w, h, &level),
+    };
     let background =
         |u: u32, v: u32| plane[0] + plane[1] * (f64::from(u) - centre[0]) + plane[2] * (f64::from(v) - centre[1]);
     // A background pixel counts only above the ring's noise: its anti-aliased edge share.
@@ -89,6 +103,64 @@ pub fn weighted_centroid<C: Pixels>(image: &GreyBuffer<C>, labelling: &Labelling
     Weighted { centroid, contrast: own / c.area as f64, ring_residual }
 }
 
+/// `bbox` grown by `margin` pixels on each side, clipped to the `w` x `h` image.
+fn grow(bbox: [u32; 4], margin: u32, w: u32, h: u32) -> [u32; 4] {
+    [
+        bbox[0].saturating_sub(margin),
+        bbox[1].saturating_sub(margin),
+        (bbox[2] + margin).min(w - 1),
+        (bbox[3] + margin).min(h - 1),
+    ]
+}
+
+/// A box around a dot and the background plane fitted to its border ring.
+#[derive(Debug, Clone, Copy)]
+struct Ring {
+    bbox: [u32; 4],
+    /// The box's centre, about which the plane is written.
+    centre: [f64; 2],
+    plane: [f64; 3],
+    /// RMS residual of the ring's pixels from the plane.
+    residual: f64,
+}
+
+impl Ring {
+    fn fit(labelling: &Labelling, index: u32, bbox: [u32; 4], level: &impl Fn(u32, u32) -> f64) -> Self {
+        let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
+        let (plane, residual) = ring_plane(labelling, index, bbox, centre, level);
+        Self { bbox, centre, plane, residual }
+    }
+}
+
+/// [`RingFit::Grown`]: the plainest grown ring inside the image (an infinite residual when
+/// none is).
+fn grown_ring(
+    labelling: &Labelling,
+    index: u32,
+    component: [u32; 4],
+    w: u32,
+    h: u32,
+    level: &impl Fn(u32, u32) -> f64,
+) -> Ring {
+    let size = (component[2] - component[0]).max(component[3] - component[1]) + 1;
+    let inside = |margin: u32| {
+        component[0] >= margin && component[1] >= margin && component[2] + margin < w && component[3] + margin < h
+    };
+    let mut best: Option<Ring> = None;
+    let mut margin = 2 * MARGIN;
+    while margin <= 2 * size.max(MARGIN) && inside(margin) {
+        let next = Ring::fit(labelling, index, grow(component, margin, w, h), level);
+        if best.is_none_or(|b| next.residual < b.residual) {
+            best = Some(next);
+        }
+        margin *= 2;
+    }
+    best.unwrap_or_else(|| Ring {
+        residual: f64::INFINITY,
+        ..Ring::fit(labelling, index, grow(component, MARGIN, w, h), level)
+    })
+}
+
 /// Calls `f(u0, u1, owner)` for the segments `u0..u1` of row `v` between columns `first` and
 /// `last` (inclusive), by owner.
 fn visit_row(labelling: &Labelling, index: u32, v: u32, first: u32, last: u32, mut f: impl FnMut(u32, u32, Owner)) {
@@ -121,16 +193,14 @@ fn ring_plane(
     centre: [f64; 2],
     level: &impl Fn(u32, u32) -> f64,
 ) -> ([f64; 3], f64) {
-    let mut normal = Matrix3::<f64>::zeros();
-    let mut rhs = Vector3::<f64>::zeros();
-    let mut squares = 0.0;
-    let mut add = |u: u32, v: u32| {
-        let x = Vector3::new(1.0, f64::from(u) - centre[0], f64::from(v) - centre[1]);
-        let g = level(u, v);
-        normal += x * x.transpose();
-        rhs += x * g;
-        squares += g * g;
-    };
+    let mut sums = PlaneSums::default();
+    visit_ring(labelling, index, bbox, |u, v| sums.add(u, v, centre, level(u, v)));
+    sums.solve()
+}
+
+/// Calls `f(u, v)` for each background pixel of the border ring of `bbox` (its first and last
+/// rows, and its first and last columns between them).
+fn visit_ring(labelling: &Labelling, index: u32, bbox: [u32; 4], mut f: impl FnMut(u32, u32)) {
     for v in bbox[1]..=bbox[3] {
         let whole_row = v == bbox[1] || v == bbox[3];
         visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
@@ -138,28 +208,53 @@ fn ring_plane(
                 return;
             }
             if whole_row {
-                (u0..u1).for_each(|u| add(u, v));
+                (u0..u1).for_each(|u| f(u, v));
             } else {
                 for u in [bbox[0], bbox[2]] {
                     if (u0..u1).contains(&u) {
-                        add(u, v);
+                        f(u, v);
                     }
                 }
             }
         });
     }
-    let count = normal[(0, 0)];
-    // Residual sum of squares of a least-squares fit: sum g^2 - p . (X^T g).
-    let rms = |p: Vector3<f64>| ((squares - p.dot(&rhs)).max(0.0) / count).sqrt();
-    match normal.try_inverse() {
-        Some(inverse) if count >= 3.0 && (normal.determinant() / count.powi(3)).abs() > 1e-9 => {
-            let p = inverse * rhs;
-            ([p[0], p[1], p[2]], rms(p))
+}
+
+/// The normal equations of a least-squares plane `g = a + b_u (u - u_c) + b_v (v - v_c)`.
+#[derive(Debug, Default)]
+struct PlaneSums {
+    normal: Matrix3<f64>,
+    rhs: Vector3<f64>,
+    squares: f64,
+}
+
+impl PlaneSums {
+    fn add(&mut self, u: u32, v: u32, centre: [f64; 2], g: f64) {
+        let x = Vector3::new(1.0, f64::from(u) - centre[0], f64::from(v) - centre[1]);
+        self.normal += x * x.transpose();
+        self.rhs += x * g;
+        self.squares += g * g;
+    }
+
+    fn count(&self) -> f64 {
+        self.normal[(0, 0)]
+    }
+
+    /// The plane and the RMS of its residuals; the mean when the pixels do not fix a plane.
+    fn solve(&self) -> ([f64; 3], f64) {
+        let count = self.count();
+        // Residual sum of squares of a least-squares fit: sum g^2 - p . (X^T g).
+        let rms = |p: Vector3<f64>| ((self.squares - p.dot(&self.rhs)).max(0.0) / count).sqrt();
+        match self.normal.try_inverse() {
+            Some(inverse) if count >= 3.0 && (self.normal.determinant() / count.powi(3)).abs() > 1e-9 => {
+                let p = inverse * self.rhs;
+                ([p[0], p[1], p[2]], rms(p))
+            }
+            _ if count > 0.0 => {
+                let mean = self.rhs[0] / count;
+                ([mean, 0.0, 0.0], rms(Vector3::new(mean, 0.0, 0.0)))
+            }
+            _ => ([0.0; 3], 0.0),
         }
-        _ if count > 0.0 => {
-            let mean = rhs[0] / count;
-            ([mean, 0.0, 0.0], rms(Vector3::new(mean, 0.0, 0.0)))
-        }
-        _ => ([0.0; 3], 0.0),
     }
 }
