@@ -189,3 +189,21 @@ def test_the_stubs_name_the_families_of_the_one_declaration():
     assert literal is not None
     assert tuple(ast.literal_eval(f"[{literal.group(1)}]")) == vsinv.TAG_FAMILIES
     assert vsinv.TAG_FAMILIES[0] == "tag36h11" and "tagStandard41h12" in vsinv.TAG_FAMILIES
+
+
+@pytest.mark.parametrize("family", ["tagStandard41h12", "tagCircle21h7"])
+def test_invariance_reads_a_rendered_rig_of_the_family(family, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    # The rig seen by the reference camera and by the servo camera at its start pose: the
+    # command decodes the family's tags in both (12 corners by identity).
+    from vsinv import cli
+
+    d = _rig(family)
+    vsinv.save_image(vsinv.render(d, reference=True), tmp_path / "ref.png")
+    vsinv.save_image(vsinv.render(d, pose=np.diag([1.0, 1.0, 1.0, 1.0])), tmp_path / "cur.png")
+    code = cli.main(["invariance", str(tmp_path / "ref.png"), str(tmp_path / "cur.png"), "--target", "tags",
+                     "--family", family])
+    captured = capsys.readouterr()
+    assert code == 0 and "over 12 of 12" in captured.out, (captured.out, captured.err)
+    code = cli.main(["invariance", str(tmp_path / "ref.png"), str(tmp_path / "cur.png"), "--target", "tags",
+                     "--family", "tag36h11"])
+    assert code != 0  # no tag36h11 tag in the reference image
