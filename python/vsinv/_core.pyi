@@ -8,6 +8,7 @@ import numpy.typing as npt
 from typing_extensions import disjoint_base
 
 #: The AprilTag families `detect_tags`, `TagTracker` and `ImageServo` read (Rust `TagFamily::NAMES`).
+#: `TAG_FAMILIES` at run time (a test checks that the two agree).
 _TagFamily = Literal[
     "tag36h11",
     "tag36h10",
@@ -19,6 +20,9 @@ _TagFamily = Literal[
     "tagCircle49h12",
     "tagCustom48h12",
 ]
+
+#: The names of the AprilTag families every tag argument and scenario key accepts (Rust `TagFamily::NAMES`).
+TAG_FAMILIES: tuple[str, ...]
 
 __version__: str
 __all__ = [
@@ -66,6 +70,7 @@ __all__ = [
     "DotTracker",
     "Tags",
     "TagTracker",
+    "TAG_FAMILIES",
     "detect_tags",
     "load_image",
     "save_image",

@@ -9,6 +9,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ._core import TAG_FAMILIES
+
 __all__ = ["TAG_OPTION_NAMES", "add_tag_options", "tag_options"]
 
 #: The keyword arguments an error may name, and the options that give them.
@@ -17,7 +19,7 @@ TAG_OPTION_NAMES = {"family": "--family", "tag_ids": "--tag-ids", "decimation": 
 
 def add_tag_options(parser: Any, scope: str = "tags: ") -> None:
     """Adds the tag target's options to a command; ``scope`` starts each help text."""
-    parser.add_argument("--family", default="tag36h11", help=f"{scope}the AprilTag family (tag36h11)")
+    parser.add_argument("--family", default="tag36h11", help=f"{scope}the AprilTag family, one of {', '.join(TAG_FAMILIES)} (default tag36h11)")
     parser.add_argument("--tag-ids", metavar="I,J,...", help=f"{scope}the tags to follow (default: every tag decoded in REF)")
     parser.add_argument(
         "--decimation", metavar="D", type=int,

@@ -79,8 +79,8 @@ pub(super) fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyRes
     Ok(PyTags { ids: ids.unbind(), corners: corners.unbind(), family, count: m })
 }
 
-/// `"tag36h11"`, `"tag36h10"`, `"tag25h9"` or `"tag16h5"`; anything else raises
-/// `InvalidInput` naming `family`.
+/// A name of [`TagFamily::NAMES`] (Python's `TAG_FAMILIES`); anything else raises
+/// `InvalidInput` naming `family` and listing the names.
 pub(super) fn family_arg(name: &str) -> PyResult<TagFamily> {
     TagFamily::from_name(name).ok_or_else(|| {
         let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
@@ -127,5 +127,7 @@ pub fn detect_tags(
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyTags>()?;
     m.add_function(wrap_pyfunction!(detect_tags, m)?)?;
+    // The families every tag argument and scenario key accepts, from the one declaration.
+    m.add("TAG_FAMILIES", pyo3::types::PyTuple::new(m.py(), TagFamily::NAMES)?)?;
     Ok(())
 }

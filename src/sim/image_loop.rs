@@ -17,7 +17,6 @@ use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::view_of;
 use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
-use crate::vision::tags::TagFamily;
 use crate::vision::target::dots::Dots;
 use crate::vision::target::{Target, TargetPoint};
 use crate::vision::tracker::TrackerConfig;
@@ -76,7 +75,8 @@ pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<Scene
                 .tags()
                 .cloned()
                 .ok_or(Error::InvalidParameter { name: "object.tags", reason: "the scene has no tag rig".into() })?;
-            Ok(SceneVision { target: Box::new(tags), detector: Box::new(TagDetector::new(TagFamily::Tag36h11)) })
+            let detector = Box::new(TagDetector::new(tags.family()));
+            Ok(SceneVision { target: Box::new(tags), detector })
         }
     }
 }
@@ -336,7 +336,8 @@ mod tests {
             size: 0.05,
             pose: Isometry3::from_parts(Translation3::new(x, 0.0, 0.5), rotation),
         };
-        let rig = TagRig::new(vec![tag(5, -0.04, facing), tag(9, 0.04, away)]).unwrap();
+        let rig =
+            TagRig::new(crate::vision::TagFamily::Tag36h11, vec![tag(5, -0.04, facing), tag(9, 0.04, away)]).unwrap();
         let points: Vec<[f64; 3]> = rig.points().iter().map(|p| p.position).collect();
         let scene = Scene::new(points, vec![]).unwrap().with_tags(rig).unwrap();
         let config = RenderConfig { noise_sigma: 1.0, ..RenderConfig::default() };

@@ -7,7 +7,7 @@
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |
-//! | a rig of AprilTags (tag36h11, [`TagRig`]) | [`target::tags`] |
+//! | a rig of AprilTags of any [`TagFamily`] ([`TagRig`]) | [`target::tags`] |
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |

@@ -39,22 +39,26 @@ pub struct ObjectSpec {
     /// camera).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub normals: Option<Vec<[f64; 3]>>,
-    /// A rig of AprilTags (tag36h11) instead of `points`: the points are the tags' corners,
-    /// four per tag in order (top-left, top-right, bottom-right, bottom-left as printed).
+    /// A rig of AprilTags instead of `points`: the points are the tags' corners, four per tag
+    /// in order (top-left, top-right, bottom-right, bottom-left as printed).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tags: Vec<TagSpec>,
+    /// The family of the `tags` (a name of `vision::TagFamily::NAMES`; default tag36h11).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tag_family: Option<String>,
     /// The rig's frame in F*, in which the `tags` are placed (default: F*).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rig: Option<PoseSpec>,
 }
 
-/// One `[[object.tags]]` entry: a tag36h11 tag on the rig.
+/// One `[[object.tags]]` entry: a tag of the rig's family (`object.tag_family`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TagSpec {
-    /// The tag's id in the family, 0-586.
+    /// The tag's id in the family (0-586 for tag36h11).
     pub id: u32,
-    /// Side of the black border's outer square, metres (AprilTag's and OpenCV's tag size).
+    /// Side of the square whose corners are reported, metres (AprilTag's and OpenCV's tag
+    /// size: tag36h11's black border, tagStandard41h12's white square inside its black ring).
     pub size: f64,
     /// The tag's centre in the rig frame, metres.
     pub position: [f64; 3],

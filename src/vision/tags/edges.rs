@@ -344,10 +344,10 @@ pub(super) mod tests {
                     * UnitQuaternion::new(axis * angle.to_radians()),
             ),
         };
-        let rig = TagRig::new(vec![
-            tag(5, Vector3::y(), 50.0, -0.08),
-            tag(9, Vector3::new(1.0, 1.0, 0.0).normalize(), 35.0, 0.08),
-        ])
+        let rig = TagRig::new(
+            FAMILY,
+            vec![tag(5, Vector3::y(), 50.0, -0.08), tag(9, Vector3::new(1.0, 1.0, 0.0).normalize(), 35.0, 0.08)],
+        )
         .unwrap();
         let mut worst_error: f64 = 0.0;
         for (blur, noise) in [(0.0, 0.0), (0.8, 1.0), (1.2, 2.0)] {

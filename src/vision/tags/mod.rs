@@ -28,8 +28,11 @@
 //! do not support its corners is not reported (never reported with a wrong corner).
 
 mod edges;
+mod face;
 mod pyramid;
 mod smoothed;
+
+pub use self::face::TagFace;
 
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
@@ -38,8 +41,9 @@ use kornia_image::{Image, ImageSize};
 use crate::error::{Error, Result};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
 
-/// The tag families [`detect_tags`] reads: those OpenCV's aruco module has too (its
-/// `DICT_APRILTAG_*` dictionaries), whose corner order is checked against it.
+/// The tag families [`detect_tags`] reads, declared once (`FAMILIES`): AprilTag 3's nine
+/// (the classic four are also OpenCV aruco's `DICT_APRILTAG_*`, whose corner order is checked
+/// against it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 pub enum TagFamily {
     /// tag36h11: 587 ids, 6 x 6 data bits, minimum Hamming distance 11 (the recommended family).
@@ -64,72 +68,63 @@ pub enum TagFamily {
     TagCustom48h12,
 }
 
+/// The one declaration of the families: each with its name (AprilTag's, as Python spells it).
+/// Everything else is read from kornia-apriltag's family of that name (its layout and codes):
+/// by the decoder, the renderer ([`TagFace`]), the scenario key `object.tag_family` and
+/// Python's `TAG_FAMILIES`. Adding a family is a variant and a row here.
+const FAMILIES: [(TagFamily, &str); 9] = [
+    (TagFamily::Tag36h11, "tag36h11"),
+    (TagFamily::Tag36h10, "tag36h10"),
+    (TagFamily::Tag25h9, "tag25h9"),
+    (TagFamily::Tag16h5, "tag16h5"),
+    (TagFamily::TagStandard41h12, "tagStandard41h12"),
+    (TagFamily::TagStandard52h13, "tagStandard52h13"),
+    (TagFamily::TagCircle21h7, "tagCircle21h7"),
+    (TagFamily::TagCircle49h12, "tagCircle49h12"),
+    (TagFamily::TagCustom48h12, "tagCustom48h12"),
+];
+
 impl TagFamily {
-    /// The names, as Python spells them (AprilTag's names).
-    pub const NAMES: [&'static str; 9] = [
-        "tag36h11",
-        "tag36h10",
-        "tag25h9",
-        "tag16h5",
-        "tagStandard41h12",
-        "tagStandard52h13",
-        "tagCircle21h7",
-        "tagCircle49h12",
-        "tagCustom48h12",
-    ];
-    const ALL: [Self; 9] = [
-        Self::Tag36h11,
-        Self::Tag36h10,
-        Self::Tag25h9,
-        Self::Tag16h5,
-        Self::TagStandard41h12,
-        Self::TagStandard52h13,
-        Self::TagCircle21h7,
-        Self::TagCircle49h12,
-        Self::TagCustom48h12,
-    ];
+    /// The names, as Python spells them (AprilTag's names), in the order of [`TagFamily::ALL`].
+    pub const NAMES: [&'static str; FAMILIES.len()] = {
+        let mut names = [""; FAMILIES.len()];
+        let mut i = 0;
+        while i < FAMILIES.len() {
+            names[i] = FAMILIES[i].1;
+            i += 1;
+        }
+        names
+    };
+    /// Every family.
+    pub const ALL: [Self; FAMILIES.len()] = {
+        let mut all = [Self::Tag36h11; FAMILIES.len()];
+        let mut i = 0;
+        while i < FAMILIES.len() {
+            all[i] = FAMILIES[i].0;
+            i += 1;
+        }
+        all
+    };
 
     /// The family of a name (`"tag36h11"`, ...), `None` for another name.
     pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|f| f.name() == name)
+        FAMILIES.iter().find(|(_, n)| *n == name).map(|(f, _)| *f)
     }
 
     /// The name of a family.
     pub fn name(self) -> &'static str {
-        match self {
-            Self::Tag36h11 => "tag36h11",
-            Self::Tag36h10 => "tag36h10",
-            Self::Tag25h9 => "tag25h9",
-            Self::Tag16h5 => "tag16h5",
-            Self::TagStandard41h12 => "tagStandard41h12",
-            Self::TagStandard52h13 => "tagStandard52h13",
-            Self::TagCircle21h7 => "tagCircle21h7",
-            Self::TagCircle49h12 => "tagCircle49h12",
-            Self::TagCustom48h12 => "tagCustom48h12",
-        }
+        FAMILIES.iter().find(|(f, _)| *f == self).map_or("", |(_, n)| n)
     }
 
     /// Whether the family's square is white inside a black ring (AprilTag 3's families), not
-    /// black inside the white quiet zone.
+    /// black inside the white quiet zone (the layout's `reversed_border`).
     pub fn reversed_border(self) -> bool {
-        matches!(
-            self,
-            Self::TagStandard41h12
-                | Self::TagStandard52h13
-                | Self::TagCircle21h7
-                | Self::TagCircle49h12
-                | Self::TagCustom48h12
-        )
+        face::layout(self).is_ok_and(|l| l.reversed_border)
     }
 
     /// Cells across the square whose corners are reported (the layout's `width_at_border`).
     pub fn border_cells(self) -> u32 {
-        match self {
-            Self::Tag36h11 | Self::Tag36h10 => 8,
-            Self::Tag25h9 => 7,
-            Self::Tag16h5 | Self::TagStandard52h13 | Self::TagCustom48h12 => 6,
-            Self::TagStandard41h12 | Self::TagCircle21h7 | Self::TagCircle49h12 => 5,
-        }
+        face::layout(self).map_or(1, |l| u32::try_from(l.width_at_border).unwrap_or(1))
     }
 
     /// The most bit errors a decoded tag may have: two (the AprilTag library's default), one
@@ -142,18 +137,15 @@ impl TagFamily {
         }
     }
 
+    /// kornia-apriltag's family of the same name (`tagStandard41h12` is its
+    /// `tagstandard41_h12`).
     fn kind(self) -> TagFamilyKind {
-        match self {
-            Self::Tag36h11 => TagFamilyKind::Tag36H11,
-            Self::Tag36h10 => TagFamilyKind::Tag36H10,
-            Self::Tag25h9 => TagFamilyKind::Tag25H9,
-            Self::Tag16h5 => TagFamilyKind::Tag16H5,
-            Self::TagStandard41h12 => TagFamilyKind::TagStandard41H12,
-            Self::TagStandard52h13 => TagFamilyKind::TagStandard52H13,
-            Self::TagCircle21h7 => TagFamilyKind::TagCircle21H7,
-            Self::TagCircle49h12 => TagFamilyKind::TagCircle49H12,
-            Self::TagCustom48h12 => TagFamilyKind::TagCustom48H12,
-        }
+        let name = self.name().to_lowercase();
+        let kornia = match name.rfind('h') {
+            Some(h) => format!("{}_{}", &name[..h], &name[h..]),
+            None => name,
+        };
+        kornia.parse().unwrap_or(TagFamilyKind::Tag36H11)
     }
 }
 
@@ -351,7 +343,9 @@ impl TagDecoder {
         let factor = decimation as usize;
         let stale = self.levels.get(level).is_none_or(|(s, f, _)| *s != size || *f != factor);
         if stale {
-            let mut config = DecodeTagsConfig::new(vec![self.family.kind()]).map_err(decoder_error)?;
+            // The family data the faces are drawn from (`face.rs`), repaired where kornia's is not.
+            let family = TagFamilyKind::Custom(std::sync::Arc::new(face::layout(self.family)?.clone()));
+            let mut config = DecodeTagsConfig::new(vec![family]).map_err(decoder_error)?;
             config.downscale_factor = factor;
             config.min_tag_width = (self.family.border_cells() / decimation).max(3) as usize;
             config.threshold_split = THRESHOLD_SPLIT;
@@ -404,25 +398,19 @@ pub(crate) mod synthetic {
         TAG_CORNERS_IN_LAYOUT.map(|[x, y]| to_pixel(p, w / 2.0, x * w, y * w))
     }
 
-    /// Whether cell `(x, y)` of the black square (`0..width_at_border`) is white for tag `id`.
-    fn white(l: &Layout, id: usize, x: i64, y: i64) -> bool {
-        let code = l.code_data[id];
-        (0..l.nbits)
-            .any(|i| i64::from(l.bit_x[i]) == x && i64::from(l.bit_y[i]) == y && code >> (l.nbits - 1 - i) & 1 == 1)
-    }
-
-    /// Draws tags (black 30, white 220) on a white `width x height` image.
+    /// Draws tags (black 30, white 220) on a white `width x height` image: each tag's face
+    /// ([`TagFace`](super::TagFace)), its grid's cells that are not white drawn black (a round
+    /// face's grid whole, its corners black too).
     pub fn draw(family: TagFamily, width: u32, height: u32, tags: &[Placement]) -> GreyImage {
-        let l = layout(family);
-        let w = l.width_at_border as i64;
         let mut darkness = vec![0.0f64; (width * height) as usize];
         for p in tags {
-            for y in 0..w {
-                for x in 0..w {
-                    let data = x > 0 && y > 0 && x < w - 1 && y < w - 1;
-                    if !(data && white(&l, p.id, x, y)) {
-                        let a = to_pixel(p, w as f64 / 2.0, x as f64, y as f64);
-                        let b = to_pixel(p, w as f64 / 2.0, (x + 1) as f64, (y + 1) as f64);
+            let face = super::TagFace::new(family, p.id as u32).unwrap();
+            let half = face.total as f64 / 2.0;
+            for (y, row) in face.white.iter().enumerate() {
+                for (x, &white) in row.iter().enumerate() {
+                    if !white {
+                        let a = to_pixel(p, half, x as f64, y as f64);
+                        let b = to_pixel(p, half, (x + 1) as f64, (y + 1) as f64);
                         paint(&mut darkness, width, [a[0].min(b[0]), a[1].min(b[1])], [a[0].max(b[0]), a[1].max(b[1])]);
                     }
                 }
@@ -501,7 +489,7 @@ mod tests {
 
     #[test]
     fn several_tags_sorted_by_id_in_every_family() {
-        for family in [TagFamily::Tag36h11, TagFamily::Tag36h10, TagFamily::Tag25h9, TagFamily::Tag16h5] {
+        for family in TagFamily::ALL {
             let tags = [(9, [60.0, 50.0], 0), (2, [160.0, 55.0], 3), (5, [110.0, 130.0], 2)];
             let placed = tags.map(|(id, centre, quarter_turns)| Placement { id, centre, cell: 7.0, quarter_turns });
             let found = detect_tags(&draw(family, 220, 180, &placed), family).unwrap();

@@ -1,40 +1,36 @@
-//! A rig of AprilTags (family tag36h11, AprilTag 3's `tag36h11`, OpenCV's
-//! `DICT_APRILTAG_36h11`): each tag's four outer corners are the target's points, identity
-//! `4 id + c` with `c` in OpenCV aruco's order (0 top-left, 1 top-right, 2 bottom-right,
-//! 3 bottom-left of the tag as printed), so a detector matches the reference image and the
-//! current one by identity, whatever the two cameras.
+//! A rig of AprilTags of one family (any [`TagFamily`] the detector reads): each tag's four
+//! outer corners are the target's points, identity `4 id + c` with `c` in OpenCV aruco's
+//! order (0 top-left, 1 top-right, 2 bottom-right, 3 bottom-left of the tag as printed), so a
+//! detector matches the reference image and the current one by identity, whatever the two
+//! cameras.
 //!
-//! The tag as printed is a grid of 10 x 10 cells (the family's `total_width`): a white quiet
-//! zone one cell wide, the black border (`width_at_border` = 8 cells: the tag's *size* is the
-//! side of this square, as AprilTag and OpenCV define it) and 6 x 6 data cells. "As printed"
-//! is as OpenCV prints the tag (`cv2.aruco.generateImageMarker` of `DICT_APRILTAG_36h11`),
-//! the corner order's reference: that is the AprilTag library's own layout turned half a
-//! turn. In the library's layout, bit `i` of the 36-bit code (most significant first) is the
-//! cell at column `bit_x[i]`, row `bit_y[i]` of the 8 x 8 square, white when set (the codes
-//! and layout are kornia-apriltag's copy of AprilTag 3's `tag36h11.c`). The white cells are
-//! drawn as polygons on the dark background, which shows through as the black ones.
+//! The tag as printed is its family's face ([`TagFace`]: the grid of `total_width` cells the
+//! decoder's family data describes, cut to a disc for the circle families). The tag's *size* is
+//! the side of the square whose corners are reported (`width_at_border` cells: tag36h11's
+//! black border, 8 cells in a grid of 10 with its white quiet zone; tagStandard41h12's white
+//! square inside the black ring, 5 cells in a grid of 9 whose outer data cells lie outside the
+//! ring), as AprilTag and OpenCV define it. "As printed" is as OpenCV prints the tag
+//! (`cv2.aruco.generateImageMarker` of `DICT_APRILTAG_36h11`), the corner order's reference:
+//! the AprilTag library's own layout turned half a turn. The white cells are drawn as polygons
+//! on the dark background, which shows through as the black ones.
 
 use nalgebra::{Isometry3, Point3};
 
 use crate::error::{Error, Result, Short};
 use crate::vision::render::{Canvas, Polygon};
+use crate::vision::tags::{TagFace, TagFamily};
 use crate::vision::target::{Target, TargetPoint, shown};
 
-/// The number of tag36h11 codes: valid ids are `0..TAG36H11_COUNT`.
-pub const TAG36H11_COUNT: u32 = 587;
-/// Cells across the tag as printed (quiet zone included).
-const TOTAL_CELLS: usize = 10;
-/// Cells across the black border's outer square (the tag's size).
-const BORDER_CELLS: usize = 8;
-/// Data cells across.
-const DATA_CELLS: usize = 6;
+/// Vertices of the regular polygon (inscribed) that stands for a round face's disc: its
+/// sides are at most `r (1 - cos(pi / 256))`, 7.5e-5 of the radius, inside the circle.
+const DISC_SIDES: usize = 256;
 
 /// One tag: its id, its size and its pose.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigTag {
-    /// The tag36h11 id, `0..587`.
+    /// The id in the rig's family.
     pub id: u32,
-    /// Side of the black border's outer square, metres.
+    /// Side of the square whose corners are reported (tag36h11's black border), metres.
     pub size: f64,
     /// The tag frame in F*: origin at the tag's centre, x to the right and y up as printed,
     /// z out of the printed face (OpenCV aruco's marker frame); the tag is seen from z > 0.
@@ -49,90 +45,109 @@ impl RigTag {
         [[-h, h], [h, h], [h, -h], [-h, -h]].map(|[x, y]| (self.pose * Point3::new(x, y, 0.0)).coords.into())
     }
 
-    /// The white cells (quiet zone and set data bits) as polygons of F*, rows merged into runs.
-    fn white_polygons(&self) -> Vec<Polygon> {
-        let bits = tag36h11_bits(self.id);
-        let cell = self.size / BORDER_CELLS as f64;
-        let half = TOTAL_CELLS as f64 / 2.0;
-        // Cells [c0, c1) x [r0, r1) of the 10 x 10 grid, row 0 at the top.
-        let rect = |c0: usize, c1: usize, r0: usize, r1: usize| {
-            let (x0, x1) = ((c0 as f64 - half) * cell, (c1 as f64 - half) * cell);
-            let (y0, y1) = ((half - r0 as f64) * cell, (half - r1 as f64) * cell);
-            let corners = [[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
-            corners.map(|[x, y]| (self.pose * Point3::new(x, y, 0.0)).coords.into()).to_vec()
-        };
-        let last = TOTAL_CELLS - 1;
-        let mut cells = vec![
-            rect(0, TOTAL_CELLS, 0, 1),
-            rect(0, TOTAL_CELLS, last, TOTAL_CELLS),
-            rect(0, 1, 1, last),
-            rect(last, TOTAL_CELLS, 1, last),
-        ];
-        // Data cell (row, column) of the 6 x 6 square is cell (row + 2, column + 2) of the grid.
-        for (row, bits) in bits.iter().enumerate() {
-            let mut column = 0;
-            while column < DATA_CELLS {
-                if !bits[column] {
-                    column += 1;
+    /// The white cells of the face as polygons of F*, rows merged into runs, cut to the disc
+    /// of a round face.
+    fn white_polygons(&self, face: &TagFace) -> Vec<Polygon> {
+        let cell = self.size / face.border as f64;
+        let half = face.total as f64 / 2.0;
+        // Layout point (x, y) (cells, y down) turned half a turn, in the tag frame (y up).
+        let plane = |x: f64, y: f64| [(half - x) * cell, (y - half) * cell];
+        let disc: Option<Vec<[f64; 2]>> = face.round.then(|| {
+            (0..DISC_SIDES)
+                .map(|k| {
+                    let a = std::f64::consts::TAU * k as f64 / DISC_SIDES as f64;
+                    [half * cell * a.cos(), half * cell * a.sin()]
+                })
+                .collect()
+        });
+        let mut cells = Vec::new();
+        for (y, row) in face.white.iter().enumerate() {
+            let mut x = 0;
+            while x < face.total {
+                if !row[x] {
+                    x += 1;
                     continue;
                 }
-                let start = column;
-                while column < DATA_CELLS && bits[column] {
-                    column += 1;
+                let start = x;
+                while x < face.total && row[x] {
+                    x += 1;
                 }
-                cells.push(rect(start + 2, column + 2, row + 2, row + 3));
+                let (x0, x1, y0, y1) = (start as f64, x as f64, y as f64, y as f64 + 1.0);
+                let mut run = vec![plane(x0, y0), plane(x1, y0), plane(x1, y1), plane(x0, y1)];
+                if let Some(disc) = &disc {
+                    run = clip_convex(run, disc);
+                }
+                if run.len() >= 3 {
+                    cells.push(
+                        run.iter().map(|&[px, py]| (self.pose * Point3::new(px, py, 0.0)).coords.into()).collect(),
+                    );
+                }
             }
         }
-        // Four finite vertices each (checked in TagRig::new): cannot fail.
+        // Finite vertices (checked in TagRig::new), three or more: cannot fail.
         cells.into_iter().filter_map(|v| Polygon::new(v).ok()).collect()
     }
 }
 
-/// The data bits of tag36h11 tag `id` as printed (as OpenCV prints it: the library's layout
-/// turned half a turn): `[row][column]` of the 6 x 6 data square, true for white. Ids beyond
-/// the family give all black.
-pub fn tag36h11_bits(id: u32) -> [[bool; 6]; 6] {
-    let mut bits = [[false; 6]; 6];
-    let Some(&code) = kornia_apriltag::family::tag36h11::CODE_DATA.get(id as usize) else {
-        return bits;
+/// `subject` clipped to the convex polygon `clip` (both convex, vertices in order;
+/// Sutherland-Hodgman): empty when they do not overlap.
+fn clip_convex(subject: Vec<[f64; 2]>, clip: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let orientation = |p: &[[f64; 2]]| {
+        (0..p.len())
+            .map(|i| {
+                let (a, b) = (p[i], p[(i + 1) % p.len()]);
+                a[0] * b[1] - b[0] * a[1]
+            })
+            .sum::<f64>()
+            .signum()
     };
-    let (bit_x, bit_y) = tag36h11_layout();
-    let n = bit_x.len();
-    for i in 0..n {
-        // Layout coordinates 1..=6 are the data cells 0..=5; half a turn: 5 - x, 5 - y.
-        let (x, y) = (DATA_CELLS - bit_x[i] as usize, DATA_CELLS - bit_y[i] as usize);
-        bits[y][x] = (code >> (n - 1 - i)) & 1 == 1;
+    let sign = orientation(clip);
+    let mut out = subject;
+    for i in 0..clip.len() {
+        let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
+        let side = |p: [f64; 2]| sign * ((b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]));
+        let input = std::mem::take(&mut out);
+        for j in 0..input.len() {
+            let (p, q) = (input[j], input[(j + 1) % input.len()]);
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                out.push(p);
+            }
+            if (sp >= 0.0) != (sq >= 0.0) {
+                let t = sp / (sp - sq);
+                out.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+            }
+        }
+        if out.is_empty() {
+            break;
+        }
     }
-    bits
+    out
 }
 
-/// The family's bit positions (`bit_x`, `bit_y`: cells of the 8 x 8 black-border square).
-fn tag36h11_layout() -> &'static (Vec<i8>, Vec<i8>) {
-    static LAYOUT: std::sync::OnceLock<(Vec<i8>, Vec<i8>)> = std::sync::OnceLock::new();
-    LAYOUT.get_or_init(|| match kornia_apriltag::family::TagFamily::tag36_h11() {
-        Ok(family) => (family.bit_x, family.bit_y),
-        Err(_) => (Vec::new(), Vec::new()),
-    })
-}
-
-/// A rig of tags: the target's points are the tags' corners, four per tag in the tags' order.
+/// A rig of tags of one family: the target's points are the tags' corners, four per tag in
+/// the tags' order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TagRig {
+    family: TagFamily,
     tags: Vec<RigTag>,
     points: Vec<TargetPoint>,
     cells: Vec<Vec<Polygon>>,
 }
 
 impl TagRig {
-    /// A rig of tags with distinct ids in `0..587`, finite sizes > 0 and finite poses.
-    pub fn new(tags: Vec<RigTag>) -> Result<Self> {
+    /// A rig of `family`'s tags with distinct ids of the family, finite sizes > 0 and finite
+    /// poses.
+    pub fn new(family: TagFamily, tags: Vec<RigTag>) -> Result<Self> {
         let bad = |i: usize, reason: String| {
             Err(Error::InvalidParameter { name: "tags", reason: format!("tag {i}: {reason}") })
         };
+        let mut cells = Vec::with_capacity(tags.len());
         for (i, tag) in tags.iter().enumerate() {
-            if tag.id >= TAG36H11_COUNT {
-                return bad(i, format!("id must be in 0..{TAG36H11_COUNT} (tag36h11), got {}", tag.id));
-            }
+            let face = match TagFace::new(family, tag.id) {
+                Ok(face) => face,
+                Err(e) => return bad(i, e.to_string()),
+            };
             if let Some(j) = tags[..i].iter().position(|t| t.id == tag.id) {
                 return bad(i, format!("id {} is also tag {j}'s", tag.id));
             }
@@ -143,13 +158,18 @@ impl TagRig {
             if !(pose.translation.vector.iter().chain(pose.rotation.coords.iter()).all(|v| v.is_finite())) {
                 return bad(i, "the pose must be finite".into());
             }
+            cells.push(tag.white_polygons(&face));
         }
         let points = tags
             .iter()
             .flat_map(|t| (0u32..).zip(t.corners()).map(|(c, position)| TargetPoint { id: 4 * t.id + c, position }))
             .collect();
-        let cells = tags.iter().map(RigTag::white_polygons).collect();
-        Ok(Self { tags, points, cells })
+        Ok(Self { family, tags, points, cells })
+    }
+
+    /// The family of the tags.
+    pub fn family(&self) -> TagFamily {
+        self.family
     }
 
     /// The tags.
@@ -206,7 +226,9 @@ mod tests {
 
     #[test]
     fn corners_have_opencv_order_and_identities() {
-        let tags = TagRig::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(10, 0.04, [0.1, 0.0, 0.5])]).unwrap();
+        let tags =
+            TagRig::new(TagFamily::Tag36h11, vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(10, 0.04, [0.1, 0.0, 0.5])])
+                .unwrap();
         let ids: Vec<u32> = tags.points().iter().map(|p| p.id).collect();
         assert_eq!(ids, [12, 13, 14, 15, 40, 41, 42, 43]);
         // Top-left as printed is at image left (x < 0) and top (y < 0 in F*, v down).
@@ -215,23 +237,20 @@ mod tests {
         assert!((p(1)[0] - 0.04).abs() < 1e-15 && (p(1)[1] + 0.04).abs() < 1e-15);
         assert!((p(2)[0] - 0.04).abs() < 1e-15 && (p(2)[1] - 0.04).abs() < 1e-15);
         assert!((p(3)[0] + 0.04).abs() < 1e-15 && (p(3)[1] - 0.04).abs() < 1e-15);
-        assert!(TagRig::new(vec![facing(587, 0.08, [0.0, 0.0, 0.5])]).is_err());
-        assert!(TagRig::new(vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(3, 0.08, [0.1, 0.0, 0.5])]).is_err());
-        assert!(TagRig::new(vec![facing(3, -0.08, [0.0, 0.0, 0.5])]).is_err());
-        assert!(TagRig::new(vec![facing(3, 0.08, [0.0, f64::NAN, 0.5])]).is_err());
+        assert!(TagRig::new(TagFamily::Tag36h11, vec![facing(587, 0.08, [0.0, 0.0, 0.5])]).is_err());
+        assert!(
+            TagRig::new(TagFamily::Tag36h11, vec![facing(3, 0.08, [0.0, 0.0, 0.5]), facing(3, 0.08, [0.1, 0.0, 0.5])])
+                .is_err()
+        );
+        assert!(TagRig::new(TagFamily::Tag36h11, vec![facing(3, -0.08, [0.0, 0.0, 0.5])]).is_err());
+        assert!(TagRig::new(TagFamily::Tag36h11, vec![facing(3, 0.08, [0.0, f64::NAN, 0.5])]).is_err());
     }
 
-    #[test]
-    fn the_first_code_is_tag36h11s() {
-        // AprilTag 3's tag36h11 code 0 is 0xd7e00984b; bit 35 (the most significant) is the
-        // cell at bit_x = 1, bit_y = 1 of the library's layout: the bottom-right data cell as
-        // OpenCV prints the tag; bit 0 (set) is at bit_x = 3, bit_y = 4 and bit 2 (clear) at
-        // bit_x = 2, bit_y = 4.
-        let bits = tag36h11_bits(0);
-        assert!(bits[5][5] && bits[1][2] && !bits[1][3]);
-        let ones: usize = bits.iter().flatten().filter(|&&b| b).count();
-        assert_eq!(ones, 0xd7e00984b_u64.count_ones() as usize);
-        assert_eq!(tag36h11_bits(600), [[false; 6]; 6]);
+    /// tag36h11's data bits as printed (the library's layout turned half a turn):
+    /// `[row][column]` of the 6 x 6 data square, true for white.
+    fn tag36h11_bits(id: u32) -> [[bool; 6]; 6] {
+        let face = TagFace::new(TagFamily::Tag36h11, id).unwrap();
+        std::array::from_fn(|r| std::array::from_fn(|c| face.white[7 - r][7 - c]))
     }
 
     /// Reads a fronto-parallel tag's 10 x 10 cells back at their centres.
@@ -253,7 +272,7 @@ mod tests {
     fn a_rendered_tag_reads_back_its_code() {
         for id in [0, 1, 42, 586] {
             let tag = facing(id, 0.1, [0.01, -0.005, 0.5]);
-            let tags = TagRig::new(vec![tag.clone()]).unwrap();
+            let tags = TagRig::new(TagFamily::Tag36h11, vec![tag.clone()]).unwrap();
             let config = RenderConfig { noise_sigma: 3.0, ..Default::default() };
             let out = render(&tags, &Isometry3::identity(), config);
             assert_eq!(out.drawn, [true; 4]);
@@ -275,7 +294,7 @@ mod tests {
     #[test]
     fn the_white_area_is_the_white_cells_area() {
         let tag = facing(7, 0.08, [0.0, 0.0, 0.5]);
-        let out = render(&TagRig::new(vec![tag]).unwrap(), &Isometry3::identity(), sharp());
+        let out = render(&TagRig::new(TagFamily::Tag36h11, vec![tag]).unwrap(), &Isometry3::identity(), sharp());
         let sum: f64 = out.image.pixels().map(|p| (f64::from(p[0]) - 20.0) / 200.0).sum();
         // A cell is 0.01 m at 0.5 m: 20 px, 400 px^2; the quiet zone has 36 cells.
         let white = 36 + tag36h11_bits(7).iter().flatten().filter(|&&b| b).count();
@@ -285,7 +304,9 @@ mod tests {
 
     #[test]
     fn a_tag_seen_from_behind_or_hidden_is_not_drawn() {
-        let tags = TagRig::new(vec![facing(1, 0.05, [0.0, 0.0, 0.5]), facing(2, 0.05, [0.0, 0.0, -0.5])]).unwrap();
+        let tags =
+            TagRig::new(TagFamily::Tag36h11, vec![facing(1, 0.05, [0.0, 0.0, 0.5]), facing(2, 0.05, [0.0, 0.0, -0.5])])
+                .unwrap();
         let out = render(&tags, &Isometry3::identity(), sharp());
         assert_eq!(out.drawn, [true, true, true, true, false, false, false, false]);
         // From behind the first tag (turned round about y, beyond it): its back.

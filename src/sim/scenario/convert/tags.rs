@@ -6,12 +6,17 @@ use super::{check_positive, check_values, pose_of};
 use crate::error::Result;
 use crate::sim::scenario::scenario_error;
 use crate::sim::scenario::schema::ObjectSpec;
-use crate::vision::target::tags::{RigTag, TAG36H11_COUNT, TagRig};
+use crate::vision::TagFamily;
+use crate::vision::tags::TagFace;
+use crate::vision::target::tags::{RigTag, TagRig};
 
 impl ObjectSpec {
     /// The tag rig, if `tags` are given (then neither `points` nor `normals` may be).
     pub(super) fn tag_rig(&self) -> Result<Option<TagRig>> {
         if self.tags.is_empty() {
+            if self.tag_family.is_some() {
+                return Err(scenario_error("object.tag_family", "is the tags' family: give [[object.tags]] too"));
+            }
             if self.rig.is_some() {
                 return Err(scenario_error("object.rig", "places tags: give [[object.tags]] too"));
             }
@@ -31,13 +36,15 @@ impl ObjectSpec {
             }
             None => nalgebra::Isometry3::identity(),
         };
+        let family = self.family()?;
+        let count = TagFace::count(family).map_err(|e| scenario_error("object.tag_family", e.to_string()))?;
         let mut tags = Vec::with_capacity(self.tags.len());
         for (i, t) in self.tags.iter().enumerate() {
             let key = |k: &str| format!("object.tags[{i}].{k}");
-            if t.id >= TAG36H11_COUNT {
+            if t.id >= count {
                 return Err(scenario_error(
                     &key("id"),
-                    format!("a tag36h11 id, 0 to {}, got {}", TAG36H11_COUNT - 1, t.id),
+                    format!("a {} id, 0 to {}, got {}", family.name(), count - 1, t.id),
                 ));
             }
             if let Some(j) = self.tags[..i].iter().position(|o| o.id == t.id) {
@@ -49,7 +56,17 @@ impl ObjectSpec {
             check_values(&key("rotation_deg"), &t.rotation_deg)?;
             tags.push(RigTag { id: t.id, size: t.size, pose: rig * pose_of(t.position, t.rotation_deg) });
         }
-        TagRig::new(tags).map(Some).map_err(|e| scenario_error("object.tags", e.to_string()))
+        TagRig::new(family, tags).map(Some).map_err(|e| scenario_error("object.tags", e.to_string()))
+    }
+
+    /// `object.tag_family`, tag36h11 when absent; another name is an error naming the key and
+    /// listing the names ([`TagFamily::NAMES`]).
+    fn family(&self) -> Result<TagFamily> {
+        let Some(name) = &self.tag_family else { return Ok(TagFamily::default()) };
+        TagFamily::from_name(name).ok_or_else(|| {
+            let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
+            scenario_error("object.tag_family", format!("expected one of {names}, got {name:?}"))
+        })
     }
 }
 
@@ -104,5 +121,36 @@ mod tests {
             let err = error_of(edit);
             assert!(err.contains(key), "{key}: {err}");
         }
+    }
+
+    #[test]
+    fn the_family_key_is_read_and_checked_against_the_families() {
+        let mut s = builtin("tags-12-6").unwrap();
+        s.object.tag_family = Some("tagStandard41h12".into());
+        s.object.tags[0].id = 2114;
+        let config = s.to_config().unwrap();
+        let rig = config.scene.tags().expect("a tag rig");
+        assert_eq!(rig.family(), crate::vision::TagFamily::TagStandard41h12);
+        assert_eq!(
+            builtin("tags-12-6").unwrap().to_config().unwrap().scene.tags().unwrap().family().name(),
+            "tag36h11"
+        );
+        let err = error_of(|s| s.object.tag_family = Some("tag36h12".into()));
+        assert!(err.contains("object.tag_family"), "{err}");
+        for name in crate::vision::TagFamily::NAMES {
+            assert!(err.contains(&format!("{name:?}")), "{name}: {err}");
+        }
+        let err = error_of(|s| {
+            s.object.tag_family = Some("tagCircle21h7".into());
+            s.object.tags[2].id = 38;
+        });
+        assert!(err.contains("object.tags[2].id") && err.contains("tagCircle21h7 id, 0 to 37"), "{err}");
+        let err = error_of(|s| {
+            s.object.tags.clear();
+            s.object.rig = None;
+            s.object.points = vec![[0.0, 0.0, 1.0]; 6];
+            s.object.tag_family = Some("tag25h9".into());
+        });
+        assert!(err.contains("object.tag_family"), "{err}");
     }
 }
