@@ -340,3 +340,41 @@ def test_outputs_do_not_follow_planted_links(tmp_path: Path) -> None:
     assert target.read_text() == "keep"
     assert not (out / "trajectory.npz").is_symlink() and (out / "trajectory.npz").stat().st_size > 0
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == []  # no temporary left
+
+
+# ---------------------------------------------------------------------------------------------
+# Deep nesting (issue 28, finding 2): a 140 KB URDF of 20,000 nested elements killed
+# `load_scenario` and `vsinv run` (stack overflow, exit 139); 200,000 levels ran past 30 s.
+
+
+def nested_urdf(levels: int) -> str:
+    return (f'<?xml version="1.0"?>\n<robot name="r"><link name="base">{"<x>" * levels}{MARKER}'
+            f'{"</x>" * levels}</link></robot>\n')
+
+
+def test_deeply_nested_urdf(folder: Path) -> None:
+    files = {"deep20k.urdf": nested_urdf(20_000), "deep200k.urdf": nested_urdf(200_000),
+             "deep65.urdf": nested_urdf(65),
+             "wide.urdf": '<robot name="r"><link name="base"/>' + "<x/>" * 250_000 + f"<{MARKER}/></robot>"}
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    assert len(files["deep20k.urdf"]) < 150_000
+    base = "d = vsinv.load_scenario('arm-ur5-12-6').to_dict(); d['robot']['end_effector'] = 'tool0'\n"
+    cases = {f"dict {f}": base + f"d['robot']['urdf'] = {f!r}; vsinv.load_scenario(d)" for f in files}
+    outcomes = run_cases(cases, folder)
+    check(outcomes)
+    for f in files:
+        message = outcomes[f"dict {f}"]["message"]
+        assert f in message and "the limit of a URDF's" in message, message
+    # The CLI: `vsinv run` of a scenario file naming the URDF.
+    import vsinv
+
+    text = vsinv.load_scenario("arm-ur5-12-6").to_toml()
+    assert 'urdf = "ur5"' in text
+    cli_cases, named = {}, {}
+    for f in files:
+        toml = folder / f"arm_{f}.toml"
+        toml.write_text(text.replace('urdf = "ur5"', f"urdf = {json.dumps(f)}"))
+        cli_cases[f] = CLI_CASE.format(args=["run", os.fspath(toml), "--no-progress"])
+        named[f] = f
+    check_cli(run_cases(cli_cases, folder), named)

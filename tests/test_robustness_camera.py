@@ -110,7 +110,7 @@ def test_distort_undistort(data: Any) -> None:
                                   "distortion": dist_variants()}
     if which == "undistort_points":
         args.update(tol=1e-10, max_iter=50)
-        strategies.update(tol=floats(1e-10, overrides={"negative": INVALID, "neginf": INVALID}), max_iter=ints(50))
+        strategies.update(tol=floats(1e-10, overrides={"zero": INVALID, "negative": INVALID, "neginf": INVALID}), max_iter=ints(50))
     ref = fn(**args)
     if which == "distort_points":
         np.testing.assert_allclose(ref, cv_distort(px, K.matrix, DIST), rtol=1e-9, atol=1e-6)

@@ -328,7 +328,10 @@ class Servo:
     Each ``step(pixels, visible, depths)`` returns the twist to send and the verdict: the
     loop logic (stop rules certified by the pose uncertainty, lost features, the rz = pi
     trap, the iteration limit, depth estimation, path following) that the simulator runs
-    too. Arguments of another law are refused by name.
+    too. Arguments of another law are refused by name. A stop is final: once a step has
+    returned one, every later step returns the same verdict with a zero twist.
+
+    Works from several threads: each call holds the GIL, so calls take turns.
     """
 
     def __new__(
@@ -357,7 +360,8 @@ class Servo:
     def step(
         self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None, depths: _ArrayLike | None = None
     ) -> ServoStep:
-        """One step: the twist to send (zero when stopping), the verdict and the telemetry."""
+        """One step: the twist to send (zero when stopping), the verdict and the telemetry.
+        After a stop, every later step returns that stop again (zero twist)."""
     @property
     def iterations(self) -> int:
         """Control steps applied."""
@@ -429,6 +433,10 @@ class ImageServo:
     The stall rule is on unless ``stop={"stall": False}``: real detections of one pose by two
     lenses disagree, so the run ends when the error stopped decreasing and the camera is still,
     ``converged`` if the bound (with the measured disagreement floor) is within the tolerance.
+    A first frame where no point is found (blank, dark) is the verdict ``lost_features`` with a
+    zero twist. As for ``Servo``, a stop is final.
+
+    Works from several threads: their calls take turns (each waits with the GIL released).
     """
 
     def __new__(
@@ -787,7 +795,9 @@ def detect_dots(
 
 @final
 class DotTracker:
-    """Tracks dots through images from one approximate pixel per dot in the first image."""
+    """Tracks dots through images from one approximate pixel per dot in the first image.
+
+    Works from several threads: their calls take turns (each waits with the GIL released)."""
 
     def __new__(
         cls,
@@ -818,7 +828,9 @@ class TagTracker:
     whole frame is read when one is not found there, when the size changes, and every ``refresh``
     frames (0: only then) to pick up tags coming into view. A tracked frame gives what
     ``detect_tags`` gives on it, for the tags tracked. ``decimation`` (1..=8, None: the detector's
-    default) is ``detect_tags``'s."""
+    default) is ``detect_tags``'s.
+
+    Works from several threads: their calls take turns (each waits with the GIL released)."""
 
     def __new__(
         cls,
@@ -946,7 +958,8 @@ class IkSolution:
 def fk(arm: str, joints: _ArrayLike) -> _F64Array:
     """The 4x4 pose of the end-effector of the built-in ``arm`` ('ur5': ``tool0``, 'panda':
     ``panda_hand_tcp``) in the arm's base frame (its URDF root link: ``base_link``,
-    ``panda_link0``) at ``joints`` (rad), one value per joint."""
+    ``panda_link0``) at ``joints`` (rad), one value per joint within the joint limits
+    (InvalidInput naming the first joint outside)."""
 
 def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution:
     """Joints within the limits of the built-in ``arm`` ('ur5', 'panda') that put its

@@ -295,6 +295,10 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
 pub const DEFAULT_UNDISTORT_TOL: f64 = 1e-10;
 /// Default iteration cap of [`undistort_points`].
 pub const DEFAULT_UNDISTORT_MAX_ITER: usize = 50;
+/// Newton steps in a row that do not lower the residual before undistortion gives up.
+const STALLED_STEPS: usize = 8;
+/// A residual this small (pixels) that no longer decreases is rounding error.
+const ROUNDING_PX: f64 = 1e-6;
 
 /// Undistorts pixels: the inverse of [`distort_points`], `p = K m` with `d(m) = K^-1 p_d`.
 ///
@@ -306,7 +310,8 @@ pub const DEFAULT_UNDISTORT_MAX_ITER: usize = 50;
 /// Errors: [`Error::Distortion`] naming the first point whose residual is still above `tol`
 /// after `max_iter` iterations, or for which no step can keep `det J > 0` (the pixel lies
 /// beyond the image of the fold, where the model folds back); [`Error::InvalidParameter`]
-/// for `tol < 0` or `max_iter == 0`; [`Error::NonFinite`] for a non-finite pixel.
+/// for `tol <= 0` or `max_iter == 0`; [`Error::NonFinite`] for a non-finite pixel. The work
+/// is bounded whatever `max_iter`: it stops when a step no longer lowers the residual.
 pub fn undistort_points(
     pixels: &[[f64; 2]],
     intrinsics: &Intrinsics,
@@ -315,10 +320,13 @@ pub fn undistort_points(
     max_iter: usize,
 ) -> Result<Vec<[f64; 2]>> {
     check_finite_points("pixels", pixels)?;
-    if !(tol >= 0.0) || !tol.is_finite() {
+    if !(tol > 0.0) || !tol.is_finite() {
         return Err(Error::InvalidParameter {
             name: "tol",
-            reason: format!("must be finite and >= 0, got {}", Short(tol)),
+            reason: format!(
+                "must be finite and > 0 pixels (the residual stops at rounding error, about 1e-13 px, so 0 is never met), got {}",
+                Short(tol)
+            ),
         });
     }
     if max_iter == 0 {
@@ -383,6 +391,7 @@ fn undistort_one(
         let cand = [m[0] - step.x, m[1] - step.y];
         if valid(cand) && residual(d, k2, cand, target).1 <= err { cand } else { m }
     };
+    let mut stalled = 0;
     for _ in 0..max_iter {
         if err <= tol {
             return Ok(to_pixel(k, polish(m, r, err)));
@@ -393,6 +402,7 @@ fn undistort_one(
         };
         let mut t = 1.0;
         let mut accepted = false;
+        let before = err;
         for _ in 0..60 {
             let cand = [m[0] - t * step.x, m[1] - t * step.y];
             if valid(cand) {
@@ -405,7 +415,15 @@ fn undistort_one(
             }
             t *= 0.5;
         }
-        if !accepted {
+        // Steps that no longer lower the residual: at rounding error, or stuck at the fold.
+        // A few in a row end the work, whatever `max_iter`.
+        stalled = if accepted && !(err < before) { stalled + 1 } else { 0 };
+        if stalled >= STALLED_STEPS && err <= ROUNDING_PX {
+            return Err(format!(
+                "the residual stopped decreasing at {err:.3e} px (rounding error), above tol {tol:.1e}"
+            ));
+        }
+        if !accepted || stalled >= STALLED_STEPS {
             return Err(format!(
                 "the model folds: no pre-image with a positive Jacobian determinant (residual {err:.3e} px at the fold); the pixel lies beyond the image of the fold, det J = {:.3e}",
                 d.jacobian_unchecked(m).determinant()
@@ -526,7 +544,7 @@ mod tests {
     fn non_convergence_is_reported() {
         let k = Intrinsics::pinhole(500.0, 500.0, 320.0, 240.0).unwrap();
         let d = barrel();
-        match undistort_points(&[[600.0, 400.0]], &k, &d, 0.0, 1) {
+        match undistort_points(&[[600.0, 400.0]], &k, &d, 1e-12, 1) {
             Err(Error::Distortion { index: 0, reason }) => assert!(reason.contains("converge"), "{reason}"),
             other => panic!("{other:?}"),
         }

@@ -10,6 +10,7 @@ use super::errors::invalid_argument;
 use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
+use super::shared::Shared;
 use super::tags::{decimation_arg, family_arg};
 use super::vision::{image_arg, polarity_arg};
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
@@ -100,9 +101,11 @@ fn refuse_foreign(target: &str, given: &[(&str, bool)]) -> PyResult<()> {
 /// camera), then each `step(image)` detects or tracks it, matches the points by identity,
 /// undistorts them with K_hat and `distortion`, and steps the servo session. Keyword
 /// arguments after the target's are the `Servo` session's (law, depths, gain, stop, ...).
-#[pyclass(name = "ImageServo", module = "vsinv._core")]
+///
+/// Works from several threads: their calls take turns (each waits with the GIL released).
+#[pyclass(name = "ImageServo", module = "vsinv._core", frozen)]
 pub(super) struct PyImageServo {
-    inner: ImageServo,
+    inner: Shared<ImageServo>,
 }
 
 #[pymethods]
@@ -180,68 +183,65 @@ impl PyImageServo {
         };
         let config = ImageServoConfig { servo: servo_config, reference_lens, reference_depths };
         let inner = py.detach(|| ImageServo::new(&image, &target, config, depths))?;
-        Ok(Self { inner })
+        Ok(Self { inner: Shared::new(inner, "ImageServo") })
     }
 
     /// One frame (a `(height, width)` uint8 array): the twist to send, the verdict, the
     /// telemetry, and per point the pixel found and whether it was found.
-    fn step(&mut self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
+    fn step(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
         let image = image_arg(image, "image")?;
         let image = image.buffer("image")?;
-        let pipeline = &mut self.inner;
-        let step = py.detach(|| pipeline.step(&image))?;
-        let found = self.inner.found().to_vec();
-        let pixels = self.inner.pixels().to_vec();
+        let (step, found, pixels) = self.inner.detached(py, |pipeline| {
+            let step = pipeline.step(&image)?;
+            Ok::<_, crate::Error>((step, pipeline.found().to_vec(), pipeline.pixels().to_vec()))
+        })??;
         let init = PyClassInitializer::from(PyServoStep::from(step)).add_subclass(PyImageStep { found, pixels });
         Py::new(py, init)
     }
 
     /// The points' identities, in the session's order (n,).
     #[getter]
-    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u32>> {
-        PyArray1::from_slice(py, self.inner.ids())
+    fn ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u32>>> {
+        Ok(PyArray1::from_slice(py, self.inner.lock(py)?.ids()))
     }
     /// The reference pixels (n, 2), undistorted with reference_K when given.
     #[getter]
     fn reference_pixels<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let px = self.inner.servo().reference_pixels();
+        let inner = self.inner.lock(py)?;
+        let px = inner.servo().reference_pixels();
         mat(py, px.len(), 2, px.as_flattened().to_vec())
     }
     /// Control steps applied.
     #[getter]
-    fn iterations(&self) -> usize {
-        self.inner.servo().iterations()
+    fn iterations(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.inner.lock(py)?.servo().iterations())
     }
     /// The basis in use (three point indices).
     #[getter]
-    fn basis(&self) -> (usize, usize, usize) {
-        let [a, b, c] = self.inner.servo().basis();
-        (a, b, c)
+    fn basis(&self, py: Python<'_>) -> PyResult<(usize, usize, usize)> {
+        let [a, b, c] = self.inner.lock(py)?.servo().basis();
+        Ok((a, b, c))
     }
     /// How many times the basis changed because one of its points was not visible.
     #[getter]
-    fn basis_switches(&self) -> usize {
-        self.inner.servo().basis_switches()
+    fn basis_switches(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.inner.lock(py)?.servo().basis_switches())
     }
     /// The pixel noise measured on the last frames (None before three), pixels.
     #[getter]
-    fn pixel_sigma(&self) -> Option<f64> {
-        self.inner.servo().pixel_sigma()
+    fn pixel_sigma(&self, py: Python<'_>) -> PyResult<Option<f64>> {
+        Ok(self.inner.lock(py)?.servo().pixel_sigma())
     }
     /// What the frames say about the pose, as `Servo.certainty()`: pixel_sigma,
     /// reference_pixel_sigma (pixels), translation_sigma, translation_bound (metres),
     /// rotation_sigma, rotation_bound (radians); None when it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        super::servo::certainty_dict(py, self.inner.servo())
+        super::servo::certainty_dict(py, self.inner.lock(py)?.servo())
     }
-    fn __repr__(&self) -> String {
-        let s = self.inner.servo();
-        format!(
-            "ImageServo(law={:?}, points={}, iterations={})",
-            s.law().name(),
-            self.inner.ids().len(),
-            s.iterations()
-        )
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let inner = self.inner.lock(py)?;
+        let s = inner.servo();
+        Ok(format!("ImageServo(law={:?}, points={}, iterations={})", s.law().name(), inner.ids().len(), s.iterations()))
     }
 }
 

@@ -90,7 +90,8 @@ impl PyIkSolution {
     }
 }
 
-/// The 4x4 pose of the built-in `arm`'s end-effector in its base frame at `joints`.
+/// The 4x4 pose of the built-in `arm`'s end-effector in its base frame at `joints`, within
+/// the joint limits.
 #[pyfunction]
 fn fk<'py>(
     py: Python<'py>,
@@ -99,6 +100,11 @@ fn fk<'py>(
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let model = builtin_arm(arm)?;
     let q = joints_arg(joints, "joints", &model)?;
+    // Within the joint limits (1e300 rad is no pose of the arm).
+    model.check_limits(&q).map_err(|e| match e {
+        crate::Error::InvalidParameter { reason, .. } => invalid_argument("joints", format!("joints: {reason}")),
+        e => e.into(),
+    })?;
     from_matrix(py, &model.fk(&q)?.to_homogeneous())
 }
 

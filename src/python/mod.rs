@@ -20,6 +20,7 @@ mod logs;
 mod planning;
 mod se3;
 mod servo;
+mod shared;
 mod sim;
 mod stability;
 mod tag_tracker;

@@ -4,7 +4,7 @@
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::IntoPyObjectExt;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString, PyTuple};
+use pyo3::types::{PyCFunction, PyDict, PyString, PyTuple};
 
 use super::batch_watch::run_reporting;
 use super::control::bool_repr;
@@ -71,12 +71,26 @@ pub fn access(allow_outside_files: bool) -> FileAccess {
 
 fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scenario> {
     let py = d.py();
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("default", PyCFunction::new_closure(py, None, None, numpy_to_json)?)?;
     let text: String = py
         .import("json")?
-        .call_method1("dumps", (d,))
+        .call_method("dumps", (d,), Some(&kwargs))
         .map_err(|e| invalid_argument("scenario", format!("scenario: cannot be written as JSON ({e})")))?
         .extract()?;
     Ok(Scenario::from_json_with(&text, access)?)
+}
+
+/// `json.dumps`'s `default`: NumPy scalars (`np.float32(0.5)`, `np.int64(3)`, `np.bool_`)
+/// and arrays as the Python numbers and lists they hold; anything else is not JSON.
+fn numpy_to_json(args: &Bound<'_, PyTuple>, _kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyAny>> {
+    let obj = args.get_item(0)?;
+    let numpy = obj.py().import("numpy")?;
+    if obj.is_instance(&numpy.getattr("generic")?)? || obj.is_instance(&numpy.getattr("ndarray")?)? {
+        return Ok(obj.call_method0("tolist")?.unbind());
+    }
+    let kind = obj.get_type().name()?;
+    Err(pyo3::exceptions::PyTypeError::new_err(format!("Object of type {kind} is not JSON serializable")))
 }
 
 /// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path; the files

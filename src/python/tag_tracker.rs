@@ -5,6 +5,7 @@
 use pyo3::prelude::*;
 
 use super::errors::invalid_argument;
+use super::shared::Shared;
 use super::tags::{PyTags, decimation_arg, family_arg, tags_out};
 use super::vision::image_arg;
 use crate::vision::detector::tags::{DEFAULT_REFRESH, TagDetector};
@@ -17,9 +18,11 @@ const _: () = assert!(DEFAULT_REFRESH == 15);
 /// a crop around its last corners, and the whole frame is read when one is not found there,
 /// when the size changes, and every `refresh` frames (0: only then) to pick up tags coming
 /// into view. A tracked frame gives what `detect_tags` gives on it, for the tags tracked.
-#[pyclass(name = "TagTracker", module = "vsinv._core")]
+///
+/// Works from several threads: their calls take turns (each waits with the GIL released).
+#[pyclass(name = "TagTracker", module = "vsinv._core", frozen)]
 pub(super) struct PyTagTracker {
-    inner: TagDetector,
+    inner: Shared<TagDetector>,
 }
 
 #[pymethods]
@@ -35,27 +38,27 @@ impl PyTagTracker {
         let refresh = u32::try_from(refresh).map_err(|_| {
             invalid_argument("refresh", format!("refresh: expected a whole number of frames >= 0, got {refresh}"))
         })?;
-        Ok(Self { inner: detector.with_refresh(refresh) })
+        Ok(Self { inner: Shared::new(detector.with_refresh(refresh), "TagTracker") })
     }
 
     /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id.
-    fn track(&mut self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
+    fn track(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
-        let detector = &mut self.inner;
-        let tags = py.detach(|| detector.track(&buffer))?;
-        tags_out(py, &tags, self.inner.family())
+        let (tags, family) = self.inner.detached(py, |detector| (detector.track(&buffer), detector.family()))?;
+        tags_out(py, &tags?, family)
     }
 
     /// Forgets the last frame: the next one is read whole.
-    fn reset(&mut self) {
-        self.inner.reset();
+    fn reset(&self, py: Python<'_>) -> PyResult<()> {
+        self.inner.lock(py)?.reset();
+        Ok(())
     }
 
     /// Whether the last frame was read whole (not tracked in crops).
     #[getter]
-    fn read_whole(&self) -> bool {
-        self.inner.read_whole()
+    fn read_whole(&self, py: Python<'_>) -> PyResult<bool> {
+        Ok(self.inner.lock(py)?.read_whole())
     }
 }
 

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 
 use super::arrays::{f64_array, mat, points2};
+use super::shared::Shared;
 use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
@@ -208,9 +209,11 @@ pub(super) fn polarity_arg(name: &str) -> PyResult<Polarity> {
 /// bool)`. The window follows each dot's size and motion; a dot whose area or shape changed
 /// too much (merged with another region, say) is not found and keeps its last position with
 /// `found` false; two dots are never swapped.
-#[pyclass(name = "DotTracker", module = "vsinv._core")]
+///
+/// Works from several threads: their calls take turns (each waits with the GIL released).
+#[pyclass(name = "DotTracker", module = "vsinv._core", frozen)]
 pub struct PyDotTracker {
-    inner: DotTracker,
+    inner: Shared<DotTracker>,
 }
 
 #[pymethods]
@@ -235,19 +238,14 @@ impl PyDotTracker {
         let polarity = polarity_arg(polarity)?;
         let config = TrackerConfig { search_radius, max_search_radius, min_area, polarity, max_area_ratio };
         let inner = py.detach(|| DotTracker::new(&buffer, clicks, config))?;
-        Ok(Self { inner })
+        Ok(Self { inner: Shared::new(inner, "DotTracker") })
     }
 
     /// Finds the dots in the next image: `(pixels (n, 2), found (n,) bool)`.
-    fn track<'py>(
-        &mut self,
-        py: Python<'py>,
-        image: &Bound<'py, PyAny>,
-    ) -> PyResult<(PixelArray<'py>, FlagArray<'py>)> {
+    fn track<'py>(&self, py: Python<'py>, image: &Bound<'py, PyAny>) -> PyResult<(PixelArray<'py>, FlagArray<'py>)> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
-        let tracker = &mut self.inner;
-        let result = py.detach(|| tracker.track(&buffer))?;
+        let result = self.inner.detached(py, |tracker| tracker.track(&buffer))??;
         let n = result.found.len();
         Ok((mat(py, n, 2, result.pixels.into_flattened())?, PyArray1::from_vec(py, result.found)))
     }
@@ -255,15 +253,16 @@ impl PyDotTracker {
     /// The last known position of every dot, `(n, 2)`.
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        mat(py, self.inner.len(), 2, self.inner.positions().as_flattened().to_vec())
+        let inner = self.inner.lock(py)?;
+        mat(py, inner.len(), 2, inner.positions().as_flattened().to_vec())
     }
 
-    fn __len__(&self) -> usize {
-        self.inner.len()
+    fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.inner.lock(py)?.len())
     }
 
-    fn __repr__(&self) -> String {
-        format!("DotTracker({} dots)", self.inner.len())
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(format!("DotTracker({} dots)", self.inner.lock(py)?.len()))
     }
 }
 

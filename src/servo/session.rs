@@ -106,6 +106,8 @@ pub struct Servo {
     certainty: Option<Certainty>,
     telemetry: Telemetry,
     iteration: usize,
+    /// The stop [`step`](Servo::step) returned: final (every later step returns it).
+    ended: Option<Verdict>,
 }
 
 impl Servo {
@@ -158,18 +160,35 @@ impl Servo {
             certainty: None,
             telemetry: Telemetry::empty(),
             iteration: 0,
+            ended: None,
         })
     }
 
     /// One step: [`observe`](Self::observe), then [`verdict`](Self::verdict), then, while
     /// running, [`control`](Self::control). `visible` flags the points found (None: all);
     /// `depths` are required with [`ServoDepths::PerStep`] and refused otherwise.
+    ///
+    /// A stop is final: once a step has returned one (converged, settled, lost features, the
+    /// iteration limit, ...), every later step returns the same verdict with a zero twist and
+    /// the same telemetry, without looking at its image; a new session servos again.
     pub fn step(&mut self, pixels: &[[f64; 2]], visible: Option<&[bool]>, depths: Option<&[f64]>) -> Result<ServoStep> {
-        self.observe(pixels, visible, depths)?;
-        match self.verdict() {
-            Verdict::Running => Ok(self.control()),
-            verdict => Ok(ServoStep { twist: Vector6::zeros(), verdict, telemetry: self.telemetry }),
+        if let Some(verdict) = &self.ended {
+            return Ok(ServoStep { twist: Vector6::zeros(), verdict: verdict.clone(), telemetry: self.telemetry });
         }
+        self.observe(pixels, visible, depths)?;
+        let step = match self.verdict() {
+            Verdict::Running => self.control(),
+            verdict => ServoStep { twist: Vector6::zeros(), verdict, telemetry: self.telemetry },
+        };
+        if !step.verdict.is_running() {
+            self.ended = Some(step.verdict.clone());
+        }
+        Ok(step)
+    }
+
+    /// The final verdict, once a [`step`](Servo::step) has returned a stop.
+    pub fn ended(&self) -> Option<&Verdict> {
+        self.ended.as_ref()
     }
 
     /// Takes an image's points: undistorts them with K_hat and the believed distortion (a

@@ -66,4 +66,7 @@ pub struct SimulationConfig {
     pub vision: Option<crate::vision::RenderConfig>,
     /// Keep the per-iteration record.
     pub record: bool,
+    /// The most memory the record holds, bytes ([`MAX_RECORD_BYTES`](crate::sim::MAX_RECORD_BYTES)
+    /// from a scenario): a longer run keeps one iteration in 2, 4, ... and its last one.
+    pub record_bytes: usize,
 }

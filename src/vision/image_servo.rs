@@ -202,7 +202,13 @@ impl ImageServo {
         } else {
             // A hint outside the image, like any dot that cannot start, is left out by the
             // frames' detector (`DotTracking::partial`): its point is not visible.
-            let d = self.detector.start(&image, &self.first).map_err(|e| hints_named(e, "first_points"))?;
+            // The frames' detector leaves out each dot that cannot start, so it fails only when
+            // none can: a first frame without the target (blank, dark, out of focus) is a lost
+            // target, no point found, and the servo's verdict lost_features with a zero twist.
+            let d = match self.detector.start(&image, &self.first) {
+                Err(Error::InvalidImage { what, .. }) if what == "initial_pixels" => Vec::new(),
+                other => other.map_err(|e| hints_named(e, "first_points"))?,
+            };
             self.started = true;
             d
         };

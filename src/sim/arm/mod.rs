@@ -29,10 +29,12 @@ mod ik;
 mod kinematics;
 mod model;
 pub mod servo;
+mod urdf_shape;
 
 pub use ik::{DampedLeastSquaresIk, IkSolution, InverseKinematics};
 pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
 pub use servo::{ArmRobot, ArmStep};
+pub use urdf_shape::{MAX_URDF_DEPTH, MAX_URDF_NODES};
 
 use crate::error::{Error, Result};
 

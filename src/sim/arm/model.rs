@@ -125,6 +125,8 @@ impl ArmModel {
 
     /// Parses URDF text; `source` labels the errors.
     pub(super) fn parse(urdf: &str, end_effector: &str, source: &str) -> Result<Self> {
+        // Bounded depth and size before the recursive parser (module urdf_shape).
+        super::urdf_shape::check_urdf_shape(urdf).map_err(|e| urdf_error(source, e))?;
         let robot = urdf_rs::read_from_string(urdf).map_err(|e| urdf_error(source, parse_message(&e.to_string())))?;
         let chain = chain_to(&robot, end_effector, source)?;
         let base = chain.first().map_or(end_effector, |j| j.parent.link.as_str());

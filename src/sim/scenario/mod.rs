@@ -6,6 +6,7 @@
 
 mod builtin;
 mod convert;
+pub use convert::{MAX_OBJECT_POINTS, MIN_TAG_SIDE_PIXELS};
 mod files;
 mod law_keys;
 pub mod schema;
@@ -72,6 +73,16 @@ pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
     Error::Scenario { key: key.to_string(), reason: reason.into() }
 }
 
+/// Scenario text (TOML, or JSON from a dictionary) is held to the file limit,
+/// [`MAX_SCENARIO_BYTES`], before it is parsed.
+fn check_text_size(text: &str) -> Result<()> {
+    if text.len() as u64 > MAX_SCENARIO_BYTES {
+        let reason = format!("{} bytes of text, more than the limit of {MAX_SCENARIO_BYTES} bytes", text.len());
+        return Err(scenario_error("", reason));
+    }
+    Ok(())
+}
+
 impl Scenario {
     /// Parses TOML text; errors name the key (and line) at fault.
     pub fn from_toml(text: &str) -> Result<Self> {
@@ -108,6 +119,7 @@ impl Scenario {
     }
 
     fn parse_toml(text: &str) -> Result<Self> {
+        check_text_size(text)?;
         // The parser's message only, with the line: its Display quotes the source line, which
         // may be anything (a binary file, a secret).
         let de = toml::Deserializer::parse(text).map_err(|e| scenario_error("", toml_message(text, &e)))?;
@@ -145,6 +157,7 @@ impl Scenario {
     }
 
     fn parse_json(text: &str) -> Result<Self> {
+        check_text_size(text)?;
         let mut de = serde_json::Deserializer::from_str(text);
         serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();

@@ -12,6 +12,7 @@ use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::outcome::{Outcome, Recording, Status, Summary};
+use crate::sim::record_budget::RecordBudget;
 use crate::sim::robot::{RobotEvent, RobotMotion};
 use crate::sim::scene::Observation;
 
@@ -48,6 +49,7 @@ pub(super) struct Run<'a> {
     peak_speeds: (f64, f64),
     prop3: Prop3Figures,
     recording: Option<Recording>,
+    budget: RecordBudget,
     iteration: usize,
 }
 
@@ -77,6 +79,7 @@ impl<'a> Run<'a> {
             detection: vec![f64::NAN; n],
             pose: config.start,
             recording: config.record.then(|| Recording { n_points: n, n_joints: joints.len(), ..Default::default() }),
+            budget: RecordBudget::new(config.record_bytes, n, joints.len(), config.vision.is_some()),
             joints,
             min_manipulability,
             robot_end: None,
@@ -140,6 +143,7 @@ impl<'a> Run<'a> {
         let deviation = distance_to_segment(&position, &self.config.start.translation.vector, &Vector3::zeros());
         self.max_line_deviation = self.max_line_deviation.max(deviation);
         let Some(r) = self.recording.as_mut() else { return };
+        self.budget.before_row(r, self.iteration);
         let (pose, m, servo) = (&self.pose, self.servo.telemetry(), &self.servo);
         r.time.push(t);
         let h = pose.to_homogeneous();

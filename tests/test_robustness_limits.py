@@ -1,0 +1,190 @@
+"""Limits that hold together (issue 28): a run's record in bounded memory, `[vision]` limits
+found when the scenario loads (not as a servo outcome), bounded undistortion, and the smaller
+findings: `fk` outside the joint limits, a final verdict, a blank first frame, NumPy scalars in
+scenario dicts. Each case failed before its fix."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from typing import Any
+
+import numpy as np
+import pytest
+
+import vsinv
+
+pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="RLIMIT_AS: Linux")
+
+
+def endless(max_iterations: int) -> dict[str, Any]:
+    """lens-12-6 with pixel noise and stop thresholds never met: runs to max_iterations."""
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["stop"].update(max_iterations=max_iterations, pixel_error=1e-9, invariant_error=1e-12, tau21=1e-12)
+    d["noise"].update(pixel_sigma=1.0)
+    return d
+
+
+def test_a_long_recorded_run_fits_in_bounded_memory() -> None:
+    """Finding 3: max_iterations = 10_000_000 with recording on aborted on memory after 29 s.
+    One million iterations (an unbounded record: about 600 MB, 1.2 GB while growing) under an
+    address-space cap of 640 MiB over the interpreter's: the record holds at most 64 MiB."""
+    code = textwrap.dedent(f"""
+        import json, os, resource, time
+        import vsinv
+        vm = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        limit = vm + (640 << 20)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+        t = time.perf_counter()
+        r = vsinv.run_scenario(json.loads({json.dumps(endless(1_000_000))!r}))
+        print(json.dumps({{"status": r.summary["status"], "iterations": r.summary["iterations"],
+                          "rows": len(r.time), "first": float(r.time[0]), "last": float(r.time[-1]),
+                          "bytes": sum(a.nbytes for a in r.arrays.values()), "s": time.perf_counter() - t}}))
+    """)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, f"the run died ({proc.returncode}): {proc.stderr[-2000:]}"
+    out = json.loads(proc.stdout.splitlines()[-1])
+    assert out["status"] == "max_iterations" and out["iterations"] == 1_000_000, out
+    assert out["bytes"] <= 64 << 20, out  # the record's budget (MAX_RECORD_BYTES)
+    assert 3 <= out["rows"] < 1_000_001 and out["first"] == 0.0
+    assert out["last"] == pytest.approx(1_000_000 * 0.04), out  # the last row is where the run ended
+
+
+def test_a_short_run_is_recorded_whole() -> None:
+    r = vsinv.run_scenario(endless(300))
+    assert r.summary["iterations"] == 300 and len(r.time) == 301
+    np.testing.assert_allclose(np.diff(r.time), 0.04)
+
+
+# ---------------------------------------------------------------------------------------------
+# Finding 6: [vision] limits at load time
+
+
+def test_a_camera_larger_than_the_detectors_take_is_refused_at_load() -> None:
+    d = vsinv.load_scenario("vision-12-6").to_dict()
+    d["camera"].update(width=20000.0, height=20000.0)
+    with pytest.raises(vsinv.InvalidInput) as e:
+        vsinv.load_scenario(d)
+    assert e.value.key == "camera.width" and "camera.height" in str(e.value) and "2^28" in str(e.value)
+    d = vsinv.load_scenario("vision-12-6").to_dict()
+    d["reference_camera"].update(width=16385.0, height=16384.0)
+    with pytest.raises(vsinv.InvalidInput, match="reference_camera.width x reference_camera.height"):
+        vsinv.load_scenario(d)
+    d["reference_camera"].update(width=16384.0, height=16384.0)  # 2^28: accepted
+    vsinv.load_scenario(d)
+
+
+@pytest.mark.parametrize("size", [1e-9, 1e-3])
+def test_a_tag_too_small_to_read_is_refused_at_load(size: float) -> None:
+    d = vsinv.load_scenario("tags-12-6").to_dict()
+    d["object"]["tags"][1]["size"] = size
+    with pytest.raises(vsinv.InvalidInput) as e:
+        vsinv.load_scenario(d)
+    assert e.value.key == "object.tags[1].size" and "at least 8 px" in str(e.value), str(e.value)
+
+
+def test_readable_tags_still_load() -> None:
+    d = vsinv.load_scenario("tags-12-6").to_dict()
+    for t in d["object"]["tags"]:
+        t["size"] = 0.05
+    vsinv.load_scenario(d)
+
+
+def test_scenario_text_is_held_to_the_file_limit() -> None:
+    """Finding 7: a TOML string of 2e6 points took 4.5 s and 1.66 GB before a missing field."""
+    text = "object.points = [" + "[0.1, 0.2, 1.0]," * 1_200_000 + "]\n"
+    assert len(text) > 16 << 20
+    with pytest.raises(vsinv.InvalidInput, match="bytes of text, more than the limit of 16777216"):
+        vsinv.Scenario.from_toml(text)
+
+
+# ---------------------------------------------------------------------------------------------
+# The smaller findings
+
+
+def test_fk_refuses_joints_outside_the_limits() -> None:
+    q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]
+    vsinv.fk("ur5", q)
+    for bad in (1e300, -1e300, 7.0):
+        with pytest.raises(vsinv.InvalidInput, match="joints: shoulder_pan_joint = .* is outside its limits") as e:
+            vsinv.fk("ur5", [bad] + q[1:])
+        assert e.value.argument == "joints"
+
+
+def test_a_verdict_is_final() -> None:
+    """A step after a stop returns that stop (it returned `settled` after `converged`)."""
+    sc = vsinv.load_scenario("lens-12-12")
+    _, ref_px, _ = vsinv.render_view(sc, reference=True)
+    _, start_px, _ = vsinv.render_view(sc)
+    z = np.array(vsinv.load_scenario("lens-12-12").to_dict()["object"]["points"])[:, 2]
+    k = vsinv.Intrinsics(1200.0, 1200.0, 416.0, 312.0)
+    servo = vsinv.Servo(ref_px, k, reference_depths=z)
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        step = servo.step(ref_px + rng.normal(0.0, 1e-3, ref_px.shape))
+        if not step.running:
+            break
+    assert not step.running, step.verdict
+    final, iterations = (step.verdict, step.reason), servo.iterations
+    for pixels in (start_px, ref_px, ref_px + 5.0, start_px):
+        again = servo.step(pixels)
+        assert (again.verdict, again.reason) == final and not again.running
+        assert np.array_equal(again.twist, np.zeros(6))
+    assert servo.iterations == iterations
+
+
+def test_a_blank_first_frame_is_a_lost_target() -> None:
+    sc = vsinv.load_scenario("vision-12-6")
+    ref, ref_px, _ = vsinv.render_view(sc, reference=True)
+    start, start_px, _ = vsinv.render_view(sc)
+    z = [0.60, 0.66, 0.56, 0.63, 0.54, 0.65, 0.62, 0.57, 0.64, 0.55, 0.61, 0.66]
+    k = vsinv.Intrinsics(648.0, 570.0, 427.0, 304.0)
+    for blank in (np.zeros_like(start), np.full_like(start, 255)):
+        servo = vsinv.ImageServo(ref, "dots", k, reference_points=ref_px, first_points=start_px, reference_depths=z)
+        step = servo.step(blank)
+        assert step.verdict == "lost_features" and not step.found.any(), step.reason
+        assert np.array_equal(step.twist, np.zeros(6))
+    # A hint outside the image is still an argument error, named.
+    servo = vsinv.ImageServo(ref, "dots", k, reference_points=ref_px, first_points=start_px, reference_depths=z)
+    assert servo.step(start).found.all()
+
+
+@pytest.mark.parametrize("scalar", [np.float32, np.float64, np.int64, np.int32])
+def test_numpy_scalars_in_scenario_dicts(scalar: Any) -> None:
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["control"]["gain"] = scalar(1)
+    d["stop"]["max_iterations"] = np.int64(5)
+    d["start"]["position"] = np.array([0.2, -0.15, -0.15], dtype=np.float32)
+    d["noise"]["on_reference"] = np.bool_(False)
+    s = vsinv.load_scenario(d)
+    assert s.to_dict()["control"]["gain"] == 1.0 and s.to_dict()["stop"]["max_iterations"] == 5
+    assert vsinv.run_scenario(d).summary["iterations"] <= 5
+    d["control"]["gain"] = object()
+    with pytest.raises(vsinv.InvalidInput, match="object is not JSON serializable"):
+        vsinv.load_scenario(d)
+
+
+def test_object_points_are_bounded() -> None:
+    """Finding 7: 1e6 object points, 3 iterations took 11.3 s and 2.3 GB; at most 10,000 now,
+    refused before any work."""
+    import time
+
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    rng = np.random.default_rng(0)
+    for n, ok in ((10_000, True), (10_001, False), (100_000, False)):
+        pts = np.column_stack([rng.uniform(-0.15, 0.15, n), rng.uniform(-0.12, 0.12, n), rng.uniform(0.54, 0.66, n)])
+        d["object"]["points"] = pts
+        t = time.perf_counter()
+        if ok:
+            vsinv.load_scenario(d)
+        else:
+            with pytest.raises(vsinv.InvalidInput, match=f"{n} points given, at most 10000") as e:
+                vsinv.load_scenario(d)
+            assert e.value.key == "object.points"
+        assert time.perf_counter() - t < 10.0
+    # A million points: more text than a scenario file may hold, refused before parsing.
+    d["object"]["points"] = np.zeros((1_000_000, 3))
+    with pytest.raises(vsinv.InvalidInput, match="more than the limit of 16777216 bytes"):
+        vsinv.load_scenario(d)
