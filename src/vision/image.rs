@@ -128,18 +128,24 @@ pub fn load_image(path: &Path) -> Result<GreyImage> {
     let what = path.display().to_string();
     let bytes = crate::input_file::read_bytes(path, crate::input_file::MAX_IMAGE_BYTES)
         .map_err(|reason| image_error(&what, reason))?;
-    let format = ::image::guess_format(&bytes)
-        .map_err(|_| image_error(&what, "not a PNG, PGM/PPM, JPEG or GIF image (unknown signature)"))?;
-    if format == ::image::ImageFormat::Jpeg && !jpeg_is_whole(&bytes) {
-        return Err(image_error(&what, "not a valid JPEG image (truncated: no end of image after the last scan)"));
+    decode_image(&what, &bytes)
+}
+
+/// An image file's bytes decoded as [`load_image`] decodes them (what it calls once the file is
+/// read; the fuzz target's entry point); `what` names the file in errors.
+pub fn decode_image(what: &str, bytes: &[u8]) -> Result<GreyImage> {
+    let format = ::image::guess_format(bytes)
+        .map_err(|_| image_error(what, "not a PNG, PGM/PPM, JPEG or GIF image (unknown signature)"))?;
+    if format == ::image::ImageFormat::Jpeg && !jpeg_is_whole(bytes) {
+        return Err(image_error(what, "not a valid JPEG image (truncated: no end of image after the last scan)"));
     }
-    let name = format!("{format:?}").to_uppercase();
     let img = if format == ::image::ImageFormat::Png {
-        png_file::decode(&what, &bytes)?
+        png_file::decode(what, bytes)?
     } else {
-        let invalid = |e| image_error(&what, format!("not a valid {name} image ({})", decode_reason(&e)));
+        let name = format!("{format:?}").to_uppercase();
+        let invalid = |e| image_error(what, format!("not a valid {name} image ({})", decode_reason(&e)));
         let reader = || {
-            let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes.as_slice()), format);
+            let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
             let mut limits = ::image::Limits::default();
             limits.max_image_width = Some(MAX_IMAGE_SIDE);
             limits.max_image_height = Some(MAX_IMAGE_SIDE);
@@ -148,11 +154,11 @@ pub fn load_image(path: &Path) -> Result<GreyImage> {
             reader
         };
         let (width, height) = reader().into_dimensions().map_err(invalid)?;
-        check_dimensions(&what, u64::from(width), u64::from(height))?;
+        check_dimensions(what, u64::from(width), u64::from(height))?;
         reader().decode().map_err(invalid)?
     };
-    let grey = to_grey(&what, img)?;
-    check_image(&what, &grey)?;
+    let grey = to_grey(what, img)?;
+    check_image(what, &grey)?;
     Ok(grey)
 }
 

@@ -30,7 +30,8 @@ pub(super) fn decode(what: &str, bytes: &[u8]) -> Result<DynamicImage> {
     let (color, depth) = reader.output_color_type();
     if depth != BitDepth::Eight {
         let reason = format!(
-            "{color:?} {depth:?}-bit samples: only 8-bit images are read (convert 16-bit images to 8 bits first)"
+            "{color:?} {}-bit samples: only 8-bit images are read (convert 16-bit images to 8 bits first)",
+            depth as u8
         );
         return Err(image_error(what, reason));
     }
