@@ -141,6 +141,14 @@ def test_an_array_too_large_is_refused_before_allocating(name: str, tmp_path: Pa
     assert not (tmp_path / "never.png").exists()
 
 
+def test_the_dot_detector_refuses_more_than_its_bound() -> None:
+    # Accepted as an image (under 2^28 pixels), but over 2^26 for detect_dots, which takes
+    # about 16 bytes a pixel (4 GB and 25 s at 2^28): refused before it reads the image.
+    row = run("vsinv.detect_dots(np.broadcast_to(np.uint8(7), (8193, 8192)))", over=512 << 20)
+    refused(row, "image", "too large for the dot detector", "67108864")
+    assert row["s"] < 1.0, row
+
+
 def test_a_large_png_at_decimation_1_is_refused_not_an_abort(tmp_path: Path) -> None:
     # The report's file: 16000 x 16000 stripes, 256 MB of pixels (under 2^28, so load_image
     # reads it), at decimation 1 aborted detect_tags (it would take some 15 GB).
