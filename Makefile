@@ -66,9 +66,13 @@ bench: install
 	$(PYTHON) benches/lens_change_accuracy.py
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
-# and the property tests on new random examples (CI runs a fixed sequence).
+# the image decoders and detectors on mutated image files for FUZZ_SECONDS (the CI part replays
+# the corpus of tests/fixtures/fuzz and a fixed sequence of mutations), and the property tests
+# on new random examples (CI runs a fixed sequence).
+FUZZ_SECONDS ?= 120
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
+	VSINV_FUZZ_SECONDS=$(FUZZ_SECONDS) cargo test --release --test fuzz_images mutations -- --nocapture
 	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness_*.py tests/test_api.py tests/test_se3.py
 	VSINV_PROPTEST_RANDOM=1 cargo test --release $(addprefix --test ,$(ROBUSTNESS_TESTS)) --test invariance
 

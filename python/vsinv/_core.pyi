@@ -875,11 +875,16 @@ def detect_tags(
     in the image shrunk by `decimation` (1..=8: larger is faster, smaller finds smaller tags;
     None: chosen per image, 1 below 960 pixels on the shorter side, 2 at 1920 x 1080) and on
     the image halved again and again, so large tags are found too. An empty image raises
-    InvalidInput; an image without tags gives an empty result."""
+    InvalidInput; an image without tags gives an empty result. Bounds: an image of at most 2^28
+    pixels (65536 a side, as every image argument), a decimation that leaves at most about 2^22
+    pixels to search (InvalidInput naming `decimation` and the one that fits otherwise; None
+    always fits: the detector takes some 70 bytes a searched pixel)."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
     """Reads an image file (PNG, PGM/PPM, JPEG, or a GIF's first frame) as (height, width) uint8
-    grey; colour is converted with the Rec. 601 luma weights (as OpenCV), 16-bit images are refused."""
+    grey; colour is converted with the Rec. 601 luma weights (as OpenCV), 16-bit images are refused.
+    At most 64 MiB of file, 2^28 pixels (65536 a side) and 512 MiB to decode; a PNG file's colour
+    profile (iCCP) and text chunks are skipped unread."""
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes a (height, width) uint8 array as a PNG file."""

@@ -106,7 +106,9 @@ pub(super) fn decimation_arg(decimation: Option<i64>) -> PyResult<Option<u32>> {
 /// image raises `InvalidInput`; an image without tags gives an empty result. Quads are
 /// searched in the image shrunk by `decimation` (1..=8; `None`: chosen per image, 1 below
 /// 960 pixels on the shorter side, 2 at 1920 x 1080) and on coarser levels; corners are
-/// measured at full size.
+/// measured at full size. The image is at most 2^28 pixels (65536 a side), and the decimation
+/// must leave at most about 2^22 pixels to search (the detector's memory, some 70 bytes a
+/// searched pixel; `None` chooses one that does).
 #[pyfunction]
 #[pyo3(signature = (image, family = "tag36h11", decimation = None))]
 pub fn detect_tags(

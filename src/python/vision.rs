@@ -12,7 +12,7 @@ use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
-use crate::vision::image::{GreyBuffer, GreyImage, load_image as load_image_file, save_png, view};
+use crate::vision::image::{GreyBuffer, GreyImage, check_dimensions, load_image as load_image_file, save_png, view};
 use crate::vision::polarity::Polarity;
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
@@ -42,7 +42,8 @@ impl ImageArg<'_> {
 }
 
 /// Reads `obj` as an 8-bit grey image: a 2-d uint8 NumPy array (anything else is refused with
-/// `InvalidInput` naming its dtype or shape).
+/// `InvalidInput` naming its dtype or shape, as is an image larger than `check_dimensions`
+/// allows: 2^28 pixels, 65536 a side).
 pub(super) fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
     let py = obj.py();
     let Ok(any) = obj.cast::<numpy::PyUntypedArray>() else {
@@ -55,6 +56,10 @@ pub(super) fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Im
         let reason = format!("expected a (height, width) uint8 array, got dtype {dtype} with shape {shape:?}");
         return Err(image_error(what, format!("{reason} (convert colour images to grey first)")));
     }
+    // The size is checked before anything is allocated for it (a zero-stride view of a huge
+    // image is copied below, and the detectors allocate after its pixels).
+    let shape = any.shape();
+    check_dimensions(what, shape[1] as u64, shape[0] as u64)?;
     let mut array = obj.cast::<PyArray2<u8>>()?.clone();
     if !array.is_c_contiguous() {
         static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();

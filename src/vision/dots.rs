@@ -17,7 +17,7 @@ use rayon::prelude::*;
 use crate::error::{Error, Result};
 use crate::vision::background::TileThresholds;
 use crate::vision::centroid::{MARGIN, RingFit, Weighted, weighted_centroid};
-use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
+use crate::vision::image::{GreyBuffer, GreyImage, MAX_IMAGE_PIXELS, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 use crate::vision::runs::{Component, label};
 
@@ -114,10 +114,29 @@ impl Window {
     }
 }
 
+/// The most pixels [`detect_dots`] reads: 2^26 (8192 x 8192), a quarter of
+/// [`MAX_IMAGE_PIXELS`]. The detector takes about 16 bytes a pixel (local thresholds, labels,
+/// runs; measured on stripes, 13 on noise) and some 0.1 s a megapixel, so at most about
+/// 1 GiB and several seconds.
+pub const MAX_DOT_PIXELS: u64 = MAX_IMAGE_PIXELS >> 2;
+
 /// Detects the dots of a whole image, sorted by `(v, u)` of their centroids. A uniform image
-/// (all black, say) is an error: nothing can stand out in it.
+/// (all black, say) is an error: nothing can stand out in it; so is an image of more than
+/// [`MAX_DOT_PIXELS`], refused before anything is allocated.
 pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Vec<Dot>> {
     check_image("image", image)?;
+    let pixels = u64::from(image.width()) * u64::from(image.height());
+    if pixels > MAX_DOT_PIXELS {
+        return Err(Error::InvalidImage {
+            what: "image".into(),
+            reason: format!(
+                "{} x {} pixels: too large for the dot detector (at most {MAX_DOT_PIXELS} pixels, 2^26: \
+                 its memory, about 16 bytes a pixel)",
+                image.height(),
+                image.width()
+            ),
+        });
+    }
     check_config(config)?;
     let (lo, hi) = image.pixels().fold((u8::MAX, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
     if lo == hi {
@@ -525,5 +544,17 @@ mod tests {
         assert!(detect_dots(&img, &none).unwrap().is_empty());
         let high = DetectConfig { threshold: Some(250), ..Default::default() };
         assert!(detect_dots(&img, &high).unwrap().is_empty());
+    }
+
+    #[test]
+    fn an_image_larger_than_the_dot_bound_is_refused_before_reading() {
+        // 8192 x 8193 (just over 2^26 pixels): zero-filled, never read (a uniform image would
+        // otherwise be refused as uniform, after a pass over it).
+        let big = GreyImage::new(8192, 8193);
+        let err = detect_dots(&big, &DetectConfig::default()).unwrap_err().to_string();
+        assert!(err.contains("too large for the dot detector") && err.contains("67108864"), "{err}");
+        let fits = GreyImage::new(8192, 8192);
+        let err = detect_dots(&fits, &DetectConfig::default()).unwrap_err().to_string();
+        assert!(err.contains("uniform"), "{err}");
     }
 }

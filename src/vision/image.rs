@@ -1,6 +1,8 @@
 //! 8-bit grey images: the `image` crate's `GrayImage` (row-major, `(height, width)`), its
 //! checks and image files (PNG, PGM/PPM, JPEG).
 
+mod png_file;
+
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -36,12 +38,36 @@ pub fn view<'a>(what: &str, width: u32, height: u32, data: &'a [u8]) -> Result<G
 }
 
 fn check_size(what: &str, width: u32, height: u32, len: usize) -> Result<()> {
-    if width == 0 || height == 0 {
-        return Err(image_error(what, format!("empty image ({height} x {width})")));
-    }
+    check_dimensions(what, u64::from(width), u64::from(height))?;
     let expected = width as usize * height as usize;
     if len != expected {
         return Err(image_error(what, format!("{len} values for a {height} x {width} image ({expected} expected)")));
+    }
+    Ok(())
+}
+
+/// The largest side of an image, pixels: a file's declared size, an array's shape, a
+/// detector's input.
+pub const MAX_IMAGE_SIDE: u32 = 65_536;
+/// The most pixels (width x height, 2^28: 256 MiB of grey levels) an image may have: every
+/// entry point that takes an image (a file, an array, a buffer given to a detector, the
+/// renderer's output) refuses a larger one before allocating anything for it.
+pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
+
+/// Checks an image's size against [`MAX_IMAGE_SIDE`] and [`MAX_IMAGE_PIXELS`] (and that it is
+/// not empty) before anything is allocated for it; `what` names the argument in errors.
+pub fn check_dimensions(what: &str, width: u64, height: u64) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(image_error(what, format!("empty image ({height} x {width})")));
+    }
+    let side = u64::from(MAX_IMAGE_SIDE);
+    if width > side || height > side || width.saturating_mul(height) > MAX_IMAGE_PIXELS {
+        return Err(image_error(
+            what,
+            format!(
+                "{height} x {width} pixels: too large (at most {MAX_IMAGE_PIXELS} pixels, 2^28, and {side} on a side)"
+            ),
+        ));
     }
     Ok(())
 }
@@ -56,16 +82,11 @@ pub fn from_raw(what: &str, width: u32, height: u32, data: Vec<u8>) -> Result<Gr
     GreyImage::from_raw(width, height, data).ok_or_else(|| image_error(what, "inconsistent size"))
 }
 
-/// Checks that an image is not empty.
+/// Checks that an image is neither empty nor larger than [`check_dimensions`] allows.
 pub fn check_image<C: Pixels>(what: &str, image: &GreyBuffer<C>) -> Result<()> {
-    if image.width() == 0 || image.height() == 0 {
-        return Err(image_error(what, format!("empty image ({} x {})", image.height(), image.width())));
-    }
-    Ok(())
+    check_dimensions(what, u64::from(image.width()), u64::from(image.height()))
 }
 
-/// The largest side of an image read from a file, pixels.
-pub const MAX_IMAGE_SIDE: u32 = 65_536;
 /// The most memory decoding an image file may take, bytes.
 pub const MAX_IMAGE_ALLOC: u64 = 512 << 20;
 
@@ -99,28 +120,45 @@ pub fn save_png(image: &GreyImage, path: &Path) -> Result<()> {
 /// (16-bit PGM or PNG) are refused: scaling them down would hide a choice (which bits matter)
 /// that belongs to the caller. The file must be a regular file of at most
 /// [`MAX_IMAGE_BYTES`](crate::input_file::MAX_IMAGE_BYTES); decoding is bounded by
-/// [`MAX_IMAGE_SIDE`] and [`MAX_IMAGE_ALLOC`] (a small file declaring a huge image is refused).
+/// [`check_dimensions`] (the declared size, before decoding) and [`MAX_IMAGE_ALLOC`] (a small
+/// file declaring a huge image is refused); a PNG file's colour profile and text chunks are
+/// skipped unread (compressed, they could inflate to any size: `png_file.rs`).
 /// Errors name the file and never quote its contents.
 pub fn load_image(path: &Path) -> Result<GreyImage> {
     let what = path.display().to_string();
     let bytes = crate::input_file::read_bytes(path, crate::input_file::MAX_IMAGE_BYTES)
         .map_err(|reason| image_error(&what, reason))?;
-    let format = ::image::guess_format(&bytes)
-        .map_err(|_| image_error(&what, "not a PNG, PGM/PPM, JPEG or GIF image (unknown signature)"))?;
-    if format == ::image::ImageFormat::Jpeg && !jpeg_is_whole(&bytes) {
-        return Err(image_error(&what, "not a valid JPEG image (truncated: no end of image after the last scan)"));
+    decode_image(&what, &bytes)
+}
+
+/// An image file's bytes decoded as [`load_image`] decodes them (what it calls once the file is
+/// read; the fuzz target's entry point); `what` names the file in errors.
+pub fn decode_image(what: &str, bytes: &[u8]) -> Result<GreyImage> {
+    let format = ::image::guess_format(bytes)
+        .map_err(|_| image_error(what, "not a PNG, PGM/PPM, JPEG or GIF image (unknown signature)"))?;
+    if format == ::image::ImageFormat::Jpeg && !jpeg_is_whole(bytes) {
+        return Err(image_error(what, "not a valid JPEG image (truncated: no end of image after the last scan)"));
     }
-    let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-    let mut limits = ::image::Limits::default();
-    limits.max_image_width = Some(MAX_IMAGE_SIDE);
-    limits.max_image_height = Some(MAX_IMAGE_SIDE);
-    limits.max_alloc = Some(MAX_IMAGE_ALLOC);
-    reader.limits(limits);
-    let name = format!("{format:?}").to_uppercase();
-    let img =
-        reader.decode().map_err(|e| image_error(&what, format!("not a valid {name} image ({})", decode_reason(&e))))?;
-    let grey = to_grey(&what, img)?;
-    check_image(&what, &grey)?;
+    let img = if format == ::image::ImageFormat::Png {
+        png_file::decode(what, bytes)?
+    } else {
+        let name = format!("{format:?}").to_uppercase();
+        let invalid = |e| image_error(what, format!("not a valid {name} image ({})", decode_reason(&e)));
+        let reader = || {
+            let mut reader = ::image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
+            let mut limits = ::image::Limits::default();
+            limits.max_image_width = Some(MAX_IMAGE_SIDE);
+            limits.max_image_height = Some(MAX_IMAGE_SIDE);
+            limits.max_alloc = Some(MAX_IMAGE_ALLOC);
+            reader.limits(limits);
+            reader
+        };
+        let (width, height) = reader().into_dimensions().map_err(invalid)?;
+        check_dimensions(what, u64::from(width), u64::from(height))?;
+        reader().decode().map_err(invalid)?
+    };
+    let grey = to_grey(what, img)?;
+    check_image(what, &grey)?;
     Ok(grey)
 }
 

@@ -34,7 +34,7 @@ use crate::vision::target::Target;
 
 /// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
 /// sizes are refused with `InvalidParameter("image size")` before any allocation.
-pub const MAX_RENDER_PIXELS: u64 = 1 << 28;
+pub const MAX_RENDER_PIXELS: u64 = crate::vision::image::MAX_IMAGE_PIXELS;
 
 /// How the images are made (the `[vision]` table of a scenario).
 #[derive(Debug, Clone, Copy, PartialEq)]

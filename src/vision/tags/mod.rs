@@ -203,8 +203,48 @@ const THRESHOLD_SPLIT: f32 = 0.5;
 /// keeps the finest search's shorter side at least [`AUTOMATIC_MIN_SIDE`] pixels (1 up to
 /// 959 pixels, 2 at 1920 x 1080, 4 at 3840 x 2160), so the smallest tag it finds is about the
 /// same share of the image at any resolution (larger tags are found on the coarser levels).
+/// A larger one is taken when the search would read more than [`MAX_SEARCH_PIXELS`] (a long
+/// strip of an image, or one of more than 2^24 pixels).
 pub fn automatic_decimation(width: u32, height: u32) -> u32 {
-    (width.min(height) / AUTOMATIC_MIN_SIDE).clamp(1, MAX_DECIMATION)
+    let preferred = (width.min(height) / AUTOMATIC_MIN_SIDE).clamp(1, MAX_DECIMATION);
+    (preferred..=MAX_DECIMATION)
+        .find(|&d| searched_pixels(width, height, d) <= MAX_SEARCH_PIXELS)
+        .unwrap_or(MAX_DECIMATION)
+}
+
+/// The most pixels the finest quad search reads (the image shrunk by the decimation), which
+/// bounds the detector's memory: `kornia-apriltag` takes up to about 70 bytes a searched pixel
+/// (its connected components and edge clusters, on noise; 50 on stripes or a checkerboard).
+/// 2^22 (2048 x 2048; 1920 x 1080 is searched at decimation 1), plus 2^14 for the rounding up
+/// of the largest image [`check_dimensions`](crate::vision::image::check_dimensions) accepts
+/// ([`MAX_IMAGE_PIXELS`](crate::vision::image::MAX_IMAGE_PIXELS)) decimated by
+/// [`MAX_DECIMATION`], so that every image has a decimation that fits.
+pub const MAX_SEARCH_PIXELS: u64 = (1 << 22) + (1 << 14);
+
+/// The pixels of the image `width x height` shrunk by `decimation` (rounded up, as the
+/// detector does).
+pub fn searched_pixels(width: u32, height: u32, decimation: u32) -> u64 {
+    let d = u64::from(decimation.max(1));
+    u64::from(width).div_ceil(d) * u64::from(height).div_ceil(d)
+}
+
+/// Refuses a decimation that leaves more than [`MAX_SEARCH_PIXELS`] to search, naming the
+/// smallest that fits.
+fn check_search(width: u32, height: u32, decimation: u32) -> Result<()> {
+    let searched = searched_pixels(width, height, decimation);
+    if searched <= MAX_SEARCH_PIXELS {
+        return Ok(());
+    }
+    let fits = (decimation..=MAX_DECIMATION)
+        .find(|&d| searched_pixels(width, height, d) <= MAX_SEARCH_PIXELS)
+        .unwrap_or(MAX_DECIMATION);
+    Err(Error::InvalidParameter {
+        name: "decimation",
+        reason: format!(
+            "{decimation} leaves {searched} pixels of this {height} x {width} image to search, at most \
+             {MAX_SEARCH_PIXELS} are searched (the detector's memory): use decimation >= {fits}"
+        ),
+    })
 }
 /// The largest decimation accepted.
 pub const MAX_DECIMATION: u32 = 8;
@@ -270,6 +310,7 @@ impl TagDecoder {
             return Ok(Vec::new());
         }
         let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(image.width(), image.height()));
+        check_search(image.width(), image.height(), decimation)?;
         let mut candidates = self.search(0, image, decimation, 1.0)?;
         let (mut scale, mut level, mut half) = (1u32, 0, None::<GreyImage>);
         loop {
@@ -577,5 +618,39 @@ mod tests {
         let owned = draw(TagFamily::Tag36h11, 80, 80, &[p]);
         let view = crate::vision::image::view("image", 80, 80, owned.as_raw()).unwrap();
         assert_eq!(detect_tags(&view, TagFamily::Tag36h11).unwrap(), detect_tags(&owned, TagFamily::Tag36h11).unwrap());
+    }
+
+    #[test]
+    fn every_accepted_image_has_a_decimation_within_the_search_bound() {
+        use crate::vision::image::{MAX_IMAGE_PIXELS, MAX_IMAGE_SIDE};
+        // The extremes check_dimensions accepts: the longest strips and the squares just
+        // under 2^28 pixels whose sides are not multiples of 8 (rounded up when decimated).
+        let side = MAX_IMAGE_SIDE;
+        let strip = (MAX_IMAGE_PIXELS / u64::from(side)) as u32;
+        for (w, h) in [(side, strip), (strip, side), (side, 1), (16_385, 16_383), (16_383, 16_385), (16_000, 16_000)] {
+            assert!(u64::from(w) * u64::from(h) <= MAX_IMAGE_PIXELS);
+            let d = automatic_decimation(w, h);
+            // Independent count: the decimated sides as (side + d - 1) / d, in floating point.
+            let n = (f64::from(w) / f64::from(d)).ceil() * (f64::from(h) / f64::from(d)).ceil();
+            assert!(n <= MAX_SEARCH_PIXELS as f64, "{w} x {h}: decimation {d} leaves {n}");
+            assert!(check_search(w, h, d).is_ok());
+        }
+        // The automatic choice is unchanged where it fits (issue 27's figures).
+        assert_eq!([automatic_decimation(640, 480), automatic_decimation(1920, 1080)], [1, 2]);
+        assert_eq!(automatic_decimation(3840, 2160), 4);
+        // A long strip is decimated more than its short side asks for.
+        assert_eq!(automatic_decimation(65_536, 600), 4);
+    }
+
+    #[test]
+    fn a_decimation_leaving_too_many_pixels_is_refused_before_allocating() {
+        // 16000 x 16000 at decimation 1 would take ~15 GB in the detector: refused with the
+        // decimation that fits. The image is a zero-filled buffer the detector never reads.
+        let image = GreyImage::new(16_000, 16_000);
+        let err = TagDecoder::with_decimation(TagFamily::Tag36h11, 1).unwrap().detect(&image).unwrap_err();
+        let text = err.to_string();
+        assert!(matches!(err, Error::InvalidParameter { name: "decimation", .. }), "{text}");
+        assert!(text.contains("use decimation >= 8") && text.contains(&MAX_SEARCH_PIXELS.to_string()), "{text}");
+        assert!(check_search(2048, 2048, 1).is_ok() && check_search(2049, 2100, 1).is_err());
     }
 }
