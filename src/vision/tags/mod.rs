@@ -28,12 +28,15 @@
 //! do not support its corners is not reported (never reported with a wrong corner).
 
 mod edges;
+mod follow;
 mod pyramid;
 mod smoothed;
 
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
 use kornia_image::{Image, ImageSize};
+
+pub use follow::TagFollower;
 
 use crate::error::{Error, Result};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
