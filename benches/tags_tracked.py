@@ -17,8 +17,9 @@ package's folder, never copied). "still": the same frame again and again; "movin
 shifted by (0, 0), (2, 1), (4, 2), (2, 1) pixels in turn (the uncovered border white), about
 2 px a frame. The tracker reads no whole frame while timed (``refresh=0``; the run checks that
 every timed frame was tracked, and reports how far the tracked corners are from ``detect_tags``'s
-on the same frames, "max diff px", how many tags one found and not the other, "odd", and the share
-of the tracked tags that were followed by their edges, "edges %");
+on the same frames, "max diff px" ("crop diff" for ``follow=False``), how many tags one found and
+not the other, "odd", and the share of the tracked tags that were followed by their edges,
+"edges %");
 "amortized" adds one whole read every 15 frames, the tracker's default ``refresh``. Timing as
 ``benches/tags_vs_opencv.py`` (minimum over rounds of the median time per call); the ratios are
 vsinv's time over OpenCV's (``ArucoDetector(DICT_APRILTAG_36h11)``, subpixel refinement) on the
@@ -73,6 +74,7 @@ class Row:
     opencv_ms: float
     opencv_tags: int
     max_diff_px: float  # largest distance of a tracked corner from the whole frame's
+    crop_diff_px: float  # the same, with the quad search in crops (follow=False)
     odd_tags: int  # tags found by one of tracked and whole frame but not the other
     edges_share: float  # of the tags of the tracked frames, those followed by their edges
 
@@ -149,7 +151,8 @@ def measure(rounds: int) -> list[Row]:
                     amortized_ms=((REFRESH - 1) * t["moving"] + t["whole"]) / REFRESH * 1e3,
                     opencv_ms=t["opencv"] * 1e3,
                     opencv_tags=0 if ids is None else len(ids),
-                    max_diff_px=max(c.worst for c in checked),
+                    max_diff_px=max(still.worst, moving.worst),
+                    crop_diff_px=max(crop_still.worst, crop_moving.worst),
                     odd_tags=sum(c.odd for c in checked),
                     edges_share=(still.edges + moving.edges) / max(still.reads + moving.reads, 1),
                 )
@@ -161,7 +164,7 @@ def print_table(rows: list[Row]) -> None:
     head = (
         f"{'frames':<20} {'dec':>3} {'tags':>4} {'whole ms':>9} {'still ms':>9} {'moving ms':>9} "
         f"{'crop still':>10} {'crop moving':>11} {'amortized':>9} {'OpenCV ms':>9} {'CV tags':>7} "
-        f"{'max diff px':>11} {'odd':>3} {'edges %':>7}  ratios to OpenCV: whole / still / moving"
+        f"{'max diff px':>11} {'crop diff':>9} {'odd':>3} {'edges %':>7}  ratios to OpenCV: whole / still / moving"
     )
     print(head)
     print("-" * len(head))
@@ -169,7 +172,7 @@ def print_table(rows: list[Row]) -> None:
         print(
             f"{r.image:<20} {r.decimation:>3} {r.tags:>4} {r.whole_ms:>9.2f} {r.still_ms:>9.3f} {r.moving_ms:>9.3f} "
             f"{r.crop_still_ms:>10.3f} {r.crop_moving_ms:>11.3f} {r.amortized_ms:>9.2f} {r.opencv_ms:>9.2f} "
-            f"{r.opencv_tags:>7} {r.max_diff_px:>11.1e} {r.odd_tags:>3} {100 * r.edges_share:>7.0f}  "
+            f"{r.opencv_tags:>7} {r.max_diff_px:>11.1e} {r.crop_diff_px:>9.1e} {r.odd_tags:>3} {100 * r.edges_share:>7.0f}  "
             f"{r.ratio(r.whole_ms):.2f} / {r.ratio(r.still_ms):.3f} / {r.ratio(r.moving_ms):.3f}"
         )
 

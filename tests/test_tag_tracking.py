@@ -21,9 +21,10 @@ BENCHMARK = Path("/usr/share/visp-images-data/ViSP-images/AprilTag/benchmark/192
 #: (src/vision/tags/follow.rs) has them measured from its last corners, the whole frame from the
 #: decoder's quad; the edge refinement (src/vision/tags/edges.rs) stops when its corners move by
 #: less than 0.05 px and keeps a trace of where it started: up to 0.0062 px over 30 rendered
-#: frames in perspective (0.0055 px found in crops, 3e-4 px on the benchmark shifted by a few
-#: pixels). With the refinement iterated to a fixed point this would shrink further.
-TOLERANCE_PX = 0.01
+#: frames in perspective (0.0055 px found in crops), 3e-4 px on the 1920 x 1080 benchmark shifted
+#: by a few pixels, 0.018 px on the 640 x 480 one (0.015 px found in crops; benches/tags_tracked.py).
+#: With the refinement iterated to a fixed point this would shrink further.
+TOLERANCE_PX = 0.02
 
 
 def _same(tracked: vsinv.Tags, whole: vsinv.Tags, what: str) -> None:
@@ -80,8 +81,7 @@ def test_the_benchmark_shifted_between_frames_is_tracked_as_the_whole_frame_read
             frame = _shifted(image, du, dv)
             got = tracker.track(frame)
             reads.append(tracker.read_whole)
-            assert len(set(tracker.reads)) == 1, f"decimation {decimation}, frame {k}: {tracker.reads}"
-            kinds.append(tracker.reads[0])
+            kinds.append(set(tracker.reads))
             whole = vsinv.detect_tags(frame, decimation=decimation)
             what = f"decimation {decimation}, frame {k}"
             # A tag the whole frame finds after a shift of a few pixels but not before (decimation
@@ -89,11 +89,13 @@ def test_the_benchmark_shifted_between_frames_is_tracked_as_the_whole_frame_read
             (_same if tracker.read_whole or decimation == 3 else _within)(got, whole, what)
             assert len(got) >= 3, what
         # The first frame and the 300 px jump are read whole; the tags that moved by up to 4 px
-        # are followed by their edges (so is the frame still after the jump), and those that
-        # moved by 9-10 px (more than three quarters of a cell) are found in their crops.
+        # are followed by their edges (so is the frame still after the jump); those that moved
+        # by 9-10 px (frames 4 and 6: about three quarters of the small tags' cells) are followed
+        # or, when beyond their edges' search window, found in their crops.
         assert reads == [True, False, False, False, False, False, False, True, False, False], decimation
-        edges, crop, whole = "edges", "crop", "whole"
-        assert kinds == [whole, edges, edges, edges, crop, edges, crop, whole, edges, edges], decimation
+        edges, either, whole = {"edges"}, {"edges", "crop"}, {"whole"}
+        assert [k <= either for k in kinds] == [k not in (0, 7) for k in range(10)], decimation
+        assert [kinds[k] for k in (0, 1, 2, 3, 5, 7, 8, 9)] == [whole, edges, edges, edges, edges, whole, edges, edges]
 
 
 def test_tags_leaving_entering_and_no_false_identities() -> None:

@@ -1,7 +1,9 @@
 //! A tag followed from its last corners with no quad search ([`TagFollower`]): the four outer
 //! edges are measured again on the full-resolution image around where they were (profiles
 //! across each edge within a bounded window, a line fitted to their crossings, corners where
-//! the lines meet: `edges.rs`, the refinement the whole-frame detection ends with), then the
+//! the lines meet: `edges.rs`, the refinement the whole-frame detection ends with; when the
+//! tag moved more than those profiles reach, each edge is first searched along its normal
+//! within three quarters of a cell, `edge_search.rs`), then the
 //! bits are read through the homography of those corners as the AprilTag decoder reads them
 //! (a linear grey model of the border's black and white cells, each bit against the model's
 //! midpoint, sharpened by the decoder's Laplacian), and the code must be the tracked tag's,
@@ -12,6 +14,7 @@
 use kornia_apriltag::family::TagFamily as Layout;
 use nalgebra::{Matrix3, Vector3};
 
+use super::edge_search;
 use super::edges::{self, Border};
 use super::{TAG_CORNERS_IN_LAYOUT, Tag, TagFamily, decoder_error};
 use crate::error::Result;
@@ -48,7 +51,10 @@ impl TagFollower {
     /// read there are not tag `id`'s in that orientation.
     pub fn follow<C: Pixels>(&self, image: &GreyBuffer<C>, id: u32, start: &[P; 4]) -> Option<Tag> {
         let border = Border { cells: f64::from(self.family.border_cells()), reversed: self.family.reversed_border() };
-        let corners = edges::refine_corners(image, start, border)?;
+        let corners = edges::refine_corners(image, start, border).or_else(|| {
+            let moved = edge_search::moved_corners(image, start, border)?;
+            edges::refine_corners(image, &moved, border)
+        })?;
         let code = self.read_code(image, &corners)?;
         self.is_code_of(code, id).then_some(Tag { id, corners })
     }
@@ -234,14 +240,14 @@ mod tests {
         assert!(SquareMap::onto(&[[0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]).is_none());
     }
 
-    /// A tag that moved by up to two pixels is followed to the corners the whole-frame
+    /// A tag that moved by up to four pixels (two thirds of a cell) is followed to the corners the whole-frame
     /// detection finds; the same quad is refused under any other id, and in another
     /// orientation (its corners listed from another one).
     #[test]
     fn follows_a_moved_tag_and_refuses_other_identities() {
         let follower = TagFollower::new(FAMILY).unwrap();
         let before = Placement { id: 42, centre: [90.3, 70.6], cell: 7.2, quarter_turns: 1 };
-        let after = Placement { centre: [91.9, 69.4], ..before };
+        let after = Placement { centre: [93.9, 68.4], ..before };
         let image = draw(FAMILY, 180, 140, &[after]);
         let whole = detect_tags(&image, FAMILY).unwrap();
         let start = corners(FAMILY, &before);

@@ -27,6 +27,7 @@
 //! (`src/vision/tags/edges.rs`): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
 //! do not support its corners is not reported (never reported with a wrong corner).
 
+mod edge_search;
 mod edges;
 mod follow;
 mod pyramid;
