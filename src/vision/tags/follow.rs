@@ -26,6 +26,14 @@ type P = [f64; 2];
 /// default `decode_sharpening`).
 const SHARPENING: f64 = 0.25;
 
+/// The edges found farther than this from the last corners (pixels) are refined from there.
+const MOVED_PX: f64 = 1.0;
+
+/// The largest distance between corresponding corners.
+fn largest_move(a: &[P; 4], b: &[P; 4]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1])).fold(0.0, f64::max)
+}
+
 /// Follows tags of one family from their last corners (the family's layout and decoding
 /// table built once).
 pub struct TagFollower {
@@ -51,10 +59,13 @@ impl TagFollower {
     /// read there are not tag `id`'s in that orientation.
     pub fn follow<C: Pixels>(&self, image: &GreyBuffer<C>, id: u32, start: &[P; 4]) -> Option<Tag> {
         let border = Border { cells: f64::from(self.family.border_cells()), reversed: self.family.reversed_border() };
-        let corners = edges::refine_corners(image, start, border).or_else(|| {
-            let moved = edge_search::moved_corners(image, start, border)?;
-            edges::refine_corners(image, &moved, border)
-        })?;
+        // From where the edges were searched when they moved by more than a pixel (the
+        // refinement's profiles reach 1.5 px at least), from the last corners otherwise.
+        let moved = edge_search::moved_corners(image, start, border).filter(|m| largest_move(m, start) > MOVED_PX);
+        let corners = match moved {
+            Some(moved) => edges::refine_corners(image, &moved, border),
+            None => edges::refine_corners(image, start, border),
+        }?;
         let code = self.read_code(image, &corners)?;
         self.is_code_of(code, id).then_some(Tag { id, corners })
     }
