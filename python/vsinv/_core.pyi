@@ -823,11 +823,14 @@ class DotTracker:
 
 @final
 class TagTracker:
-    """AprilTags of ``family`` through a sequence of frames: after a frame, each tag is searched in
-    a crop around its last corners (a margin of half its side plus twice its last motion), and the
-    whole frame is read when one is not found there, when the size changes, and every ``refresh``
-    frames (0: only then) to pick up tags coming into view. A tracked frame gives what
-    ``detect_tags`` gives on it, for the tags tracked. ``decimation`` (1..=8, None: the detector's
+    """AprilTags of ``family`` through a sequence of frames: after a frame, each tag is followed from
+    its last corners (its edges measured again near them, its bits read there, accepted only as the
+    same id: no quad search), else searched in a crop around its last corners (a margin of a
+    quarter of its side plus twice its last motion), and the whole frame is read when one is not
+    found there, when the size changes, and every ``refresh`` frames (0: only then) to pick up tags
+    coming into view. A tracked frame gives the corners ``detect_tags`` gives on it (within 0.02
+    px), for the tags tracked; ``reads`` says how each was read. ``follow=False`` skips the
+    following (the quad search in each crop every frame). ``decimation`` (1..=8, None: the detector's
     default) is ``detect_tags``'s.
 
     Works from several threads: their calls take turns (each waits with the GIL released)."""
@@ -837,6 +840,7 @@ class TagTracker:
         family: _TagFamily = "tag36h11",
         decimation: int | None = None,
         refresh: int = 15,
+        follow: bool = True,
     ) -> TagTracker: ...
     def track(self, image: npt.NDArray[np.uint8]) -> Tags:
         """The tags in the next frame (a (height, width) uint8 array), sorted by id."""
@@ -845,6 +849,12 @@ class TagTracker:
     @property
     def read_whole(self) -> bool:
         """Whether the last frame was read whole (not tracked in crops)."""
+    @property
+    def reads(self) -> list[str]:
+        """How each tag of the last frame was read, in the order of its ids: "edges" (followed from
+        its last corners, its edges measured again and its bits read there, no quad search),
+        "crop" (the quad search in a crop around them) or "whole" (the quad search in the whole
+        frame)."""
 
 @final
 class Tags:

@@ -14,10 +14,12 @@ use crate::vision::tags::TagDecoder;
 // The signature's default, written as a literal for Python's introspection.
 const _: () = assert!(DEFAULT_REFRESH == 15);
 
-/// AprilTags of `family` through a sequence of frames: after a frame, each tag is searched in
-/// a crop around its last corners, and the whole frame is read when one is not found there,
+/// AprilTags of `family` through a sequence of frames: after a frame, each tag is followed from
+/// its last corners (its edges measured again there and its bits read, no quad search), else
+/// searched in a crop around them, and the whole frame is read when one is not found there,
 /// when the size changes, and every `refresh` frames (0: only then) to pick up tags coming
 /// into view. A tracked frame gives what `detect_tags` gives on it, for the tags tracked.
+/// `follow=False` skips the following (the quad search in each crop every frame).
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "TagTracker", module = "vsinv._core", frozen)]
@@ -28,8 +30,8 @@ pub(super) struct PyTagTracker {
 #[pymethods]
 impl PyTagTracker {
     #[new]
-    #[pyo3(signature = (family = "tag36h11", decimation = None, refresh = 15))]
-    fn new(family: &str, decimation: Option<i64>, refresh: i64) -> PyResult<Self> {
+    #[pyo3(signature = (family = "tag36h11", decimation = None, refresh = 15, follow = true))]
+    fn new(family: &str, decimation: Option<i64>, refresh: i64, follow: bool) -> PyResult<Self> {
         let family = family_arg(family)?;
         let detector = match decimation_arg(decimation)? {
             Some(d) => TagDetector::with_decoder(TagDecoder::with_decimation(family, d)?),
@@ -38,7 +40,7 @@ impl PyTagTracker {
         let refresh = u32::try_from(refresh).map_err(|_| {
             invalid_argument("refresh", format!("refresh: expected a whole number of frames >= 0, got {refresh}"))
         })?;
-        Ok(Self { inner: Shared::new(detector.with_refresh(refresh), "TagTracker") })
+        Ok(Self { inner: Shared::new(detector.with_refresh(refresh).with_following(follow), "TagTracker") })
     }
 
     /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id.
@@ -59,6 +61,13 @@ impl PyTagTracker {
     #[getter]
     fn read_whole(&self, py: Python<'_>) -> PyResult<bool> {
         Ok(self.inner.lock(py)?.read_whole())
+    }
+
+    /// How each tag of the last frame was read, in the order of its ids: "edges" (followed from
+    /// its last corners, no quad search), "crop" (quad search in a crop around them) or "whole".
+    #[getter]
+    fn reads(&self, py: Python<'_>) -> PyResult<Vec<&'static str>> {
+        Ok(self.inner.lock(py)?.reads().iter().map(|r| r.name()).collect())
     }
 }
 

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::vision::detector::tag_regions::{Region, merged};
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::{GreyBuffer, GreyView, Pixels, view};
-use crate::vision::tags::{Tag, TagDecoder, TagFamily, automatic_decimation};
+use crate::vision::tags::{Tag, TagDecoder, TagFamily, TagFollower, automatic_decimation};
 
 /// A whole-frame search every this many frames by default, so that tags coming into view (or
 /// out from behind an occluder) are picked up while the others are tracked (half a second at
@@ -22,7 +22,42 @@ const CROP_GUARD: f64 = 2.0;
 /// Decoders kept for crop sizes seen lately.
 const KEPT_CROP_DECODERS: usize = 32;
 
-/// Tags of one family, found in each image: after a frame, each tag is searched first in a
+/// How a tag of the last frame of [`TagDetector::track`] was read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum TagRead {
+    /// Followed from its last corners: its edges measured again where they were and its bits
+    /// read there ([`TagFollower`]), no quad search.
+    Edges,
+    /// Found by the quad search in a crop around its last corners.
+    Crop,
+    /// Found by the quad search in the whole frame.
+    Whole,
+}
+
+impl TagRead {
+    /// Its name: `"edges"`, `"crop"` or `"whole"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Edges => "edges",
+            Self::Crop => "crop",
+            Self::Whole => "whole",
+        }
+    }
+}
+
+/// A tag of the last frame: where it was, how far it moved since the frame before (its
+/// largest corner move, pixels) and its corners' moves.
+#[derive(Debug, Clone, Copy)]
+struct Last {
+    tag: Tag,
+    motion: f64,
+    step: [[f64; 2]; 4],
+}
+
+/// Tags of one family, found in each image: after a frame, each tag is first followed from
+/// its last corners with no quad search ([`TagFollower`]: its edges measured again near
+/// them, its bits read there, accepted only as the same identity), then, when that fails,
+/// searched in a
 /// crop around its last corners (a margin proportional to its size plus its last
 /// motion), and the whole frame is read when one of them is not found there, when the image
 /// size changes, and every [`DEFAULT_REFRESH`] frames (to pick up tags coming into view).
@@ -37,9 +72,14 @@ pub struct TagDetector {
     /// The decimation asked for (None: the decoder's default), for the crops' decoders.
     decimation: Option<u32>,
     crops: Vec<((u32, u32), TagDecoder)>,
+    /// Built at the first tracked frame.
+    follower: Option<TagFollower>,
+    /// Whether tags are followed from their last corners before any crop is searched.
+    follow: bool,
     buffer: Vec<u8>,
-    /// The tags of the last frame with their last motion (pixels), and that frame's size.
-    last: Vec<(Tag, f64)>,
+    /// The tags of the last frame, how each was read, and that frame's size.
+    last: Vec<Last>,
+    reads: Vec<TagRead>,
     size: (u32, u32),
     refresh: u32,
     since_whole: u32,
@@ -63,8 +103,11 @@ impl TagDetector {
             decoder,
             decimation,
             crops: Vec::new(),
+            follower: None,
+            follow: true,
             buffer: Vec::new(),
             last: Vec::new(),
+            reads: Vec::new(),
             size: (0, 0),
             refresh: DEFAULT_REFRESH,
             since_whole: 0,
@@ -76,6 +119,13 @@ impl TagDetector {
     /// 0: only when a tag is lost or the size changes).
     pub fn with_refresh(mut self, frames: u32) -> Self {
         self.refresh = frames;
+        self
+    }
+
+    /// The same, following each tag from its last corners first (`true`, the default) or
+    /// searching each tracked tag's crop straight away (`false`: the quad search every frame).
+    pub fn with_following(mut self, follow: bool) -> Self {
+        self.follow = follow;
         self
     }
 
@@ -104,20 +154,52 @@ impl TagDetector {
     pub fn track<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Vec<Tag>> {
         let size = image.dimensions();
         let due = self.refresh != 0 && self.since_whole + 1 >= self.refresh;
-        let tracked = if size == self.size && !due && !self.last.is_empty() { self.in_crops(image)? } else { None };
-        let tags = match tracked {
-            Some(tags) => {
+        let tracked = if size == self.size && !due && !self.last.is_empty() { self.tracked(image)? } else { None };
+        let (tags, reads) = match tracked {
+            Some(found) => {
                 self.since_whole += 1;
-                tags
+                found
             }
             None => {
                 self.since_whole = 0;
-                self.decoder.detect(image)?
+                let tags = self.decoder.detect(image)?;
+                let reads = vec![TagRead::Whole; tags.len()];
+                (tags, reads)
             }
         };
         self.whole = self.since_whole == 0;
         self.remember(&tags, size);
+        self.reads = reads;
         Ok(tags)
+    }
+
+    /// How each tag of the last frame of [`TagDetector::track`] was read, in the order of the
+    /// tags it returned.
+    pub fn reads(&self) -> &[TagRead] {
+        &self.reads
+    }
+
+    /// The last frame's tags in this one: each followed from its last corners, those that
+    /// cannot be searched in crops ([`TagDetector::in_crops`]); `None` when one is lost.
+    fn tracked<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Option<(Vec<Tag>, Vec<TagRead>)>> {
+        if self.follow && self.follower.is_none() {
+            self.follower = Some(TagFollower::new(self.decoder.family())?);
+        }
+        let mut found = Vec::with_capacity(self.last.len());
+        let mut rest = Vec::new();
+        for last in &self.last {
+            match self.follower.as_ref().and_then(|f| followed(f, image, last)) {
+                Some(tag) => found.push((tag, TagRead::Edges)),
+                None => rest.push(*last),
+            }
+        }
+        if !rest.is_empty() {
+            let Some(in_crops) = self.in_crops(image, &rest)? else { return Ok(None) };
+            let new: Vec<Tag> = in_crops.into_iter().filter(|t| found.iter().all(|(f, _)| f.id != t.id)).collect();
+            found.extend(new.into_iter().map(|t| (t, TagRead::Crop)));
+        }
+        found.sort_by_key(|(t, _)| t.id);
+        Ok(Some(found.into_iter().unzip()))
     }
 
     /// Whether the last frame of [`TagDetector::track`] was read whole (not tracked in crops).
@@ -128,18 +210,20 @@ impl TagDetector {
     /// Forgets the last frame: the next one is read whole.
     pub fn reset(&mut self) {
         self.last.clear();
+        self.reads.clear();
         self.size = (0, 0);
     }
 
-    /// The last frame's tags, each read in a crop around it; `None` when one is not found
-    /// there, two share an id, or the crops would cover too much of the frame.
-    fn in_crops<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Option<Vec<Tag>>> {
+    /// The tags of `lasts`, each read in a crop around it (with any other tag read whole in
+    /// those crops); `None` when one is not found there, two share an id, or the crops would
+    /// cover too much of the frame.
+    fn in_crops<C: Pixels>(&mut self, image: &GreyBuffer<C>, lasts: &[Last]) -> Result<Option<Vec<Tag>>> {
         let (width, height) = image.dimensions();
         // The crops are read at the decimation the whole frame is read at.
         let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(width, height));
         let align = 4 * decimation;
         let regions: Option<Vec<Region>> =
-            self.last.iter().map(|(tag, motion)| Region::around(tag, *motion, width, height, align)).collect();
+            lasts.iter().map(|l| Region::around(&l.tag, l.motion, width, height, align)).collect();
         let Some(regions) = regions.map(merged) else { return Ok(None) };
         let area: u64 = regions.iter().map(Region::area).sum();
         if area as f64 > MAX_CROP_SHARE * f64::from(width) * f64::from(height) {
@@ -154,7 +238,7 @@ impl TagDetector {
         }
         tags.sort_by_key(|t| t.id);
         let twice = tags.windows(2).any(|w| w[0].id == w[1].id);
-        let lost = self.last.iter().any(|(last, _)| tags.binary_search_by_key(&last.id, |t| t.id).is_err());
+        let lost = lasts.iter().any(|last| tags.binary_search_by_key(&last.tag.id, |t| t.id).is_err());
         Ok((!twice && !lost).then_some(tags))
     }
 
@@ -183,13 +267,15 @@ impl TagDetector {
 
     /// Keeps `tags` with how far each moved since the last frame (0 for a new one).
     fn remember(&mut self, tags: &[Tag], size: (u32, u32)) {
-        let motion = |tag: &Tag| {
-            let last = self.last.iter().find(|(l, _)| l.id == tag.id);
-            last.map_or(0.0, |(l, _)| {
-                l.corners.iter().zip(&tag.corners).map(|(a, b)| (a[0] - b[0]).hypot(a[1] - b[1])).fold(0.0, f64::max)
-            })
+        let last = |tag: &Tag| {
+            let before = self.last.iter().find(|l| l.tag.id == tag.id);
+            let step: [[f64; 2]; 4] = std::array::from_fn(|k| {
+                before.map_or([0.0; 2], |l| [0, 1].map(|i| tag.corners[k][i] - l.tag.corners[k][i]))
+            });
+            let motion = step.iter().map(|s| s[0].hypot(s[1])).fold(0.0, f64::max);
+            Last { tag: *tag, motion, step }
         };
-        self.last = tags.iter().map(|t| (*t, motion(t))).collect();
+        self.last = tags.iter().map(last).collect();
         self.size = size;
     }
 
@@ -207,6 +293,16 @@ impl TagDetector {
         }
         Ok(out)
     }
+}
+
+/// The tag of `last` followed in `image` from its last corners, or from where its last step
+/// would take them (see [`TagFollower::follow`]).
+fn followed<C: Pixels>(follower: &TagFollower, image: &GreyBuffer<C>, last: &Last) -> Option<Tag> {
+    let id = last.tag.id;
+    follower.follow(image, id, &last.tag.corners).or_else(|| {
+        let ahead: [[f64; 2]; 4] = std::array::from_fn(|k| [0, 1].map(|i| last.tag.corners[k][i] + last.step[k][i]));
+        (last.motion > 0.0).then(|| follower.follow(image, id, &ahead)).flatten()
+    })
 }
 
 /// The decoder kept for crops of `size` (a new one, the oldest dropped, when none is).
@@ -342,6 +438,8 @@ mod tests {
                 let image = draw(FAMILY, 480, 360, &tags);
                 let got = tracker.track(&image).unwrap();
                 assert_eq!(tracker.read_whole(), k == 0, "decimation {decimation}, frame {k}");
+                let read = if k == 0 { TagRead::Whole } else { TagRead::Edges };
+                assert_eq!(tracker.reads(), [read; 3], "decimation {decimation}, frame {k}");
                 assert_same(&got, &whole.detect(&image).unwrap(), &format!("decimation {decimation}, frame {k}"));
                 assert_eq!(got.len(), 3);
             }
@@ -386,6 +484,36 @@ mod tests {
             if *read_whole {
                 assert_same(&got, &all, &format!("frame {k}"));
             }
+        }
+    }
+
+    /// A tag replaced by another id at the same place is refused by the follower (its edges
+    /// are there, its bits are not), lost in its crop, and the whole frame reads the new one;
+    /// the same tag turned by a quarter is found by the crop search, with its corners in its
+    /// new order. With the following off, each tracked tag is read in its crop.
+    #[test]
+    fn a_tag_replaced_or_turned_in_place_is_never_followed() {
+        let other = place(9, 200.0, 80.0, 6.0);
+        let turned = Placement { quarter_turns: 1, ..place(5, 70.6, 70.0, 6.0) };
+        // (tags, reads in the order of the ids found, ids)
+        let script: [(&[Placement], &[TagRead], &[u32]); 5] = [
+            (&[place(3, 70.0, 70.0, 6.0), other], &[TagRead::Whole; 2], &[3, 9]),
+            (&[place(3, 70.6, 70.0, 6.0), other], &[TagRead::Edges; 2], &[3, 9]),
+            (&[place(5, 70.6, 70.0, 6.0), other], &[TagRead::Whole; 2], &[5, 9]),
+            (&[turned, other], &[TagRead::Crop, TagRead::Edges], &[5, 9]),
+            (&[turned, other], &[TagRead::Edges; 2], &[5, 9]),
+        ];
+        let mut tracker = TagDetector::new(FAMILY).with_refresh(0);
+        let mut searched = TagDetector::new(FAMILY).with_refresh(0).with_following(false);
+        let mut whole = TagDecoder::new(FAMILY);
+        for (k, (tags, reads, ids)) in script.iter().enumerate() {
+            let image = draw(FAMILY, 320, 200, tags);
+            let got = tracker.track(&image).unwrap();
+            assert_eq!(got.iter().map(|t| t.id).collect::<Vec<_>>(), *ids, "frame {k}");
+            assert_eq!(tracker.reads(), *reads, "frame {k}");
+            assert_same(&got, &whole.detect(&image).unwrap(), &format!("frame {k}"));
+            assert_same(&searched.track(&image).unwrap(), &got, &format!("frame {k}, not followed"));
+            assert!(searched.reads().iter().all(|r| *r != TagRead::Edges), "frame {k}");
         }
     }
 

@@ -214,7 +214,7 @@ fn intersect(l: Line, m: Line) -> Option<P> {
 }
 
 /// The grey level at `(u, v)` (pixel centres at integers), `None` outside the image.
-fn bilinear<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
+pub(super) fn bilinear<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
     let (w, h) = (image.width() as f64, image.height() as f64);
     if !(u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0) {
         return None;

@@ -27,8 +27,10 @@
 //! (`src/vision/tags/edges.rs`): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
 //! do not support its corners is not reported (never reported with a wrong corner).
 
+mod edge_search;
 mod edges;
 mod face;
+mod follow;
 mod pyramid;
 mod smoothed;
 
@@ -37,6 +39,8 @@ pub use self::face::TagFace;
 use kornia_apriltag::family::TagFamilyKind;
 use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
 use kornia_image::{Image, ImageSize};
+
+pub use follow::TagFollower;
 
 use crate::error::{Error, Result};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
