@@ -58,18 +58,27 @@ CASES = {
         "s = vsinv.load_scenario('vision-12-12').to_dict()\n"
         "s['camera'] = dict(s['camera'], width=20000, height=20000)\n"
         "vsinv.render(s)",
-        "image size",
+        "camera.width",  # refused when the scenario loads (issue 28)
     ),
     "run_scenario 20000x20000 image": (
         "s = vsinv.load_scenario('vision-12-12').to_dict()\n"
         "for cam in ('camera', 'reference_camera'):\n"
         "    s[cam] = dict(s[cam], width=20000, height=20000)\n"
         "vsinv.run_scenario(s, record=False)",
-        "image size",
+        "camera.width",
     ),
     "run_scenario 200,000 points, basis auto": (
         "s = vsinv.load_scenario('lens-12-6').to_dict()\n"
         "obj = np.c_[rng.uniform(-0.1, 0.1, (N, 2)), rng.uniform(0.55, 0.65, N)]\n"
+        "s['object'] = {'points': obj.tolist()}\n"
+        "s.pop('basis', None)\n"
+        "s['stop'] = dict(s.get('stop', {}), max_iterations=3)\n"
+        "vsinv.run_scenario(s, record=False)",
+        "object.points",  # at most 10,000 (issue 28)
+    ),
+    "run_scenario 10,000 points, basis auto": (
+        "s = vsinv.load_scenario('lens-12-6').to_dict()\n"
+        "obj = np.c_[rng.uniform(-0.1, 0.1, (10_000, 2)), rng.uniform(0.55, 0.65, 10_000)]\n"
         "s['object'] = {'points': obj.tolist()}\n"
         "s.pop('basis', None)\n"
         "s['stop'] = dict(s.get('stop', {}), max_iterations=3)\n"
