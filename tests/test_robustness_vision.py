@@ -218,7 +218,7 @@ def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return IMG_LOCK["reference"]
 
 
-@covers("TagTracker", "TagTracker.track", "TagTracker.reset", "TagTracker.read_whole")
+@covers("TagTracker", "TagTracker.track", "TagTracker.reset", "TagTracker.read_whole", "TagTracker.reads")
 @fuzz_settings(60)
 @given(st.data())
 def test_tag_tracker(data: Any) -> None:
@@ -240,6 +240,8 @@ def test_tag_tracker(data: Any) -> None:
         tags = call(tracker.track, nxt.value, _api="TagTracker.track", _expect=nxt.expect, _names=("image",))
         if returned(tags):
             assert isinstance(call(getattr, tracker, "read_whole", _api="TagTracker.read_whole"), bool)
+            reads = call(getattr, tracker, "reads", _api="TagTracker.reads")
+            assert len(reads) == len(tags) and set(reads) <= {"edges", "crop", "whole"}, reads
             if nxt.expect == SAME and tracker is ref:
                 assert list(tags.ids) == [0, 5]
     call(tracker.reset, _api="TagTracker.reset", _finite=False)
@@ -339,7 +341,7 @@ def tag_image() -> np.ndarray:
     return IMG_LOCK["tags"]
 
 
-@covers("detect_tags", "Tags", "Tags.ids", "Tags.corners", "Tags.family")
+@covers("detect_tags", "Tags", "Tags.ids", "Tags.corners", "Tags.family", "TAG_FAMILIES")
 @fuzz_settings(100)
 @given(st.data())
 def test_detect_tags(data: Any) -> None:
@@ -366,4 +368,5 @@ def test_detect_tags(data: Any) -> None:
         m = len(out)
         assert ids.shape == (m,) and ids.dtype == np.int64 and corners.shape == (m, 4, 2)
         assert family in vsinv.TAG_FAMILIES and repr(out).startswith("Tags(")
+        assert isinstance(vsinv.TAG_FAMILIES, tuple) and all(isinstance(f, str) for f in vsinv.TAG_FAMILIES)
         assert (np.diff(ids) > 0).all()

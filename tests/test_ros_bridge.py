@@ -291,8 +291,12 @@ def test_the_session_stops_with_a_zero_twist(views: dict[str, Any]) -> None:
     assert not out.twist.any() and s.state == "stopped" and s.reason.startswith("max_iterations")
     assert s.frame(views["start"], 0.03).twist is None  # stopped: nothing more
     assert s.start(0.1) == (True, "running") and s.pipeline.iterations == 0  # a new session
-    # a frame the pipeline refuses: stop, not raise
+    # a blank first frame: the target is lost, an outcome (issue 28): stop with a zero twist
     out = s.frame(np.zeros((10, 10), np.uint8), 0.2)
+    assert not out.twist.any() and s.state == "stopped" and s.reason.startswith("lost_features") and out.frame_used
+    # a frame the pipeline refuses (not 8-bit grey): stop, not raise
+    s.start(0.3)
+    out = s.frame(np.zeros((10, 10)), 0.4)
     assert not out.twist.any() and s.state == "stopped" and "frame refused" in s.reason and out.frame_used
     # the watchdog, counted from the start and from the last image
     s.start(1.0)
