@@ -44,6 +44,12 @@ def start_pose() -> np.ndarray:
     return vsinv.pose_from_position_thetau(START_POSITION, np.radians(START_ROTATION_DEG))
 
 
+def pose_error(pose: np.ndarray) -> tuple[float, float]:
+    """How far `pose` is from the goal (the identity): millimetres and degrees."""
+    position, thetau = vsinv.thetau_from_pose(pose)
+    return 1e3 * float(np.linalg.norm(position)), float(np.degrees(np.linalg.norm(thetau)))
+
+
 def views(scenario: vsinv.Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The reference image and its true pixels, the start image and its true pixels."""
     ref, ref_px, _ = vsinv.render_view(scenario, reference=True)
@@ -69,8 +75,7 @@ def test_lens_change_closes_through_images(scenario: vsinv.Scenario) -> None:
             break
         pose = pose @ vsinv.exp_twist(step.twist, 0.01)
         image = vsinv.render_view(scenario, pose=pose)[0]
-    position, thetau = vsinv.thetau_from_pose(pose)
-    error_mm, error_deg = 1e3 * np.linalg.norm(position), np.degrees(np.linalg.norm(thetau))
+    error_mm, error_deg = pose_error(pose)
     print(f"{step.verdict} after {pipeline.iterations} iterations: {error_mm:.3f} mm, {error_deg:.4f} deg; {lost} lost")
     assert step.verdict == "converged", step.reason
     assert lost == 0
@@ -309,8 +314,7 @@ def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsin
             break
         pose = pose @ vsinv.exp_twist(step.twist, 0.01)
         image = vsinv.render_view(scenario, pose=pose)[0]
-    position, thetau = vsinv.thetau_from_pose(pose)
-    error_mm, error_deg = 1e3 * np.linalg.norm(position), np.degrees(np.linalg.norm(thetau))
+    error_mm, error_deg = pose_error(pose)
     print(f"{step.verdict} after {pipeline.iterations}: {error_mm:.3f} mm, {error_deg:.4f} deg; basis {pipeline.basis}, switches {switches[-1]}")
     assert step.verdict == "converged", step.reason
     assert 11 not in pipeline.basis and hidden not in pipeline.basis
