@@ -181,7 +181,7 @@ fn run_checked(config: &SimulationConfig, status: Status, iterations: usize) {
     assert_eq!((s.status, s.iterations), (status, iterations), "lens-12-6 changed: {}", s.message);
 }
 
-/// Iterations of the full `lens-12-6` run (the README's table).
+/// Iterations of the full `lens-12-6` run (docs/results/built-in-scenarios.md).
 const LENS_12_6_ITERATIONS: usize = 213;
 
 /// One iteration's time: a `long`-iteration run minus a 1-iteration run (the set-up cancels

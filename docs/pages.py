@@ -9,7 +9,12 @@ asserts), fails the tests.
 
 A ```console block lists commands, one per line after ``$ ``; ``vsinv`` stands for
 ``python -m vsinv``. A block whose first line is ``# not run: <reason>`` is shown, not run
-(installation commands). Usage:
+(installation commands).
+
+The manual's pages (`MANUAL`: the guides, references and results that were the README's
+sections) are the exception: their blocks are fragments that tests/test_readme_blocks.py runs
+one by one, each with the inputs it names and a check of what the text says of it, so they
+are not run here as one program. Usage:
 
     python docs/pages.py run [PAGE ...] [--cwd DIR]   # every page by default, cwd docs/
     python docs/pages.py rust                         # cargo doc into docs/rust/ (the Rust API)
@@ -45,6 +50,38 @@ class Block:
     @property
     def runs(self) -> bool:
         return self.lang in ("python", "console") and not self.code.startswith(NOT_RUN)
+
+
+# The manual: pages whose blocks tests/test_readme_blocks.py runs one by one (with the README).
+MANUAL = (
+    "install.md",
+    "guides/python.md",
+    "guides/simulator.md",
+    "guides/images.md",
+    "guides/real-camera.md",
+    "guides/tags.md",
+    "guides/sweeps.md",
+    "guides/real-robot.md",
+    "guides/ros2.md",
+    "guides/hand-eye.md",
+    "guides/rust.md",
+    "reference/conventions.md",
+    "reference/scenario-files.md",
+    "reference/files-and-limits.md",
+    "results/built-in-scenarios.md",
+    "results/noise.md",
+    "results/performance.md",
+    "development.md",
+)
+
+
+def manual_pages() -> list[Path]:
+    return [DOCS / name for name in MANUAL]
+
+
+def runs_as_page(page: Path) -> bool:
+    """Whether the page's blocks run here, as one program (the manual's run block by block)."""
+    return page.resolve() not in {p.resolve() for p in manual_pages()} and any(b.runs for b in blocks(page))
 
 
 def pages() -> list[Path]:
@@ -122,7 +159,7 @@ def main() -> int:
         build_rust_docs()
         return 0
     failed = 0
-    for page in [p.resolve() for p in args.pages] or pages():
+    for page in [p.resolve() for p in args.pages] or [p for p in pages() if runs_as_page(p)]:
         done = run_page(page, args.cwd)
         print(f"{page.relative_to(DOCS)}: {'ok' if done.returncode == 0 else 'FAILED'}")
         if done.returncode != 0:

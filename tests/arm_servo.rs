@@ -28,7 +28,7 @@ fn pose(p: [f64; 3], r_deg: [f64; 3]) -> Isometry3<f64> {
     )
 }
 
-/// The measured figures of a run, as in the README's table.
+/// The measured figures of a run, as in the table of docs/results/built-in-scenarios.md.
 fn report(o: &Outcome, arm: &ArmRobot) -> String {
     let s = &o.summary;
     let r = o.recording.as_ref().unwrap();

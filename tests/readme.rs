@@ -1,5 +1,6 @@
-//! The README's "Scenario files" block is the one description of the scenario keys: it must
-//! parse as a valid scenario and name every key of the schema.
+//! The "Scenario files" page's block (docs/reference/scenario-files.md, once the README's
+//! section) is the one description of the scenario keys: it must parse as a valid scenario and
+//! name every key of the schema.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::collections::BTreeSet;
@@ -7,8 +8,8 @@ use std::collections::BTreeSet;
 use vsinv::sim::Scenario;
 
 fn readme_scenario_block() -> String {
-    let readme = include_str!("../README.md");
-    let section = readme.split("### Scenario files").nth(1).expect("README has a 'Scenario files' section");
+    let page = include_str!("../docs/reference/scenario-files.md");
+    let section = page.split("# Scenario files").nth(1).expect("the page has a 'Scenario files' title");
     let block = section.split("```toml\n").nth(1).expect("a toml block in that section");
     block.split("\n```").next().expect("a closed toml block").to_string()
 }

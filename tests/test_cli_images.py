@@ -116,7 +116,7 @@ def test_invariance_follows_a_lens_change_with_clicks_in_both_images(capsys, tmp
 def test_invariance_tracks_the_issue_pair_with_clicks_in_both_images(capsys, tmp_path: Path) -> None:
     # The pair `vsinv render vision-12-6` writes: 12 mm reference, 6 mm start view (another pose).
     run_cli(capsys, "render", "vision-12-6", "--out", tmp_path)
-    # The README's command, start.csv standing in for the clicks, and the figures it quotes.
+    # The images guide's command (docs/guides/images.md), start.csv standing in for the clicks, and the figures it quotes.
     code, out, err = run_cli(
         capsys, "invariance", tmp_path / "reference.png", tmp_path / "start.png", "--points", tmp_path / "reference.csv",
         "--first-points", tmp_path / "start.csv",

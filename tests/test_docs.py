@@ -15,7 +15,7 @@ from doc_pages import pages
 
 ROOT = Path(__file__).resolve().parent.parent
 
-RUNNABLE = [p for p in pages.pages() if any(b.runs for b in pages.blocks(p))]
+RUNNABLE = [p for p in pages.pages() if pages.runs_as_page(p)]
 # Pages of prose and reference only; every other page (the tutorial, the concepts) shows code.
 WITHOUT_CODE = ("index.md", "paper-corrections.md", "reference/python.md", "reference/rust.md")
 
@@ -33,10 +33,17 @@ def test_page_code_runs(page: Path, tmp_path: Path) -> None:
 
 
 def test_tutorial_and_concepts_have_code() -> None:
-    """The tutorial and every concept page show runnable code, so every one is checked."""
+    """The tutorial and every concept page show runnable code, so every one is checked; the
+    manual's pages are run block by block by tests/test_readme_blocks.py."""
     for name in nav_pages():
-        if name not in WITHOUT_CODE:
+        if name not in WITHOUT_CODE and name not in pages.MANUAL:
             assert pages.DOCS / name in RUNNABLE, f"{name} has no runnable block"
+
+
+def test_manual_pages_are_on_disk_and_not_run_as_programs() -> None:
+    for page in pages.manual_pages():
+        assert page.is_file(), page
+        assert page not in RUNNABLE, page
 
 
 def test_nav_lists_every_page() -> None:

@@ -2,7 +2,7 @@
 forked after they ran (a ``ProcessPoolExecutor`` with the ``fork`` start method).
 
 POSIX ``fork`` copies only the calling thread, so a worker pool started before the fork has no
-workers in the child: before the fix the README's sweep on a ``ProcessPoolExecutor(2)`` waited
+workers in the child: before the fix the sweep guide's sweep (docs/guides/sweeps.md) on a ``ProcessPoolExecutor(2)`` waited
 forever at 0 % CPU when a sweep or batch had run before in the same process. vsinv now keeps
 its own pools and rebuilds them in a forked child (``src/parallel.rs``).
 
@@ -63,7 +63,7 @@ def run_script(code: str) -> str:
 
 
 def test_the_readme_sweep_on_a_process_pool_after_earlier_sweeps_and_batches() -> None:
-    """The README's "Batches and sweeps" block in order: a batch, a sweep in this process, then
+    """The "Batches and sweeps" guide's block (docs/guides/sweeps.md) in order: a batch, a sweep in this process, then
     the sweep on ``ProcessPoolExecutor(2)`` (fork, Linux's default before Python 3.14)."""
     out = run_script(
         """

@@ -1,4 +1,6 @@
-"""Every fenced code block of README.md, executed (issue 19, item 2: a README that is true).
+"""Every fenced code block of README.md and of the manual's pages, executed (issue 19, item 2:
+a README that is true; issue 29: the manual moved from the README to the docs site's guides,
+references and results, `MANUAL` in docs/pages.py, and its blocks kept running here).
 
 `tests/readme.rs` checks the README's scenario block against the schema (it parses and names
 every key); this file runs the blocks as a reader would and checks what the text says of them.
@@ -44,6 +46,8 @@ from doc_pages import pages
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / "README.md"
+# The README (the landing page) and the manual's pages of the docs site, whose blocks run here.
+MANUAL = [README, *pages.manual_pages()]
 VISP = Path("/usr/share/visp-images-data/ViSP-images")
 TIME_LIMIT_S = 300
 
@@ -53,12 +57,18 @@ RUN, SLOW, NOT_RUN = "run", "slow", "not run"
 Block = pages.Block  # a fenced block: lang, code, line of its opening fence
 
 
+def placed_blocks() -> list[tuple[Path, Block]]:
+    """Every block of the README and the manual's pages, with its page."""
+    return [(page, block) for page in MANUAL for block in pages.blocks(page)]
+
+
 def readme_blocks() -> list[Block]:
-    return pages.blocks(README)
+    return [block for _, block in placed_blocks()]
 
 
 def readme_text() -> str:
-    return README.read_text(encoding="utf-8")
+    """The README and the manual's pages, one text (the figures are found wherever they moved)."""
+    return "\n".join(page.read_text(encoding="utf-8") for page in MANUAL)
 
 
 @dataclass(frozen=True)
@@ -130,7 +140,7 @@ assert agreement.max_rotation_deg < 1e-6 and agreement.max_translation_m < 1e-9
 """
 
 SIMULATOR_PRELUDE = f"""
-README = {str(README)!r}
+PAGE = {str(ROOT / "docs/guides/simulator.md")!r}
 import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
@@ -177,7 +187,7 @@ def check_replay(out: str) -> None:
 SIMULATOR_CHECK = """
 import re
 import shutil
-text = open(README).read()
+text = open(PAGE).read()
 m = re.search(r"with the default\\s+`\\[stop\\]` the noisy copy above ends `(\\w+)` after (\\d+) iterations \\(([\\d.]+) mm", text)
 plain = dict(d, stop=vsinv.load_scenario("lens-12-6").to_dict()["stop"])
 s = vsinv.run_scenario(plain).summary
@@ -324,6 +334,9 @@ BLOCKS: list[Entry] = [
           "make test about 15 minutes on 2 cores): CI and the lead run it, and this file is part of it"),
     Entry("sh", "python -m pip install .", NOT_RUN, "compiles the extension from source (5-15 minutes); make wheels "
           "and tests/test_wheels.py (VSINV_WHEELS=1) run the same install in a fresh venv"),
+    Entry("python", "# The paper's lens change (sec. 5.2)", RUN, output="converged after 212 steps, 0.09 mm from the reference pose"),
+    Entry("sh", "python3 -m venv --system-site-packages .venv", NOT_RUN, "needs a ROS 2 installation, a camera "
+          "driver and MoveIt Servo; tests/test_ros_loop.py runs the node over ROS 2 topics with simulated ones"),
     Entry("python", "import numpy as np, vsinv", RUN, prelude=CONTROL_PRELUDE),
     Entry("python", "try:", RUN, prelude=ERRORS_PRELUDE, check="print('no exception escaped')"),
     Entry("python", "cal = vsinv.load_calibration", RUN, prelude=CALIBRATION_PRELUDE, check=CALIBRATION_CHECK),
@@ -368,7 +381,7 @@ BLOCKS: list[Entry] = [
 
 def entry_for(block: Block) -> Entry:
     matches = [e for e in BLOCKS if e.lang == block.lang and block.first_line.startswith(e.starts)]
-    assert len(matches) == 1, f"README block at line {block.line} ({block.lang!r}: {block.first_line!r}) matches {len(matches)} entries"
+    assert len(matches) == 1, f"manual block at line {block.line} ({block.lang!r}: {block.first_line!r}) matches {len(matches)} entries"
     return matches[0]
 
 
@@ -408,7 +421,7 @@ def run_shell(code: str, cwd: Path) -> subprocess.CompletedProcess[str]:
 
 
 def _ids() -> list[str]:
-    return [f"line{b.line}-{b.lang or 'text'}" for b in readme_blocks()]
+    return [f"{page.relative_to(ROOT)}:{b.line}-{b.lang or 'text'}" for page, b in placed_blocks()]
 
 
 @pytest.mark.parametrize("block", readme_blocks(), ids=_ids())
@@ -448,7 +461,7 @@ def run_python_block(block: Block, entry: Entry, cwd: Path) -> None:
     assert isinstance(entry.check, str)
     code = "\n".join([PYTHON_CONVENTION, textwrap.dedent(entry.prelude), "# --- README block ---", block.code, "# --- check ---", entry.check])
     proc = run_python(code, cwd)
-    assert proc.returncode == 0, f"README block at line {block.line} failed:\n{proc.stdout}\n{proc.stderr}"
+    assert proc.returncode == 0, f"manual block at line {block.line} ({block.first_line!r}) failed:\n{proc.stdout}\n{proc.stderr}"
     assert entry.output in proc.stderr + proc.stdout, proc.stderr
 
 
@@ -457,7 +470,7 @@ def run_shell_block(block: Block, entry: Entry, cwd: Path) -> None:
         pre = run_python(textwrap.dedent(entry.prelude), cwd)
         assert pre.returncode == 0, pre.stderr
     proc = run_shell(block.code, cwd)
-    assert proc.returncode == 0, f"README block at line {block.line} failed:\n{proc.stdout}\n{proc.stderr}"
+    assert proc.returncode == 0, f"manual block at line {block.line} ({block.first_line!r}) failed:\n{proc.stdout}\n{proc.stderr}"
     assert callable(entry.check)
     entry.check(proc.stdout)
 

@@ -341,14 +341,15 @@ def test_entry_point_without_ros(tmp_path: Path) -> None:
     assert done.returncode == 2 and "rclpy is not importable" in done.stderr
 
 
-def test_the_readme_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The README's parameters file, with files of its own, passes the bridge's parser."""
+def test_the_guides_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The ROS 2 guide's parameters file (docs/guides/ros2.md), with files of its own, passes
+    the bridge's parser."""
     yaml = pytest.importorskip("yaml")
     import re
 
-    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
-    block = re.search(r"^```yaml\n(vsinv_ros:.*?)^```", readme, re.M | re.S)
-    assert block, "the README's ROS 2 parameters block"
+    guide = (Path(__file__).resolve().parent.parent / "docs/guides/ros2.md").read_text(encoding="utf-8")
+    block = re.search(r"^```yaml\n(vsinv_ros:.*?)^```", guide, re.M | re.S)
+    assert block, "the ROS 2 guide's parameters block"
     parameters = yaml.safe_load(block.group(1))["vsinv_ros"]["ros__parameters"]
     monkeypatch.chdir(tmp_path)
     vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / parameters["reference_image"])

@@ -2,7 +2,7 @@
 within a generous bound or refuses quickly with InvalidInput naming the argument. The bounds
 are hang tests, not benchmarks (benches/ measures speed): each case runs in a subprocess
 that is killed after a few seconds, so a hang fails the test instead of stalling the suite.
-The complexities are documented in the README ("Input size: costs and limits")."""
+The complexities are documented in docs/reference/files-and-limits.md ("Input size: costs and limits")."""
 
 import subprocess
 import sys

@@ -456,7 +456,7 @@ def test_exports():
 
 
 def test_readme_sweep_example_type_checks(tmp_path):
-    """The README's use of `vsinv.sweep.Uniform` and `vsinv.run_sweep` passes mypy."""
+    """The sweep guide's use (docs/guides/sweeps.md) of `vsinv.sweep.Uniform` and `vsinv.run_sweep` passes mypy."""
     api = pytest.importorskip("mypy.api")
     snippet = tmp_path / "snippet.py"
     snippet.write_text(

@@ -1,5 +1,5 @@
 """The pose uncertainty that pixel noise leaves, the noise meter, the `settled` verdict and the
-honesty of `converged` under noise (benches/noise_honesty.py makes the README's table)."""
+honesty of `converged` under noise (benches/noise_honesty.py makes the table of docs/results/noise.md)."""
 
 import sys
 from pathlib import Path

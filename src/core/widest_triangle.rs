@@ -27,7 +27,7 @@ pub const EXHAUSTIVE_MAX_POINTS: usize = 200;
 pub const EXACT_MAX_BOUNDARY_POINTS: usize = 500;
 
 /// The largest convex hull (in vertices) the `O(h^2)` search takes: it answers within a
-/// second (the README's table); larger hulls are refused with `InvalidParameter("pixels")`.
+/// second (docs/reference/files-and-limits.md); larger hulls are refused with `InvalidParameter("pixels")`.
 pub const MAX_HULL_POINTS: usize = 10_000;
 
 /// Twice the triangle's area, with the expression (and vertex order: `a` has the lowest

@@ -13,7 +13,7 @@ is the Cartesian product of the axes, the last key varying fastest) or a distrib
 ``numpy.random.default_rng(seed)``; every draw is combined with every grid point. A scalar is
 a one-value axis. Every point is run ``repeats`` times with different noise seeds.
 
-**Keys.** Any dotted scenario key (README, "Scenario files"): ``"noise.pixel_sigma"``,
+**Keys.** Any dotted scenario key (docs/reference/scenario-files.md): ``"noise.pixel_sigma"``,
 ``"control.gain"``, ``"estimate.skew_deg"``, ``"stop.max_iterations"``, ``"start.position.2"``
 (an integer segment indexes a list), ``"vision.blur_sigma"``, ``"robot.damping"``. The
 scenario schema decides which keys exist: each key is applied to the base scenario and the
