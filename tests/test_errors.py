@@ -142,7 +142,7 @@ def test_planar_object_and_equal_depths(ref):
 
 @pytest.mark.parametrize("k_hat", [np.diag([-1200.0, 1200.0, 1.0]), np.diag([1200.0, 0.0, 1.0])])
 def test_non_positive_focal_estimate(ref, k_hat):
-    with pytest.raises(vsinv.InvalidInput, match="> 0"):
+    with pytest.raises(vsinv.InvalidInput, match=r"K\[0,0\] and K\[1,1\] must be > 0"):
         vsinv.InvariantController(ref[0], k_hat)
     with pytest.raises(vsinv.InvalidInput):
         vsinv.IbvsController(ref[0], k_hat)
@@ -342,7 +342,7 @@ def test_sweep_helpers_refuse_bad_input_with_invalid_input():
     for bad in ([np.nan, 0.0, 0.0], "abc", [1e300, 1e300, 0.0], [1.0, 2.0]):
         with pytest.raises(vsinv.InvalidInput, match="thetau"):  # NaN matrices or ValueError before
             rotation_from_thetau(bad)
-    with pytest.raises(vsinv.InvalidInput, match="rot"):
+    with pytest.raises(vsinv.InvalidInput, match="rot: non-finite value at row 0, column 0"):
         thetau_from_rotation(np.full((3, 3), np.nan))
     s = Uniform(-1e308, 1e308).sample(np.random.default_rng(0), 100)  # was OverflowError
     assert np.isfinite(s).all() and (np.abs(s) <= 1e308).all()
@@ -420,7 +420,7 @@ def test_issue16_invariant_path_sample_refuses_nan():
     cur, _ = view(obj, pose((0.08, -0.05, -0.15), (0.1, -0.15, 0.4)), lens(700.0))
     path = vsinv.InvariantPath(cur, ref, duration=2.0)
     for t in (np.nan, np.inf):
-        with pytest.raises(vsinv.InvalidInput, match="t"):
+        with pytest.raises(vsinv.InvalidInput, match="t must be finite"):
             path.sample(t)
     q, r = path.sample(-1.0)
     assert np.isfinite(q).all() and np.isfinite(r).all()

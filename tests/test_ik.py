@@ -61,9 +61,9 @@ def test_unreachable_poses_are_refused_naming_the_pose_and_the_residual():
 
 def test_bad_arguments_are_named():
     pose = vsinv.fk("panda", [0.0, -0.3, 0.0, -2.0, 0.0, 1.8, 0.8])
-    with pytest.raises(vsinv.InvalidInput, match="arm"):
+    with pytest.raises(vsinv.InvalidInput, match="unknown built-in arm `kuka`"):
         vsinv.ik("kuka", pose)
-    with pytest.raises(vsinv.InvalidInput, match="arm"):
+    with pytest.raises(vsinv.InvalidInput, match="arm: expected a built-in arm name"):
         vsinv.ik(None, pose)
     with pytest.raises(vsinv.InvalidInput, match="seed: expected 7 values"):
         vsinv.ik("panda", pose, seed=np.zeros(6))

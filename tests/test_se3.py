@@ -64,7 +64,7 @@ def test_pose_helpers_refuse_bad_input() -> None:
         vsinv.exp_twist([0.0] * 5)
     with pytest.raises(vsinv.InvalidInput, match="twist"):
         vsinv.exp_twist([np.nan] + [0.0] * 5)
-    with pytest.raises(vsinv.InvalidInput, match="dt"):
+    with pytest.raises(vsinv.InvalidInput, match="dt: non-finite value"):
         vsinv.exp_twist([0.0] * 6, np.inf)
     with pytest.raises(vsinv.InvalidInput, match="pose"):
         vsinv.thetau_from_pose(np.ones((4, 4)))
