@@ -47,8 +47,10 @@ lint:
 
 # The documentation site in site/: the Rust API (cargo doc, warnings are errors), the pages' code
 # run in docs/ (its figures land in docs/figures/; a failing block fails the build), then mkdocs
-# in strict mode (a broken link or a docstring it cannot read fails the build). Needs the `docs` extra.
+# in strict mode (a broken link or a docstring it cannot read fails the build). Installs the `docs`
+# extra first when mkdocs is missing (after `make run`, which installs only what running needs).
 docs:
+	$(PYTHON) -c "import mkdocs, mkdocstrings, material" 2>/dev/null || $(PIP) install -v -e ".[docs]"
 	$(PYTHON) docs/pages.py rust
 	$(PYTHON) docs/pages.py run
 	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict

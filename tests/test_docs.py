@@ -58,3 +58,30 @@ def test_console_blocks_check_quoted_output() -> None:
     wrong = pages.console_as_python("$ echo hello\ngoodbye\n")
     with pytest.raises(AssertionError, match="goodbye"):
         exec(wrong, {"_subprocess": __import__("subprocess")})
+
+
+def test_the_site_needs_no_network() -> None:
+    """Equations become MathML at build time (docs/hooks/mathml.py) and the theme uses the
+    system's fonts: no script or font from a CDN, so the site reads offline (issue 29, item 5)."""
+    config = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    assert "docs/hooks/mathml.py" in config and "font: false" in config
+    assert not re.search(r"^\s*-\s*https?://", config, re.M), "a script from the network"
+
+
+def test_equations_become_mathml() -> None:
+    """The hook's conversion against latex2mathml's own, for the two forms arithmatex writes."""
+    pytest.importorskip("latex2mathml")
+    import importlib.util
+
+    from latex2mathml.converter import convert
+
+    spec = importlib.util.spec_from_file_location("mathml_hook", ROOT / "docs/hooks/mathml.py")
+    assert spec is not None and spec.loader is not None
+    hook = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(hook)
+    page = ('<p>so <span class="arithmatex">\\(q = Q^{-1} p\\)</span> and</p>\n'
+            '<div class="arithmatex">\\[a &lt; b\\]</div>')
+    out = hook.to_mathml(page)
+    assert convert("q = Q^{-1} p", display="inline") in out
+    assert convert("a < b", display="block") in out
+    assert "arithmatex" not in out and "\\(" not in out

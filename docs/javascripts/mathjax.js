@@ -1,6 +1,0 @@
-// MathJax reads the \( \) and \[ \] spans pymdownx.arithmatex writes.
-window.MathJax = {
-  tex: { inlineMath: [["\\(", "\\)"]], displayMath: [["\\[", "\\]"]], processEscapes: true, processEnvironments: true },
-  options: { ignoreHtmlClass: ".*|", processHtmlClass: "arithmatex" },
-};
-document$.subscribe(() => MathJax.typesetPromise());
