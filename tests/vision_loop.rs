@@ -40,13 +40,14 @@ fn lens_change_through_images_ends_within_2mm_and_0_2_degree() {
 
 /// Sec. 5.2 through an AprilTag rig (issue 18, item 5): corners matched by tag identity
 /// between the 12 mm reference image and the current one, no clicks; the paper's accuracy.
-/// With the same lens the servo ends where the 0.5 px image rule cannot tell (within the
-/// pose targets, a pan of about 0.04 deg shifts the image by 1 px, which the invariant
-/// features barely see): tags-12-12 may end at its iteration limit, at the paper's accuracy.
+/// With the same lens the 0.5 px image rule can go unmet (within the pose targets, a pan of
+/// about 0.04 deg shifts the image by 1 px, which the invariant features barely see):
+/// tags-12-12 ends by its stall rule, `converged` with the pose the images certify.
 #[test]
 fn tag_rigs_through_images_reach_the_papers_accuracy() {
     let (s, rec) = run("tags-12-12");
-    assert!(matches!(s.status, Status::Converged | Status::MaxIterations), "{}", s.message);
+    assert_eq!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.message.contains("stalled"), "{}", s.message);
     assert!(s.final_translation_error < 1e-3 && s.final_rotation_error.to_degrees() < 0.1);
     assert!(s.final_image_error < 1.5, "{} px", s.final_image_error);
     assert_eq!(rec.n_points, 12);
