@@ -198,13 +198,28 @@ pub fn project_with(k: &Matrix3<f64>, point: &Point3<f64>) -> Result<[f64; 2]> {
     Ok(pixel)
 }
 
+/// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
+/// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
+pub fn check_upper_triangular(what: &'static str, k: &Matrix3<f64>) -> Result<()> {
+    check_finite_matrix(what, k)?;
+    if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
+        return Err(Error::InvalidIntrinsics {
+            reason: format!("{what} must be upper triangular with last row (0, 0, 1)"),
+        });
+    }
+    if k[(0, 0)] == 0.0 || k[(1, 1)] == 0.0 {
+        return Err(Error::InvalidIntrinsics { reason: format!("{what} is singular (zero focal term)") });
+    }
+    Ok(())
+}
+
 /// F(K) of sec. 4.1 written with the entries of K:
 /// `F = [[sin(th)/fkv, -cos(th)/fkv], [0, 1/fku]] = [[1/K11, K01/(K00 K11)], [0, 1/K00]]`.
 /// Valid for any finite upper-triangular K with a nonzero diagonal, including the
 /// non-physical estimates that the stability checks explore; fails for any other K and when
 /// an entry overflows (a focal term near 1e-308).
 pub fn f_of_matrix(k: &Matrix3<f64>) -> Result<Matrix2<f64>> {
-    crate::core::stability::check_upper_triangular("K", k)?;
+    check_upper_triangular("K", k)?;
     let f = f_unchecked(k);
     check_overflow("K", "entries of F(K)", &[f.as_slice()])?;
     Ok(f)

@@ -9,10 +9,6 @@ use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuatern
 
 use crate::error::{Error, Result, check_finite, check_finite_matrix, check_overflow};
 
-fn skew(w: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -w.z, w.y, w.z, 0.0, -w.x, -w.y, w.x, 0.0)
-}
-
 /// `exp` of a twist `(vx, vy, vz, wx, wy, wz)`: the rigid motion produced by holding that
 /// twist constant for one unit of time. With `twist * dt` for a camera velocity expressed in
 /// the current camera frame, the new pose is `pose * exp_twist(twist * dt)?`.
@@ -33,7 +29,7 @@ fn exp_twist_unchecked(twist: &[f64; 6]) -> Isometry3<f64> {
     let w = Vector3::new(twist[3], twist[4], twist[5]);
     let theta = w.norm();
     let rotation = UnitQuaternion::from_scaled_axis(w);
-    let wx = skew(&w);
+    let wx = w.cross_matrix();
     // V = I + (1 - cos th)/th^2 [w]x + (th - sin th)/th^3 [w]x^2, with series near 0.
     let (b, c) = if theta < 1e-5 {
         let t2 = theta * theta;

@@ -6,23 +6,9 @@
 
 use nalgebra::{Complex, Matrix2, Matrix3, Matrix5};
 
+pub use crate::core::camera::check_upper_triangular;
 use crate::core::camera::f_unchecked;
-use crate::error::{Error, Result, Short, check_finite, check_finite_matrix, check_overflow};
-
-/// Checks that a matrix has the form of eq. (4) up to signs (upper triangular, last row
-/// (0, 0, 1), nonzero diagonal): estimates with negative focal terms are allowed here.
-pub fn check_upper_triangular(what: &'static str, k: &Matrix3<f64>) -> Result<()> {
-    check_finite_matrix(what, k)?;
-    if k[(1, 0)] != 0.0 || k[(2, 0)] != 0.0 || k[(2, 1)] != 0.0 || k[(2, 2)] != 1.0 {
-        return Err(Error::InvalidIntrinsics {
-            reason: format!("{what} must be upper triangular with last row (0, 0, 1)"),
-        });
-    }
-    if k[(0, 0)] == 0.0 || k[(1, 1)] == 0.0 {
-        return Err(Error::InvalidIntrinsics { reason: format!("{what} is singular (zero focal term)") });
-    }
-    Ok(())
-}
+use crate::error::{Error, Result, Short, check_finite, check_overflow};
 
 /// The depth scale `kappa` of sec. 4.1: the depth estimates are `kappa zeta`, so kappa is
 /// finite and > 0 (a depth estimate is positive).

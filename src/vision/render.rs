@@ -1,5 +1,5 @@
-//! What the camera sees: a [`Target`] drawn by a [`Renderer`] through one entry point,
-//! [`Renderer::render`]. The target draws itself on a [`Canvas`] with the renderer's
+//! What the camera sees: a [`Drawing`] (every target is one) rendered by a [`Renderer`]
+//! through one entry point, [`Renderer::render`]. The target draws itself on a [`Canvas`] with the renderer's
 //! primitives (today white discs, whose perspective image is an exact ellipse); the canvas
 //! starts as the frame's noisy background and each primitive is anti-aliased, blurred (the
 //! optical PSF), noised, clipped and quantised to 8 bits.
@@ -30,7 +30,6 @@ use crate::core::distortion::Distortion;
 use crate::error::{Error, Result, Short};
 use crate::vision::image::GreyImage;
 use crate::vision::polarity::Polarity;
-use crate::vision::target::Target;
 
 /// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
 /// sizes are refused with `InvalidParameter("image size")` before any allocation.
@@ -145,7 +144,7 @@ impl Renderer {
     /// what the ideal pinhole image shows at `K d^-1(K^-1 p)` (a primitive reaching beyond the
     /// lens model's fold is not drawn); `visible` (one flag per point of the target) hides
     /// occluded points; `frame` selects the noise draw.
-    pub fn render<T: Target + ?Sized>(
+    pub fn render<T: Drawing + ?Sized>(
         &self,
         target: &T,
         visible: Option<&[bool]>,
@@ -157,7 +156,7 @@ impl Renderer {
             let reason = format!("{width} x {height}: at least 1 x 1 and at most {MAX_RENDER_PIXELS} pixels (2^28)");
             return Err(Error::InvalidParameter { name: "image size", reason });
         }
-        let n = target.points().len();
+        let n = target.point_count();
         check_flags("visible", visible.map_or(n, <[bool]>::len), n)?;
         let noise = Noise {
             noisy_background: &self.noisy_background,
@@ -172,7 +171,7 @@ impl Renderer {
             noise,
         };
         let mut canvas = Canvas::new(noise.background_frame(width, height), *view, paint);
-        let drawn = target.draw(&mut canvas, visible);
+        let drawn = target.draw_on(&mut canvas, visible);
         check_flags("drawn", drawn.len(), n)?;
         let mut image = canvas.into_image();
         if self.config.polarity == Polarity::Dark {
@@ -180,6 +179,18 @@ impl Renderer {
         }
         Ok(Rendered { image, drawn })
     }
+}
+
+/// What [`Renderer::render`] draws: points drawn with the canvas's primitives. The renderer
+/// needs nothing more of a target, so it does not depend on the targets: every
+/// `vision::target::Target` is a drawing (a blanket implementation there).
+pub trait Drawing {
+    /// The number of points (one visibility flag each).
+    fn point_count(&self) -> usize;
+
+    /// Draws the points on `canvas`, hiding those `visible` flags off; returns, per point,
+    /// whether it was drawn.
+    fn draw_on(&self, canvas: &mut Canvas<'_>, visible: Option<&[bool]>) -> Vec<bool>;
 }
 
 /// `got` flags where the target has `expected` points.

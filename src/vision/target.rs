@@ -6,7 +6,7 @@
 pub mod dots;
 pub mod tags;
 
-use crate::vision::render::Canvas;
+use crate::vision::render::{Canvas, Drawing};
 
 /// A point of a target: its identity and its position in the object frame (F*).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -28,6 +28,17 @@ pub trait Target: Send + Sync {
     /// flag per point, checked by the renderer) hides occluded points. Returns, per point,
     /// whether it was drawn.
     fn draw(&self, canvas: &mut Canvas<'_>, visible: Option<&[bool]>) -> Vec<bool>;
+}
+
+/// Every target is drawn by the renderer (which knows only [`Drawing`]).
+impl<T: Target + ?Sized> Drawing for T {
+    fn point_count(&self) -> usize {
+        self.points().len()
+    }
+
+    fn draw_on(&self, canvas: &mut Canvas<'_>, visible: Option<&[bool]>) -> Vec<bool> {
+        self.draw(canvas, visible)
+    }
 }
 
 /// Whether point `i` is to be drawn under `visible` (a missing flag hides it).

@@ -16,7 +16,7 @@ use nalgebra::{SMatrix, SymmetricEigen, Vector3, Vector4};
 
 use super::Solution;
 use super::motions::{Motion, Rigid};
-use super::rotation::{quaternion, quaternion_product, rotation_from_quaternion, skew, vector_part};
+use super::rotation::{quaternion, quaternion_product, rotation_from_quaternion, vector_part};
 use crate::error::{Error, Result};
 
 /// The unit dual quaternion `(q, q')` of a rigid motion: `q` its rotation (`w >= 0`),
@@ -36,11 +36,11 @@ fn normal_matrix(motions: &[Motion]) -> SMatrix<f64, 8, 8> {
         let (a_dual, b_dual): (Vector3<f64>, Vector3<f64>) = (vector_part(&qa_dual), vector_part(&qb_dual));
         let mut s = SMatrix::<f64, 6, 8>::zeros();
         s.fixed_view_mut::<3, 1>(0, 0).copy_from(&(a - b));
-        s.fixed_view_mut::<3, 3>(0, 1).copy_from(&skew(&(a + b)));
+        s.fixed_view_mut::<3, 3>(0, 1).copy_from(&(a + b).cross_matrix());
         s.fixed_view_mut::<3, 1>(3, 0).copy_from(&(a_dual - b_dual));
-        s.fixed_view_mut::<3, 3>(3, 1).copy_from(&skew(&(a_dual + b_dual)));
+        s.fixed_view_mut::<3, 3>(3, 1).copy_from(&(a_dual + b_dual).cross_matrix());
         s.fixed_view_mut::<3, 1>(3, 4).copy_from(&(a - b));
-        s.fixed_view_mut::<3, 3>(3, 5).copy_from(&skew(&(a + b)));
+        s.fixed_view_mut::<3, 3>(3, 5).copy_from(&(a + b).cross_matrix());
         normal += s.transpose() * s;
     }
     normal

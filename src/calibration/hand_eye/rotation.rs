@@ -2,27 +2,14 @@
 //! the motions in (Tsai-Lenz: `2 sin(theta/2) u`; Park-Martin: `theta u`; Daniilidis: unit
 //! and dual quaternions).
 
-use nalgebra::{Matrix3, Vector3, Vector4};
+use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3, Vector4};
 
 /// The unit quaternion `(w, x, y, z)` of a rotation matrix, with `w >= 0` (the angle in
-/// [0, pi]): Shepperd's method (J. Guidance and Control 1(3), 1978), which divides by the
-/// largest of the four `4 q_k^2` for accuracy at every angle.
+/// [0, pi]): nalgebra's conversion (which divides by the largest of the four `4 q_k^2`, as
+/// Shepperd's method, for accuracy at every angle), in the order the methods' equations use.
 pub(crate) fn quaternion(r: &Matrix3<f64>) -> Vector4<f64> {
-    let (m00, m11, m22) = (r[(0, 0)], r[(1, 1)], r[(2, 2)]);
-    let trace = m00 + m11 + m22;
-    let q = if trace > 0.0 {
-        let s = 2.0 * (trace + 1.0).sqrt();
-        Vector4::new(0.25 * s, (r[(2, 1)] - r[(1, 2)]) / s, (r[(0, 2)] - r[(2, 0)]) / s, (r[(1, 0)] - r[(0, 1)]) / s)
-    } else if m00 > m11 && m00 > m22 {
-        let s = 2.0 * (1.0 + m00 - m11 - m22).sqrt();
-        Vector4::new((r[(2, 1)] - r[(1, 2)]) / s, 0.25 * s, (r[(0, 1)] + r[(1, 0)]) / s, (r[(0, 2)] + r[(2, 0)]) / s)
-    } else if m11 > m22 {
-        let s = 2.0 * (1.0 + m11 - m00 - m22).sqrt();
-        Vector4::new((r[(0, 2)] - r[(2, 0)]) / s, (r[(0, 1)] + r[(1, 0)]) / s, 0.25 * s, (r[(1, 2)] + r[(2, 1)]) / s)
-    } else {
-        let s = 2.0 * (1.0 + m22 - m00 - m11).sqrt();
-        Vector4::new((r[(1, 0)] - r[(0, 1)]) / s, (r[(0, 2)] + r[(2, 0)]) / s, (r[(1, 2)] + r[(2, 1)]) / s, 0.25 * s)
-    };
+    let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*r));
+    let q = Vector4::new(q.w, q.i, q.j, q.k);
     if q[0] < 0.0 { -q } else { q }
 }
 
@@ -32,7 +19,8 @@ pub(crate) fn vector_part(q: &Vector4<f64>) -> Vector3<f64> {
 }
 
 /// The rotation vector `theta u` (theta in [0, pi]) of a rotation matrix, through its
-/// quaternion: `theta = 2 atan2(|v|, w)`, accurate at small and large angles alike.
+/// quaternion: `theta = 2 atan2(|v|, w)`, accurate at small and large angles alike (an
+/// `acos(w)` loses the small angles).
 pub(crate) fn rotation_vector(r: &Matrix3<f64>) -> Vector3<f64> {
     let q = quaternion(r);
     let v = vector_part(&q);
@@ -46,23 +34,15 @@ pub(crate) fn rotation_angle(r: &Matrix3<f64>) -> f64 {
     2.0 * vector_part(&q).norm().atan2(q[0])
 }
 
-/// The rotation matrix of the unit quaternion `(w, v)`:
-/// `R = (w^2 - |v|^2) I + 2 v v^T + 2 w [v]x`.
+/// The rotation matrix of the unit quaternion `(w, v)` (nalgebra's).
 pub(crate) fn rotation_from_quaternion(w: f64, v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::identity() * (w * w - v.norm_squared()) + v * v.transpose() * 2.0 + skew(v) * (2.0 * w)
+    UnitQuaternion::new_unchecked(Quaternion::new(w, v.x, v.y, v.z)).to_rotation_matrix().into_inner()
 }
 
-/// The cross-product matrix `[v]x` (`[v]x u = v x u`).
-pub(crate) fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
-}
-
-/// The Hamilton product of quaternions `(w, x, y, z)`.
+/// The Hamilton product of quaternions `(w, x, y, z)` (nalgebra's).
 pub(crate) fn quaternion_product(p: &Vector4<f64>, q: &Vector4<f64>) -> Vector4<f64> {
-    let (pv, qv) = (vector_part(p), vector_part(q));
-    let w = p[0] * q[0] - pv.dot(&qv);
-    let v = qv * p[0] + pv * q[0] + pv.cross(&qv);
-    Vector4::new(w, v[0], v[1], v[2])
+    let pq = Quaternion::new(p[0], p[1], p[2], p[3]) * Quaternion::new(q[0], q[1], q[2], q[3]);
+    Vector4::new(pq.w, pq.i, pq.j, pq.k)
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::Solution;
 use super::motions::{Motion, Rigid};
-use super::rotation::{quaternion, rotation_from_quaternion, skew, vector_part};
+use super::rotation::{quaternion, rotation_from_quaternion, vector_part};
 use super::translation::{least_squares, solve_translation};
 use crate::error::{Error, Result};
 
@@ -40,7 +40,7 @@ pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
         if !(in_band(&pa) && in_band(&pb)) {
             continue;
         }
-        let lhs = skew(&(pa + pb));
+        let lhs = (pa + pb).cross_matrix();
         normal += lhs.transpose() * lhs;
         rhs += lhs.transpose() * (pb - pa);
         used.push(m);

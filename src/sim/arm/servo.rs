@@ -4,7 +4,7 @@
 //! with a joint-centring task in the null space of redundant arms, saturates them by the
 //! joint speed limits (one common scale) and integrates `q += dq dt`.
 
-use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix3, Matrix6, Matrix6xX, Vector6};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix6, Matrix6xX, Vector6};
 
 use super::{ArmLimits, ArmModel};
 use crate::error::{Error, Result, Short, check_finite};
@@ -60,18 +60,13 @@ pub struct ArmStep {
     pub event: Option<RobotEvent>,
 }
 
-/// `[t]x`, the cross-product matrix.
-fn skew(t: &nalgebra::Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::new(0.0, -t.z, t.y, t.z, 0.0, -t.x, -t.y, t.x, 0.0)
-}
-
 /// The twist transform (adjoint) of a pose `(R, t)`: a twist in the pose's frame to the
 /// same motion's twist in the parent frame, `(R v + t x R w, R w)`.
 pub fn twist_transform(pose: &Isometry3<f64>) -> Matrix6<f64> {
     let r = pose.rotation.to_rotation_matrix().into_inner();
     let mut m = Matrix6::zeros();
     m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
-    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(skew(&pose.translation.vector) * r));
+    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(pose.translation.vector.cross_matrix() * r));
     m.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
     m
 }
