@@ -23,7 +23,7 @@ from rcl_interfaces.msg import ParameterType, ParameterValue
 from rcl_interfaces.srv import DescribeParameters, SetParameters
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import CameraInfo, Image
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
@@ -187,6 +187,10 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
         spin_until(ex, lambda: rig.status.get("K_hat") is not None, 10.0)
         out["faults"] = faults(ex, rig)
         out["parameters"] = parameters(ex, rig)
+        # a best-effort camera against the default (reliable) subscription: said in the status
+        rig.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+        spin_until(ex, lambda: rig.status.get("qos") is not None, 10.0)
+        out["qos"] = rig.status.get("qos")
         out["frames"] = sorted({f for _, _, f, _ in rig.twists})
         out["stamps_set"] = all(s > 0 for _, _, _, s in rig.twists)
         out["diagnostics"] = [(s.level if isinstance(s.level, int) else int.from_bytes(s.level, "little"), s.name, s.message)

@@ -402,3 +402,19 @@ def test_lost_features_stop_with_a_zero_twist(views: dict[str, Any]) -> None:
     assert out.twist is not None and not out.twist.any() and out.frame_used
     status = json.loads(s.status_json())
     assert status["verdict"] == "lost_features" and status["points"]["found"] < 12
+
+
+def test_a_new_camera_info_is_used_from_the_next_session(views: dict[str, Any]) -> None:
+    s = session(views, K_hat=None)
+    none = vsinv.Distortion([0.0, 0.0, 0.0, 0.0])
+    s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))
+    assert s.start(0.0)[0]
+    s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))  # the same lens again: nothing pending
+    assert json.loads(s.status_json())["K_hat_next"] is None
+    s.camera_info((vsinv.Intrinsics(500.0, 500.0, 416.0, 312.0), none))  # a new lens mid-run: shown, not used
+    status = json.loads(s.status_json())
+    assert status["K_hat"] == [600.0, 600.0, 416.0, 312.0] and status["K_hat_next"] == [500.0, 500.0, 416.0, 312.0]
+    s.reset()
+    assert s.start(1.0)[0]  # the next session: the new lens in use
+    status = json.loads(s.status_json())
+    assert status["K_hat"] == [500.0, 500.0, 416.0, 312.0] and status["K_hat_next"] is None

@@ -107,3 +107,4 @@ def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
         vsinv.to_grey(bad)
     with pytest.raises(vsinv.InvalidInput, match="order"):
         vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
+

@@ -250,6 +250,7 @@ def test_every_fault_stops_the_robot_at_once(tmp_path: Path) -> None:
     assert watchdog["range"] == [[0.01, 10.0]] and "MoveIt Servo" in watchdog["description"], watchdog
     assert "reliable, best_effort" in reliability["constraints"], reliability
     assert r["frames"] == ["camera_optical_frame"] and r["stamps_set"]
+    assert "incompatible with image_qos.reliability 'reliable'" in str(r["qos"]), r["qos"]
     assert any(level == 2 and "vsinv_ros" in name and "refused" in message for level, name, message in r["diagnostics"])
 
 
