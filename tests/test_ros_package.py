@@ -55,3 +55,22 @@ def test_the_parameters_file_is_read(tmp_path: Path) -> None:
     c = parse_parameters(flat(parameters))
     assert c.watchdog_timeout == 0.1 and c.image_reliability == "reliable" and c.image_depth == 1
     assert c.output_frame == "end_effector" and c.end_effector_frame == "tool0" and c.camera_frame == "camera_color_optical_frame"
+
+
+def test_colcon_builds_the_package(tmp_path: Path) -> None:
+    """colcon (when installed) builds ros/vsinv: the launch and parameters files in share/vsinv,
+    the vsinv_ros executable in lib/vsinv (what ros2 run and launch_ros look for)."""
+    import shutil
+    import subprocess
+    import sys
+
+    colcon = shutil.which("colcon") or str(Path(sys.executable).parent / "colcon")
+    if not Path(colcon).is_file():
+        pytest.skip("colcon is not installed (pip install colcon-common-extensions)")
+    done = subprocess.run([colcon, "build", "--base-paths", str(PACKAGE), "--build-base", str(tmp_path / "build"),
+                           "--install-base", str(tmp_path / "install")], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+    install = tmp_path / "install" / "vsinv"
+    for path in ("share/vsinv/package.xml", "share/vsinv/launch/servo.launch.py", "share/vsinv/config/servo.yaml",
+                 "share/ament_index/resource_index/packages/vsinv", "lib/vsinv/vsinv_ros"):
+        assert (install / path).is_file(), path
