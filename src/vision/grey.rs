@@ -5,8 +5,6 @@
 //!
 //! [`load_image`]: crate::vision::load_image
 
-use rayon::prelude::*;
-
 use crate::error::{Error, Result};
 use crate::vision::image::{GreyImage, check_dimensions};
 
@@ -18,9 +16,6 @@ pub enum ChannelOrder {
     /// Blue, green, red (`bgr8`, OpenCV's order).
     Bgr,
 }
-
-/// Rows converted per parallel task: small images stay on one thread.
-const ROWS_PER_TASK: usize = 64;
 
 /// The grey image of `height` rows of `width` colour pixels, row `v` starting at byte
 /// `v * row_stride` of `data` (`row_stride >= 3 * width`: padded rows are read as such);
@@ -48,22 +43,19 @@ pub fn colour_to_grey(
         ChannelOrder::Rgb => [9798, 19235, 3735],
         ChannelOrder::Bgr => [3735, 19235, 9798],
     };
-    let mut grey = vec![0u8; w * h];
-    grey.par_chunks_mut(w * ROWS_PER_TASK).enumerate().for_each(|(task, rows)| {
-        for (i, out) in rows.chunks_exact_mut(w).enumerate() {
-            let start = (task * ROWS_PER_TASK + i) * row_stride;
-            convert_row(&data[start..start + row_bytes], out, weights);
-        }
-    });
+    // Filled as it is made (no zeroing pass); one thread: the loop runs at memory speed.
+    let mut grey = Vec::with_capacity(w * h);
+    for row in data.chunks(row_stride).take(h) {
+        let (pixels, _) = row[..row_bytes].as_chunks::<3>();
+        grey.extend(pixels.iter().map(|&p| luma(p, weights)));
+    }
     GreyImage::from_raw(width, height, grey).ok_or_else(|| invalid(what, "inconsistent size".into()))
 }
 
-/// One row: each pixel's weighted sum, rounded, over 2^15 (at most 255: the weights sum to 2^15).
-fn convert_row(colour: &[u8], grey: &mut [u8], [a, b, c]: [u32; 3]) {
-    for (px, out) in colour.chunks_exact(3).zip(grey.iter_mut()) {
-        let l = a * u32::from(px[0]) + b * u32::from(px[1]) + c * u32::from(px[2]);
-        *out = ((l + (1 << 14)) >> 15) as u8;
-    }
+/// One pixel's weighted sum, rounded, over 2^15 (at most 255: the weights sum to 2^15).
+fn luma(px: [u8; 3], [a, b, c]: [u32; 3]) -> u8 {
+    let l = a * u32::from(px[0]) + b * u32::from(px[1]) + c * u32::from(px[2]);
+    ((l + (1 << 14)) >> 15) as u8
 }
 
 fn invalid(what: &str, reason: String) -> Error {
