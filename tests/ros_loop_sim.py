@@ -58,9 +58,9 @@ def pose_from_msg(msg: PoseStamped) -> np.ndarray:
 
 
 class SimCamera(Node):
-    def __init__(self, scenario: vsinv.Scenario, K: list[float], start_pose: np.ndarray) -> None:
+    def __init__(self, scenario: vsinv.Scenario, K: list[float], start_pose: np.ndarray, encoding: str = "mono8") -> None:
         super().__init__("sim_camera")
-        self.scenario, self.K = scenario, K
+        self.scenario, self.K, self.encoding = scenario, K, encoding
         self.image_pub = self.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=1))
         self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", QoSProfile(depth=1))
         self.create_subscription(PoseStamped, "/sim/camera_pose", self.on_pose, QoSProfile(depth=1))
@@ -72,9 +72,12 @@ class SimCamera(Node):
 
     def render(self, pose: np.ndarray) -> None:
         grey = vsinv.render(self.scenario, pose=pose)
-        self.image = Image(height=grey.shape[0], width=grey.shape[1], encoding="mono8", step=grey.shape[1])
+        h, w = grey.shape
+        if self.encoding == "mono8":
+            self.image = Image(height=h, width=w, encoding="mono8", step=w, data=grey.tobytes())
+        else:  # the grey scene in colour: every channel the same
+            self.image = Image(height=h, width=w, encoding=self.encoding, step=3 * w, data=np.repeat(grey[:, :, None], 3, 2).tobytes())
         self.image.header.frame_id = "camera_optical_frame"
-        self.image.data = grey.tobytes()
         fx, fy, u0, v0 = self.K
         self.info = CameraInfo(height=grey.shape[0], width=grey.shape[1], distortion_model="plumb_bob")
         self.info.k = [fx, 0.0, u0, 0.0, fy, v0, 0.0, 0.0, 1.0]
@@ -222,12 +225,23 @@ def watchdog(executor: SingleThreadedExecutor, camera: SimCamera, robot: SimRobo
     return out
 
 
+def sized_scenario(name: str, size: list[int] | None) -> vsinv.Scenario:
+    """The scenario, its servo camera's image ``size`` (width, height) with the principal point
+    at the centre (the same lens on a larger sensor), or as it is."""
+    scenario = vsinv.load_scenario(name)
+    if size is None:
+        return scenario
+    d = scenario.to_dict()
+    d["camera"].update(width=float(size[0]), height=float(size[1]), u0=size[0] / 2.0, v0=size[1] / 2.0)
+    return vsinv.Scenario.from_dict(d)
+
+
 def run(config: dict[str, Any]) -> dict[str, Any]:
     """The three phases, the nodes destroyed at the end."""
     deadline = time.monotonic() + config["timeout"]
     hand_eye = np.asarray(config["hand_eye"], dtype=float)
     start = np.asarray(config["start_pose"], dtype=float)
-    camera = SimCamera(vsinv.load_scenario(config["scenario"]), config["K"], start)
+    camera = SimCamera(sized_scenario(config["scenario"], config.get("size")), config["K"], start, config.get("encoding", "mono8"))
     robot = SimRobot(camera, start @ np.linalg.inv(hand_eye), hand_eye, config["dt"], config["frame"])
     sup = Supervisor()
     executor = SingleThreadedExecutor()
@@ -235,7 +249,7 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
         executor.add_node(node)
     try:
         out = converge(executor, camera, robot, sup, deadline)
-        if out["start"][0]:
+        if out["start"][0] and not config.get("converge_only"):
             out.update(annotated_and_refused(executor, camera, sup, deadline))
             out.update(watchdog(executor, camera, robot, sup, deadline))
         return out

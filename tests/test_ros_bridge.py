@@ -43,6 +43,7 @@ def good(views: dict[str, Any], **change: Any) -> dict[str, Any]:
         "reference_points": [float(x) for x in views["ref_px"].ravel()],
         "first_points": [float(x) for x in views["start_px"].ravel()],
         "reference_depths": OBJECT_Z, "rz_task": "tau21", "dt": 0.01, "K_hat": [600.0, 600.0, 416.0, 312.0],
+        "camera_frame": "camera_optical_frame",
     }
     p.update(change)
     return {k: v for k, v in p.items() if v is not None}
@@ -63,12 +64,14 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
     np.testing.assert_array_equal(c.hand_eye, [[1, 0, 0, 0.1], [0, 1, 0, 0], [0, 0, 1, 0.05], [0, 0, 0, 1]])
     assert c.topics == {"image": "image", "camera_info": "camera_info", "twist": "~/twist", "status": "~/status",
                         "annotated": "~/annotated"}
-    assert c.watchdog_timeout == 0.5 and not c.autostart
+    assert c.watchdog_timeout == 0.1 and not c.autostart  # MoveIt Servo's command timeout
     validate_pipeline(c)
-    tags = parse_parameters({"reference_image": views["reference"], "tag_ids": [1, 2], "depth": 0.5, "law": "ibvs"})
+    tags = parse_parameters({"reference_image": views["reference"], "tag_ids": [1, 2], "depth": 0.5, "law": "ibvs",
+                             "camera_frame": "camera"})
     assert tags.target == "tags" and tags.servo_options["tag_ids"] == [1, 2] and tags.servo_options["depths"] == 0.5
     assert "decimation" not in tags.servo_options
-    tags = parse_parameters({"reference_image": views["reference"], "decimation": 3, "depth": 0.5, "law": "ibvs"})
+    tags = parse_parameters({"reference_image": views["reference"], "decimation": 3, "depth": 0.5, "law": "ibvs",
+                             "camera_frame": "camera"})
     assert tags.servo_options["decimation"] == 3
 
 
@@ -97,6 +100,10 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
         ({"output_frame": "end_effector", "end_effector_frame": "tool0", "hand_eye": [0.0] * 7}, "parameter hand_eye: the quaternion"),
         ({"output_frame": "end_effector", "end_effector_frame": "tool0", "hand_eye": [2.0] + [0.0] * 15}, "parameter hand_eye: not a rigid"),
         ({"output_frame": "tool"}, "parameter output_frame"),
+        ({"camera_frame": ""}, "parameter camera_frame: output_frame camera needs"),
+        ({"image_qos.reliability": "fast"}, "parameter image_qos.reliability: expected one of reliable, best_effort"),
+        ({"image_qos.depth": 0}, "parameter image_qos.depth: expected 1..=100"),
+        ({"status_period": 0.0}, "parameter status_period"),
         ({"watchdog_timeout": 0.0}, "parameter watchdog_timeout"),
         ({"twist_topic": " "}, "parameter twist_topic: empty"),
         ({"basis": [0, 1]}, "parameter basis"),
@@ -126,7 +133,7 @@ def test_bad_law_options_are_refused_at_start(views: dict[str, Any], change: dic
 @pytest.mark.parametrize("decimation", [0, 9])
 def test_a_decimation_out_of_range_is_refused_at_start(views: dict[str, Any], decimation: int) -> None:
     config = parse_parameters({"reference_image": views["reference"], "decimation": decimation, "depth": 0.5,
-                               "law": "ibvs", "K_hat": [600.0, 600.0, 416.0, 312.0]})
+                               "law": "ibvs", "K_hat": [600.0, 600.0, 416.0, 312.0], "camera_frame": "camera"})
     with pytest.raises(vsinv.InvalidInput, match=r"parameters: .*decimation: must be in 1..=8"):
         validate_pipeline(config)
 
@@ -282,7 +289,7 @@ def test_the_session_steps_as_image_servo_does(views: dict[str, Any]) -> None:
 
 
 def test_the_session_stops_with_a_zero_twist(views: dict[str, Any]) -> None:
-    s = session(views, **{"stop.max_iterations": 2})
+    s = session(views, watchdog_timeout=0.5, **{"stop.max_iterations": 2})
     s.start(0.0)
     outs = [s.frame(views["start"], 0.01 * k) for k in range(1, 5)]
     assert outs[0].twist.any() and outs[1].twist.any()
@@ -396,3 +403,19 @@ def test_lost_features_stop_with_a_zero_twist(views: dict[str, Any]) -> None:
     assert out.twist is not None and not out.twist.any() and out.frame_used
     status = json.loads(s.status_json())
     assert status["verdict"] == "lost_features" and status["points"]["found"] < 12
+
+
+def test_a_new_camera_info_is_used_from_the_next_session(views: dict[str, Any]) -> None:
+    s = session(views, K_hat=None)
+    none = vsinv.Distortion([0.0, 0.0, 0.0, 0.0])
+    s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))
+    assert s.start(0.0)[0]
+    s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))  # the same lens again: nothing pending
+    assert json.loads(s.status_json())["K_hat_next"] is None
+    s.camera_info((vsinv.Intrinsics(500.0, 500.0, 416.0, 312.0), none))  # a new lens mid-run: shown, not used
+    status = json.loads(s.status_json())
+    assert status["K_hat"] == [600.0, 600.0, 416.0, 312.0] and status["K_hat_next"] == [500.0, 500.0, 416.0, 312.0]
+    s.reset()
+    assert s.start(1.0)[0]  # the next session: the new lens in use
+    status = json.loads(s.status_json())
+    assert status["K_hat"] == [500.0, 500.0, 416.0, 312.0] and status["K_hat_next"] is None

@@ -191,3 +191,88 @@ def test_bad_parameters_stop_the_node_at_start(tmp_path: Path) -> None:
                               env=env, capture_output=True, text=True, timeout=60)
         assert done.returncode == 2, (change, done.stderr)
         assert "refused to start: parameter" in done.stderr and name in done.stderr, (change, done.stderr)
+
+
+def run_bridge_with(tmp_path: Path, parameters: dict[str, Any], script: str, config: dict[str, Any], timeout: float) -> tuple[dict[str, Any], str]:
+    """The bridge with ``parameters`` and a simulation script with ``config``: its JSON output
+    and the bridge's stderr."""
+    env = ros_env()
+    params = write_params(tmp_path / "bridge.yaml", parameters)
+    (tmp_path / "sim.json").write_text(json.dumps(config))
+    bridge = subprocess.Popen([sys.executable, "-m", "vsinv.ros", "--ros-args", "--params-file", str(params)],
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        sim = subprocess.run([sys.executable, str(HERE / script), "--config", str(tmp_path / "sim.json"), "--out", str(tmp_path / "out.json")],
+                             env=env, capture_output=True, text=True, timeout=timeout)
+    finally:
+        _, err = stop(bridge)
+    assert sim.returncode == 0, sim.stderr[-3000:]
+    return json.loads((tmp_path / "out.json").read_text()), err
+
+
+#: Each fault and the words the status's reason must hold.
+FAULTS = {
+    "encoding bayer_rggb8": "encoding 'bayer_rggb8' is not read", "encoding 8UC1": "encoding '8UC1' is not read",
+    "encoding empty": "encoding '' is not read", "step < width": "rows of 831 bytes", "short data": "does not fit",
+    "0x0 image": "0x0", "size 640x480": "image size 640x480 is not the CameraInfo's 832x624",
+    "frame_id other": "frame_id 'other' is not the camera's 'camera_optical_frame'", "frame_id empty": "frame_id '' is not",
+    "duplicate": "a duplicate", "out of order": "out of order", "camera_info 640x480": "camera_info size 640x480 is not the images' 832x624",
+}
+
+
+def test_every_fault_stops_the_robot_at_once(tmp_path: Path) -> None:
+    """Each unusable image (and a CameraInfo of another size) sent while servoing: the next
+    twist is a zero twist, within one frame (33 ms), with the cause in the status; twists carry
+    the camera_frame parameter and a stamp; the status is latched before any image; parameter
+    sets apply or are refused with a reason; /diagnostics says the fault."""
+    parameters = bridge_parameters(tmp_path)
+    parameters.update(output_frame="camera", camera_frame="camera_optical_frame", watchdog_timeout=1.0,
+                      stop={"max_iterations": 100000, "stall": False}, max_linear_speed=0.25)
+    for key in ("hand_eye", "end_effector_frame"):
+        parameters.pop(key)
+    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    config = {"scenario": SCENARIO, "K": K_6MM, "start_pose": start.tolist()}
+    r, err = run_bridge_with(tmp_path, parameters, "ros_fault_sim.py", config, timeout=240)
+    assert r["status_before_images"].get("state") == "idle", r["status_before_images"]  # latched, from the start
+    print("\nfault -> zero twist (ms):")
+    for name, words in FAULTS.items():
+        f = r["faults"][name]
+        print(f"  {name:<22} {f['ms']:.2f}" if f["ms"] is not None else f"  {name:<22} none", f["reason"])
+        assert f["was_running"], (name, f, err[-2000:])
+        assert f["twist"] == [0.0] * 6, (name, f)  # the very next twist is the stop
+        assert f["ms"] < 1000.0 / 30.0, (name, f)  # within one frame at 30 Hz
+        assert f["state"] == "stopped" and words in f["reason"], (name, f)
+    p = r["parameters"]
+    assert p["speed_before"] > 0.01 and p["set_speed"][0] and p["speed_after"] <= 0.01 + 1e-9, p
+    assert not p["set_target"][0] and "read at start only" in p["set_target"][1], p
+    assert p["set_watchdog"][0] and 150.0 < p["watchdog_ms"] < 400.0 and p["watchdog_reason"].startswith("watchdog"), p
+    watchdog, reliability = p["describe"]
+    assert watchdog["range"] == [[0.01, 10.0]] and "MoveIt Servo" in watchdog["description"], watchdog
+    assert "reliable, best_effort" in reliability["constraints"], reliability
+    assert r["frames"] == ["camera_optical_frame"] and r["stamps_set"]
+    assert "incompatible with image_qos.reliability 'reliable'" in str(r["qos"]), r["qos"]
+    assert any(level == 2 and "vsinv_ros" in name and "refused" in message for level, name, message in r["diagnostics"])
+
+
+@pytest.mark.parametrize("width, height, encoding", [(1280, 720, "mono8"), (1280, 720, "bgr8"), (1920, 1080, "mono8"), (1920, 1080, "bgr8")])
+def test_large_images_converge(tmp_path: Path, width: int, height: int, encoding: str) -> None:
+    """The lens change loop with the 6 mm lens on a 1280x720 or 1920x1080 sensor (the principal
+    point at the centre), mono8 and bgr8, a 30 Hz camera period: images of up to 6.2 MB arrive
+    over the default QoS (reliable, keep last 1) and the loop converges."""
+    parameters = bridge_parameters(tmp_path)
+    dx, dy = width / 2.0 - K_6MM[2], height / 2.0 - K_6MM[3]
+    parameters["first_points"] = [x + (dx if i % 2 == 0 else dy) for i, x in enumerate(parameters["first_points"])]
+    parameters.update(dt=1.0 / 30.0)
+    k = [K_6MM[0], K_6MM[1], width / 2.0, height / 2.0]
+    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    config = {"scenario": SCENARIO, "K": k, "start_pose": start.tolist(), "dt": 1.0 / 30.0, "frame": "tool0",
+              "hand_eye": hand_eye_matrix("hand_eye", HAND_EYE).tolist(), "timeout": 240.0, "size": [width, height],
+              "encoding": encoding, "converge_only": True}
+    r, err = run_bridge_with(tmp_path, parameters, "ros_loop_sim.py", config, timeout=300)
+    s = r["status"]
+    print(f"\n{width}x{height} {encoding}: {s['verdict']} after {s['iterations']} iterations, {r['error_mm']:.3f} mm, "
+          f"{r['error_deg']:.4f} deg; {r['rate_hz']:.1f} twists/s lock-step; latency median {r['latency_median_ms']:.2f} ms, "
+          f"p99 {r['latency_p99_ms']:.2f} ms")
+    assert r["K_hat"] == k, (r, err[-2000:])
+    assert s["verdict"] == "converged", (s, err[-2000:])
+    assert r["error_mm"] < 1.0 and r["error_deg"] < 0.1

@@ -11,6 +11,7 @@ mod batch_watch;
 mod camera;
 mod control;
 mod errors;
+mod grey;
 mod hand_eye;
 mod image_servo;
 mod invariant;
@@ -46,6 +47,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planning::register(m)?;
     sim::register(m)?;
     vision::register(m)?;
+    grey::register(m)?;
     image_servo::register(m)?;
     tags::register(m)?;
     tag_tracker::register(m)?;

@@ -13,7 +13,10 @@ from .params import parameter_help
 USAGE = """usage: vsinv-ros [--ros-args -p NAME:=VALUE ... | --params-file FILE]
 
 The vsinv ROS 2 bridge: images and CameraInfo in, a TwistStamped for MoveIt Servo out.
-Services ~/start, ~/stop, ~/reset (std_srvs/Trigger); status as JSON on ~/status.
+Services ~/start, ~/stop, ~/reset (std_srvs/Trigger); status as JSON on ~/status (latched,
+a heartbeat every status_period) and on /diagnostics. An unusable image publishes a zero
+twist at once and stops. As a ROS 2 package (ros/vsinv, colcon build):
+ros2 launch vsinv servo.launch.py params_file:=FILE, or ros2 run vsinv vsinv_ros.
 
 parameters:
 """

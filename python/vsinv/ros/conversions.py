@@ -17,7 +17,7 @@ from typing import Any, Literal, cast
 import numpy as np
 import numpy.typing as npt
 
-from .._core import Distortion, Intrinsics, InvalidInput
+from .._core import Distortion, Intrinsics, InvalidInput, to_grey
 
 __all__ = [
     "ENCODINGS", "image_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
@@ -27,14 +27,10 @@ __all__ = [
 #: The image encodings the bridge reads (sensor_msgs/image_encodings), each to 8-bit grey.
 ENCODINGS = ("mono8", "rgb8", "bgr8")
 
-#: Rec. 601 luma in fixed point (over 2^15), the weights vsinv.load_image uses (OpenCV's
-#: COLOR_RGB2GRAY to the bit).
-_LUMA_601 = np.array([9798, 19235, 3735], dtype=np.uint32)
-
-
 def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     """A sensor_msgs/Image (mono8, rgb8 or bgr8; rows of ``step`` bytes) as a (height, width)
-    uint8 array; another encoding or inconsistent sizes are refused with InvalidInput."""
+    uint8 array (colour by Rec. 601 luma in Rust: :func:`vsinv.to_grey`); another encoding or
+    inconsistent sizes are refused with InvalidInput."""
     encoding, height, width, step = str(msg.encoding), int(msg.height), int(msg.width), int(msg.step)
     if encoding not in ENCODINGS:
         raise InvalidInput(f"image: encoding {encoding!r} is not read (expected one of {', '.join(ENCODINGS)})")
@@ -50,11 +46,7 @@ def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     rows = data[: height * step].reshape(height, step)[:, : width * channels]
     if channels == 1:
         return np.ascontiguousarray(rows)
-    rgb = rows.reshape(height, width, 3)
-    if encoding == "bgr8":
-        rgb = rgb[:, :, ::-1]
-    luma = (rgb.astype(np.uint32) @ _LUMA_601 + (1 << 14)) >> 15
-    return np.minimum(luma, 255).astype(np.uint8)
+    return to_grey(rows.reshape(height, width, 3), order="bgr" if encoding == "bgr8" else "rgb")
 
 
 def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics, Distortion]:

@@ -96,10 +96,12 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("dt", "float", 1.0 / 30.0, "the camera period, seconds (the path's time step)"),
     # the output
     _P("output_frame", "str", "camera", "the twist's frame: the camera's optical frame, or the end effector's through hand_eye", ("camera", "end_effector")),
-    _P("camera_frame", "str", "", "the camera optical frame's name (empty: the images' header frame_id)"),
+    _P("camera_frame", "str", "", "the camera optical frame's name: the twist's frame_id with output_frame camera (required "
+       "then), and the frame_id images must carry (empty: the first image's, with output_frame end_effector)"),
     _P("end_effector_frame", "str", "", "the end effector frame's name (output_frame end_effector)"),
     _P("hand_eye", "floats", None, "the camera pose in the end effector frame: 4x4 row-major, or [x, y, z, qx, qy, qz, qw]"),
-    _P("watchdog_timeout", "float", 0.5, "publish a zero twist and stop when no image came for this long, seconds"),
+    _P("watchdog_timeout", "float", 0.1, "publish a zero twist and stop when no image came for this long, seconds "
+       "(MoveIt Servo's incoming_command_timeout, 0.1 s); changed at once by a parameter set"),
     _P("autostart", "bool", False, "start servoing at the first image (otherwise call the start service)"),
     _P("publish_annotated", "bool", True, "publish the image with the points found"),
     _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8 or bgr8)"),
@@ -107,6 +109,12 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("twist_topic", "str", "~/twist", "geometry_msgs/TwistStamped out (MoveIt Servo: /servo_node/delta_twist_cmds)"),
     _P("status_topic", "str", "~/status", "std_msgs/String out: the status as JSON"),
     _P("annotated_topic", "str", "~/annotated", "sensor_msgs/Image out: rgb8 with the points found"),
+) + (
+    # the ROS interface: QoS, status (issue 30); separate from the law options above
+    _P("image_qos.reliability", "str", "reliable", "the image and CameraInfo subscriptions' reliability (best_effort "
+       "loses large images between processes)", ("reliable", "best_effort")),
+    _P("image_qos.depth", "int", 1, "the image subscription's history depth (keep last): 1 steps on the newest image"),
+    _P("status_period", "float", 1.0, "the status and /diagnostics heartbeat, seconds"),
 )
 
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -136,7 +144,10 @@ class BridgeConfig:
     camera_frame: str = ""
     end_effector_frame: str = ""
     hand_eye: Optional[npt.NDArray[np.float64]] = None
-    watchdog_timeout: float = 0.5
+    watchdog_timeout: float = 0.1
+    image_reliability: str = "reliable"
+    image_depth: int = 1
+    status_period: float = 1.0
     autostart: bool = False
     publish_annotated: bool = True
     topics: dict[str, str] = field(default_factory=dict)
@@ -326,15 +337,31 @@ def _output(given: dict[str, Any], config: BridgeConfig) -> None:
         config.hand_eye = hand_eye_matrix("hand_eye", given["hand_eye"])
     elif "hand_eye" in given:
         raise _refuse("hand_eye", "only used with output_frame end_effector")
+    elif not config.camera_frame:
+        raise _refuse("camera_frame", "output_frame camera needs the camera optical frame's name (the twist's frame_id)")
     timeout = given["watchdog_timeout"]
     if not timeout > 0.0:
         raise _refuse("watchdog_timeout", f"expected a positive number of seconds, got {timeout}")
     config.watchdog_timeout = timeout
+    _interface(given, config)
     for key in ("image", "camera_info", "twist", "status", "annotated"):
         name = f"{key}_topic"
         if not given[name].strip():
             raise _refuse(name, "empty topic name")
         config.topics[key] = given[name]
+
+
+def _interface(given: dict[str, Any], config: BridgeConfig) -> None:
+    """The QoS and the status period, into ``config``."""
+    config.image_reliability = given["image_qos.reliability"]
+    depth = given["image_qos.depth"]
+    if not 1 <= depth <= 100:
+        raise _refuse("image_qos.depth", f"expected 1..=100 images, got {depth}")
+    config.image_depth = depth
+    period = given["status_period"]
+    if not 0.01 <= period <= 60.0:
+        raise _refuse("status_period", f"expected 0.01..=60 seconds, got {period}")
+    config.status_period = period
 
 
 def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:

@@ -66,6 +66,11 @@ class BridgeSession:
         self.lens: Optional[tuple[Intrinsics, Distortion]] = None
         if config.K_hat is not None:
             self.lens = (config.K_hat, config.distortion or Distortion([0.0, 0.0, 0.0, 0.0]))
+        self.lens_in_use: Optional[tuple[Intrinsics, Distortion]] = None
+        # the live speed limits (a parameter set lowers them at once; the pipeline's own,
+        # from the session's start, still bound the twist)
+        self.max_linear_speed: Optional[float] = config.servo_options.get("max_linear_speed")
+        self.max_angular_speed: Optional[float] = config.servo_options.get("max_angular_speed")
         self.pipeline: Optional[ImageServo] = None
         self.finished = False
         self.last_image: Optional[float] = None
@@ -75,8 +80,10 @@ class BridgeSession:
 
     # ---- the lens -------------------------------------------------------------------------
     def camera_info(self, lens: tuple[Intrinsics, Distortion]) -> None:
-        """A CameraInfo's lens; unused when K_hat is a parameter. A new session uses the latest."""
-        if self.config.K_hat is None:
+        """A CameraInfo's lens; unused when K_hat is a parameter. It is applied when a session
+        is built (the first start, a start after a reset or a final verdict): the status shows
+        the lens in use (``K_hat``) and a newer one received (``K_hat_next``)."""
+        if self.config.K_hat is None and (self.lens is None or self.lens[0] != lens[0] or self.lens[1] != lens[1]):
             self.lens = lens
 
     # ---- requests -------------------------------------------------------------------------
@@ -92,7 +99,7 @@ class BridgeSession:
                 self.pipeline = ImageServo(self.config.reference_image, self.config.target, k, distortion=d, **self.config.servo_options)
             except VsinvError as e:
                 return False, f"cannot build the servo: {e}"
-            self.finished, self.last_step = False, None
+            self.finished, self.last_step, self.lens_in_use = False, None, self.lens
         self.state, self.reason, self.message = "running", None, None
         self.started_at, self.last_image = now, None
         log.info("vsinv-ros: servoing started")
@@ -134,13 +141,25 @@ class BridgeSession:
             out = self.stop(f"{step.verdict}: {step.reason}")
             out.step, out.frame_used = step, True
             return out
-        self.twist = np.asarray(step.twist, dtype=float)
+        self.twist = self.limited(np.asarray(step.twist, dtype=float))
         return Output(self.output_twist(self.twist), step, True)
 
-    def refuse_frame(self, error: InvalidInput) -> None:
-        """A message that is no usable image: said in the status; not an image for the watchdog."""
+    def limited(self, twist: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+        """The twist scaled as a whole to the live speed limits (as the pipeline scales it)."""
+        scale = 1.0
+        for limit, part in ((self.max_linear_speed, twist[:3]), (self.max_angular_speed, twist[3:])):
+            norm = float(np.linalg.norm(part))
+            if limit is not None and norm > limit:
+                scale = min(scale, limit / norm)
+        return twist * scale
+
+    def refuse_frame(self, error: InvalidInput | str) -> Output:
+        """A message that is no usable image (or a refused CameraInfo): a zero twist at once,
+        a stop while running (resumed by a start), the cause in the status; not an image for
+        the watchdog."""
         self.message = str(error)
         log.warning("vsinv-ros: %s", error)
+        return self.stop(f"refused: {error}")
 
     def watchdog(self, now: float) -> Output:
         """While running with no image for the timeout: stop with a zero twist."""
@@ -164,8 +183,11 @@ class BridgeSession:
         s["iterations"] = self.pipeline.iterations if self.pipeline is not None else 0
         s["twist"] = [float(x) for x in self.output_twist(self.twist)]
         s["output_frame"] = self.config.output_frame
-        k = self.lens[0] if self.lens is not None else None
+        in_use = self.lens_in_use if self.pipeline is not None else self.lens
+        k = in_use[0] if in_use is not None else None
         s["K_hat"] = [k.fku, k.fkv, k.u0, k.v0] if k is not None else None
+        nxt = self.lens[0] if self.lens is not None and self.lens is not in_use else None
+        s["K_hat_next"] = [nxt.fku, nxt.fkv, nxt.u0, nxt.v0] if nxt is not None else None
         step = self.last_step
         if step is None:
             s.update(verdict=None, points=None)

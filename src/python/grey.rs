@@ -1,0 +1,63 @@
+//! `to_grey`: a `(height, width, 3)` uint8 colour array (RGB or BGR) to the `(height, width)`
+//! grey array the detectors read, in Rust with the GIL released (Rec. 601 luma, OpenCV's
+//! `COLOR_RGB2GRAY`/`COLOR_BGR2GRAY` to the bit).
+
+use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::vision::grey::{ChannelOrder, colour_to_grey};
+
+fn invalid(reason: String) -> PyErr {
+    crate::Error::InvalidImage { what: "image".to_string(), reason }.into()
+}
+
+/// The grey image of a colour image: `image` a `(height, width, 3)` uint8 array whose
+/// channels are in `order` (`"rgb"` or `"bgr"`); a non-contiguous array is copied once.
+#[pyfunction]
+#[pyo3(signature = (image, order = "rgb"))]
+pub fn to_grey<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: &str) -> PyResult<Bound<'py, PyArray2<u8>>> {
+    let order = match order {
+        "rgb" => ChannelOrder::Rgb,
+        "bgr" => ChannelOrder::Bgr,
+        other => {
+            let e = crate::Error::InvalidParameter {
+                name: "order",
+                reason: format!("expected 'rgb' or 'bgr', got {other:?}"),
+            };
+            return Err(e.into());
+        }
+    };
+    let Ok(any) = image.cast::<numpy::PyUntypedArray>() else {
+        let kind = image.get_type().name()?.to_string();
+        return Err(invalid(format!("expected a (height, width, 3) uint8 NumPy array, got {kind}")));
+    };
+    let dtype = any.dtype().str()?.to_string();
+    let shape = any.shape().to_vec();
+    if shape.len() != 3 || shape[2] != 3 || dtype != "uint8" {
+        return Err(invalid(format!(
+            "expected a (height, width, 3) uint8 array, got dtype {dtype} with shape {shape:?}"
+        )));
+    }
+    let (Ok(h), Ok(w)) = (u32::try_from(shape[0]), u32::try_from(shape[1])) else {
+        return Err(invalid(format!("image too large {shape:?}")));
+    };
+    crate::vision::image::check_dimensions("image", u64::from(w), u64::from(h))?;
+    let array = image
+        .cast::<PyArray3<u8>>()?
+        .try_readonly()
+        .map_err(|e| invalid(format!("array is being written to ({e})")))?;
+    let grey = match array.as_slice() {
+        Ok(data) => py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, data, order))?,
+        Err(_) => {
+            let owned: Vec<u8> = array.as_array().iter().copied().collect();
+            py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, &owned, order))?
+        }
+    };
+    let (w, h) = grey.dimensions();
+    PyArray1::from_vec(py, grey.into_raw()).reshape([h as usize, w as usize])
+}
+
+/// Adds `to_grey`.
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(to_grey, m)?)
+}
