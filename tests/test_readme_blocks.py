@@ -364,6 +364,8 @@ BLOCKS: list[Entry] = [
     Entry("yaml", "vsinv_ros:", NOT_RUN, "a ROS 2 parameters file for a real camera and arm: "
           "tests/test_ros_bridge.py parses it with the bridge's parser (with files of its own), and "
           "tests/test_ros_loop.py runs the bridge from such a file over ROS 2 topics"),
+    Entry("sh", "pip install .  ", NOT_RUN, "needs a ROS 2 installation with colcon, launch and launch_ros (not on "
+          "PyPI); tests/test_ros_package.py builds the package with colcon when it is installed"),
     Entry("sh", "vsinv-ros --ros-args", NOT_RUN, "needs ROS 2, a camera driver and MoveIt Servo; "
           "tests/test_ros_loop.py runs the same command against a simulated camera and robot"),
     Entry("python", "q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]", RUN,
