@@ -340,7 +340,8 @@ impl TagDecoder {
             .filter(|&((errors, _), _, _)| errors <= max_errors)
             .filter_map(|(margin, id, corners)| {
                 let corners = edges::refine_corners(image, &corners, border)
-                    .or_else(|| smoothed::refine_corners(image, &corners, border))?;
+                    .or_else(|| smoothed::refine_corners(image, &corners, border))
+                    .or_else(|| edges::refine_blurred_corners(image, &corners, border))?;
                 Some((margin, Tag { id, corners }))
             })
             .collect();
