@@ -9,7 +9,6 @@ sets (applied, refused) and descriptions; the watchdog set shorter. Writes JSON 
 
 from __future__ import annotations
 
-import argparse
 import json
 import time
 from typing import Any, Callable
@@ -201,21 +200,7 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
         rig.destroy_node()
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser()
-    parser.add_argument("--config", required=True)
-    parser.add_argument("--out", required=True)
-    args = parser.parse_args()
-    with open(args.config) as f:
-        config = json.load(f)
-    rclpy.init()
-    try:
-        result = run(config)
-    finally:
-        rclpy.try_shutdown()
-    with open(args.out, "w") as f:
-        json.dump(result, f, indent=1)
-
-
 if __name__ == "__main__":
-    main()
+    from ros_sim_main import main
+
+    main(run)

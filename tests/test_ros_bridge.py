@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import vsinv
+from ros_yaml import flat
 from vsinv.ros import BridgeSession, hand_eye_matrix, image_to_grey, lens_from_camera_info, parse_parameters
 from vsinv.ros import twist_in_end_effector_frame, validate_pipeline
 from vsinv.ros.annotate import annotate
@@ -361,12 +362,6 @@ def test_the_guides_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.
     monkeypatch.chdir(tmp_path)
     vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / parameters["reference_image"])
     (tmp_path / parameters["reference_depths_file"]).write_text("z\n" + "0.5\n" * 16)
-
-    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for k, v in d.items():
-            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
-        return out
 
     c = parse_parameters(flat(parameters))
     assert c.target == "tags" and c.output_frame == "end_effector" and c.topics["twist"] == "/servo_node/delta_twist_cmds"

@@ -7,12 +7,12 @@ import ast
 import importlib.util
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 
 import vsinv
+from ros_yaml import flat
 from vsinv.ros import parse_parameters
 
 PACKAGE = Path(__file__).resolve().parent.parent / "ros" / "vsinv"
@@ -45,12 +45,6 @@ def test_the_parameters_file_is_read(tmp_path: Path) -> None:
     vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / "reference.png")
     (tmp_path / "depths.csv").write_text("z\n" + "0.5\n" * 16)
     parameters.update(reference_image=str(tmp_path / "reference.png"), reference_depths_file=str(tmp_path / "depths.csv"))
-
-    def flat(d: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for k, v in d.items():
-            out.update(flat(v, f"{prefix}{k}.") if isinstance(v, dict) else {f"{prefix}{k}": v})
-        return out
 
     c = parse_parameters(flat(parameters))
     assert c.watchdog_timeout == 0.1 and c.image_reliability == "reliable" and c.image_depth == 1
