@@ -341,7 +341,7 @@ def tag_image() -> np.ndarray:
     return IMG_LOCK["tags"]
 
 
-@covers("detect_tags", "Tags", "Tags.ids", "Tags.corners", "Tags.family", "TAG_FAMILIES")
+@covers("detect_tags", "Tags", "Tags.ids", "Tags.corners", "Tags.family", "Tags.stopped_early", "TAG_FAMILIES")
 @fuzz_settings(100)
 @given(st.data())
 def test_detect_tags(data: Any) -> None:
@@ -365,6 +365,8 @@ def test_detect_tags(data: Any) -> None:
         ids = call(getattr, out, "ids", _api="Tags.ids")
         corners = call(getattr, out, "corners", _api="Tags.corners")
         family = call(getattr, out, "family", _api="Tags.family")
+        early = call(getattr, out, "stopped_early", _api="Tags.stopped_early")
+        assert early is False  # an ordinary image is searched whole
         m = len(out)
         assert ids.shape == (m,) and ids.dtype == np.int64 and corners.shape == (m, 4, 2)
         assert family in vsinv.TAG_FAMILIES and repr(out).startswith("Tags(")

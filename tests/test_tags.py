@@ -166,6 +166,7 @@ def test_apriltag_pgm_matches_its_ground_truth(visp: Path) -> None:  # noqa: F81
     truth = visp_corners(folder / "ground_truth_detection.txt", row_column=True)
     assert sorted(truth) == list(range(8, 20))
     tags = vsinv.detect_tags(image)
+    assert not tags.stopped_early  # an ordinary frame: searched whole
     errors = errors_against(tags, truth)
     report("AprilTag.pgm vs ground truth", errors)
     assert errors.max() <= 0.5
@@ -185,6 +186,7 @@ def test_benchmark_640x480_matches_its_ground_truth(visp: Path, family: str) -> 
     image = vsinv.load_image(folder / f"{stem}_640x480.png")
     truth = visp_corners(folder / f"corners_{stem}.txt", row_column=False)
     tags = vsinv.detect_tags(image, family=family)
+    assert not tags.stopped_early and not vsinv.detect_tags(image, family, decimation=1).stopped_early
     errors = errors_against(tags, truth)
     report(f"{stem}_640x480 vs ground truth", errors)
     assert errors.max() <= 0.5

@@ -844,7 +844,9 @@ class TagTracker:
         follow: bool = True,
     ) -> TagTracker: ...
     def track(self, image: npt.NDArray[np.uint8]) -> Tags:
-        """The tags in the next frame (a (height, width) uint8 array), sorted by id."""
+        """The tags in the next frame (a (height, width) uint8 array), sorted by id; their
+        ``stopped_early`` says whether a quad search of this frame (whole or in a crop) stopped
+        early, as ``detect_tags``'s."""
     def reset(self) -> None:
         """Forgets the last frame: the next one is read whole."""
     @property
@@ -872,6 +874,11 @@ class Tags:
     @property
     def family(self) -> str:
         """The family searched for ("tag36h11", ...)."""
+    @property
+    def stopped_early(self) -> bool:
+        """Whether the search stopped early: the frame was too cluttered to be searched whole
+        within the detector's bound on its work (some levels not searched, or some decoded
+        candidates not measured); the tags found are still right, others may be missing."""
     def __len__(self) -> int: ...
 
 def detect_tags(
@@ -889,7 +896,12 @@ def detect_tags(
     InvalidInput; an image without tags gives an empty result. Bounds: an image of at most 2^28
     pixels (65536 a side, as every image argument), a decimation that leaves at most about 2^22
     pixels to search (InvalidInput naming `decimation` and the one that fits otherwise; None
-    always fits: the detector takes some 70 bytes a searched pixel)."""
+    always fits: the detector takes some 70 bytes a searched pixel). The work per frame is bounded
+    too: a level of the search holding more regions (black or white, of the detector's
+    threshold) than is left of the frame's budget of 4,096 is not searched, and at most 512
+    decoded candidates have their corners measured (best first, one per id); the result's
+    `stopped_early` says when that happened (a cluttered frame: thousands of small squares or
+    tags), never on ordinary frames."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
     """Reads an image file (PNG, PGM/PPM, JPEG, or a GIF's first frame) as (height, width) uint8

@@ -13,7 +13,7 @@ use super::logs::{DEBUG, INFO, log};
 use crate::sim::arm::ArmRobot;
 use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin};
+use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin, check_point_count};
 use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).
@@ -71,6 +71,11 @@ pub fn access(allow_outside_files: bool) -> FileAccess {
 
 fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scenario> {
     let py = d.py();
+    // Too many object points are refused before the dictionary is written as JSON (a million
+    // took 5 s and 300 MB to be refused as too much text).
+    if let Ok(n) = d.get_item("object").and_then(|o| o.get_item("points")).and_then(|p| p.len()) {
+        check_point_count(n)?;
+    }
     let kwargs = PyDict::new(py);
     kwargs.set_item("default", PyCFunction::new_closure(py, None, None, numpy_to_json)?)?;
     let text: String = py

@@ -43,12 +43,15 @@ impl PyTagTracker {
         Ok(Self { inner: Shared::new(detector.with_refresh(refresh).with_following(follow), "TagTracker") })
     }
 
-    /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id.
+    /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id; their
+    /// `stopped_early` says whether a quad search of this frame stopped early.
     fn track(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
-        let (tags, family) = self.inner.detached(py, |detector| (detector.track(&buffer), detector.family()))?;
-        tags_out(py, &tags?, family)
+        let (tags, family, early) = self
+            .inner
+            .detached(py, |detector| (detector.track(&buffer), detector.family(), detector.stopped_early()))?;
+        tags_out(py, &tags?, family, early)
     }
 
     /// Forgets the last frame: the next one is read whole.

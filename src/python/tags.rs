@@ -10,7 +10,7 @@ use pyo3::prelude::*;
 use super::vision::image_arg;
 use crate::error::Result;
 use crate::vision::image::{GreyBuffer, Pixels};
-use crate::vision::tags::{MAX_DECIMATION, Tag, TagDecoder, TagFamily};
+use crate::vision::tags::{MAX_DECIMATION, Tag, TagDecoder, TagFamily, TagReport};
 
 /// Images up to this many pixels keep their decoder (its buffers) for the next call on the
 /// same thread; a larger one gets a decoder of its own, freed after the call.
@@ -21,13 +21,13 @@ thread_local! {
 }
 
 /// The tags in `image`, with this thread's last decoder when it fits.
-fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: Option<u32>) -> Result<Vec<Tag>> {
+fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: Option<u32>) -> Result<TagReport> {
     let fresh = || match decimation {
         Some(d) => TagDecoder::with_decimation(family, d),
         None => Ok(TagDecoder::new(family)),
     };
     if u64::from(image.width()) * u64::from(image.height()) > KEPT_DECODER_PIXELS {
-        return fresh()?.detect(image);
+        return fresh()?.detect_report(image);
     }
     DECODER.with(|cell| {
         let mut kept = cell.borrow_mut();
@@ -36,8 +36,8 @@ fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: Optio
             *kept = Some(fresh()?);
         }
         match kept.as_mut() {
-            Some(decoder) => decoder.detect(image),
-            None => fresh()?.detect(image),
+            Some(decoder) => decoder.detect_report(image),
+            None => fresh()?.detect_report(image),
         }
     })
 }
@@ -52,6 +52,11 @@ pub struct PyTags {
     /// bottom-right, bottom-left as OpenCV's aruco module orders them.
     #[pyo3(get)]
     corners: Py<PyArray3<f64>>,
+    /// Whether the search stopped early: the frame was too cluttered to be searched whole
+    /// within the detector's bound on its work (some levels not searched, or some decoded
+    /// candidates not measured); the tags found are still right, others may be missing.
+    #[pyo3(get)]
+    stopped_early: bool,
     family: TagFamily,
     count: usize,
 }
@@ -62,7 +67,8 @@ impl PyTags {
         self.count
     }
     fn __repr__(&self) -> String {
-        format!("Tags({} {} found)", self.count, self.family.name())
+        let early = if self.stopped_early { ", stopped early" } else { "" };
+        format!("Tags({} {} found{early})", self.count, self.family.name())
     }
     /// The family searched for (`"tag36h11"`, ...).
     #[getter]
@@ -71,12 +77,12 @@ impl PyTags {
     }
 }
 
-pub(super) fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily) -> PyResult<PyTags> {
+pub(super) fn tags_out(py: Python<'_>, tags: &[Tag], family: TagFamily, stopped_early: bool) -> PyResult<PyTags> {
     let m = tags.len();
     let ids = PyArray1::from_vec(py, tags.iter().map(|t| i64::from(t.id)).collect());
     let flat: Vec<f64> = tags.iter().flat_map(|t| t.corners.as_flattened().to_vec()).collect();
     let corners = PyArray1::from_vec(py, flat).reshape([m, 4, 2])?;
-    Ok(PyTags { ids: ids.unbind(), corners: corners.unbind(), family, count: m })
+    Ok(PyTags { ids: ids.unbind(), corners: corners.unbind(), stopped_early, family, count: m })
 }
 
 /// A name of [`TagFamily::NAMES`] (Python's `TAG_FAMILIES`); anything else raises
@@ -121,8 +127,8 @@ pub fn detect_tags(
     let decimation = decimation_arg(decimation)?;
     let image = image_arg(image, "image")?;
     let buffer = image.buffer("image")?;
-    let tags = py.detach(|| detect(&buffer, family, decimation))?;
-    tags_out(py, &tags, family)
+    let report = py.detach(|| detect(&buffer, family, decimation))?;
+    tags_out(py, &report.tags, family, report.stopped_early)
 }
 
 /// Adds tag detection.

@@ -52,6 +52,18 @@ const MAX_ITERATIONS: usize = 10_000_000;
 /// The most object points of a scenario.
 pub const MAX_OBJECT_POINTS: usize = 10_000;
 
+/// Refuses more than [`MAX_OBJECT_POINTS`] object points, naming `object.points` (also
+/// checked on a Python dictionary before it is written as JSON).
+pub fn check_point_count(n: usize) -> Result<()> {
+    if n <= MAX_OBJECT_POINTS {
+        return Ok(());
+    }
+    let reason = format!(
+        "{n} points given, at most {MAX_OBJECT_POINTS} (an iteration's work grows with them: about 40 ms at 10,000, 1.7 s at 100,000)"
+    );
+    Err(scenario_error("object.points", reason))
+}
+
 pub(super) fn check_values(key: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
         Some(i) => Err(scenario_error(
@@ -140,13 +152,7 @@ impl Scenario {
             let key = if rig.is_some() { "object.tags" } else { "object.points" };
             return Err(scenario_error(key, reason));
         }
-        if points.len() > MAX_OBJECT_POINTS {
-            let reason = format!(
-                "{} points given, at most {MAX_OBJECT_POINTS} (an iteration's work grows with them: about 40 ms at 10,000, 1.7 s at 100,000)",
-                points.len()
-            );
-            return Err(scenario_error("object.points", reason));
-        }
+        check_point_count(points.len())?;
         if let Some(i) = points.iter().position(|p| p.iter().any(|v| !v.is_finite())) {
             return Err(scenario_error(&point_key(i), "non-finite coordinate"));
         }

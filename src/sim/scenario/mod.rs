@@ -6,7 +6,7 @@
 
 mod builtin;
 mod convert;
-pub use convert::{MAX_OBJECT_POINTS, MIN_TAG_SIDE_PIXELS};
+pub use convert::{MAX_OBJECT_POINTS, MIN_TAG_SIDE_PIXELS, check_point_count};
 mod files;
 mod law_keys;
 pub mod schema;

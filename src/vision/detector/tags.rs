@@ -84,6 +84,9 @@ pub struct TagDetector {
     refresh: u32,
     since_whole: u32,
     whole: bool,
+    /// Whether a search of the last frame stopped early (a cluttered frame, see
+    /// [`TagReport`](crate::vision::tags::TagReport)).
+    stopped_early: bool,
 }
 
 impl TagDetector {
@@ -112,6 +115,7 @@ impl TagDetector {
             refresh: DEFAULT_REFRESH,
             since_whole: 0,
             whole: true,
+            stopped_early: false,
         }
     }
 
@@ -153,6 +157,7 @@ impl TagDetector {
     /// when it can, read in the whole frame otherwise (see the type's documentation).
     pub fn track<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Vec<Tag>> {
         let size = image.dimensions();
+        self.stopped_early = false;
         let due = self.refresh != 0 && self.since_whole + 1 >= self.refresh;
         let tracked = if size == self.size && !due && !self.last.is_empty() { self.tracked(image)? } else { None };
         let (tags, reads) = match tracked {
@@ -162,7 +167,9 @@ impl TagDetector {
             }
             None => {
                 self.since_whole = 0;
-                let tags = self.decoder.detect(image)?;
+                let report = self.decoder.detect_report(image)?;
+                self.stopped_early = report.stopped_early;
+                let tags = report.tags;
                 let reads = vec![TagRead::Whole; tags.len()];
                 (tags, reads)
             }
@@ -200,6 +207,12 @@ impl TagDetector {
         }
         found.sort_by_key(|(t, _)| t.id);
         Ok(Some(found.into_iter().unzip()))
+    }
+
+    /// Whether a quad search of the last frame of [`TagDetector::track`] stopped early (the
+    /// frame too cluttered: see [`TagReport`](crate::vision::tags::TagReport)).
+    pub fn stopped_early(&self) -> bool {
+        self.stopped_early
     }
 
     /// Whether the last frame of [`TagDetector::track`] was read whole (not tracked in crops).
@@ -255,7 +268,9 @@ impl TagDetector {
         }
         let crop = view("crop", w, h, &self.buffer)?;
         let decoder = crop_decoder(&mut self.crops, (w, h), self.decoder.family(), decimation)?;
-        let mut tags = decoder.detect(&crop)?;
+        let report = decoder.detect_report(&crop)?;
+        self.stopped_early |= report.stopped_early;
+        let mut tags = report.tags;
         let offset = [f64::from(region.x0), f64::from(region.y0)];
         for tag in &mut tags {
             for c in &mut tag.corners {

@@ -27,6 +27,7 @@
 //! (`src/vision/tags/edges.rs`): subpixel, unbiased on anti-aliased or blurred edges, and a tag whose edges
 //! do not support its corners is not reported (never reported with a wrong corner).
 
+mod budget;
 mod edge_search;
 mod edges;
 mod face;
@@ -34,6 +35,7 @@ mod follow;
 mod pyramid;
 mod smoothed;
 
+pub use self::budget::{MAX_MEASURED_CANDIDATES, MAX_SEARCHED_REGIONS, TagReport};
 pub use self::face::TagFace;
 
 use kornia_apriltag::family::TagFamilyKind;
@@ -177,6 +179,12 @@ pub fn detect_tags<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Resul
     TagDecoder::new(family).detect(image)
 }
 
+/// [`detect_tags`], saying whether the search stopped early on a cluttered frame (the work
+/// per frame is bounded: [`MAX_SEARCHED_REGIONS`], [`MAX_MEASURED_CANDIDATES`]).
+pub fn detect_tags_report<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily) -> Result<TagReport> {
+    TagDecoder::new(family).detect_report(image)
+}
+
 /// A tag detector kept from image to image: its buffers are reused while the image size
 /// stays the same ([`detect_tags`] makes a new one each call).
 ///
@@ -202,6 +210,9 @@ pub const AUTOMATIC_MIN_SIDE: u32 = 480;
 /// brightest pixels: the AprilTag library's midpoint (kornia's default, a third, breaks the
 /// black border of blurred tags into white).
 const THRESHOLD_SPLIT: f32 = 0.5;
+/// The contrast below which a tile of the threshold is left out (kornia's default, set here
+/// so that [`budget::regions`] thresholds as the detector does).
+const MIN_WHITE_BLACK_DIFFERENCE: u8 = 5;
 
 /// The decimation [`TagDecoder::new`] chooses for a `width x height` image: the largest that
 /// keeps the finest search's shorter side at least [`AUTOMATIC_MIN_SIDE`] pixels (1 up to
@@ -309,13 +320,19 @@ impl TagDecoder {
 
     /// The tags in `image`, as [`detect_tags`].
     pub fn detect<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<Vec<Tag>> {
+        Ok(self.detect_report(image)?.tags)
+    }
+
+    /// The tags in `image` and whether the search stopped early, as [`detect_tags_report`].
+    pub fn detect_report<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<TagReport> {
         check_image("image", image)?;
         if image.width() < MIN_SIDE || image.height() < MIN_SIDE {
-            return Ok(Vec::new());
+            return Ok(TagReport::default());
         }
         let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(image.width(), image.height()));
         check_search(image.width(), image.height(), decimation)?;
-        let mut candidates = self.search(0, image, decimation, 1.0)?;
+        let mut budget = budget::Budget::new();
+        let mut candidates = self.search_within(&mut budget, 0, image, decimation, 1.0)?;
         let (mut scale, mut level, mut half) = (1u32, 0, None::<GreyImage>);
         loop {
             let next = match &half {
@@ -328,27 +345,41 @@ impl TagDecoder {
             }
             if scale > decimation {
                 level += 1;
-                candidates.extend(self.search(level, &next, 1, f64::from(scale))?);
+                candidates.extend(self.search_within(&mut budget, level, &next, 1, f64::from(scale))?);
             }
             half = Some(next);
         }
         let border =
             edges::Border { cells: f64::from(self.family.border_cells()), reversed: self.family.reversed_border() };
         let max_errors = self.family.max_bit_errors();
-        let mut tags: Vec<((u8, f32), Tag)> = candidates
-            .into_iter()
-            .filter(|&((errors, _), _, _)| errors <= max_errors)
-            .filter_map(|(margin, id, corners)| {
-                let corners = edges::refine_corners(image, &corners, border)
-                    .or_else(|| smoothed::refine_corners(image, &corners, border))
-                    .or_else(|| edges::refine_blurred_corners(image, &corners, border))?;
-                Some((margin, Tag { id, corners }))
-            })
-            .collect();
-        // The fewest bit errors first, then the best decoding margin.
-        tags.sort_by(|a, b| a.1.id.cmp(&b.1.id).then(a.0.0.cmp(&b.0.0)).then(b.0.1.total_cmp(&a.0.1)));
-        tags.dedup_by_key(|t| t.1.id);
-        Ok(tags.into_iter().map(|(_, tag)| tag).collect())
+        candidates.retain(|&((errors, _), _, _)| errors <= max_errors);
+        // Per id, the measured candidate with the fewest bit errors, then the best margin.
+        let (tags, stopped) = budget::measure_best_first(candidates, |corners| {
+            edges::refine_corners(image, corners, border)
+                .or_else(|| smoothed::refine_corners(image, corners, border))
+                .or_else(|| edges::refine_blurred_corners(image, corners, border))
+        });
+        Ok(TagReport { tags, stopped_early: budget.stopped_early || stopped })
+    }
+
+    /// [`Self::search`] when the level's regions fit in what is left of the frame's budget,
+    /// nothing otherwise.
+    fn search_within<C: Pixels>(
+        &mut self,
+        budget: &mut budget::Budget,
+        level: usize,
+        image: &GreyBuffer<C>,
+        decimation: u32,
+        scale: f64,
+    ) -> Result<Vec<Candidate>> {
+        let regions = budget::regions(image, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT).unwrap_or(0);
+        if !budget.admit(regions) {
+            // The level keeps its decoder, so that the levels after it find theirs.
+            let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
+            self.decoder_for(level, size, decimation)?;
+            return Ok(Vec::new());
+        }
+        self.search(level, image, decimation, scale)
     }
 
     /// The tags the detector decodes in `image` (a level `scale` times smaller than the
@@ -395,6 +426,7 @@ impl TagDecoder {
             config.downscale_factor = factor;
             config.min_tag_width = (self.family.border_cells() / decimation).max(3) as usize;
             config.threshold_split = THRESHOLD_SPLIT;
+            config.min_white_black_difference = MIN_WHITE_BLACK_DIFFERENCE;
             let decoder = AprilTagDecoder::new(config, size).map_err(decoder_error)?;
             self.levels.truncate(level);
             self.levels.push((size, factor, decoder));

@@ -22,10 +22,12 @@ mod shape;
 mod start;
 mod window_search;
 
+pub use self::start::MAX_START_PIXELS;
+
 use self::shape::Shape;
 use self::window_search::{Component, Level, WindowSearch};
 use crate::error::{Error, Result};
-use crate::vision::dots::Window;
+use crate::vision::dots::{MAX_DOT_PIXELS, Window};
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 
@@ -132,11 +134,13 @@ impl DotTracker {
         if initial_pixels.is_empty() {
             return Err(Error::TooFewPoints { needed: 1, got: 0, why: "the tracker needs one pixel per dot" });
         }
+        check_auto_polarity(image, config.polarity)?;
         let dark = config.polarity.dark_dots(image);
         let mut search = WindowSearch::default();
         let mut dots = Vec::with_capacity(initial_pixels.len());
+        let mut read = 0;
         for (i, &click) in initial_pixels.iter().enumerate() {
-            dots.push(start::initial_dot(image, i, click, &config, dark, &mut search)?);
+            dots.push(start::initial_dot(image, i, click, &config, dark, &mut search, &mut read)?);
         }
         check_distinct(&dots)?;
         let positions = dots.iter().map(|d| d.position).collect();
@@ -346,6 +350,22 @@ fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// Two clicks on the same dot are an error naming both.
+/// Refuses [`Polarity::Auto`] on an image the dot detector would refuse: its rule labels the
+/// whole image (some 10 bytes a pixel), where a tracker otherwise reads windows only.
+fn check_auto_polarity<C: Pixels>(image: &GreyBuffer<C>, polarity: Polarity) -> Result<()> {
+    let pixels = u64::from(image.width()) * u64::from(image.height());
+    if polarity != Polarity::Auto || pixels <= MAX_DOT_PIXELS {
+        return Ok(());
+    }
+    Err(Error::InvalidParameter {
+        name: "polarity",
+        reason: format!(
+            "\"auto\" reads the whole image (some 10 bytes a pixel), at most {MAX_DOT_PIXELS} pixels (2^26); this \
+             one has {pixels}: give \"dark\" or \"light\""
+        ),
+    })
+}
+
 fn check_distinct(dots: &[TrackedDot]) -> Result<()> {
     for (i, a) in dots.iter().enumerate() {
         if let Some(j) = dots[i + 1..].iter().position(|b| distance(a.position, b.position) < 0.5) {

@@ -20,7 +20,15 @@ pub(super) const MIN_CONTRAST: u8 = 24;
 /// [`detect_dots`]: crate::vision::dots::detect_dots
 const MIN_FILL: f64 = 0.95;
 
-/// The dot around click `i`, or an error naming it.
+/// The most pixels the start search reads for all the clicks of one tracker (the window
+/// around a click doubles while no dot is found in it): 2^27, some seconds at most, as
+/// [`detect_dots`]'s bound on a whole image.
+///
+/// [`detect_dots`]: crate::vision::dots::detect_dots
+pub const MAX_START_PIXELS: u64 = 1 << 27;
+
+/// The dot around click `i`, or an error naming it; `read` counts the pixels the windows of
+/// every click read so far, at most [`MAX_START_PIXELS`].
 pub(super) fn initial_dot<C: Pixels>(
     image: &GreyBuffer<C>,
     i: usize,
@@ -28,6 +36,7 @@ pub(super) fn initial_dot<C: Pixels>(
     config: &TrackerConfig,
     dark: bool,
     search: &mut WindowSearch,
+    read: &mut u64,
 ) -> Result<TrackedDot> {
     if !(click[0].is_finite() && click[1].is_finite()) {
         return Err(Error::NonFinitePoint {
@@ -49,6 +58,14 @@ pub(super) fn initial_dot<C: Pixels>(
     let mut no_contrast = true;
     loop {
         let window = Window::around(image, click, radius).ok_or_else(|| not_found("outside the image"))?;
+        *read += u64::from(window.u1 - window.u0 + 1) * u64::from(window.v1 - window.v0 + 1);
+        if *read > MAX_START_PIXELS {
+            return Err(not_found(&format!(
+                "no dot found within {} px (the start search reads at most {MAX_START_PIXELS} pixels, 2^27, for all \
+                 the points)",
+                Short(radius / 2.0)
+            )));
+        }
         let whole =
             window.u0 == 0 && window.v0 == 0 && window.u1 + 1 >= image.width() && window.v1 + 1 >= image.height();
         let (background, peak) = window_levels(image, window, flip);
@@ -140,5 +157,38 @@ mod tests {
             let e = DotTracker::new(&notched(notch), &[[41.0, 39.0]], TrackerConfig::default()).unwrap_err();
             assert!(e.to_string().contains("not a dot"), "{notch}: {e}");
         }
+    }
+
+    /// A blank 8200 x 8192 image (the attack: a 40000 x 40000 one ran past 30 s): the windows
+    /// around each click double up to the whole image; after the first click or two the
+    /// search has read its bound and says so, and a dot is still found within it.
+    #[test]
+    fn the_start_search_reads_a_bounded_number_of_pixels() {
+        use crate::vision::polarity::Polarity;
+        let mut blank = GreyImage::new(8200, 8192);
+        let t = std::time::Instant::now();
+        let clicks: Vec<[f64; 2]> = (0..20).map(|k| [1000.0 + 300.0 * f64::from(k), 4000.0]).collect();
+        let e = DotTracker::new(&blank, &clicks, TrackerConfig::default()).unwrap_err().to_string();
+        assert!(e.contains("at most 134217728 pixels"), "{e}");
+        assert!(t.elapsed().as_secs_f64() < 10.0, "{:?}", t.elapsed());
+        // One click in the middle of a blank image: read whole (within the bound), no dot.
+        let e = DotTracker::new(&blank, &[[4100.0, 4096.0]], TrackerConfig::default()).unwrap_err().to_string();
+        assert!(e.contains("no contrast"), "{e}");
+        // A dot far from its click is found by the doubling windows, within the bound.
+        for v in 4990..5010 {
+            for u in 4990..5010 {
+                blank.put_pixel(u, v, image::Luma([255]));
+            }
+        }
+        let tracker = DotTracker::new(&blank, &[[4999.5, 4999.5]], TrackerConfig::default()).unwrap();
+        assert!((tracker.positions()[0][0] - 4999.5).abs() < 1e-9);
+        // Polarity "auto" labels the whole image: refused above the dot detector's bound.
+        let auto = TrackerConfig { polarity: Polarity::Auto, ..TrackerConfig::default() };
+        let e = DotTracker::new(&blank, &[[4999.5, 4999.5]], auto).unwrap_err().to_string();
+        assert!(e.contains("polarity") && e.contains("at most 67108864 pixels"), "{e}");
+        let small = GreyImage::from_fn(64, 64, |u, v| {
+            image::Luma([if (28..36).contains(&u) && (28..36).contains(&v) { 255 } else { 0 }])
+        });
+        assert!(DotTracker::new(&small, &[[31.5, 31.5]], auto).is_ok());
     }
 }
