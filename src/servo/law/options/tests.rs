@@ -119,3 +119,18 @@ fn the_markdown_table_has_a_row_per_option() {
     }
     assert!(md.contains("`max_angular_speed_deg` (deg/s)"), "{md}");
 }
+
+/// Every choice the table offers is one the law's own parser reads (`RzTask`, `Interaction`).
+#[test]
+fn every_choice_builds_its_law() {
+    for o in LAW_OPTIONS {
+        let OptionKind::Choice(names) = o.kind else { continue };
+        for name in names {
+            let mut given = LawOptions::new();
+            given.set(o.name, OptionValue::Choice((*name).into())).unwrap();
+            for law in o.laws {
+                Law::from_options(law, &given).unwrap_or_else(|e| panic!("{} = {name} under {law}: {e}", o.name));
+            }
+        }
+    }
+}
