@@ -330,8 +330,10 @@ def test_pixel_noise_meter(data: Any) -> None:
 # ---------------------------------------------------------------------------------------------
 # servo sessions
 
+# gain is a law option (LAW_OPTIONS): given only when drawn, with the invariant law, since
+# law "none" refuses it by name.
 SERVO_ARGS: dict[str, Any] = {"reference_pixels": REF_PX, "K_hat": K, "law": "invariant", "reference_depths": REF_Z,
-                              "depths": "reference", "gain": 1.0, "dt": 0.04, "stop": None, "stop_rule": None}
+                              "depths": "reference", "dt": 0.04, "stop": None, "stop_rule": None}
 
 
 def servo_strategies() -> dict[str, st.SearchStrategy[V]]:
@@ -344,7 +346,7 @@ def servo_strategies() -> dict[str, st.SearchStrategy[V]]:
         "reference_depths": depth_variants(REF_Z, {"none": INVALID}),
         "depths": choices(["reference", "per_step", 0.6, vsinv.ResectionDepths(FIRST_PX, FIRST_Z, REF_PX, 0.6)],
                           ["ref", "", -1.0, math.nan, math.inf, 0.0]),
-        "gain": floats(1.0, overrides=positive),
+        "gain": floats(1.0, overrides={**positive, "none": RETURN}),  # a law option: None is its default
         "dt": floats(0.04, overrides=positive),
         "stop": choices([None, {"window": 3}, {"max_iterations": 10, "pixel_error": 1.0}, {"reference_pixel_sigma": 0.1}],
                         [{"windw": 1}, {"window": 0}, {"window": -1}, {"pixel_error": "a"}, {1: 2}]),

@@ -267,7 +267,8 @@ def test_image_servo(data: Any) -> None:
                         {"reference_image": image_variants(ref), "reference_points": arrays(ref_px + 1.0, overrides=over),
                          "first_points": arrays(px + 1.0, overrides={**over, "fewer": INVALID, "empty": INVALID, "none": RETURN}),
                          "target": choices(["dots"], ["tags?", "", 3], bad_expect=TYPE),
-                         "gain": floats(0.5, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID}),
+                         "gain": floats(0.5, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID,
+                                                        "none": RETURN}),  # a law option: None is its default
                          "depths": floats(0.6, overrides={"nan": INVALID, "zero": INVALID, "negative": INVALID})},
                         api="ImageServo", digest=digest, ref=ref_pipeline,
                         names={"first_points": ("first_points",), "reference_image": ("reference_image", "reference_points")})

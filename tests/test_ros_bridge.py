@@ -83,6 +83,8 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
         ({"gain": "fast"}, "parameter gain: expected a number"),
         ({"gain": True}, "parameter gain"),
         ({"gain": float("nan")}, "parameter gain: expected a finite number"),
+        ({"gain": -1.0}, "parameter gain: must be finite and > 0, got -1"),  # the table's range, at parsing
+        ({"adaptive_gain": [1.0, 2.0, 3.0]}, "parameter adaptive_gain: the gain for a large error"),
         ({"stop.window": 2.5}, "parameter stop.window: expected an integer"),
         ({"target": "circles"}, "parameter target: expected one of tags, dots"),
         ({"reference_image": None}, "parameter reference_image: required"),
@@ -119,7 +121,8 @@ def test_bad_parameters_are_refused_by_name(views: dict[str, Any], change: dict[
     assert name in str(e.value), str(e.value)
 
 
-@pytest.mark.parametrize("change, name", [({"gain": -1.0}, "gain"), ({"stop.window": 0}, "window"),
+@pytest.mark.parametrize("change, name", [({"law": "ibvs", "rz_task": None, "gain_rz": 2.0}, "gain_rz"),
+                                           ({"stop.window": 0}, "window"),
                                            ({"tracker.polarity": "grey"}, "polarity"), ({"reference_depths": [0.6]}, "depth")])
 def test_bad_law_options_are_refused_at_start(views: dict[str, Any], change: dict[str, Any], name: str) -> None:
     config = parse_parameters(good(views, **change))

@@ -24,6 +24,21 @@ _TagFamily = Literal[
 #: The names of the AprilTag families every tag argument and scenario key accepts (Rust `TagFamily::NAMES`).
 TAG_FAMILIES: tuple[str, ...]
 
+#: The laws' options, declared once in the servo layer (Rust `servo::law::options::LAW_OPTIONS`):
+#: name (the keyword of `Servo`, `ImageServo` and the controllers, the ROS parameter, the `vsinv
+#: replay` flag), the laws that read it, kind, choices, default (None: unset), range, unit,
+#: scenario key and unit, meaning. A test checks that the signatures below declare every one.
+#: Keys: name, laws, kind ("number", "flag", "choice", "adaptive_gain"), choices, default, min,
+#: max, min_open, max_open, range, unit, scenario_key, scenario_unit, doc.
+LAW_OPTIONS: tuple[dict[str, Any], ...]
+
+def check_law_option(name: str, value: object) -> None:
+    """Checks a value of the law option `name` as `Servo` would: `InvalidInput` naming the option
+    (or its part, `adaptive_gain.at_infinity`) for a value of another kind or out of its range."""
+
+def law_options_markdown() -> str:
+    """`LAW_OPTIONS` as a Markdown table, for the reference pages of the docs."""
+
 __version__: str
 __all__ = [
     "ImageServo",
@@ -90,6 +105,9 @@ __all__ = [
     "HandEyeAgreement",
     "calibrate_hand_eye",
     "compare_hand_eye_methods",
+    "LAW_OPTIONS",
+    "check_law_option",
+    "law_options_markdown",
     "__version__",
 ]
 
@@ -326,6 +344,8 @@ class IbvsController:
 class Servo:
     """A servo session: the reference image, the law, the depth source and the stop rules.
 
+    The keyword arguments are the session's (``reference_depths`` to ``dt``) and the laws' options
+    (``LAW_OPTIONS``: ``gain`` to ``max_angular_speed``; None or absent: the law's default).
     Each ``step(pixels, visible, depths)`` returns the twist to send and the verdict: the
     loop logic (stop rules certified by the pose uncertainty, lost features, the rz = pi
     trap, the iteration limit, depth estimation, path following) that the simulator runs

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ._core import Intrinsics, VsinvError, load_calibration
+from ._core import LAW_OPTIONS, Intrinsics, InvalidInput, VsinvError, check_law_option, load_calibration
 from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import read_points
@@ -19,8 +19,53 @@ __all__ = ["add_replay_command", "cmd_replay"]
 #: The targets the command can follow.
 TARGETS = ("dots", "tags")
 
+#: The replay's own defaults of law options (the table's otherwise): a gentler gain for
+#: frames that were recorded, not commanded.
+_REPLAY_DEFAULTS = {"gain": 0.5}
+
+
+def _flag(name: str) -> str:
+    """A law option's command option: ``max_linear_speed`` is ``--max-linear-speed``."""
+    return "--" + name.replace("_", "-")
+
+
 #: ImageServo's keyword arguments that an error may name, and the options that give them.
-_OPTION_NAMES = {"reference_points": "--points", "first_points": "--first-points", **TAG_OPTION_NAMES}
+_OPTION_NAMES = {
+    "reference_points": "--points",
+    "first_points": "--first-points",
+    **TAG_OPTION_NAMES,
+    **{o["name"]: _flag(o["name"]) for o in LAW_OPTIONS},
+}
+
+
+def _triple(text: str) -> tuple[float, float, float]:
+    try:
+        a, b, c = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected three numbers L0,LINF,SLOPE, got {text!r}") from None
+    return a, b, c
+
+
+def _add_law_options(p: argparse.ArgumentParser) -> None:
+    """A command option per law option of ``vsinv.LAW_OPTIONS`` (declared once, in the servo
+    layer); unset: the law's default."""
+    group = p.add_argument_group("law options", "each read by the laws named (unset: the law's default)")
+    for o in LAW_OPTIONS:
+        name, kind = o["name"], o["kind"]
+        default = _REPLAY_DEFAULTS.get(name)
+        shown = default if default is not None else o["default"]
+        unit = f", {o['unit']}" if o["unit"] else ""
+        text = f"({', '.join(o['laws'])}) {o['doc']}{unit} ({'unset' if shown is None else shown})"
+        kw: dict[str, Any] = {"dest": name, "default": default, "help": text.replace("%", "%%")}
+        if kind == "number":
+            kw.update(type=float, metavar="X")
+        elif kind == "flag":
+            kw.update(action=argparse.BooleanOptionalAction)
+        elif kind == "choice":
+            kw.update(choices=o["choices"])
+        else:
+            kw.update(type=_triple, metavar="L0,LINF,SLOPE")
+        group.add_argument(_flag(name), **kw)
 
 
 def add_replay_command(sub: Any) -> None:
@@ -46,7 +91,7 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--law", choices=("invariant", "ibvs", "none"), default="invariant", help="the control law (invariant)")
     p.add_argument("--reference-depths", metavar="CSV", type=Path, help="depths of the points at the reference pose, metres (z column)")
     p.add_argument("--depth", metavar="Z", type=float, help="one depth for every point, metres (IBVS; the invariant law needs --reference-depths)")
-    p.add_argument("--gain", type=float, default=0.5, help="the law's gain (0.5)")
+    _add_law_options(p)
     add_tracker_options(p, "dots: ")
     p.add_argument("--out", metavar="DIR", type=Path, help="write replay.csv and replay.png to DIR")
     p.add_argument("--max-frames", metavar="N", type=_positive_int, help="read at most N frames (default: all)")
@@ -70,11 +115,27 @@ def _intrinsics(text: str) -> Intrinsics:
     return Intrinsics(fx, fy, u0, v0)
 
 
+def _law_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The law options given, each checked (kind, range; the error names the command option);
+    a replay default only for the laws that read it, an option given for another law is left
+    for the session to refuse by name."""
+    options: dict[str, Any] = {}
+    for o in LAW_OPTIONS:
+        name = o["name"]
+        value = getattr(args, name)
+        if value is None or (value == _REPLAY_DEFAULTS.get(name) and args.law not in o["laws"]):
+            continue
+        try:
+            check_law_option(name, value)
+        except InvalidInput as e:
+            raise InvalidInput(f"{_flag(name)}: {getattr(e, 'reason', None) or e}") from None
+        options[name] = value
+    return options
+
+
 def _options(args: argparse.Namespace) -> dict[str, Any]:
     """The ImageServo keyword arguments the command's options give."""
-    options: dict[str, Any] = {"law": args.law}
-    if args.law != "none":
-        options["gain"] = args.gain
+    options: dict[str, Any] = {"law": args.law, **_law_options(args)}
     if args.calibration is not None:
         calibration = load_calibration(args.calibration)
         options["distortion"] = calibration.distortion

@@ -16,6 +16,7 @@ mod hand_eye;
 mod image_servo;
 mod invariant;
 mod kinematics;
+mod law_options;
 mod lens;
 mod logs;
 mod planning;
@@ -43,6 +44,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     stability::register(m)?;
     control::register(m)?;
     servo::register(m)?;
+    law_options::register(m)?;
     uncertainty::register(m)?;
     planning::register(m)?;
     sim::register(m)?;

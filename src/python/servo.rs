@@ -9,71 +9,41 @@ use super::errors::invalid_argument;
 use super::{BasisArg, depths_arg, intrinsics, pixels_arg};
 use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
-use crate::core::control::InvariantControllerConfig;
-use crate::core::ibvs::Interaction;
-use crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO;
-use crate::core::saturation::TwistLimits;
+use crate::servo::law::options::{LAW_OPTIONS, LAWS, LawOptions, OptionKind, OptionSpec, OptionValue, option};
 use crate::servo::{
     Law, PathPlan, Servo, ServoConfig, ServoDepths, ServoReference, ServoStep, StopRule, StopRules, Telemetry, Verdict,
 };
 
-/// The keyword arguments that tune a law; each belongs to some laws only.
-struct LawArgs<'a> {
-    law: &'a str,
-    gain: f64,
-    gain_rz: Option<f64>,
-    rz_task: Option<&'a str>,
-    feedforward: Option<bool>,
-    min_structure_ratio: Option<f64>,
-    interaction: Option<&'a str>,
-    adaptive_gain: Option<AdaptiveGain>,
-    twist_limits: Option<TwistLimits>,
+/// The law named `law` with the options given; an option of another law is refused by name.
+fn law_of(law: &str, options: &LawOptions) -> PyResult<Law> {
+    if !LAWS.contains(&law) {
+        return Err(invalid_argument("law", format!("law: expected \"invariant\", \"ibvs\" or \"none\", got {law:?}")));
+    }
+    if let Some(name) = options.given().find(|n| option(n).is_some_and(|o| !o.reads(law))) {
+        return Err(invalid_argument(name, format!("{name}: not an argument of the {law:?} law")));
+    }
+    Ok(Law::from_options(law, options)?)
 }
 
-impl LawArgs<'_> {
-    /// The law, refusing an argument of another law by name.
-    fn law(&self) -> PyResult<Law> {
-        let invariant_only = [
-            ("gain_rz", self.gain_rz.is_some()),
-            ("rz_task", self.rz_task.is_some()),
-            ("feedforward", self.feedforward.is_some()),
-            ("min_structure_ratio", self.min_structure_ratio.is_some()),
-        ];
-        let ibvs_only = [("interaction", self.interaction.is_some())];
-        let moving = [("adaptive_gain", self.adaptive_gain.is_some()), ("max speeds", self.twist_limits.is_some())];
-        let refused: &[(&str, bool)] = match self.law {
-            "invariant" => &ibvs_only,
-            "ibvs" => &invariant_only,
-            "none" => &[invariant_only.as_slice(), &ibvs_only, &moving].concat(),
-            other => {
-                return Err(invalid_argument(
-                    "law",
-                    format!("law: expected \"invariant\", \"ibvs\" or \"none\", got {other:?}"),
-                ));
-            }
-        };
-        if let Some((name, _)) = refused.iter().find(|(_, given)| *given) {
-            return Err(invalid_argument(name, format!("{name}: not an argument of the {:?} law", self.law)));
-        }
-        Ok(match self.law {
-            "invariant" => Law::Invariant(InvariantControllerConfig {
-                gain: self.gain,
-                gain_rz: self.gain_rz.unwrap_or(1.0),
-                feedforward: self.feedforward.unwrap_or(true),
-                min_structure_ratio: self.min_structure_ratio.unwrap_or(DEFAULT_MIN_STRUCTURE_RATIO),
-                rz_task: self.rz_task.unwrap_or("angle").parse()?,
-                adaptive_gain: self.adaptive_gain,
-                twist_limits: self.twist_limits,
-            }),
-            "ibvs" => Law::Ibvs {
-                gain: self.gain,
-                interaction: self.interaction.unwrap_or("current").parse::<Interaction>()?,
-                adaptive_gain: self.adaptive_gain,
-                twist_limits: self.twist_limits,
-            },
-            _ => Law::Observe,
-        })
+/// A law option's value from Python, as the table's kind says; None when unset.
+pub(super) fn option_value(spec: &OptionSpec, value: &Bound<'_, PyAny>) -> PyResult<Option<OptionValue>> {
+    if value.is_none() {
+        return Ok(None);
     }
+    let py = value.py();
+    let name = spec.name;
+    let bad = |e: PyErr| invalid_argument(name, format!("{name}: {}", e.value(py)));
+    Ok(Some(match spec.kind {
+        OptionKind::Number => OptionValue::Number(value.extract().map_err(bad)?),
+        OptionKind::Flag => OptionValue::Flag(value.extract().map_err(bad)?),
+        OptionKind::Choice(_) => OptionValue::Choice(value.extract().map_err(bad)?),
+        OptionKind::AdaptiveGain => match super::args::adaptive_gain(value)? {
+            Some((at_zero, at_infinity, slope_at_zero)) => {
+                OptionValue::AdaptiveGain(AdaptiveGain { at_zero, at_infinity, slope_at_zero })
+            }
+            None => return Ok(None),
+        },
+    }))
 }
 
 /// The `stop` dictionary over the default stop rules; an unknown key is refused by name.
@@ -149,41 +119,23 @@ pub(super) struct ServoOptions<'py> {
     reference_depths: Option<Bound<'py, PyAny>>,
     depths: Option<Bound<'py, PyAny>>,
     basis: BasisArg,
-    gain: f64,
-    gain_rz: Option<f64>,
-    rz_task: Option<String>,
-    feedforward: Option<bool>,
-    min_structure_ratio: Option<f64>,
-    interaction: Option<String>,
-    adaptive_gain: Option<(f64, f64, f64)>,
-    max_linear_speed: Option<f64>,
-    max_angular_speed: Option<f64>,
+    /// The laws' options given ([`LAW_OPTIONS`]), checked.
+    law_options: LawOptions,
     stop: Option<Bound<'py, PyDict>>,
     stop_rule: Option<String>,
     path_samples: Option<usize>,
     dt: f64,
 }
 
-/// The keyword arguments `ServoOptions::from_kwargs` knows, in `Servo`'s order.
-pub(super) const SERVO_OPTIONS: [&str; 17] = [
-    "law",
-    "reference_depths",
-    "depths",
-    "basis",
-    "gain",
-    "gain_rz",
-    "rz_task",
-    "feedforward",
-    "min_structure_ratio",
-    "interaction",
-    "adaptive_gain",
-    "max_linear_speed",
-    "max_angular_speed",
-    "stop",
-    "stop_rule",
-    "path_samples",
-    "dt",
-];
+/// The session's keyword arguments `ServoOptions::from_kwargs` knows besides the laws'
+/// options ([`LAW_OPTIONS`]), in `Servo`'s order.
+pub(super) const SESSION_OPTIONS: [&str; 8] =
+    ["law", "reference_depths", "depths", "basis", "stop", "stop_rule", "path_samples", "dt"];
+
+/// Every keyword argument of the session: its own, then the laws' options.
+pub(super) fn servo_option_names() -> Vec<&'static str> {
+    SESSION_OPTIONS.iter().copied().chain(LAW_OPTIONS.iter().map(|o| o.name)).collect()
+}
 
 impl<'py> ServoOptions<'py> {
     /// The options in a `**kwargs` dictionary (None: the defaults); a key `Servo` does not
@@ -194,15 +146,7 @@ impl<'py> ServoOptions<'py> {
             reference_depths: None,
             depths: None,
             basis: BasisArg::Auto,
-            gain: 1.0,
-            gain_rz: None,
-            rz_task: None,
-            feedforward: None,
-            min_structure_ratio: None,
-            interaction: None,
-            adaptive_gain: None,
-            max_linear_speed: None,
-            max_angular_speed: None,
+            law_options: LawOptions::new(),
             stop: None,
             stop_rule: None,
             path_samples: None,
@@ -225,28 +169,29 @@ impl<'py> ServoOptions<'py> {
             "reference_depths" => self.reference_depths = given.then_some(value),
             "depths" => self.depths = given.then_some(value),
             "basis" => self.basis = value.extract()?,
-            "gain" => self.gain = value.extract().map_err(bad)?,
-            "gain_rz" => self.gain_rz = value.extract().map_err(bad)?,
-            "rz_task" => self.rz_task = value.extract().map_err(bad)?,
-            "feedforward" => self.feedforward = value.extract().map_err(bad)?,
-            "min_structure_ratio" => self.min_structure_ratio = value.extract().map_err(bad)?,
-            "interaction" => self.interaction = value.extract().map_err(bad)?,
-            "adaptive_gain" => self.adaptive_gain = super::args::adaptive_gain(&value)?,
-            "max_linear_speed" => self.max_linear_speed = value.extract().map_err(bad)?,
-            "max_angular_speed" => self.max_angular_speed = value.extract().map_err(bad)?,
             "stop" => {
                 self.stop = if given { Some(value.cast_into::<PyDict>().map_err(|e| bad(e.into()))?) } else { None }
             }
             "stop_rule" => self.stop_rule = value.extract().map_err(bad)?,
             "path_samples" => self.path_samples = value.extract().map_err(bad)?,
             "dt" => self.dt = value.extract().map_err(bad)?,
+            _ if option(key).is_some() => self.set_law_option(key, &value)?,
             _ => {
-                let known = SERVO_OPTIONS.join(", ");
+                let known = servo_option_names().join(", ");
                 return Err(invalid_argument(
                     key,
                     format!("{key}: not an argument of the servo session; known: {known}"),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// A law option, checked against the table (the error names it).
+    fn set_law_option(&mut self, key: &str, value: &Bound<'py, PyAny>) -> PyResult<()> {
+        let Some(spec) = option(key) else { return Ok(()) };
+        if let Some(v) = option_value(spec, value)? {
+            self.law_options.set(spec.name, v)?;
         }
         Ok(())
     }
@@ -258,20 +203,7 @@ impl<'py> ServoOptions<'py> {
 
     /// The session's configuration, the reference depths and the depth source.
     pub(super) fn session(self, k_hat: Intrinsics) -> PyResult<(ServoConfig, Option<Vec<f64>>, ServoDepths)> {
-        let (adaptive_gain, twist_limits) =
-            super::control::command_options(self.adaptive_gain, self.max_linear_speed, self.max_angular_speed)?;
-        let args = LawArgs {
-            law: &self.law,
-            gain: self.gain,
-            gain_rz: self.gain_rz,
-            rz_task: self.rz_task.as_deref(),
-            feedforward: self.feedforward,
-            min_structure_ratio: self.min_structure_ratio,
-            interaction: self.interaction.as_deref(),
-            adaptive_gain,
-            twist_limits,
-        };
-        let law = args.law()?;
+        let law = law_of(&self.law, &self.law_options)?;
         let reference_depths = match &self.reference_depths {
             Some(z) => Some(depths_arg(z)?.as_slice()?.to_vec()),
             None => None,
@@ -301,56 +233,26 @@ pub(super) struct PyServo {
 
 #[pymethods]
 impl PyServo {
+    /// The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
+    /// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.LAW_OPTIONS`).
     #[new]
-    #[allow(non_snake_case, clippy::too_many_arguments)]
+    #[allow(non_snake_case)]
     #[pyo3(
-        signature = (reference_pixels, K_hat, law = "invariant", *, reference_depths = None, depths = None, basis = BasisArg::Auto, gain = 1.0, gain_rz = None, rz_task = None, feedforward = None, min_structure_ratio = None, interaction = None, adaptive_gain = None, max_linear_speed = None, max_angular_speed = None, stop = None, stop_rule = None, path_samples = None, dt = 0.04),
-        text_signature = "(reference_pixels, K_hat, law='invariant', *, reference_depths=None, depths='reference', basis='auto', gain=1.0, gain_rz=None, rz_task=None, feedforward=None, min_structure_ratio=None, interaction=None, adaptive_gain=None, max_linear_speed=None, max_angular_speed=None, stop=None, stop_rule=None, path_samples=None, dt=0.04)"
+        signature = (reference_pixels, K_hat, law = "invariant", **options),
+        text_signature = "(reference_pixels, K_hat, law='invariant', **options)"
     )]
     fn new(
         py: Python<'_>,
         reference_pixels: &Bound<'_, PyAny>,
         K_hat: &Bound<'_, PyAny>,
         law: &str,
-        reference_depths: Option<&Bound<'_, PyAny>>,
-        depths: Option<&Bound<'_, PyAny>>,
-        basis: BasisArg,
-        gain: f64,
-        gain_rz: Option<f64>,
-        rz_task: Option<&str>,
-        feedforward: Option<bool>,
-        min_structure_ratio: Option<f64>,
-        interaction: Option<&str>,
-        #[pyo3(from_py_with = super::args::adaptive_gain)] adaptive_gain: Option<(f64, f64, f64)>,
-        max_linear_speed: Option<f64>,
-        max_angular_speed: Option<f64>,
-        stop: Option<&Bound<'_, PyDict>>,
-        stop_rule: Option<&str>,
-        path_samples: Option<usize>,
-        dt: f64,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let a = pixels_arg(reference_pixels, "reference_pixels")?;
         let pixels = points2(&a)?.to_vec();
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let options = ServoOptions {
-            law: law.to_string(),
-            reference_depths: reference_depths.cloned(),
-            depths: depths.cloned(),
-            basis,
-            gain,
-            gain_rz,
-            rz_task: rz_task.map(str::to_string),
-            feedforward,
-            min_structure_ratio,
-            interaction: interaction.map(str::to_string),
-            adaptive_gain,
-            max_linear_speed,
-            max_angular_speed,
-            stop: stop.cloned(),
-            stop_rule: stop_rule.map(str::to_string),
-            path_samples,
-            dt,
-        };
+        let mut options = ServoOptions::from_kwargs(options)?;
+        options.law = law.to_string();
         let (config, reference_depths, source) = options.session(k_hat)?;
         let reference = ServoReference { pixels, depths: reference_depths };
         let inner = py.detach(|| Servo::new(config, reference, source))?;

@@ -20,7 +20,7 @@ from typing import Any, Literal, Mapping, Optional, Sequence, cast
 import numpy as np
 import numpy.typing as npt
 
-from .._core import Distortion, Intrinsics, InvalidInput, load_calibration
+from .._core import LAW_OPTIONS, Distortion, Intrinsics, InvalidInput, check_law_option, load_calibration
 from .conversions import hand_eye_matrix, intrinsics_from_numbers
 
 __all__ = ["PARAMETERS", "Parameter", "BridgeConfig", "parse_parameters", "parameter_help"]
@@ -36,6 +36,23 @@ class Parameter:
     default: Any
     doc: str
     choices: tuple[str, ...] = ()
+
+
+#: The ROS type of each kind of law option.
+_ROS_KINDS = {"number": "float", "flag": "bool", "choice": "str", "adaptive_gain": "floats"}
+
+
+def _law_parameters() -> tuple[Parameter, ...]:
+    """The laws' options (``vsinv.LAW_OPTIONS``, declared once in the servo layer) as
+    parameters of the same names; unset: the law's default."""
+    out = []
+    for o in LAW_OPTIONS:
+        unit = f", {o['unit']}" if o["unit"] else ""
+        form = " as [lambda_0, lambda_inf, lambda'_0]" if o["kind"] == "adaptive_gain" else ""
+        default = "" if o["default"] is None else f"; unset: {o['default']!r}"
+        doc = f"({', '.join(o['laws'])}) {o['doc']}{form}{unit}{default}"
+        out.append(Parameter(o["name"], _ROS_KINDS[o["kind"]], None, doc, tuple(o["choices"])))
+    return tuple(out)
 
 
 _P = Parameter
@@ -71,15 +88,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("depth", "float", None, "one depth for every point, metres (IBVS)"),
     _P("depths", "str", None, "the depth source: reference or per_step", ("reference", "per_step")),
     _P("basis", "ints", None, "the three points of the invariant basis (unset: chosen)"),
-    _P("gain", "float", None, "the law's gain, 1/s"),
-    _P("gain_rz", "float", None, "the gain of the rotation about the optical axis, 1/s"),
-    _P("rz_task", "str", None, "the rz task: angle or tau21", ("angle", "tau21")),
-    _P("feedforward", "bool", None, "path following: the path's feed-forward term"),
-    _P("min_structure_ratio", "float", None, "the invariant law's smallest structure ratio"),
-    _P("interaction", "str", None, "IBVS: current, desired or mean interaction matrix", ("current", "desired", "mean")),
-    _P("adaptive_gain", "floats", None, "[gain at zero error, gain at infinity, slope at zero]"),
-    _P("max_linear_speed", "float", None, "the twist is scaled as a whole to this linear speed, m/s"),
-    _P("max_angular_speed", "float", None, "and to this angular speed, rad/s"),
+    *_law_parameters(),
     _P("stop.max_iterations", "int", None, "stop after this many images"),
     _P("stop.window", "int", None, "images averaged by the stop rules"),
     _P("stop.pixel_error", "float", None, "converged below this image error, pixels (pixel rule)"),
@@ -122,11 +131,9 @@ _BY_NAME = {p.name: p for p in PARAMETERS}
 #: Parameters every ROS 2 node has, which are not the bridge's to parse.
 _ROS_OWN = ("use_sim_time", "start_type_description_service")
 
-#: ImageServo's keyword arguments given by a parameter of the same name.
-_SERVO_SCALARS = (
-    "law", "depths", "gain", "gain_rz", "rz_task", "feedforward", "min_structure_ratio", "interaction",
-    "max_linear_speed", "max_angular_speed", "stop_rule", "path_samples", "dt",
-)
+#: ImageServo's keyword arguments given by a parameter of the same name, besides the laws'
+#: options.
+_SERVO_SCALARS = ("law", "depths", "stop_rule", "path_samples", "dt")
 
 
 @dataclass
@@ -292,6 +299,26 @@ def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str
     return options
 
 
+def _law_options(given: dict[str, Any]) -> dict[str, Any]:
+    """The laws' options given, each checked against the table (kind, range) by name."""
+    options: dict[str, Any] = {}
+    for o in LAW_OPTIONS:
+        name = o["name"]
+        if name not in given:
+            continue
+        value = given[name]
+        if o["kind"] == "adaptive_gain":
+            if len(value) != 3:
+                raise _refuse(name, "expected [gain at zero, gain at infinity, slope at zero]")
+            value = tuple(value)
+        try:
+            check_law_option(name, value)
+        except InvalidInput as e:
+            raise _refuse(name, getattr(e, "reason", None) or str(e)) from None
+        options[name] = value
+    return options
+
+
 def _servo_options(given: dict[str, Any]) -> dict[str, Any]:
     """The Servo session's keyword arguments."""
     options: dict[str, Any] = {k: given[k] for k in _SERVO_SCALARS if k in given}
@@ -314,10 +341,7 @@ def _servo_options(given: dict[str, Any]) -> dict[str, Any]:
         if len(given["basis"]) != 3:
             raise _refuse("basis", f"expected three point indices, got {list(given['basis'])}")
         options["basis"] = list(given["basis"])
-    if "adaptive_gain" in given:
-        if len(given["adaptive_gain"]) != 3:
-            raise _refuse("adaptive_gain", "expected [gain at zero, gain at infinity, slope at zero]")
-        options["adaptive_gain"] = tuple(given["adaptive_gain"])
+    options.update(_law_options(given))
     stop = {k[len("stop."):]: v for k, v in given.items() if k.startswith("stop.")}
     if stop:
         options["stop"] = stop

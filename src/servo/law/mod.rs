@@ -1,11 +1,14 @@
 //! The control laws a servo session runs. Each law is a type implementing [`ServoLaw`]: it
 //! owns its behaviour (the points it needs, its default stop rule, its telemetry, the pose
 //! uncertainty of its measurements). [`Law`] is the configuration that names a law and its
-//! tuning; adding a law is one new type here and one arm in [`Law::build`].
+//! tuning; adding a law is one new type here and one arm in [`Law::build`] and
+//! [`Law::from_options`]. The laws' options (gains, tasks, speed limits) are declared once, in
+//! [`options`], which says which files adding one touches.
 
 mod ibvs;
 mod invariant;
 mod observe;
+pub mod options;
 
 use nalgebra::Vector6;
 
@@ -15,8 +18,10 @@ use crate::core::control::{InvariantController, InvariantControllerConfig};
 use crate::core::ibvs::Interaction;
 use crate::core::saturation::TwistLimits;
 use crate::core::uncertainty::{ImageNoise, Measurement, PoseUncertainty};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::servo::stop::StopRule;
+
+use self::options::{FEEDFORWARD, GAIN, GAIN_RZ, INTERACTION, LawOptions, MIN_STRUCTURE_RATIO, RZ_TASK};
 
 pub use self::ibvs::IbvsLaw;
 pub use self::invariant::InvariantLaw;
@@ -43,6 +48,37 @@ pub enum Law {
 }
 
 impl Law {
+    /// The law named `law` (`"invariant"`, `"ibvs"` or `"none"`, [`options::LAWS`]) with the
+    /// options given, the others at their defaults; an option `law` does not read is refused
+    /// by name. The invariant law: lambda and eta of eqs. (17) and (24); IBVS: lambda of
+    /// `v = -lambda L_hat^+ (p - p*)`.
+    pub fn from_options(law: &str, o: &LawOptions) -> Result<Law> {
+        o.check_law(law)?;
+        let (adaptive_gain, twist_limits) = (o.adaptive_gain(), o.twist_limits()?);
+        match law {
+            "invariant" => Ok(Law::Invariant(InvariantControllerConfig {
+                gain: o.number(&GAIN),
+                gain_rz: o.number(&GAIN_RZ),
+                feedforward: o.flag(&FEEDFORWARD),
+                min_structure_ratio: o.number(&MIN_STRUCTURE_RATIO),
+                rz_task: o.choice(&RZ_TASK).parse()?,
+                adaptive_gain,
+                twist_limits,
+            })),
+            "ibvs" => Ok(Law::Ibvs {
+                gain: o.number(&GAIN),
+                interaction: o.choice(&INTERACTION).parse()?,
+                adaptive_gain,
+                twist_limits,
+            }),
+            "none" => Ok(Law::Observe),
+            other => Err(Error::InvalidParameter {
+                name: "law",
+                reason: format!("expected \"invariant\", \"ibvs\" or \"none\", got {other:?}"),
+            }),
+        }
+    }
+
     /// The law's controller for a reference image (pinhole pixels of K*, basis, and the
     /// reference depths zeta* where the law reads them) and the intrinsics it believes, K_hat.
     pub fn build(

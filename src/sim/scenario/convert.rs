@@ -6,13 +6,10 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 use super::schema::{BodySpec, ControlSpec, DepthEstimationSpec, DepthsName, LawName, RobotKind};
 use super::{FileScope, Scenario, scenario_error};
-use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
-use crate::core::control::InvariantControllerConfig;
 use crate::core::distortion::Distortion;
 use crate::core::ibvs::IBVS_MIN_POINTS;
 use crate::core::jacobian::MIN_POINTS;
-use crate::core::saturation::TwistLimits;
 use crate::error::{Result, Short};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
@@ -237,12 +234,11 @@ impl Scenario {
         Ok(start)
     }
 
-    /// `[control]` gains and period, `[noise]` and `[stop]`.
+    /// `[control]` options and period, `[noise]` and `[stop]`.
     fn check_numbers(&self) -> Result<()> {
         let c = &self.control;
-        for (key, v) in [("control.gain", c.gain()), ("control.gain_rz", c.gain_rz()), ("control.dt", c.dt)] {
-            check_positive(key, v)?;
-        }
+        c.law_options()?;
+        check_positive("control.dt", c.dt)?;
         if c.dt > 1.0 {
             return Err(scenario_error(
                 "control.dt",
@@ -438,53 +434,11 @@ fn body_of(b: &BodySpec) -> Body {
     }
 }
 
+/// The law and its options (each checked against the servo layer's table, errors naming
+/// the scenario key).
 fn law_of(c: &ControlSpec) -> Result<Law> {
-    let (adaptive_gain, twist_limits) = (adaptive_gain_of(c)?, twist_limits_of(c)?);
-    Ok(match c.law {
-        LawName::Invariant => Law::Invariant(InvariantControllerConfig {
-            gain: c.gain(),
-            gain_rz: c.gain_rz(),
-            feedforward: c.feedforward(),
-            rz_task: c.rz_task(),
-            adaptive_gain,
-            twist_limits,
-            ..Default::default()
-        }),
-        LawName::None => Law::Observe,
-        LawName::Ibvs => Law::Ibvs { gain: c.gain(), interaction: c.interaction(), adaptive_gain, twist_limits },
-    })
-}
-
-/// `control.adaptive_gain`, checked.
-fn adaptive_gain_of(c: &ControlSpec) -> Result<Option<AdaptiveGain>> {
-    let Some(g) = c.adaptive_gain else { return Ok(None) };
-    for (key, v) in [
-        ("control.adaptive_gain.at_zero", g.at_zero),
-        ("control.adaptive_gain.at_infinity", g.at_infinity),
-        ("control.adaptive_gain.slope_at_zero", g.slope_at_zero),
-    ] {
-        check_positive(key, v)?;
-    }
-    g.validate().map_err(|e| scenario_error("control.adaptive_gain", e.to_string()))?;
-    Ok(Some(g))
-}
-
-/// `control.max_linear_speed` (m/s) and `control.max_angular_speed_deg` (deg/s); either
-/// alone leaves the other free.
-fn twist_limits_of(c: &ControlSpec) -> Result<Option<TwistLimits>> {
-    if c.max_linear_speed.is_none() && c.max_angular_speed_deg.is_none() {
-        return Ok(None);
-    }
-    for (key, v) in
-        [("control.max_linear_speed", c.max_linear_speed), ("control.max_angular_speed_deg", c.max_angular_speed_deg)]
-    {
-        if let Some(v) = v {
-            check_positive(key, v)?;
-        }
-    }
-    let linear = c.max_linear_speed.unwrap_or(f64::INFINITY);
-    let angular = c.max_angular_speed_deg.map_or(f64::INFINITY, f64::to_radians);
-    Ok(Some(TwistLimits { linear, angular }))
+    let options = c.law_options()?;
+    Law::from_options(c.law.name(), &options).map_err(|e| scenario_error("control", e.to_string()))
 }
 
 /// `[depth_estimation]`: the pure-translation image pair of appendix A.

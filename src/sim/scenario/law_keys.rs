@@ -1,49 +1,36 @@
-//! Which `[control]` keys each law reads. [`LAW_KEYS`] is the one declaration: a key that
-//! only another law reads is refused with an error naming the key and both laws, rather than
-//! silently ignored (a `rz_task` under `law = "ibvs"` would otherwise look like it did
-//! something). Adding a law is one entry in that table.
+//! Which `[control]` keys each law reads: the laws' options of the servo layer's table
+//! ([`LAW_OPTIONS`](crate::servo::law::options::LAW_OPTIONS)) under their scenario keys, and
+//! the depth source for the laws that move the camera. A key that only another law reads is
+//! refused with an error naming the key and both laws, rather than silently ignored (a
+//! `rz_task` under `law = "ibvs"` would otherwise look like it did something). A new law
+//! option is a new entry of that table, a new law one entry of [`LAWS`].
+
+use std::sync::LazyLock;
 
 use super::scenario_error;
 use super::schema::{ControlSpec, LawName};
 use crate::error::Result;
+use crate::servo::law::options::LAW_OPTIONS;
 
 /// The `[control]` keys of every law: which law, and the period between images (a
 /// stationary camera, `law = "none"`, takes one every `dt` too).
 pub const COMMON_CONTROL_KEYS: &[&str] = &["law", "dt"];
 
+/// The laws, and whether each moves the camera (and so reads `depths`, the depth source).
+const LAWS: [(LawName, bool); 3] = [(LawName::Invariant, true), (LawName::Ibvs, true), (LawName::None, false)];
+
 /// The other `[control]` keys, by the law that reads them.
-pub const LAW_KEYS: &[(LawName, &[&str])] = &[
-    (
-        LawName::Invariant,
-        &[
-            "gain",
-            "gain_rz",
-            "depths",
-            "feedforward",
-            "rz_task",
-            "max_linear_speed",
-            "max_angular_speed_deg",
-            "adaptive_gain",
-        ],
-    ),
-    (LawName::Ibvs, &["gain", "depths", "interaction", "max_linear_speed", "max_angular_speed_deg", "adaptive_gain"]),
-    (LawName::None, &[]),
-];
+pub static LAW_KEYS: LazyLock<Vec<(LawName, Vec<&'static str>)>> = LazyLock::new(|| {
+    let keys = |law: LawName, moves: bool| {
+        let options = LAW_OPTIONS.iter().filter(|o| o.reads(law.name())).filter_map(|o| o.scenario_key());
+        moves.then_some("depths").into_iter().chain(options).collect()
+    };
+    LAWS.iter().map(|&(law, moves)| (law, keys(law, moves))).collect()
+});
 
-/// The keys `law` reads besides [`COMMON_CONTROL_KEYS`] (none for a law missing from
-/// [`LAW_KEYS`], which then refuses every other key).
-pub fn law_keys(law: LawName) -> &'static [&'static str] {
-    LAW_KEYS.iter().find(|(l, _)| *l == law).map_or(&[], |(_, keys)| keys)
-}
-
-/// The keys a `[control]` table gives: those its serialisation writes (every law-specific
-/// key is optional, written only when given).
-fn given_keys(c: &ControlSpec) -> Result<Vec<String>> {
-    match serde_json::to_value(c) {
-        Ok(serde_json::Value::Object(map)) => Ok(map.keys().cloned().collect()),
-        Ok(_) => Err(scenario_error("control", "is not a table")),
-        Err(e) => Err(scenario_error("control", e.to_string())),
-    }
+/// The keys `law` reads besides [`COMMON_CONTROL_KEYS`].
+pub fn law_keys(law: LawName) -> Vec<&'static str> {
+    LAW_KEYS.iter().find(|(l, _)| *l == law).map(|(_, keys)| keys.clone()).unwrap_or_default()
 }
 
 /// "the ibvs law", "the invariant and ibvs laws".
@@ -59,12 +46,12 @@ fn laws_phrase(laws: &[&str]) -> String {
 /// laws that read it and the scenario's law.
 pub(super) fn check_law_keys(c: &ControlSpec) -> Result<()> {
     let own = law_keys(c.law);
-    for key in given_keys(c)? {
-        if COMMON_CONTROL_KEYS.contains(&key.as_str()) || own.contains(&key.as_str()) {
+    for key in c.given_keys() {
+        if COMMON_CONTROL_KEYS.contains(&key) || own.contains(&key) {
             continue;
         }
         let owners: Vec<&str> =
-            LAW_KEYS.iter().filter(|(_, keys)| keys.contains(&key.as_str())).map(|(l, _)| l.name()).collect();
+            LAW_KEYS.iter().filter(|(_, keys)| keys.contains(&key)).map(|(l, _)| l.name()).collect();
         let reason =
             format!("belongs to {}; this scenario's law (control.law) is {}", laws_phrase(&owners), c.law.name());
         return Err(scenario_error(&format!("control.{key}"), reason));
@@ -76,32 +63,18 @@ pub(super) fn check_law_keys(c: &ControlSpec) -> Result<()> {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
-    use crate::core::adaptive_gain::AdaptiveGain;
 
-    /// Every key of [`ControlSpec`] is common or read by some law, and every key of the
-    /// table is one of its fields: the table and the schema agree.
+    /// Every key of `[control]` is common or read by some law, and every law's key is one of
+    /// `[control]`: the keys derived from the table and the schema's agree.
     #[test]
     fn the_table_names_exactly_the_schema_keys() {
-        let all = ControlSpec {
-            gain: Some(1.0),
-            gain_rz: Some(1.0),
-            depths: Some(super::super::schema::DepthsName::Reference),
-            feedforward: Some(true),
-            interaction: Some(Default::default()),
-            rz_task: Some(Default::default()),
-            max_linear_speed: Some(1.0),
-            max_angular_speed_deg: Some(1.0),
-            adaptive_gain: Some(AdaptiveGain { at_zero: 2.0, at_infinity: 1.0, slope_at_zero: 1.0 }),
-            ..Default::default()
-        };
-        let fields = given_keys(&all).unwrap();
         let listed: Vec<&str> =
             COMMON_CONTROL_KEYS.iter().chain(LAW_KEYS.iter().flat_map(|(_, keys)| keys.iter())).copied().collect();
-        for f in &fields {
-            assert!(listed.contains(&f.as_str()), "control.{f} is in the schema but read by no law");
+        for f in super::super::schema::CONTROL_KEYS.iter() {
+            assert!(listed.contains(f), "control.{f} is in the schema but read by no law");
         }
         for k in &listed {
-            assert!(fields.iter().any(|f| f == k), "control.{k} is listed but not in the schema");
+            assert!(super::super::schema::CONTROL_KEYS.contains(k), "control.{k} is listed but not in the schema");
         }
         for law in [LawName::Invariant, LawName::Ibvs, LawName::None] {
             assert!(LAW_KEYS.iter().any(|(l, _)| *l == law), "{law:?} is missing from LAW_KEYS");

@@ -5,21 +5,18 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::core::adaptive_gain::AdaptiveGain;
-use crate::core::ibvs::Interaction;
-use crate::core::rz_task::RzTask;
 use crate::sim::camera_model::Zoom;
 use crate::sim::config::{Noise, PathPlan, StopRules};
 use crate::vision::RenderConfig;
+
+mod control;
+pub use control::{CONTROL_KEYS, ControlSpec};
 
 fn default_skew() -> f64 {
     90.0
 }
 fn one() -> f64 {
     1.0
-}
-fn default_dt() -> f64 {
-    0.04
 }
 
 /// `[object]`.
@@ -198,97 +195,6 @@ pub enum DepthsName {
     Reference,
     /// Estimated up to scale (appendix A).
     Estimated,
-}
-
-/// `[control]`. Each law reads its own keys ([`LAW_KEYS`](super::LAW_KEYS)): they are
-/// optional, `None` when not given (the accessors give the defaults), and a key of another
-/// law is refused.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ControlSpec {
-    /// Which law.
-    #[serde(default = "default_law")]
-    pub law: LawName,
-    /// lambda, 1/s (default 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gain: Option<f64>,
-    /// eta, 1/s (default 1; invariant law).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gain_rz: Option<f64>,
-    /// Control period, s.
-    #[serde(default = "default_dt")]
-    pub dt: f64,
-    /// Depths given to the law (default: the reference depths).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub depths: Option<DepthsName>,
-    /// Feed-forward term of eq. (17) (default on; invariant law).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub feedforward: Option<bool>,
-    /// IBVS interaction matrix (default: the current one).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub interaction: Option<Interaction>,
-    /// The invariant law's task on the rotation about the optical axis (default: the angle).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rz_task: Option<RzTask>,
-    /// Largest commanded linear speed, m/s (the twist is scaled as a whole).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_linear_speed: Option<f64>,
-    /// Largest commanded angular speed, deg/s (the twist is scaled as a whole).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_angular_speed_deg: Option<f64>,
-    /// A gain that depends on the error norm (ViSP's adaptive gain); replaces `gain`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub adaptive_gain: Option<AdaptiveGain>,
-}
-
-fn default_law() -> LawName {
-    LawName::Invariant
-}
-
-impl Default for ControlSpec {
-    fn default() -> Self {
-        Self {
-            law: default_law(),
-            gain: None,
-            gain_rz: None,
-            dt: default_dt(),
-            depths: None,
-            feedforward: None,
-            interaction: None,
-            rz_task: None,
-            max_linear_speed: None,
-            max_angular_speed_deg: None,
-            adaptive_gain: None,
-        }
-    }
-}
-
-/// The values the laws use: a key's value, or its default when not given.
-impl ControlSpec {
-    /// lambda, 1/s.
-    pub fn gain(&self) -> f64 {
-        self.gain.unwrap_or(1.0)
-    }
-    /// eta, 1/s.
-    pub fn gain_rz(&self) -> f64 {
-        self.gain_rz.unwrap_or(1.0)
-    }
-    /// The depths given to the law.
-    pub fn depths(&self) -> DepthsName {
-        self.depths.unwrap_or(DepthsName::Reference)
-    }
-    /// Whether the feed-forward term of eq. (17) is on.
-    pub fn feedforward(&self) -> bool {
-        self.feedforward.unwrap_or(true)
-    }
-    /// The IBVS interaction matrix.
-    pub fn interaction(&self) -> Interaction {
-        self.interaction.unwrap_or_default()
-    }
-    /// The invariant law's task on the rotation about the optical axis.
-    pub fn rz_task(&self) -> RzTask {
-        self.rz_task.unwrap_or_default()
-    }
 }
 
 /// Robot kind.
