@@ -335,7 +335,7 @@ def test_mire2_through_the_ros_bridge_session(visp: Path) -> None:
     flat = [float(x) for x in clicks.ravel()]
     session = BridgeSession(parse_parameters({
         "reference_image": str(frames[0]), "target": "dots", "reference_points": flat, "first_points": flat,
-        "K_hat": [600.0, 600.0, 192.0, 144.0], "law": "ibvs", "depth": 0.5,
+        "K_hat": [600.0, 600.0, 192.0, 144.0], "law": "ibvs", "depth": 0.5, "camera_frame": "camera",
         "stop.pixel_error": 1e-9, "stop.max_iterations": 10 * MIRE2_FRAMES,  # keep running through the frames
     }))
     assert session.start(0.0) == (True, "running")
