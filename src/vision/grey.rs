@@ -86,6 +86,7 @@ fn grey_row(row: &[u8], out: &mut [u8], weights: [u32; 3]) {
 
 /// [`luma`] of `BLOCK` interleaved pixels: the channels are first gathered into one array
 /// each, then combined lane by lane (no data-dependent branch: vectorised).
+#[inline(never)] // kept whole: inlined into the row loop, it vectorised worse (measured)
 fn luma_block(px: &[u8; 3 * BLOCK], [a, b, c]: [u32; 3]) -> [u8; BLOCK] {
     let mut ch = [[0u32; BLOCK]; 3];
     for i in 0..BLOCK {
