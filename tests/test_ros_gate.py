@@ -89,7 +89,7 @@ def test_parameter_changes(session: BridgeSession) -> None:
         assert not ok and why in reason, reason
 
 
-@pytest.mark.parametrize("shape", [(720, 1280), (1080, 1920), (7, 5)])
+@pytest.mark.parametrize("shape", [(720, 1280), (1080, 1920), (7, 5), (481, 643), (33, 37)])
 def test_to_grey_is_opencvs_cvtcolor(shape: tuple[int, int]) -> None:
     cv2 = pytest.importorskip("cv2")
     rng = np.random.default_rng(3)
