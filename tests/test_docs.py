@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 RUNNABLE = [p for p in pages.pages() if pages.runs_as_page(p)]
 # Pages of prose and reference only; every other page (the tutorial, the concepts) shows code.
-WITHOUT_CODE = ("index.md", "paper-corrections.md", "reference/python.md", "reference/rust.md")
+WITHOUT_CODE = ("index.md", "paper-corrections.md", "reference/python.md", "reference/rust.md", "reference/law-options.md")
 
 
 def nav_pages() -> list[str]:

@@ -207,3 +207,12 @@ def test_replay_flags_take_the_range(o, law):
 def test_replay_keeps_its_gentler_gain_for_the_laws_that_read_it():
     assert cli_replay._law_options(_replay_args("--law", "invariant")) == {"gain": 0.5}
     assert cli_replay._law_options(_replay_args("--law", "none")) == {}
+
+
+def test_the_docs_table_is_the_declaration() -> None:
+    """docs/reference/law-options.md shows the table the servo layer declares, as generated."""
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parent.parent / "docs/reference/law-options.md").read_text(encoding="utf-8")
+    table = vsinv._core.law_options_markdown().strip()
+    assert table in page, "docs/reference/law-options.md: paste vsinv._core.law_options_markdown() again"
