@@ -6,13 +6,15 @@
 //! Across each edge, at a few points along it, the grey profile is read (bilinear, half-pixel
 //! steps) within [`WINDOW_CELLS`] of a cell on both sides, and the steepest step from the
 //! square's side (dark for the classic families) to the outside is taken; the edge is moved
-//! along its normal by the median of those shifts, when most of them agree, and the corners
-//! are where the moved edges meet. The window stays within the black border and the quiet
+//! along its normal by the median of those shifts, when most of them agree, then by the
+//! median of the edge's level crossings on profiles centred there (the crossings the edge
+//! refinement reads, so that a tag which slid starts its refinement on its edges and settles
+//! in one reading rather than two), and the corners are where the moved edges meet. The window stays within the black border and the quiet
 //! zone around the tag (one cell each): inside, the first step of the same polarity is a
 //! data cell two cells in. A wrong start is caught after it: the edge refinement checks the
 //! edges' support and straightness, and the follower the tag's bits.
 
-use super::edges::{Border, bilinear};
+use super::edges::{self, Border, bilinear};
 use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];
@@ -29,6 +31,11 @@ const AGREE_PX: f64 = 1.0;
 const STEP: f64 = 0.5;
 /// The least step (difference of the grey levels one pixel apart), grey levels.
 const MIN_STEP: f64 = 10.0;
+/// The profiles of the edge's refinement (`edges.rs`) reach half a cell each side of the
+/// edge, within these bounds (pixels): [`subpixel`] reads the crossings as it does.
+const REACH_CELLS: f64 = 0.5;
+const MIN_REACH: f64 = 1.5;
+const MAX_REACH: f64 = 6.0;
 
 /// The corners of the quad whose edges are those of `corners` ([`Tag::corners`](super::Tag)'s
 /// order) each moved along its normal to where the image's edge now is; `None` when an edge
@@ -63,17 +70,24 @@ fn frame(a: P, b: P, centre: P) -> Option<(P, P)> {
 }
 
 /// How far along `out` the edge from `a` to `b` moved: the median of the profiles' steepest
-/// steps, when at least [`MIN_AGREEING`] of them agree.
+/// steps, when at least [`MIN_AGREEING`] of them agree, then to a fraction of a pixel where
+/// the edge's refinement would put it ([`subpixel`]).
 fn edge_shift<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, out: P, border: Border) -> Option<f64> {
     let cell = (b[0] - a[0]).hypot(b[1] - a[1]) / border.cells;
     let window = WINDOW_CELLS * cell;
-    let mut shifts: Vec<f64> = (0..PROFILES)
-        .filter_map(|k| {
-            let t = (1.0 - SPREAD) / 2.0 + SPREAD * k as f64 / (PROFILES - 1) as f64;
-            let p = [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t];
-            steepest_step(image, p, out, window, border.reversed)
-        })
-        .collect();
+    let points: [P; PROFILES] = std::array::from_fn(|k| {
+        let t = (1.0 - SPREAD) / 2.0 + SPREAD * k as f64 / (PROFILES - 1) as f64;
+        [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t]
+    });
+    let shifts: Vec<f64> =
+        points.iter().filter_map(|&p| steepest_step(image, p, out, window, border.reversed)).collect();
+    let coarse = agreed(shifts)?;
+    let reach = (REACH_CELLS * cell).clamp(MIN_REACH, MAX_REACH);
+    Some(subpixel(image, &points, out, coarse, reach, border.reversed).unwrap_or(coarse))
+}
+
+/// The median of `shifts`, when at least [`MIN_AGREEING`] of them are within [`AGREE_PX`] of it.
+fn agreed(mut shifts: Vec<f64>) -> Option<f64> {
     if shifts.len() < MIN_AGREEING {
         return None;
     }
@@ -83,29 +97,59 @@ fn edge_shift<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, out: P, border: Bord
     (agreeing >= MIN_AGREEING).then_some(median)
 }
 
+/// The shift `coarse` (a step found to the half pixel) moved to the median of the edge's
+/// crossings of the profiles centred there (the level crossing the edge refinement reads,
+/// `edges.rs`): the refinement then starts on the edge, and a tag that only slid settles in
+/// one reading instead of two. `None` when too few profiles cross or agree.
+fn subpixel<C: Pixels>(
+    image: &GreyBuffer<C>,
+    points: &[P],
+    out: P,
+    coarse: f64,
+    reach: f64,
+    reversed: bool,
+) -> Option<f64> {
+    let crossings: Vec<f64> = points
+        .iter()
+        .filter_map(|p| {
+            let q = [p[0] + out[0] * coarse, p[1] + out[1] * coarse];
+            edges::crossing(image, q, out, reach, reversed)
+        })
+        .collect();
+    Some(coarse + agreed(crossings)?)
+}
+
 /// The offset within `±window` of `p` along `out` where the grey level rises the most from
 /// inside to outside (falls, when `reversed`), over one pixel (the peak of a parabola through
-/// the steepest half-pixel step and its neighbours); `None` below [`MIN_STEP`].
+/// the steepest half-pixel step and its neighbours); `None` below [`MIN_STEP`]. Each
+/// half-pixel sample is read once.
 fn steepest_step<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, window: f64, reversed: bool) -> Option<f64> {
     let steps = (window / STEP).floor() as i64;
-    let grey = |o: f64| {
+    let grey = |j: i64| {
+        let o = STEP * j as f64;
         let g = bilinear(image, p[0] + out[0] * o, p[1] + out[1] * o)?;
         Some(if reversed { 255.0 - g } else { g })
     };
-    let rise = |o: f64| Some(grey(o + 0.5)? - grey(o - 0.5)?);
-    let mut best: Option<(f64, f64)> = None;
+    // Samples -steps - 1 ..= steps + 1 (every rise in the window needs them all).
+    let reads: Vec<f64> = (-steps - 1..=steps + 1).map(grey).collect::<Option<_>>()?;
+    let read = |j: i64| match usize::try_from(j + steps + 1).ok().and_then(|i| reads.get(i)) {
+        Some(&g) => Some(g),
+        None => grey(j),
+    };
+    // The rise at offset STEP * k: over one pixel, from sample k - 1 to sample k + 1.
+    let rise = |k: i64| Some(read(k + 1)? - read(k - 1)?);
+    let mut best: Option<(f64, i64)> = None;
     for k in -steps..=steps {
-        let o = STEP * k as f64;
-        let r = rise(o)?;
+        let r = rise(k)?;
         if r >= MIN_STEP && best.is_none_or(|(b, _)| r > b) {
-            best = Some((r, o));
+            best = Some((r, k));
         }
     }
-    let (r, o) = best?;
-    let (before, after) = (rise(o - STEP)?, rise(o + STEP)?);
+    let (r, k) = best?;
+    let (before, after) = (rise(k - 1)?, rise(k + 1)?);
     let curvature = before - 2.0 * r + after;
     let peak = if curvature < 0.0 { 0.5 * (before - after) / curvature } else { 0.0 };
-    Some(o + STEP * peak.clamp(-0.5, 0.5))
+    Some(STEP * k as f64 + STEP * peak.clamp(-0.5, 0.5))
 }
 
 /// Where the line through `p` along `d` meets the line through `q` along `e`.
@@ -132,8 +176,8 @@ mod tests {
         a.iter().zip(b).map(|(p, q)| (p[0] - q[0]).hypot(p[1] - q[1])).fold(0.0, f64::max)
     }
 
-    /// A tag moved by up to two thirds of a cell is found within half a pixel (the profiles'
-    /// steps), whichever way it moved; moved by more than the window, it is not found there.
+    /// A tag moved by up to two thirds of a cell is found within a twentieth of a pixel,
+    /// whichever way it moved; moved by more than the window, it is not found there.
     #[test]
     fn finds_edges_moved_within_the_window() {
         let before = Placement { id: 42, centre: [90.3, 70.6], cell: 6.0, quarter_turns: 1 };
@@ -142,7 +186,8 @@ mod tests {
             let after = Placement { centre: [before.centre[0] + shift[0], before.centre[1] + shift[1]], ..before };
             let image = draw(FAMILY, 180, 140, &[after]);
             let found = moved_corners(&image, &start, BORDER).unwrap();
-            assert!(worst(&found, &corners(FAMILY, &after)) < 0.5, "{shift:?}: {found:?}");
+            // To the edges' level crossings (subpixel), not only to the half-pixel steps.
+            assert!(worst(&found, &corners(FAMILY, &after)) < 0.05, "{shift:?}: {found:?}");
         }
         let far = Placement { centre: [before.centre[0] + 7.0, before.centre[1]], ..before };
         let moved = moved_corners(&draw(FAMILY, 180, 140, &[far]), &start, BORDER);

@@ -168,7 +168,7 @@ fn fit_edge<C: Pixels>(image: &GreyBuffer<C>, a: P, b: P, centre: P, opposite: P
 /// the profile is the length on the white side of the edge, exactly so for a pixel-area or a
 /// symmetric blur (the level-crossing of a pixel-sampled step is off by up to a tenth of a
 /// pixel). `None` without contrast or when the edge is not inside the profile.
-fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64, reversed: bool) -> Option<f64> {
+pub(super) fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64, reversed: bool) -> Option<f64> {
     let steps = (2.0 * reach / STEP).round() as usize;
     let start = -(steps as f64) * STEP / 2.0;
     let mut profile = [0.0f64; 32];
