@@ -167,7 +167,7 @@ def _ros_value(o: dict[str, Any], value: Any) -> Any:
 @pytest.mark.parametrize(("o", "law"), PAIRS, ids=IDS)
 def test_ros_parameters_take_the_range(o, law, reference_image):
     assert params._BY_NAME[o["name"]].kind == params._ROS_KINDS[o["kind"]]
-    base = {"reference_image": str(reference_image), "law": law}
+    base = {"reference_image": str(reference_image), "law": law, "camera_frame": "camera"}
     config = params.parse_parameters({**base, o["name"]: _ros_value(o, valid(o))})
     assert config.servo_options[o["name"]] == valid(o)
     with pytest.raises(vsinv.InvalidInput, match=f"^parameter {o['name']}:"):

@@ -373,3 +373,41 @@ def test_detect_tags(data: Any) -> None:
         assert family in vsinv.TAG_FAMILIES and repr(out).startswith("Tags(")
         assert isinstance(vsinv.TAG_FAMILIES, tuple) and all(isinstance(f, str) for f in vsinv.TAG_FAMILIES)
         assert (np.diff(ids) > 0).all()
+
+
+# ---------------------------------------------------------------------------------------------
+# colour to grey
+
+
+def colour_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
+    h, w, _ = valid.shape
+    return st.sampled_from([
+        V(valid, SAME, "valid"),
+        V(np.asfortranarray(valid), SAME, "fortran"),
+        V(np.repeat(valid, 2, axis=1)[:, ::2], SAME, "strided"),
+        V(valid[:, :, 0], INVALID, "grey"),
+        V(np.concatenate([valid, valid[:, :, :1]], axis=2), INVALID, "rgba"),
+        V(valid[:, :, :2], INVALID, "two channels"),
+        V(valid.astype(np.float64), INVALID, "float64"),
+        V(valid.astype(np.uint16), INVALID, "uint16"),
+        V(valid.tolist(), INVALID, "list"),
+        V(None, INVALID, "none"),
+        V(np.zeros((0, w, 3), np.uint8), INVALID, "empty"),
+        V(np.zeros((1, 1, 3), np.uint8), ANY, "1x1"),
+        V(valid.astype(object), INVALID, "object"),
+    ])
+
+
+@covers("to_grey")
+@fuzz_settings(100)
+@given(st.data())
+def test_to_grey(data: Any) -> None:
+    grey, _, _ = rendered()
+    colour = np.stack([grey, 255 - grey, grey // 2], axis=-1)
+    ref = vsinv.to_grey(colour)
+    # Independent: OpenCV's Rec. 601 conversion of the same frame, to the bit.
+    assert np.array_equal(ref, cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY))
+    orders = st.sampled_from([V("rgb", SAME, "rgb"), V(None, SAME, "none"), V("bgr", ANY, "bgr"),
+                              V("RGB", INVALID, "upper"), V(3, INVALID, "int"), V("", INVALID, "empty")])
+    fuzz(data, vsinv.to_grey, {"image": colour, "order": "rgb"},
+         {"image": colour_variants(colour), "order": orders}, ref=ref)

@@ -932,9 +932,9 @@ def load_image(path: str | os.PathLike[str]) -> _U8Image:
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes a (height, width) uint8 array as a PNG file."""
 
-def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] = "rgb") -> _U8Image:
+def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = None) -> _U8Image:
     """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image whose
-    channels are in ``order``, by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the
+    channels are in ``order`` (None: ``"rgb"``), by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the
     bit), in Rust with the GIL released; a non-contiguous array is copied once. Another shape or
     dtype raises InvalidInput, another order InvalidInput naming ``order``."""
 

@@ -12,21 +12,37 @@ fn invalid(reason: String) -> PyErr {
 }
 
 /// The grey image of a colour image: `image` a `(height, width, 3)` uint8 array whose
-/// channels are in `order` (`"rgb"` or `"bgr"`); a non-contiguous array is copied once.
+/// channels are in `order` (`"rgb"`, the default when None, or `"bgr"`); a non-contiguous
+/// array is copied once.
 #[pyfunction]
-#[pyo3(signature = (image, order = "rgb"))]
-pub fn to_grey<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: &str) -> PyResult<Bound<'py, PyArray2<u8>>> {
+#[pyo3(signature = (image, order = None))]
+pub fn to_grey<'py>(
+    py: Python<'py>,
+    image: &Bound<'py, PyAny>,
+    order: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray2<u8>>> {
     let order = match order {
-        "rgb" => ChannelOrder::Rgb,
-        "bgr" => ChannelOrder::Bgr,
-        other => {
-            let e = crate::Error::InvalidParameter {
-                name: "order",
-                reason: format!("expected 'rgb' or 'bgr', got {other:?}"),
-            };
-            return Err(e.into());
-        }
+        None => ChannelOrder::Rgb,
+        Some(order) => channel_order(order)?,
     };
+    convert(py, image, order)
+}
+
+/// `"rgb"` or `"bgr"`; anything else raises `InvalidInput` naming `order`.
+fn channel_order(order: &Bound<'_, PyAny>) -> PyResult<ChannelOrder> {
+    match order.extract::<String>().ok().as_deref() {
+        Some("rgb") => Ok(ChannelOrder::Rgb),
+        Some("bgr") => Ok(ChannelOrder::Bgr),
+        _ => {
+            let other = order.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+            let reason = format!("expected 'rgb' or 'bgr', got {other}");
+            Err(crate::Error::InvalidParameter { name: "order", reason }.into())
+        }
+    }
+}
+
+/// The conversion of a checked `(height, width, 3)` uint8 array, without the GIL.
+fn convert<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: ChannelOrder) -> PyResult<Bound<'py, PyArray2<u8>>> {
     let Ok(any) = image.cast::<numpy::PyUntypedArray>() else {
         let kind = image.get_type().name()?.to_string();
         return Err(invalid(format!("expected a (height, width, 3) uint8 NumPy array, got {kind}")));
@@ -46,9 +62,11 @@ pub fn to_grey<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: &str) -> 
         .cast::<PyArray3<u8>>()?
         .try_readonly()
         .map_err(|e| invalid(format!("array is being written to ({e})")))?;
-    let grey = match array.as_slice() {
-        Ok(data) => py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, data, order))?,
-        Err(_) => {
+    // `as_slice` also takes a Fortran-ordered array, whose bytes are not rows: C order only.
+    let c_order = if array.is_c_contiguous() { array.as_slice().ok() } else { None };
+    let grey = match c_order {
+        Some(data) => py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, data, order))?,
+        None => {
             let owned: Vec<u8> = array.as_array().iter().copied().collect();
             py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, &owned, order))?
         }
