@@ -24,7 +24,7 @@ use kornia_image::{Image, ImageSize};
 use super::{Candidate, Tag};
 use crate::vision::image::{GreyBuffer, Pixels};
 
-/// The most regions (of the detector's threshold, counted by [`regions`]) a frame's quad
+/// The most regions (of the detector's threshold, counted by `regions`) a frame's quad
 /// searches read, over all its levels: the detector takes some 15 to 50 us a region (noise
 /// the least, small squares and tags the most), so a frame's quad searches take at most some
 /// 0.2 s. Ordinary frames hold fewer: ViSP's AprilTag images at most 950 at the default
