@@ -262,9 +262,10 @@ impl Sparse {
         Self { cols: n, entries: (0..n).map(|i| (i, i, 1.0)).collect() }
     }
 
-    /// `|G|_F^2`, repeated entries added up first.
+    /// `|G|_F^2`, repeated entries added up first, in the entries' order (a `BTreeMap`: a
+    /// hashed map's random order changed the sum's last bits from process to process).
     fn frobenius_squared(&self) -> f64 {
-        let mut sums = std::collections::HashMap::with_capacity(self.entries.len());
+        let mut sums = std::collections::BTreeMap::new();
         for &(r, c, v) in &self.entries {
             *sums.entry((r, c)).or_insert(0.0) += v;
         }
