@@ -99,7 +99,10 @@ pub(super) fn regions<C: Pixels>(
     let source = Image::<u8, 1>::new(size, decimated).ok()?;
     let mut binary = Image::<Pixel, 1>::from_size_val(size, Pixel::Skip).ok()?;
     let mut tiles = TileMinMax::new(size, 4);
-    adaptive_threshold_with_split(&source, &mut binary, &mut tiles, min_difference, split).ok()?;
+    // kornia's threshold runs with rayon: on vsinv's pool, never rayon's global one, which a
+    // forked child would inherit without its threads (see `parallel`).
+    let threshold = || adaptive_threshold_with_split(&source, &mut binary, &mut tiles, min_difference, split);
+    crate::parallel::install(threshold).ok()?.ok()?;
     Some(count_regions(binary.as_slice(), size.width))
 }
 
