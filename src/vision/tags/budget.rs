@@ -22,7 +22,6 @@ use kornia_apriltag::utils::Pixel;
 use kornia_image::{Image, ImageSize};
 
 use super::{Candidate, Tag};
-use crate::vision::image::{GreyBuffer, Pixels};
 
 /// The most regions (of the detector's threshold, counted by `regions`) a frame's quad
 /// searches read, over all its levels: the detector takes some 15 to 50 us a region (noise
@@ -60,6 +59,17 @@ impl Budget {
         Self { regions_left: MAX_SEARCHED_REGIONS, stopped_early: false }
     }
 
+    /// Whether a level whose quad search reads `searched_pixels` is searched: it holds at most
+    /// one region per [`MIN_REGION_PIXELS`] pixels, and when that many fit in what is left
+    /// they are taken from the budget without counting; otherwise its regions are counted
+    /// (`count`, [`regions`]) and taken as [`Self::admit`] takes them. On an ordinary frame
+    /// only the finest level is counted.
+    pub(super) fn admit_level(&mut self, searched_pixels: u64, count: impl FnOnce() -> Option<u64>) -> bool {
+        let most = searched_pixels / u64::from(MIN_REGION_PIXELS);
+        let regions = if most <= self.regions_left { most } else { count().unwrap_or(0) };
+        self.admit(regions)
+    }
+
     /// Whether a level of `regions` regions is searched (taking them from the budget); a
     /// level refused marks the frame as stopped early.
     pub(super) fn admit(&mut self, regions: u64) -> bool {
@@ -72,36 +82,34 @@ impl Budget {
     }
 }
 
-/// The regions the detector would decode quads from in `image` decimated by `decimation`
+/// The regions the detector would decode quads from in `source` decimated by `decimation`
 /// (one pixel of `decimation x decimation`, as the detector decimates): the image is
 /// thresholded as the detector thresholds it (`adaptive_threshold_with_split`, 4 x 4 tiles),
 /// and the 4-connected regions of black or white pixels of at least [`MIN_REGION_PIXELS`] are
 /// counted (the detector leaves smaller ones out). `None` when the image is smaller than a
 /// tile.
-pub(super) fn regions<C: Pixels>(
-    image: &GreyBuffer<C>,
-    decimation: u32,
-    min_difference: u8,
-    split: f32,
-) -> Option<u64> {
+pub(super) fn regions(source: &Image<u8, 1>, decimation: u32, min_difference: u8, split: f32) -> Option<u64> {
     let d = decimation.max(1) as usize;
-    let (width, height) = (image.width() as usize, image.height() as usize);
-    let size = ImageSize { width: 1 + width.saturating_sub(1) / d, height: 1 + height.saturating_sub(1) / d };
-    let raw: &[u8] = image.as_raw();
-    let decimated: Vec<u8> = if d == 1 {
-        raw.get(..width * height)?.to_vec()
+    let decimated;
+    let searched = if d == 1 {
+        source
     } else {
-        (0..size.height)
+        let (width, height) = (source.width(), source.height());
+        let size = ImageSize { width: 1 + width.saturating_sub(1) / d, height: 1 + height.saturating_sub(1) / d };
+        let raw = source.as_slice();
+        let pixels: Vec<u8> = (0..size.height)
             .filter_map(|y| raw.get(y * d * width..y * d * width + width))
             .flat_map(|row| row.iter().step_by(d).copied())
-            .collect()
+            .collect();
+        decimated = Image::<u8, 1>::new(size, pixels).ok()?;
+        &decimated
     };
-    let source = Image::<u8, 1>::new(size, decimated).ok()?;
+    let size = searched.size();
     let mut binary = Image::<Pixel, 1>::from_size_val(size, Pixel::Skip).ok()?;
     let mut tiles = TileMinMax::new(size, 4);
     // kornia's threshold runs with rayon: on vsinv's pool, never rayon's global one, which a
     // forked child would inherit without its threads (see `parallel`).
-    let threshold = || adaptive_threshold_with_split(&source, &mut binary, &mut tiles, min_difference, split);
+    let threshold = || adaptive_threshold_with_split(searched, &mut binary, &mut tiles, min_difference, split);
     crate::parallel::install(threshold).ok()?.ok()?;
     Some(count_regions(binary.as_slice(), size.width))
 }
@@ -356,6 +364,13 @@ mod tests {
         assert!(budget.admit(MAX_SEARCHED_REGIONS - 10) && !budget.stopped_early);
         assert!(!budget.admit(11) && budget.stopped_early);
         assert!(budget.admit(10));
-        assert!(regions(&GreyImage::new(3, 3), 1, 5, 0.5).is_none());
+        let tiny = Image::<u8, 1>::from_size_val(ImageSize { width: 3, height: 3 }, 0).unwrap();
+        assert!(regions(&tiny, 1, 5, 0.5).is_none());
+        // A level that cannot hold more regions than are left is admitted without counting.
+        let mut budget = Budget::new();
+        assert!(budget.admit_level(25 * 100, || panic!("counted")));
+        assert!(budget.admit_level(25 * (MAX_SEARCHED_REGIONS - 100), || panic!("counted")));
+        assert!(!budget.admit_level(25 * 100 + 25, || Some(1000)) && budget.stopped_early);
+        assert!(budget.admit_level(25 * 100 + 25, || Some(0)));
     }
 }

@@ -210,9 +210,18 @@ pub const AUTOMATIC_MIN_SIDE: u32 = 480;
 /// brightest pixels: the AprilTag library's midpoint (kornia's default, a third, breaks the
 /// black border of blurred tags into white).
 const THRESHOLD_SPLIT: f32 = 0.5;
-/// The contrast below which a tile of the threshold is left out (kornia's default, set here
-/// so that [`budget::regions`] thresholds as the detector does).
-const MIN_WHITE_BLACK_DIFFERENCE: u8 = 5;
+/// The contrast (grey levels between the darkest and brightest pixel around a 4 x 4 tile)
+/// below which a tile of the threshold is left out of the quad search; set here so that
+/// [`budget::regions`] thresholds as the detector does.
+///
+/// Why 15 and not the AprilTag library's 5: on a real photograph the background's faint
+/// texture (paper grain, a wall, shadows) passes 5 everywhere and becomes thousands of small
+/// clusters that the quad fit reads one by one: on ViSP's `AprilTag.pgm` (640 x 480, 12
+/// tags) the search at decimation 1 took 33 ms at 5 and 4.7 ms at 15, with the same 12 tags.
+/// A tag's own contrast is its black border against its white quiet zone, far above 15 even
+/// blurred or in dim light (tests: a tag of contrast 24 is found); OpenCV's aruco leaves out
+/// the same faint texture (a pixel is black only 7 grey levels below its neighbourhood's mean).
+const MIN_WHITE_BLACK_DIFFERENCE: u8 = 15;
 
 /// The decimation [`TagDecoder::new`] chooses for a `width x height` image: the largest that
 /// keeps the finest search's shorter side at least [`AUTOMATIC_MIN_SIDE`] pixels (1 up to
@@ -362,8 +371,8 @@ impl TagDecoder {
         Ok(TagReport { tags, stopped_early: budget.stopped_early || stopped })
     }
 
-    /// [`Self::search`] when the level's regions fit in what is left of the frame's budget,
-    /// nothing otherwise.
+    /// [`Self::search`] when the level's regions fit in what is left of the frame's budget
+    /// ([`budget::Budget::admit_level`]), nothing otherwise.
     fn search_within<C: Pixels>(
         &mut self,
         budget: &mut budget::Budget,
@@ -372,32 +381,27 @@ impl TagDecoder {
         decimation: u32,
         scale: f64,
     ) -> Result<Vec<Candidate>> {
-        let regions = budget::regions(image, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT).unwrap_or(0);
-        if !budget.admit(regions) {
-            // The level keeps its decoder, so that the levels after it find theirs.
-            let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
-            self.decoder_for(level, size, decimation)?;
-            return Ok(Vec::new());
-        }
-        self.search(level, image, decimation, scale)
-    }
-
-    /// The tags the detector decodes in `image` (a level `scale` times smaller than the
-    /// full image), with their corners in the full image.
-    fn search<C: Pixels>(
-        &mut self,
-        level: usize,
-        image: &GreyBuffer<C>,
-        decimation: u32,
-        scale: f64,
-    ) -> Result<Vec<Candidate>> {
         let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
         let pixels: &[u8] = image.as_raw();
         let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
+        // One copy in kornia's image type, read by both the count and the search.
         let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
-        let decoder = self.decoder_for(level, size, decimation)?;
+        let searched = searched_pixels(image.width(), image.height(), decimation);
+        let count = || budget::regions(&source, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT);
+        if !budget.admit_level(searched, count) {
+            // The level keeps its decoder, so that the levels after it find theirs.
+            self.decoder_for(level, size, decimation)?;
+            return Ok(Vec::new());
+        }
+        self.search(level, &source, decimation, scale)
+    }
+
+    /// The tags the detector decodes in `source` (a level `scale` times smaller than the
+    /// full image), with their corners in the full image.
+    fn search(&mut self, level: usize, source: &Image<u8, 1>, decimation: u32, scale: f64) -> Result<Vec<Candidate>> {
+        let decoder = self.decoder_for(level, source.size(), decimation)?;
         // kornia decodes with rayon: on vsinv's pool, never rayon's global one (see `parallel`).
-        let detections = crate::parallel::install(|| decoder.decode(&source))?.map_err(decoder_error);
+        let detections = crate::parallel::install(|| decoder.decode(source))?.map_err(decoder_error);
         decoder.clear();
         Ok(detections?
             .iter()
