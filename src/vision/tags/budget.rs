@@ -97,10 +97,10 @@ pub(super) fn regions(source: &Image<u8, 1>, decimation: u32, min_difference: u8
         let (width, height) = (source.width(), source.height());
         let size = ImageSize { width: 1 + width.saturating_sub(1) / d, height: 1 + height.saturating_sub(1) / d };
         let raw = source.as_slice();
-        let pixels: Vec<u8> = (0..size.height)
-            .filter_map(|y| raw.get(y * d * width..y * d * width + width))
-            .flat_map(|row| row.iter().step_by(d).copied())
-            .collect();
+        let mut pixels = Vec::with_capacity(size.width * size.height);
+        for row in raw.chunks_exact(width).step_by(d) {
+            pixels.extend(row.iter().step_by(d));
+        }
         decimated = Image::<u8, 1>::new(size, pixels).ok()?;
         &decimated
     };
