@@ -67,7 +67,6 @@ from ._core import (
     render,
     render_view,
     to_grey,
-    run_batch,
     run_scenario,
     rz_coefficients,
     save_image,
@@ -77,7 +76,8 @@ from ._core import (
     tracking_bound,
     undistort_points,
 )
-from . import sweep
+from . import plots, sweep
+from ._batch import run_batch
 from .replaying import ReplayResult, replay
 from .sources import frames
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep

@@ -684,14 +684,14 @@ def run_batch(
     scenarios: Iterable[_ScenarioLike],
     threads: int | None = None,
     allow_outside_files: bool = False,
-    progress: bool | Callable[[int, int], object] | None = None,
+    progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, npt.NDArray[Any]]:
     """Runs the scenarios in parallel (GIL released, recording off); one table row per run.
 
-    ``progress``: a tqdm bar over runs (None: when stderr is a terminal), or a callable
-    ``progress(done, total)`` called from the calling thread as runs finish (``done``
-    increasing to ``total``). Ctrl-C or an exception of ``progress`` stops the batch and is
-    raised. Works in a process forked after earlier batches (the pools are rebuilt).
+    ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
+    as runs finish (``done`` increasing to ``total``); ``vsinv.run_batch`` draws a tqdm bar
+    instead for None, True or False. Ctrl-C or an exception of ``progress`` stops the batch
+    and is raised. Works in a process forked after earlier batches (the pools are rebuilt).
     """
 def run_scenario(
     scenario: _ScenarioLike,

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Optional, Union, cast
 import numpy as np
 import numpy.typing as npt
 
-from ._core import InvalidInput, recorded_columns
+from ._core import InvalidInput, RunResult as _RunResult, recorded_columns
 from .safe_files import replace_file
 
 if TYPE_CHECKING:
@@ -755,6 +755,16 @@ def plot(result: RunResult, kind: str, ax: AxesArg = None, *, scenario: _Scenari
     if kind in ("joints", "joint_velocities") and result.joint_limits is None:
         raise InvalidInput(f"kind: {kind!r} is drawn for an arm only ([robot] kind = \"urdf\")")
     return make(result, ax, scenario=scenario)
+
+
+def _run_result_plot(self: RunResult, kind: str, ax: AxesArg = None) -> Figure:
+    """The figure ``kind`` (``vsinv.plots.PLOTS``) drawn into ``ax`` (a matplotlib Axes, or one
+    per panel) or a new figure; returns the matplotlib Figure."""
+    return plot(self, kind, ax)
+
+
+# RunResult is a Rust class; its figures are drawn here (the Rust side imports no Python).
+_RunResult.plot = _run_result_plot  # type: ignore[method-assign]
 
 
 def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
