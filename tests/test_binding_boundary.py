@@ -1,6 +1,7 @@
 """The bindings only bind (issue 29, item 4): scenario dictionaries cross the boundary as
 values walked in Rust (no JSON text), the figures and the progress bar are the Python
-package's."""
+package's, and the pose helpers the package uses are Rust's, checked here against
+independent computations (OpenCV's Rodrigues, finite differences)."""
 
 from __future__ import annotations
 
@@ -141,3 +142,63 @@ def test_numpy_values_and_tuples_cross_as_lists_and_numbers() -> None:
     s = vsinv.Scenario.from_dict(d).to_dict()
     assert s["start"]["position"] == [float(np.float32(0.2)), float(np.float32(-0.15)), float(np.float32(-0.15))]
     assert s["noise"]["on_reference"] is False and isinstance(s["object"]["points"][0], list)
+
+
+# --- the pose helpers the package uses are Rust's ---------------------------------------------
+
+
+def test_thetau_from_rotations_is_opencvs_rodrigues() -> None:
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(40, 3))
+    angles = np.concatenate([np.linspace(0.0, np.pi - 1e-6, 38), [1e-9, 2.9]])
+    vectors = axes / np.linalg.norm(axes, axis=1, keepdims=True) * angles[:, None]
+    rotations = np.array([cv2.Rodrigues(v)[0] for v in vectors])
+    np.testing.assert_allclose(vsinv.thetau_from_rotations(rotations), vectors, atol=1e-9)
+    # Rodrigues back: the rotation of a theta-u vector is pose_from_position_thetau's block.
+    for v, r in zip(vectors, rotations):
+        np.testing.assert_allclose(vsinv.pose_from_position_thetau(np.zeros(3), v)[:3, :3], r, atol=1e-12)
+
+
+def test_thetau_from_rotations_refusals_name_the_matrix() -> None:
+    r = np.stack([np.eye(3), np.eye(3)])
+    r[1, 0, 2] = np.nan
+    with pytest.raises(vsinv.InvalidInput, match=r"rotations\[1\]: non-finite value at row 0, column 2") as e:
+        vsinv.thetau_from_rotations(r)
+    assert (e.value.index, e.value.row, e.value.column) == (1, 0, 2)
+    with pytest.raises(vsinv.InvalidInput, match=r"rotations\[1\]: not a rotation matrix") as e:
+        vsinv.thetau_from_rotations(np.stack([np.eye(3), 2.0 * np.eye(3)]))
+    assert e.value.index == 1
+    with pytest.raises(vsinv.InvalidInput, match="rotations: expected shape"):
+        vsinv.thetau_from_rotations(np.eye(3))
+    assert vsinv.thetau_from_rotations(np.empty((0, 3, 3))).shape == (0, 3)
+
+
+def test_plots_theta_u_leaves_unrecorded_poses_nan() -> None:
+    import vsinv.plots
+
+    r = np.stack([np.eye(3), np.full((3, 3), np.nan)])
+    out = vsinv.plots.theta_u(r)
+    assert out.shape == (2, 3) and (out[0] == 0).all() and np.isnan(out[1]).all()
+
+
+def test_twist_adjoint_moves_points_as_finite_differences_say() -> None:
+    """A frame with pose (R, t) in its parent moves with twist xi (its own frame); a point p
+    fixed in it moves in the parent as d/ds [X exp(s xi) p] at s = 0, which the parent-frame
+    twist Ad xi must give: v + w x q for q = X p."""
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        x = vsinv.pose_from_position_thetau(rng.normal(size=3), rng.normal(size=3))
+        xi = rng.normal(size=6)
+        ad = vsinv.twist_adjoint(x)
+        assert ad.shape == (6, 6)
+        v, w = (ad @ xi)[:3], (ad @ xi)[3:]
+        p = np.append(rng.normal(size=3), 1.0)
+        h = 1e-6
+        fd = ((x @ vsinv.exp_twist(xi, h) @ p) - (x @ vsinv.exp_twist(xi, -h) @ p))[:3] / (2 * h)
+        q = (x @ p)[:3]
+        np.testing.assert_allclose(v + np.cross(w, q), fd, atol=1e-8)
+    with pytest.raises(vsinv.InvalidInput, match="pose: non-finite value at row 0, column 0"):
+        vsinv.twist_adjoint(np.full((4, 4), np.nan))
+    with pytest.raises(vsinv.InvalidInput, match="pose"):
+        vsinv.twist_adjoint(np.full((4, 4), 1e300))  # t x R overflows

@@ -73,7 +73,9 @@ from ._core import (
     structure_ratio,
     summary_fields,
     thetau_from_pose,
+    thetau_from_rotations,
     tracking_bound,
+    twist_adjoint,
     undistort_points,
 )
 from . import plots, sweep
@@ -153,6 +155,8 @@ __all__ = [
     "structure_ratio",
     "summary_fields",
     "thetau_from_pose",
+    "thetau_from_rotations",
+    "twist_adjoint",
     "tracking_bound",
     "undistort_points",
     "run_sweep",
