@@ -23,6 +23,10 @@ use crate::sim::config::SimulationConfig;
 /// The largest scenario file, bytes.
 pub use crate::input_file::MAX_SCENARIO_BYTES;
 
+/// How a scenario passes depths to the invariant law, added to the core's remedies when a
+/// run stops on a degenerate structure ([`crate::Error::message_with_remedy`]).
+pub const DEPTHS_REMEDY: &str = "; scenario control.depths = \"reference\" or \"estimated\"";
+
 /// A TOML syntax error: the parser's message and the line, without the quoted source.
 fn toml_message(text: &str, e: &toml::de::Error) -> String {
     let message = shorten_quotes(e.message().trim());
