@@ -60,7 +60,7 @@ fn main() -> vsinv::Result<()> {
     let (status, reason) = loop {
         let pixels = view(&object, &pose, &k, &mut noise)?;
         let step = servo.step(&pixels, None, None)?;
-        if let Verdict::Stop { status, reason } = step.verdict {
+        if let Verdict::Stop { status, reason, .. } = step.verdict {
             break (status, reason);
         }
         pose *= exp_twist(&(step.twist * config.dt).into())?; // the robot moves for one period

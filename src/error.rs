@@ -1,4 +1,8 @@
-//! The crate's one error type.
+//! The crate's one error type. The core's variants are always there; those of a higher layer
+//! (scenarios, URDF files and arms, images, calibration files and hand-eye motions) exist only
+//! with that layer's feature, so that the control core (`--no-default-features`) speaks only
+//! of its own inputs. A higher layer words a core error in its own terms where it reports one
+//! (the remedy of [`Error::DegenerateStructure`], see [`degenerate_structure_text`]).
 
 use thiserror::Error;
 
@@ -83,9 +87,7 @@ pub enum Error {
     },
     /// The invariant Jacobian has lost rank: planar object, equal depth estimates,
     /// or points too close to a plane (paper-corrections: planar object).
-    #[error(
-        "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof; with a constant-depth guess, pass the reference depths zeta* or estimated depths (appendix A: depths_from_translation, ResectionDepths; scenario control.depths = \"reference\" or \"estimated\") instead"
-    )]
+    #[error("{}", degenerate_structure_text(*ratio, *threshold, ""))]
     DegenerateStructure {
         /// sigma_5 / sigma_1 of `J_hat diag(Z, Z, Z, 1, 1)`.
         ratio: f64,
@@ -106,6 +108,9 @@ pub enum Error {
     /// A scenario file or dictionary that does not describe a valid run; `key` names the
     /// offending entry (e.g. `control.gain`).
     #[error("scenario: {}{reason}", if key.is_empty() { String::new() } else { format!("{key}: ") })]
+    ///
+    /// Of the simulator's scenarios: only with the feature `sim`.
+    #[cfg(feature = "sim")]
     Scenario {
         /// Dotted path of the key at fault (empty for the whole document).
         key: String,
@@ -114,6 +119,9 @@ pub enum Error {
     },
     /// An image that cannot be used: wrong size, empty, unreadable file, nothing to detect.
     #[error("{what}: {reason}")]
+    ///
+    /// Of the vision layer: only with the feature `vision`.
+    #[cfg(feature = "vision")]
     InvalidImage {
         /// Which image (argument name or file path).
         what: String,
@@ -123,6 +131,9 @@ pub enum Error {
     /// A robot description (URDF) that cannot be read or does not describe a serial arm;
     /// `message` names the link or joint at fault.
     #[error("URDF {file}: {message}")]
+    ///
+    /// Of the simulator's arms: only with the feature `sim`.
+    #[cfg(feature = "sim")]
     Urdf {
         /// The file path, `builtin:<name>` or `<string>`.
         file: String,
@@ -142,6 +153,9 @@ pub enum Error {
     /// A camera calibration file (ROS camera_info YAML, OpenCV FileStorage YAML or XML) that
     /// cannot be read or is malformed; `field` names the entry at fault.
     #[error("calibration file {file}: {}{reason}", if field.is_empty() { String::new() } else { format!("{field}: ") })]
+    ///
+    /// Of the calibration layer: only with the feature `calibration`.
+    #[cfg(feature = "calibration")]
     Calibration {
         /// The file path.
         file: String,
@@ -154,6 +168,9 @@ pub enum Error {
     /// last row other than `(0, 0, 0, 1)`, or a rotation block that is not orthonormal with
     /// determinant +1.
     #[error("{what}[{index}]: not a rigid transform: {reason}")]
+    ///
+    /// Of the calibration layer (hand-eye): only with the feature `calibration`.
+    #[cfg(feature = "calibration")]
     InvalidPose {
         /// Which input (e.g. `gripper_poses`).
         what: &'static str,
@@ -165,6 +182,9 @@ pub enum Error {
     /// Robot motions that do not determine the hand-eye transform (AX = XB): too few poses,
     /// no rotation, or rotations about (nearly) parallel axes only.
     #[error("degenerate hand-eye motions ({poses} poses): {reason}")]
+    ///
+    /// Of the calibration layer (hand-eye): only with the feature `calibration`.
+    #[cfg(feature = "calibration")]
     DegenerateMotion {
         /// The number of poses given.
         poses: usize,
@@ -184,6 +204,9 @@ pub enum Error {
         "pose: unreachable by {arm} within its joint limits (position {} m, theta-u {} deg): the best of {seeds} seeds stops {position_residual:.3e} m and {rotation_residual:.3e} rad away",
         Triple(*position), Triple(*thetau_deg)
     )]
+    ///
+    /// Of the simulator's arms: only with the feature `sim`.
+    #[cfg(feature = "sim")]
     Unreachable {
         /// The arm's name.
         arm: String,
@@ -200,9 +223,19 @@ pub enum Error {
     },
 }
 
+/// The message of [`Error::DegenerateStructure`]; `remedy` is a higher layer's own way to
+/// pass depths, in its words, added to the core's (`"; scenario control.depths = ..."`).
+pub fn degenerate_structure_text(ratio: f64, threshold: f64, remedy: &str) -> String {
+    format!(
+        "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof; with a constant-depth guess, pass the reference depths zeta* or estimated depths (appendix A: depths_from_translation, ResectionDepths{remedy}) instead"
+    )
+}
+
 /// Three numbers as `[a, b, c]`, each printed by [`Short`] to four significant digits.
+#[cfg(feature = "sim")]
 struct Triple([f64; 3]);
 
+#[cfg(feature = "sim")]
 impl std::fmt::Display for Triple {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let [a, b, c] = self.0.map(|v| Short((v * 1e4).round() / 1e4));
@@ -211,20 +244,31 @@ impl std::fmt::Display for Triple {
 }
 
 impl Error {
+    /// The message, with `remedy` (a higher layer's way to pass depths, in its words) added to
+    /// the core's remedies where the error has some ([`Error::DegenerateStructure`]); the
+    /// `Display` text otherwise.
+    pub fn message_with_remedy(&self, remedy: &str) -> String {
+        match self {
+            Error::DegenerateStructure { ratio, threshold } => degenerate_structure_text(*ratio, *threshold, remedy),
+            other => other.to_string(),
+        }
+    }
+
     /// True for errors caused by the scene geometry (collinear basis, planar object,
     /// points behind the camera, too few points, degenerate robot motions) rather than by
     /// malformed input.
     pub fn is_degenerate(&self) -> bool {
-        matches!(
-            self,
+        match self {
             Error::TooFewPoints { .. }
-                | Error::CollinearBasis { .. }
-                | Error::PointBehindCamera { .. }
-                | Error::DegenerateStructure { .. }
-                | Error::DegenerateEstimate { .. }
-                | Error::RzSingular { .. }
-                | Error::DegenerateMotion { .. }
-        )
+            | Error::CollinearBasis { .. }
+            | Error::PointBehindCamera { .. }
+            | Error::DegenerateStructure { .. }
+            | Error::DegenerateEstimate { .. }
+            | Error::RzSingular { .. } => true,
+            #[cfg(feature = "calibration")]
+            Error::DegenerateMotion { .. } => true,
+            _ => false,
+        }
     }
 }
 
@@ -385,7 +429,26 @@ pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::Short;
+    use super::{Error, Short};
+
+    /// The core words its own remedies; a layer adds its own (the scenario key) and gets the
+    /// message the crate gave before the split, to the letter.
+    #[test]
+    fn degenerate_structure_remedy_is_the_layers() {
+        let e = Error::DegenerateStructure { ratio: 2.464e-4, threshold: 1e-3 };
+        let core = e.to_string();
+        assert!(!core.contains("scenario") && !core.contains("control."), "{core}");
+        assert!(core.ends_with("(appendix A: depths_from_translation, ResectionDepths) instead"), "{core}");
+        let before = "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is 2.464e-4 \
+                      (< 1.0e-3); the object is planar or the depth estimates are all equal, and the invariant error \
+                      cannot control five dof; with a constant-depth guess, pass the reference depths zeta* or \
+                      estimated depths (appendix A: depths_from_translation, ResectionDepths; scenario control.depths \
+                      = \"reference\" or \"estimated\") instead";
+        let layer = "; scenario control.depths = \"reference\" or \"estimated\"";
+        assert_eq!(e.message_with_remedy(layer), before);
+        let other = Error::RzSingular { a_hat: 1e-9 };
+        assert_eq!(other.message_with_remedy(layer), other.to_string());
+    }
 
     #[test]
     fn short_numbers() {

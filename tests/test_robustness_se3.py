@@ -87,6 +87,38 @@ def test_exp_twist_composes(tw: list[float], dt: float) -> None:
     np.testing.assert_allclose(back, a, atol=1e-9)
 
 
+@covers("thetau_from_rotations", "twist_adjoint")
+@fuzz_settings(150)
+@given(st.data())
+def test_rotation_helpers(data: Any) -> None:
+    which = data.draw(st.sampled_from(["thetau_from_rotations", "twist_adjoint"]))
+    thetau = np.array([0.3, -0.4, 1.2])
+    p0 = vsinv.pose_from_position_thetau(np.array([0.2, -0.1, 0.5]), thetau)
+    if which == "thetau_from_rotations":
+        rotations = np.stack([p0[:3, :3], np.eye(3)])
+        args: dict[str, Any] = {"rotations": rotations}
+        strategies = {"rotations": arrays(rotations, overrides={"zero": INVALID, "huge": INVALID, "tiny": INVALID})}
+    else:
+        args = {"pose": p0}
+        strategies = {"pose": arrays(p0)}
+    fn = getattr(vsinv, which)
+    ref = fn(**args)
+    name, v, out = fuzz(data, fn, args, strategies, ref=ref, rtol=1e-12)
+    if not returned(out):
+        return
+    if which == "thetau_from_rotations":
+        r = np.asarray(v.value, dtype=float)
+        assert out.shape == (len(r), 3) and (np.linalg.norm(out, axis=1) <= math.pi + 1e-12).all()
+        for tu, m in zip(out, r):
+            np.testing.assert_allclose(rodrigues(tu), m, atol=1e-5)  # a rotation within 1e-6
+    else:
+        m = np.asarray(v.value, dtype=float)
+        rot, t = m[:3, :3], m[:3, 3]
+        xi = np.array([0.1, -0.2, 0.3, 0.4, -0.5, 0.6])
+        want = np.concatenate([rot @ xi[:3] + np.cross(t, rot @ xi[3:]), rot @ xi[3:]])
+        np.testing.assert_allclose(out @ xi, want, rtol=1e-12, atol=1e-12 * max(1.0, float(np.abs(m).max()) ** 2))
+
+
 # ---------------------------------------------------------------------------------------------
 # hand-eye calibration
 

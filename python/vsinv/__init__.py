@@ -67,17 +67,19 @@ from ._core import (
     render,
     render_view,
     to_grey,
-    run_batch,
     run_scenario,
     rz_coefficients,
     save_image,
     structure_ratio,
     summary_fields,
     thetau_from_pose,
+    thetau_from_rotations,
     tracking_bound,
+    twist_adjoint,
     undistort_points,
 )
-from . import sweep
+from . import plots, sweep
+from ._batch import run_batch
 from .replaying import ReplayResult, replay
 from .sources import frames
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
@@ -153,6 +155,8 @@ __all__ = [
     "structure_ratio",
     "summary_fields",
     "thetau_from_pose",
+    "thetau_from_rotations",
+    "twist_adjoint",
     "tracking_bound",
     "undistort_points",
     "run_sweep",

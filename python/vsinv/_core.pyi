@@ -98,6 +98,8 @@ __all__ = [
     "exp_twist",
     "pose_from_position_thetau",
     "thetau_from_pose",
+    "thetau_from_rotations",
+    "twist_adjoint",
     "IkSolution",
     "fk",
     "ik",
@@ -684,14 +686,14 @@ def run_batch(
     scenarios: Iterable[_ScenarioLike],
     threads: int | None = None,
     allow_outside_files: bool = False,
-    progress: bool | Callable[[int, int], object] | None = None,
+    progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, npt.NDArray[Any]]:
     """Runs the scenarios in parallel (GIL released, recording off); one table row per run.
 
-    ``progress``: a tqdm bar over runs (None: when stderr is a terminal), or a callable
-    ``progress(done, total)`` called from the calling thread as runs finish (``done``
-    increasing to ``total``). Ctrl-C or an exception of ``progress`` stops the batch and is
-    raised. Works in a process forked after earlier batches (the pools are rebuilt).
+    ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
+    as runs finish (``done`` increasing to ``total``); ``vsinv.run_batch`` draws a tqdm bar
+    instead for None, True or False. Ctrl-C or an exception of ``progress`` stops the batch
+    and is raised. Works in a process forked after earlier batches (the pools are rebuilt).
     """
 def run_scenario(
     scenario: _ScenarioLike,
@@ -986,6 +988,15 @@ def pose_from_position_thetau(position: _ArrayLike, thetau: _ArrayLike) -> _F64A
 
 def thetau_from_pose(pose: _ArrayLike) -> tuple[_F64Array, _F64Array]:
     """(position (3,), thetau (3,)) of a 4x4 pose, theta in [0, pi]."""
+
+def thetau_from_rotations(rotations: _ArrayLike) -> _F64Array:
+    """The theta-u vectors (rad, theta in [0, pi]) of rotation matrices ``(n, 3, 3)``, shape
+    ``(n, 3)`` (OpenCV's Rodrigues vectors); ``InvalidInput`` naming the matrix for one with
+    a non-finite entry or that is not a rotation (orthonormal, det +1, within 1e-6)."""
+
+def twist_adjoint(pose: _ArrayLike) -> _F64Array:
+    """The 6x6 twist transform (adjoint) of a 4x4 pose (R, t): a twist (v, w) in the pose's
+    frame to the same motion's twist in the parent frame, (R v + t x R w, R w)."""
 
 @final
 class IkSolution:

@@ -27,7 +27,13 @@ from typing import TYPE_CHECKING, Any, Callable, Optional, Union, cast
 import numpy as np
 import numpy.typing as npt
 
-from ._core import InvalidInput, recorded_columns
+from ._core import (
+    InvalidInput,
+    RunResult as _RunResult,
+    pose_from_position_thetau,
+    recorded_columns,
+    thetau_from_rotations,
+)
 from .safe_files import replace_file
 
 if TYPE_CHECKING:
@@ -200,13 +206,8 @@ def _image_size(camera: Any) -> Optional[tuple[float, float]]:
 
 def _rotation(theta_u_deg: Any) -> npt.NDArray[np.float64]:
     """The rotation matrix of a theta-u vector in degrees (Rodrigues)."""
-    r = np.radians(np.asarray(theta_u_deg, dtype=float))
-    angle = float(np.linalg.norm(r))
-    if angle < 1e-12:
-        return np.eye(3)
-    k = r / angle
-    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * kx + (1.0 - np.cos(angle)) * kx @ kx
+    thetau = np.radians(np.asarray(theta_u_deg, dtype=float))
+    return np.ascontiguousarray(pose_from_position_thetau(np.zeros(3), thetau)[:3, :3])
 
 
 def _object_points(scenario: dict[str, Any]) -> npt.NDArray[np.float64]:
@@ -431,25 +432,17 @@ def plot_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenari
 
 def theta_u(rotations: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The theta-u vectors (rad) of rotation matrices (..., 3, 3): the axis u times the angle
-    theta in [0, pi] (the rotation error components of the paper's Figs. 5, 7 and 9)."""
+    theta in [0, pi] (the rotation error components of the paper's Figs. 5, 7 and 9), by
+    :func:`vsinv.thetau_from_rotations`; NaN for a matrix with a non-finite entry (a pose not
+    recorded)."""
     r = np.asarray(rotations, dtype=float)
-    skew = np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], axis=-1)
-    cos = np.clip((np.trace(r, axis1=-2, axis2=-1) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(cos)
-    sin = np.sin(angle)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        scale = np.where(sin > 1e-6, angle / (2.0 * np.where(sin > 1e-6, sin, 1.0)), 0.5 + angle**2 / 12.0)
-    out = skew * scale[..., None]
-    # Near pi the skew part vanishes: u u^T = ((R + R^T) / 2 - cos(theta) I) / (1 - cos(theta))
-    # (Rodrigues' formula), its column of largest diagonal gives the axis, the skew part its sign.
-    for idx in zip(*np.nonzero(angle > 2.5)):
-        m = ((r[idx] + r[idx].T) / 2.0 - cos[idx] * np.eye(3)) / (1.0 - cos[idx])
-        col = m[:, int(np.argmax(np.diag(m)))]
-        axis = col / np.linalg.norm(col)
-        if np.dot(axis, skew[idx]) < 0:
-            axis = -axis
-        out[idx] = axis * angle[idx]
-    return out
+    if r.ndim < 2 or r.shape[-2:] != (3, 3):
+        raise InvalidInput(f"rotations: expected shape (..., 3, 3), got {r.shape}")
+    flat = r.reshape(-1, 3, 3)
+    finite = np.isfinite(flat).all(axis=(1, 2))
+    out = np.full((len(flat), 3), np.nan)
+    out[finite] = thetau_from_rotations(flat[finite])
+    return out.reshape(r.shape[:-2] + (3,))
 
 
 def plot_pose_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenario = None) -> Figure:
@@ -461,8 +454,7 @@ def plot_pose_errors(result: RunResult, ax: AxesArg = None, *, scenario: _Scenar
     re = np.degrees(np.asarray(result.rotation_error, dtype=float))
     pose = np.asarray(result.pose, dtype=float).reshape(-1, 4, 4)
     tr = pose[:, :3, 3] * 1e3
-    tu = np.degrees(theta_u(np.nan_to_num(pose[:, :3, :3])))
-    tu[~np.isfinite(pose[:, :3, :3]).all(axis=(1, 2))] = np.nan
+    tu = np.degrees(theta_u(pose[:, :3, :3]))  # NaN where the pose is not finite
     fig, (a1, b1, a2, b2), own = _panels(ax, 2, 2, figsize=(12, 6.4), sharex=True)
     a1.plot(t, te, color="tab:blue", label="||t||")
     a1.set_ylabel("translation error (mm)")
@@ -755,6 +747,16 @@ def plot(result: RunResult, kind: str, ax: AxesArg = None, *, scenario: _Scenari
     if kind in ("joints", "joint_velocities") and result.joint_limits is None:
         raise InvalidInput(f"kind: {kind!r} is drawn for an arm only ([robot] kind = \"urdf\")")
     return make(result, ax, scenario=scenario)
+
+
+def _run_result_plot(self: RunResult, kind: str, ax: AxesArg = None) -> Figure:
+    """The figure ``kind`` (``vsinv.plots.PLOTS``) drawn into ``ax`` (a matplotlib Axes, or one
+    per panel) or a new figure; returns the matplotlib Figure."""
+    return plot(self, kind, ax)
+
+
+# RunResult is a Rust class; its figures are drawn here (the Rust side imports no Python).
+_RunResult.plot = _run_result_plot  # type: ignore[method-assign]
 
 
 def save_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:

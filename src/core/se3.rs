@@ -5,7 +5,7 @@
 //! F*. A point `X*` given in F* has camera coordinates `M^-1 X*` (eq. 2: `R`, `t` of the paper
 //! are the rotation and translation of `M^-1`).
 
-use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix4, Matrix6, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::{Error, Result, check_finite, check_finite_matrix, check_overflow};
 
@@ -58,6 +58,40 @@ pub fn thetau_from_pose(pose: &Isometry3<f64>) -> [f64; 3] {
     pose.rotation.scaled_axis().into()
 }
 
+/// The theta-u rotation vector (radians, theta in [0, pi]) of a rotation matrix, orthonormal
+/// with determinant +1 within 1e-6 (the rule of [`pose_from_matrix`]).
+pub fn thetau_from_rotation(r: &Matrix3<f64>) -> Result<[f64; 3]> {
+    check_finite_matrix("rotation", r)?;
+    if !is_rotation(r) {
+        return Err(Error::InvalidParameter {
+            name: "rotation",
+            reason: "not a rotation matrix (orthonormal with det +1, within 1e-6)".into(),
+        });
+    }
+    Ok(UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*r)).scaled_axis().into())
+}
+
+/// Whether `r` is orthonormal with determinant +1 within 1e-6.
+fn is_rotation(r: &Matrix3<f64>) -> bool {
+    (r.transpose() * r - Matrix3::identity()).iter().all(|x| x.abs() <= 1e-6) && r.determinant() > 0.0
+}
+
+/// The twist transform (adjoint) of a rigid motion `(R, t)`: a twist `(v, w)` in the moving
+/// frame to the same motion's twist in the parent frame, `(R v + t x R w, R w)`. `R` and `t`
+/// are used as given.
+pub fn twist_adjoint(r: &Matrix3<f64>, t: &Vector3<f64>) -> Matrix6<f64> {
+    let mut m = Matrix6::zeros();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(t.cross_matrix() * r));
+    m.fixed_view_mut::<3, 3>(3, 3).copy_from(r);
+    m
+}
+
+/// [`twist_adjoint`] of a pose.
+pub fn twist_transform(pose: &Isometry3<f64>) -> Matrix6<f64> {
+    twist_adjoint(&pose.rotation.to_rotation_matrix().into_inner(), &pose.translation.vector)
+}
+
 /// The 4x4 homogeneous matrix of a pose.
 pub fn pose_to_matrix(pose: &Isometry3<f64>) -> Matrix4<f64> {
     pose.to_homogeneous()
@@ -68,9 +102,8 @@ pub fn pose_to_matrix(pose: &Isometry3<f64>) -> Matrix4<f64> {
 pub fn pose_from_matrix(m: &Matrix4<f64>) -> Result<Isometry3<f64>> {
     check_finite_matrix("pose", m)?;
     let r: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let orth = (r.transpose() * r - Matrix3::identity()).abs().max();
     let last = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)]];
-    if orth > 1e-6 || r.determinant() < 0.0 || last != [0.0, 0.0, 0.0, 1.0] {
+    if !is_rotation(&r) || last != [0.0, 0.0, 0.0, 1.0] {
         return Err(Error::InvalidParameter {
             name: "pose",
             reason: "not a rigid motion (rotation block must be orthonormal with det +1, last row 0 0 0 1)".into(),

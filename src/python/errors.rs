@@ -15,6 +15,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::Error;
+use crate::sim::scenario::DEPTHS_REMEDY;
 
 static VSINV_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static INVALID_INPUT: PyOnceLock<Py<PyType>> = PyOnceLock::new();
@@ -276,7 +277,9 @@ impl From<&Error> for PyError {
     fn from(err: &Error) -> Self {
         let class = if err.is_degenerate() { Class::Degenerate } else { Class::InvalidInput };
         let (kind, attributes) = describe(err);
-        Self { class, message: err.to_string(), kind: Some(kind), attributes }
+        // Python users pass depths to scenarios too: the remedy names the scenario key.
+        let message = err.message_with_remedy(DEPTHS_REMEDY);
+        Self { class, message, kind: Some(kind), attributes }
     }
 }
 

@@ -28,6 +28,7 @@ mod stability;
 mod tag_tracker;
 mod tags;
 mod uncertainty;
+mod values;
 mod vision;
 
 use pyo3::prelude::*;

@@ -11,8 +11,9 @@ use crate::core::adaptive_gain::AdaptiveGain;
 use crate::core::camera::Intrinsics;
 use crate::servo::law::options::{LAW_OPTIONS, LAWS, LawOptions, OptionKind, OptionSpec, OptionValue, option};
 use crate::servo::{
-    Law, PathPlan, Servo, ServoConfig, ServoDepths, ServoReference, ServoStep, StopRule, StopRules, Telemetry, Verdict,
+    Law, PathPlan, Servo, ServoConfig, ServoDepths, ServoReference, ServoStep, StopRule, StopRules, Telemetry,
 };
+use crate::sim::scenario::DEPTHS_REMEDY;
 
 /// The law named `law` with the options given; an option of another law is refused by name.
 fn law_of(law: &str, options: &LawOptions) -> PyResult<Law> {
@@ -368,10 +369,8 @@ pub(super) struct PyServoStep {
 
 impl From<ServoStep> for PyServoStep {
     fn from(step: ServoStep) -> Self {
-        let (verdict, reason) = match step.verdict {
-            Verdict::Running => ("running", None),
-            Verdict::Stop { status, reason } => (status.as_str(), Some(reason)),
-        };
+        let verdict = step.verdict.status().map_or("running", |s| s.as_str());
+        let reason = step.verdict.reason_with_remedy(DEPTHS_REMEDY);
         let twist = [0, 1, 2, 3, 4, 5].map(|i| step.twist[i]);
         Self { twist, verdict, reason, telemetry: step.telemetry }
     }

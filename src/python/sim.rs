@@ -4,16 +4,19 @@
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::IntoPyObjectExt;
 use pyo3::prelude::*;
-use pyo3::types::{PyCFunction, PyDict, PyString, PyTuple};
+use pyo3::types::{PyDict, PyString, PyTuple};
 
 use super::batch_watch::run_reporting;
 use super::control::bool_repr;
 use super::errors::{PyError, invalid_argument, reraise};
 use super::logs::{DEBUG, INFO, log};
+use super::values;
 use crate::sim::arm::ArmRobot;
 use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::{BUILTIN, FileAccess, Scenario, builtin, check_point_count};
+use crate::sim::scenario::{
+    BUILTIN, FileAccess, MAX_SCENARIO_BYTES, Scenario, builtin, check_point_count, scenario_error,
+};
 use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).
@@ -52,8 +55,7 @@ impl PyScenario {
     /// The scenario as a dictionary (every default filled in); edit it and pass it back to
     /// `run_scenario` or `Scenario.from_dict`.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let text = self.inner.to_json()?;
-        py.import("json")?.call_method1("loads", (text,))
+        values::to_python(py, &self.inner.to_value()?)
     }
     /// The scenario as TOML text.
     fn to_toml(&self) -> PyResult<String> {
@@ -70,32 +72,35 @@ pub fn access(allow_outside_files: bool) -> FileAccess {
 }
 
 fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scenario> {
-    let py = d.py();
-    // Too many object points are refused before the dictionary is written as JSON (a million
-    // took 5 s and 300 MB to be refused as too much text).
-    if let Ok(n) = d.get_item("object").and_then(|o| o.get_item("points")).and_then(|p| p.len()) {
-        check_point_count(n)?;
-    }
-    let kwargs = PyDict::new(py);
-    kwargs.set_item("default", PyCFunction::new_closure(py, None, None, numpy_to_json)?)?;
-    let text: String = py
-        .import("json")?
-        .call_method("dumps", (d,), Some(&kwargs))
-        .map_err(|e| invalid_argument("scenario", format!("scenario: cannot be written as JSON ({e})")))?
-        .extract()?;
-    Ok(Scenario::from_json_with(&text, access)?)
+    Ok(Scenario::from_value_with(scenario_value(d)?, access)?)
 }
 
-/// `json.dumps`'s `default`: NumPy scalars (`np.float32(0.5)`, `np.int64(3)`, `np.bool_`)
-/// and arrays as the Python numbers and lists they hold; anything else is not JSON.
-fn numpy_to_json(args: &Bound<'_, PyTuple>, _kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Py<PyAny>> {
-    let obj = args.get_item(0)?;
-    let numpy = obj.py().import("numpy")?;
-    if obj.is_instance(&numpy.getattr("generic")?)? || obj.is_instance(&numpy.getattr("ndarray")?)? {
-        return Ok(obj.call_method0("tolist")?.unbind());
+/// A scenario dictionary as a structured value (NumPy scalars and arrays as the numbers and
+/// lists they hold); a value that cannot be read names its key (`scenario: object.points[2][1]:
+/// ...`, kind `scenario`).
+fn scenario_value(d: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+    scenario_value_at(d, None)
+}
+
+/// [`scenario_value`] of the item `index` of a batch: keys as the batch's validation names
+/// them (`[3].control.gain`).
+fn scenario_value_at(d: &Bound<'_, PyAny>, index: Option<usize>) -> PyResult<serde_json::Value> {
+    let at = |key: &str| match (index, key.is_empty()) {
+        (None, _) => key.to_string(),
+        (Some(i), true) => format!("[{i}]"),
+        (Some(i), false) => format!("[{i}].{key}"),
+    };
+    // Too many object points are refused before the dictionary is read (a million took 5 s
+    // and 300 MB to be refused as too much text).
+    if let Ok(n) = d.get_item("object").and_then(|o| o.get_item("points")).and_then(|p| p.len()) {
+        check_point_count(n).map_err(|e| match e {
+            crate::Error::Scenario { key, reason } => scenario_error(&at(&key), reason),
+            other => other,
+        })?;
     }
-    let kind = obj.get_type().name()?;
-    Err(pyo3::exceptions::PyTypeError::new_err(format!("Object of type {kind} is not JSON serializable")))
+    // As many values as the text limit could hold (two bytes each at least, "0,").
+    let max_values = usize::try_from(MAX_SCENARIO_BYTES / 2).unwrap_or(usize::MAX);
+    values::to_value(d, max_values)?.map_err(|e| scenario_error(&at(&e.path), e.reason).into())
 }
 
 /// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path; the files
@@ -187,12 +192,6 @@ impl PyRunResult {
     #[classattr]
     fn columns(py: Python<'_>) -> PyResult<Py<PyTuple>> {
         Ok(PyTuple::new(py, recorded_columns(py)?)?.unbind())
-    }
-    /// A figure of the run, `kind` one of `vsinv.plots.PLOTS`, drawn into `ax` (a matplotlib
-    /// Axes) or a new figure; returns the figure.
-    #[pyo3(signature = (kind, ax = None))]
-    fn plot<'py>(slf: &Bound<'py, Self>, kind: &str, ax: Option<Bound<'py, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
-        slf.py().import("vsinv.plots")?.call_method1("plot", (slf, kind, ax))
     }
     fn __repr__(&self, py: Python<'_>) -> String {
         let s = self.summary.bind(py);
@@ -316,14 +315,7 @@ pub fn run_scenario(
     progress: Option<Py<PyAny>>,
     allow_outside_files: bool,
 ) -> PyResult<PyRunResult> {
-    if let Some(cb) = &progress
-        && !cb.bind(py).is_callable()
-    {
-        let kind = cb.bind(py).get_type().name()?.to_string();
-        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "progress: expected a callable progress(done, total) or None, got {kind}"
-        )));
-    }
+    check_progress(progress.as_ref().map(|p| p.bind(py)))?;
     let scenario = scenario_arg_with(scenario, access(allow_outside_files))?;
     let mut config = scenario.to_config()?;
     config.record = record;
@@ -367,6 +359,19 @@ pub fn run_scenario(
         )
     })?;
     run_result(py, scenario, &config, outcome)
+}
+
+/// A `progress` argument: None or a callable `progress(done, total)` (a TypeError otherwise).
+fn check_progress(progress: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    match progress {
+        Some(cb) if !cb.is_callable() => {
+            let kind = cb.get_type().name()?.to_string();
+            Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "progress: expected a callable progress(done, total) or None, got {kind}"
+            )))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// `run_scenario`'s result: the summary and the recorded columns moved into NumPy.
@@ -429,9 +434,9 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// not measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2,
 /// within_tolerance, message (str). A scenario whose configuration is invalid raises before
 /// anything runs; a run that fails on the way has status "error" and its message.
-/// `progress`: a tqdm bar over runs (None: when stderr is a terminal; True, False), or a
-/// callable `progress(done, total)` called from this thread as runs finish. Ctrl-C (or an
-/// exception of `progress`) stops the batch and is raised.
+/// `progress`: None, or a callable `progress(done, total)` called from this thread as runs
+/// finish (`vsinv.run_batch` makes a tqdm bar of None, True or False). Ctrl-C (or an exception
+/// of `progress`) stops the batch and is raised.
 #[pyfunction]
 #[pyo3(signature = (scenarios, threads = None, allow_outside_files = false, progress = None))]
 pub fn run_batch<'py>(
@@ -441,16 +446,12 @@ pub fn run_batch<'py>(
     allow_outside_files: bool,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    check_progress(progress.as_ref())?;
     let access = access(allow_outside_files);
     let texts = batch_texts(scenarios, access)?;
     let started = std::time::Instant::now();
     log(py, INFO, || format!("run_batch: {} scenarios on {}", texts.len(), threads_text(threads)))?;
-    let reporter = py.import("vsinv._progress")?.call_method1("reporter", (progress, texts.len(), "batch"))?;
-    let results = run_reporting(py, &texts, threads, access, Some(&reporter).filter(|r| !r.is_none()));
-    if !reporter.is_none() {
-        reporter.call_method0("close")?;
-    }
-    let results = results?;
+    let results = run_reporting(py, &texts, threads, access, progress.as_ref())?;
     let mut table = BatchTable::with_capacity(results.len());
     results.iter().for_each(|r| table.push(r));
     log(py, INFO, || {
@@ -467,11 +468,11 @@ fn threads_text(threads: Option<usize>) -> String {
     threads.map_or_else(|| "all cores".into(), |n| format!("{n} threads"))
 }
 
-/// The batch's scenarios as JSON texts. Dictionaries become JSON here (the GIL is needed);
-/// parsing, validation and the runs happen in parallel with the GIL released.
+/// The batch's scenarios as JSON texts (compact, and parsed again when each runs: a batch
+/// keeps no configuration). Dictionaries are read here (the GIL is needed) and written as
+/// text in Rust; parsing, validation and the runs happen in parallel with the GIL released.
 fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec<String>> {
     let py = scenarios.py();
-    let dumps = py.import("json")?.getattr("dumps")?;
     let mut texts = Vec::new();
     // Names and paths repeat in a batch: load each once.
     let mut loaded: std::collections::HashMap<String, String> = std::collections::HashMap::new();
@@ -482,8 +483,13 @@ fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec
             texts.push(text.clone());
             continue;
         }
-        let text = batch_text(&item, &dumps, access)
-            .map_err(|e| reraise(&e, format!("scenario {i}: {}", e.value(py)), None))?;
+        let text = if item.cast::<PyDict>().is_ok() {
+            // Read here and written as compact text in Rust; errors name `[i].key`.
+            let value = scenario_value_at(&item, Some(i))?;
+            serde_json::to_string(&value).map_err(|e| invalid_argument("scenario", format!("scenario {i}: {e}")))?
+        } else {
+            batch_text(&item, access).map_err(|e| reraise(&e, format!("scenario {i}: {}", e.value(py)), None))?
+        };
         if let Some(k) = key {
             loaded.insert(k, text.clone());
         }
@@ -495,12 +501,9 @@ fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec
 /// Opens a JSON object (written as an escape so that the braces of this file stay balanced).
 const JSON_OBJECT_START: char = '\u{7b}';
 
-/// One batch item as JSON: a dictionary dumped, a JSON text as it is (sweeps serialise while
+/// One batch item (not a dictionary) as JSON: a JSON text as it is (sweeps serialise while
 /// the previous chunk runs), anything else loaded as a scenario (name, file, Scenario).
-fn batch_text(item: &Bound<'_, PyAny>, dumps: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<String> {
-    if item.cast::<PyDict>().is_ok() {
-        return dumps.call1((item,))?.extract::<String>();
-    }
+fn batch_text(item: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<String> {
     if let Ok(s) = item.cast::<PyString>()
         && s.to_cow()?.trim_start().starts_with(JSON_OBJECT_START)
     {

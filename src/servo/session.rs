@@ -452,10 +452,7 @@ impl Servo {
                 .map_err(|err| Verdict::stop(Status::Degenerate, format!("depth estimation failed: {err}")))?;
         }
         self.follow_path()?;
-        let twist = self
-            .law
-            .twist(&self.pixels, &self.depths, &self.visible)
-            .map_err(|e| Verdict::stop(Status::of_error(&e), e.to_string()))?;
+        let twist = self.law.twist(&self.pixels, &self.depths, &self.visible).map_err(Verdict::stop_on)?;
         let (eps, tracking) = self.law.eps_and_tracking();
         (self.telemetry.eps, self.telemetry.tracking_error, self.telemetry.law_ran) = (eps, tracking, true);
         if !twist.iter().all(|v| v.is_finite()) {

@@ -69,15 +69,33 @@ pub enum Verdict {
     Stop {
         /// Why, as a status.
         status: Status,
-        /// Why, in words.
+        /// Why, in words (the core's).
         reason: String,
+        /// The control error that stopped the loop, if one did: a higher layer words it in
+        /// its own terms ([`Error::message_with_remedy`]).
+        cause: Option<Error>,
     },
 }
 
 impl Verdict {
     /// A stop with its reason.
     pub fn stop(status: Status, reason: impl Into<String>) -> Self {
-        Verdict::Stop { status, reason: reason.into() }
+        Verdict::Stop { status, reason: reason.into(), cause: None }
+    }
+
+    /// A stop on a control error: its status ([`Status::of_error`]), its message and the error.
+    pub fn stop_on(err: Error) -> Self {
+        Verdict::Stop { status: Status::of_error(&err), reason: err.to_string(), cause: Some(err) }
+    }
+
+    /// The reason of a stop with `remedy` (a higher layer's way to pass depths, in its words)
+    /// added to the cause's remedies ([`Error::message_with_remedy`]); None while running.
+    pub fn reason_with_remedy(&self, remedy: &str) -> Option<String> {
+        match self {
+            Verdict::Running => None,
+            Verdict::Stop { cause: Some(e), .. } => Some(e.message_with_remedy(remedy)),
+            Verdict::Stop { reason, .. } => Some(reason.clone()),
+        }
     }
 
     /// Whether the loop goes on.

@@ -354,7 +354,7 @@ mod tests {
         let mut pose = start;
         let status = loop {
             let step = pipeline.step(&render(&pose, &k)).unwrap();
-            if let Verdict::Stop { status, reason } = step.verdict {
+            if let Verdict::Stop { status, reason, .. } = step.verdict {
                 assert_eq!(status, Status::Converged, "{reason} after {} steps", pipeline.servo().iterations());
                 break status;
             }

@@ -17,7 +17,7 @@ from typing import Any, Literal, cast
 import numpy as np
 import numpy.typing as npt
 
-from .._core import Distortion, Intrinsics, InvalidInput, to_grey
+from .._core import Distortion, Intrinsics, InvalidInput, to_grey, twist_adjoint
 
 __all__ = [
     "ENCODINGS", "image_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
@@ -119,8 +119,6 @@ def hand_eye_matrix(name: str, values: npt.ArrayLike) -> npt.NDArray[np.float64]
 def twist_in_end_effector_frame(twist: npt.ArrayLike, hand_eye: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The camera twist (v, w), camera frame, as the end effector's twist in its own frame for
     the camera pose ``hand_eye`` in it (R, t): w_e = R w, v_e = R v + t x w_e, the adjoint of
-    the rigid mount (a rigid body's velocity field)."""
+    the rigid mount (:func:`vsinv.twist_adjoint`, a rigid body's velocity field)."""
     t6 = np.asarray(twist, dtype=float)
-    r, t = hand_eye[:3, :3], hand_eye[:3, 3]
-    w = r @ t6[3:]
-    return np.concatenate([r @ t6[:3] + np.cross(t, w), w])
+    return twist_adjoint(hand_eye) @ t6

@@ -31,7 +31,7 @@ def _run_chunk(
     """Run a chunk of scenarios written as JSON texts with :func:`vsinv.run_batch` (module
     level: picklable, for executors; texts pickle faster than nested dicts). The sweep has
     its own bar: the chunk shows none."""
-    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=False)
+    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=None)
 
 
 def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:

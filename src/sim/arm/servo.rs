@@ -7,6 +7,7 @@
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix6, Matrix6xX, Vector6};
 
 use super::{ArmLimits, ArmModel};
+use crate::core::se3::twist_transform;
 use crate::error::{Error, Result, Short, check_finite};
 use crate::sim::robot::{CameraRobot, RobotEvent, RobotMotion};
 
@@ -58,17 +59,6 @@ pub struct ArmStep {
     pub limited: bool,
     /// Set when the run must end here.
     pub event: Option<RobotEvent>,
-}
-
-/// The twist transform (adjoint) of a pose `(R, t)`: a twist in the pose's frame to the
-/// same motion's twist in the parent frame, `(R v + t x R w, R w)`.
-pub fn twist_transform(pose: &Isometry3<f64>) -> Matrix6<f64> {
-    let r = pose.rotation.to_rotation_matrix().into_inner();
-    let mut m = Matrix6::zeros();
-    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
-    m.fixed_view_mut::<3, 3>(0, 3).copy_from(&(pose.translation.vector.cross_matrix() * r));
-    m.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
-    m
 }
 
 impl ArmRobot {

@@ -23,6 +23,10 @@ use crate::sim::config::SimulationConfig;
 /// The largest scenario file, bytes.
 pub use crate::input_file::MAX_SCENARIO_BYTES;
 
+/// How a scenario passes depths to the invariant law, added to the core's remedies when a
+/// run stops on a degenerate structure ([`crate::Error::message_with_remedy`]).
+pub const DEPTHS_REMEDY: &str = "; scenario control.depths = \"reference\" or \"estimated\"";
+
 /// A TOML syntax error: the parser's message and the line, without the quoted source.
 fn toml_message(text: &str, e: &toml::de::Error) -> String {
     let message = shorten_quotes(e.message().trim());
@@ -73,7 +77,7 @@ pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
     Error::Scenario { key: key.to_string(), reason: reason.into() }
 }
 
-/// Scenario text (TOML, or JSON from a dictionary) is held to the file limit,
+/// Scenario text (TOML, or JSON: a batch's items) is held to the file limit,
 /// [`MAX_SCENARIO_BYTES`], before it is parsed.
 fn check_text_size(text: &str) -> Result<()> {
     if text.len() as u64 > MAX_SCENARIO_BYTES {
@@ -130,7 +134,7 @@ impl Scenario {
         Ok(scenario)
     }
 
-    /// Parses JSON text (the form Python dictionaries take on their way in).
+    /// Parses JSON text (the form a batch's scenarios take while they wait to run).
     pub fn from_json(text: &str) -> Result<Self> {
         Self::from_json_with(text, FileAccess::ScenarioFolder)
     }
@@ -162,10 +166,28 @@ impl Scenario {
         serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let key = e.path().to_string();
             let message = e.into_inner().to_string();
-            // serde_json appends the position in the JSON text, meaningless for a dictionary.
+            // serde_json appends the position in the JSON text, meaningless for a dictionary
+            // (a batch's dictionaries are written as JSON text while they wait).
             let message = message.split(" at line ").next().unwrap_or_default();
             scenario_error(&key, shorten_quotes(message))
         })
+    }
+
+    /// From a structured value (a Python dictionary walked by the bindings), its files
+    /// resolved by the rule `access` (relative to the working directory).
+    pub fn from_value_with(value: serde_json::Value, access: FileAccess) -> Result<Self> {
+        let mut scenario: Scenario = serde_path_to_error::deserialize(value).map_err(|e| {
+            let key = e.path().to_string();
+            scenario_error(&key, shorten_quotes(&e.into_inner().to_string()))
+        })?;
+        scenario.file_access = access;
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// The scenario as a structured value (entries in the order of the file's sections).
+    pub fn to_value(&self) -> Result<serde_json::Value> {
+        serde_json::to_value(self).map_err(|e| scenario_error("", e.to_string()))
     }
 
     /// The scenario as JSON text.

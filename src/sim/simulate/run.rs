@@ -7,13 +7,14 @@ use crate::core::camera::Intrinsics;
 use crate::core::se3::pose_error;
 use crate::core::stability::stability_verdicts;
 use crate::error::{Result, fixed_or_short};
-use crate::servo::{Servo, ServoStep, Verdict};
+use crate::servo::{Servo, ServoStep};
 use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::outcome::{Outcome, Recording, Status, Summary};
 use crate::sim::record_budget::RecordBudget;
 use crate::sim::robot::{RobotEvent, RobotMotion};
+use crate::sim::scenario::DEPTHS_REMEDY;
 use crate::sim::scene::Observation;
 
 use super::pixel_noise::PixelNoise;
@@ -106,8 +107,9 @@ impl<'a> Run<'a> {
         }
         let step = self.servo.control();
         self.after_control(&step, &k);
-        if let Verdict::Stop { status, reason } = step.verdict {
-            return Ok(Some((status, reason)));
+        // The stop's reason in the scenario's words (the remedy names its key).
+        if let Some(status) = step.verdict.status() {
+            return Ok(Some((status, step.verdict.reason_with_remedy(DEPTHS_REMEDY).unwrap_or_default())));
         }
         if let Err(end) = self.move_robot(&step.twist) {
             return Ok(Some(end));
@@ -171,8 +173,9 @@ impl<'a> Run<'a> {
         if distance.is_nan() || distance > stop.divergence_distance {
             return Some((Status::Diverged, format!("camera {} m from the goal", fixed_or_short(distance, 2))));
         }
-        if let Verdict::Stop { status, reason } = self.servo.verdict() {
-            return Some((status, reason));
+        let verdict = self.servo.verdict();
+        if let Some(status) = verdict.status() {
+            return Some((status, verdict.reason_with_remedy(DEPTHS_REMEDY).unwrap_or_default()));
         }
         if self.iteration.is_multiple_of(64) && !progress(self.iteration, stop.max_iterations) {
             return Some((Status::MaxIterations, "stopped by the caller".into()));

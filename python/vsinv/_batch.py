@@ -1,0 +1,55 @@
+""":func:`run_batch`: the Rust batch runner (``vsinv._core.run_batch``, which reports to a
+callable) with the package's progress reports (a tqdm bar of :mod:`vsinv._progress`)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from typing import Any, Callable, Optional, Union
+
+import numpy.typing as npt
+
+from . import _core
+from ._progress import Bar, Progress
+
+
+def run_batch(
+    scenarios: Iterable[Any],
+    threads: Optional[int] = None,
+    allow_outside_files: bool = False,
+    progress: Progress = None,
+) -> dict[str, npt.NDArray[Any]]:
+    """Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths)
+    in parallel with the GIL released (recording off); returns the table as a dict of NumPy
+    arrays, one row per scenario: status (str), iterations, the summary fields
+    final_translation_error, final_rotation_error, final_image_error, final_invariant_error,
+    max_line_deviation, observed_max_eps, pixel_sigma, translation_uncertainty,
+    rotation_uncertainty (SI, NaN where not measured; each also under its older name, ``_mm``,
+    ``_deg``, ``_px``), prop1, prop2, within_tolerance, message (str). A scenario whose
+    configuration is invalid raises before anything runs; a run that fails on the way has
+    status "error" and its message.
+
+    ``progress``: a tqdm bar over runs (None: when stderr is a terminal; True, False), or a
+    callable ``progress(done, total)`` called from the calling thread as runs finish (``done``
+    increasing to ``total``). Ctrl-C or an exception of ``progress`` stops the batch and is
+    raised. Works in a process forked after earlier batches (the pools are rebuilt).
+    """
+    call: Optional[Callable[[int, int], Any]]
+    bar: Union[Bar, None] = None
+    if progress is None or isinstance(progress, bool):
+        if progress is False or (progress is None and not Bar.shown_by_default()):
+            call = None
+        else:
+            scenarios = list(scenarios)  # the bar's total
+            bar = Bar(True, len(scenarios), "batch")
+            call = bar
+    elif callable(progress):
+        call = progress
+    else:
+        raise TypeError(
+            f"progress: expected None, True, False or a callable progress(done, total), got {type(progress).__name__}"
+        )
+    try:
+        return _core.run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=call)
+    finally:
+        if bar is not None:
+            bar.close()
