@@ -78,6 +78,7 @@ __all__ = [
     "ResectionDepths",
     "estimate_plane_parallax",
     "depths_from_translation",
+    "reference_depths",
     "render",
     "render_view",
     "Dots",
@@ -735,6 +736,13 @@ class InvariantPath:
     @property
     def plane_parallax(self) -> PlaneParallax: ...
     def sample(self, t: float) -> tuple[_F64Array, _F64Array]: ...
+
+def reference_depths(object_points: _ArrayLike, reference_pixels: _ArrayLike, K: _IntrinsicsLike | None = None) -> _F64Array:
+    """The reference depths zeta* (n,) of a photo taken with any camera: `object_points` (n, 3),
+    the object's model in any frame (metres), seen at `reference_pixels` (n, 2) in the photo
+    (undistorted pixels). At least 6 points not on one plane need no intrinsics (a DLT
+    resection); points on one plane (at least 4) need `K`, the photo's camera matrix (3x3 or
+    Intrinsics)."""
 
 def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]:
     """Eq. (26): the depths of the first image of a pure-translation pair (any camera), up to
