@@ -563,8 +563,8 @@ def test_attributes_of_file_image_and_lens_errors(tmp_path):
     path.write_text(ROS.replace("data: [812.25, 0.0, 323.5", "data: [812.25, 0.0, abc", 1))
     err = raised(lambda: vsinv.load_calibration(path))
     assert (err.kind, err.file, err.field) == ("calibration", str(path), "camera_matrix.data[2]")
-    err = raised(lambda: vsinv.detect_dots(np.zeros((4, 4, 3), np.uint8)))
-    assert (err.kind, err.argument) == ("invalid_image", "image") and "grey" in err.reason
+    err = raised(lambda: vsinv.detect_dots(np.zeros((4, 4, 2), np.uint8)))
+    assert (err.kind, err.argument) == ("invalid_image", "image") and "grey" in err.reason and "(4, 4, 2)" in err.reason
     k = vsinv.Intrinsics(500.0, 500.0, 320.0, 240.0)
     px = np.array([[320.0, 240.0], [570.0, 240.0], [670.0, 240.0]])
     err = raised(lambda: vsinv.undistort_points(px, k, [-0.4, 0.0, 0.0, 0.0]))

@@ -141,8 +141,8 @@ def test_bad_arguments_are_refused_by_name(scenario: vsinv.Scenario) -> None:
     with pytest.raises(vsinv.InvalidInput, match="reference_image"):
         vsinv.ImageServo(ref.astype(np.float32), "dots", K_HAT, reference_points=ref_px, **SESSION)
     pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, **SESSION)
-    with pytest.raises(vsinv.InvalidInput, match="image"):
-        pipeline.step(np.zeros((10, 10, 3), np.uint8))
+    with pytest.raises(vsinv.InvalidInput, match=r"^image: expected a uint8 NumPy array.* shape \(10, 10, 2\)"):
+        pipeline.step(np.zeros((10, 10, 2), np.uint8))
 
 
 def test_frame_sources(tmp_path: Path) -> None:

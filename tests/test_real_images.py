@@ -315,6 +315,25 @@ def test_mire2_replays_through_the_image_pipeline(visp: Path, tmp_path: Path, ca
     assert result.found.all()
 
 
+def test_mire2_with_the_invariant_law_says_how_many_points_and_what_to_do(
+    visp: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Issue 29 item 5: mire-2's five coplanar dots are too few for the invariant law (6 points not
+    on one plane, sec. 4.1): `vsinv replay` with the default law exits 2 with the counts and the
+    way out, and the way out (IBVS) follows the five dots."""
+    frames = _mire2(visp)
+    points = tmp_path / "clicks.csv"
+    points.write_text("u,v\n215,167\n85,179\n160,213\n242,248\n93,266\n")
+    args = ["replay", str(frames[0]), str(visp / "mire-2"), "--points", str(points), "--K-hat", "600,600,192,144"]
+    capsys.readouterr()
+    assert cli.main(args + ["--max-frames", "3"]) == 2
+    err = capsys.readouterr().err
+    assert "--law invariant: needs at least 6 points not on one plane" in err and "the target gives 5" in err, err
+    assert "Use --law ibvs with --depth Z" in err, err
+    assert cli.main(args + ["--law", "ibvs", "--depth", "0.5", "--max-frames", "3"]) == 0
+    assert "3 frames, 5 points; 0 point-frames not found" in capsys.readouterr().out
+
+
 def test_mire2_through_the_ros_bridge_session(visp: Path) -> None:
     """Issue 20 on real frames: the mire-2 frames as the ROS 2 bridge receives them (rgb8
     sensor_msgs/Image messages, converted to grey by the bridge) through the bridge's session,

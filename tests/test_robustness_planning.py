@@ -16,8 +16,9 @@ from hypothesis import strategies as st
 
 import vsinv
 from robustness_harness import (
-    ANY, CUR_PX, CUR_Z, FIRST_PX, FIRST_Z, INVALID, N, RAISE, REF_PX, RETURN, SAME, TRANS_PX, V, basis_variants, call,
-    covers, depth_variants, floats, fuzz, fuzz_settings, manual_invariants, pixel_variants, returned,
+    ANY, CUR_PX, CUR_Z, FIRST_PX, FIRST_Z, INVALID, KSTAR, N, OBJ, RAISE, REF_PX, REF_Z, RETURN, SAME, TRANS_PX, V, arrays,
+    basis_variants, call, covers, depth_variants, floats, fuzz, fuzz_settings, k_variants, manual_invariants, pixel_variants,
+    returned,
 )
 
 
@@ -88,6 +89,22 @@ def test_depths_from_translation(data: Any) -> None:
     fuzz(data, vsinv.depths_from_translation, args,
          {"first_pixels": pixel_variants(FIRST_PX, ANY, overrides=over), "second_pixels": pixel_variants(TRANS_PX, ANY, overrides=over)},
          ref=ref, rtol=1e-9, check=check)
+
+
+@covers("reference_depths")
+@fuzz_settings(120)
+@given(st.data())
+def test_reference_depths(data: Any) -> None:
+    # The object in its own frame (any), seen in the reference view: its depths there.
+    model = OBJ - OBJ.mean(axis=0)
+    args = {"object_points": model, "reference_pixels": REF_PX, "K": None}
+    ref = vsinv.reference_depths(**args)
+    np.testing.assert_allclose(ref, REF_Z, rtol=1e-9)
+    over = {"fewer": RAISE, "negative": ANY, "zero": RAISE, "bool": RAISE}
+    ks = st.one_of(st.just(V(None, SAME, "none")), k_variants(KSTAR).map(lambda v: V(v.value, ANY if v.expect == SAME else v.expect, v.label)))
+    fuzz(data, vsinv.reference_depths, args,
+         {"object_points": arrays(model, overrides=over), "reference_pixels": pixel_variants(REF_PX, ANY, overrides=over), "K": ks},
+         ref=ref, rtol=1e-9, check=lambda z: None if (z > 0).all() else pytest.fail(f"a depth <= 0 returned: {z}"))
 
 
 @covers("ResectionDepths", "ResectionDepths.estimate")

@@ -33,7 +33,10 @@ def image_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
         V(valid.astype(np.int64), INVALID, "int64"),
         V(valid.astype(np.float64), INVALID, "float64"),
         V(valid.astype(np.uint16), INVALID, "uint16"),
-        V(np.stack([valid] * 3, axis=-1), INVALID, "colour"),
+        V(np.stack([valid] * 3, axis=-1), SAME, "colour"),  # BGR of equal channels: the same grey
+        V(np.stack([valid] * 3 + [255 - valid], axis=-1), SAME, "bgra"),  # alpha ignored
+        V(valid[:, :, None], SAME, "one channel"),
+        V(np.stack([valid] * 2, axis=-1), INVALID, "two channels"),
         V(valid.ravel(), INVALID, "1-d"),
         V(valid.tolist(), INVALID, "list"),
         V(None, INVALID, "none"),
@@ -385,8 +388,8 @@ def colour_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
         V(valid, SAME, "valid"),
         V(np.asfortranarray(valid), SAME, "fortran"),
         V(np.repeat(valid, 2, axis=1)[:, ::2], SAME, "strided"),
-        V(valid[:, :, 0], INVALID, "grey"),
-        V(np.concatenate([valid, valid[:, :, :1]], axis=2), INVALID, "rgba"),
+        V(valid[:, :, 0], ANY, "grey"),  # returned as a copy
+        V(np.concatenate([valid, valid[:, :, :1]], axis=2), SAME, "rgba"),  # alpha ignored
         V(valid[:, :, :2], INVALID, "two channels"),
         V(valid.astype(np.float64), INVALID, "float64"),
         V(valid.astype(np.uint16), INVALID, "uint16"),

@@ -78,6 +78,7 @@ __all__ = [
     "ResectionDepths",
     "estimate_plane_parallax",
     "depths_from_translation",
+    "reference_depths",
     "render",
     "render_view",
     "Dots",
@@ -738,6 +739,13 @@ class InvariantPath:
     def plane_parallax(self) -> PlaneParallax: ...
     def sample(self, t: float) -> tuple[_F64Array, _F64Array]: ...
 
+def reference_depths(object_points: _ArrayLike, reference_pixels: _ArrayLike, K: _IntrinsicsLike | None = None) -> _F64Array:
+    """The reference depths zeta* (n,) of a photo taken with any camera: `object_points` (n, 3),
+    the object's model in any frame (metres), seen at `reference_pixels` (n, 2) in the photo
+    (undistorted pixels). At least 6 points not on one plane need no intrinsics (a DLT
+    resection); points on one plane (at least 4) need `K`, the photo's camera matrix (3x3 or
+    Intrinsics)."""
+
 def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]:
     """Eq. (26): the depths of the first image of a pure-translation pair (any camera), up to
     one positive scale (mean 1). Returns (depths (n,), epipole (3,), residual)."""
@@ -756,6 +764,11 @@ class ResectionDepths:
     ) -> ResectionDepths: ...
     def estimate(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array: ...
 
+# An image: returned, a (height, width) uint8 grey array; as an argument, any uint8 array read
+# by the bindings' one image reader: grey (height, width) or (height, width, 1), colour
+# (height, width, 3) BGR or (height, width, 4) BGRA (OpenCV's order; alpha ignored) converted
+# to grey by Rec. 601 luma (OpenCV's COLOR_BGR2GRAY to the bit), in C, Fortran or strided order.
+# Anything else raises InvalidInput naming the argument, its dtype and shape.
 _U8Image = npt.NDArray[np.uint8]
 
 def render(
@@ -866,7 +879,7 @@ class TagTracker:
         follow: bool = True,
     ) -> TagTracker: ...
     def track(self, image: npt.NDArray[np.uint8]) -> Tags:
-        """The tags in the next frame (a (height, width) uint8 array), sorted by id; their
+        """The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their
         ``stopped_early`` says whether a quad search of this frame (whole or in a crop) stopped
         early, as ``detect_tags``'s."""
     def reset(self) -> None:
@@ -908,7 +921,7 @@ def detect_tags(
     family: _TagFamily = "tag36h11",
     decimation: int | None = None,
 ) -> Tags:
-    """The AprilTags of `family` in a (height, width) uint8 image, sorted by id, with the corners
+    """The AprilTags of `family` in an image (grey, or BGR/BGRA converted to grey), sorted by id, with the corners
     of each black square in OpenCV's aruco order and pixel convention (the same numbers as
     cv2.aruco.ArucoDetector with DICT_APRILTAG_36h11, within noise), measured on the square's
     outer edges; a tag whose edges do not support its corners is left out. Quads are searched
@@ -932,13 +945,16 @@ def load_image(path: str | os.PathLike[str]) -> _U8Image:
     profile (iCCP) and text chunks are skipped unread."""
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
-    """Writes a (height, width) uint8 array as a PNG file."""
+    """Writes an image as a grey PNG file (a BGR or BGRA array is written as its grey)."""
 
 def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = None) -> _U8Image:
-    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image whose
-    channels are in ``order`` (None: ``"rgb"``), by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the
-    bit), in Rust with the GIL released; a non-contiguous array is copied once. Another shape or
-    dtype raises InvalidInput, another order InvalidInput naming ``order``."""
+    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or a
+    (height, width, 4) one with alpha (ignored), whose colour channels are in ``order`` (None:
+    ``"rgb"``), by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the bit), in Rust
+    with the GIL released; a non-contiguous array is copied once, a grey (height, width) or
+    (height, width, 1) array is returned as a copy. Another shape or dtype raises InvalidInput,
+    another order InvalidInput naming ``order``. (Every function that takes an image reads
+    colour itself, in OpenCV's BGR order.)"""
 
 @final
 class Distortion:

@@ -159,11 +159,27 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
     return options
 
 
+def _too_few_for_the_invariant_law(error: VsinvError) -> str:
+    """What to do when the target has too few points for the invariant law (a 5-dot target such
+    as ViSP's mire-2): the law needs 6 points not on one plane (sec. 4.1: each point beyond the
+    three of the basis gives two independent rows, and five dof need five rows)."""
+    needed, count = getattr(error, "needed", None) or 6, getattr(error, "count", None)
+    given = f"the target gives {count}" if count is not None else str(error)
+    return (
+        f"--law invariant: needs at least {needed} points not on one plane (the paper's sec. 4.1: three "
+        f"basis points and three more control five dof), {given}. Use --law ibvs with --depth Z (classic "
+        "IBVS: 4 points or more, with the servo camera's calibration), or a target with 6 or more points "
+        "in relief (for instance --target tags with tags on two or more faces of a box)."
+    )
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     k_hat = load_calibration(args.calibration).intrinsics if args.calibration is not None else _intrinsics(args.K_hat)
     try:
         result = replay(args.reference, args.frames, k_hat, args.target, args.max_frames, **_options(args))
     except VsinvError as e:
+        if getattr(e, "kind", None) == "too_few_points" and args.law == "invariant":
+            raise type(e)(_too_few_for_the_invariant_law(e)) from None
         raise named_as_options(e, _OPTION_NAMES) from None
     print(result.table())
     lost = int((~result.found).sum())

@@ -39,7 +39,7 @@ fn homog(p: [f64; 2]) -> Vector3<f64> {
 }
 
 /// Hartley normalisation of 2D points: centroid to 0, mean distance sqrt(2).
-fn normalise_2d(points: &[[f64; 2]]) -> Matrix3<f64> {
+pub(crate) fn normalise_2d(points: &[[f64; 2]]) -> Matrix3<f64> {
     let n = points.len() as f64;
     let (cx, cy) = points.iter().fold((0.0, 0.0), |(x, y), p| (x + p[0] / n, y + p[1] / n));
     let mean = points.iter().map(|p| (p[0] - cx).hypot(p[1] - cy)).sum::<f64>() / n;

@@ -1,19 +1,17 @@
-//! `to_grey`: a `(height, width, 3)` uint8 colour array (RGB or BGR) to the `(height, width)`
+//! `to_grey`: a colour uint8 array (RGB or BGR, with or without alpha) to the `(height, width)`
 //! grey array the detectors read, in Rust with the GIL released (Rec. 601 luma, OpenCV's
-//! `COLOR_RGB2GRAY`/`COLOR_BGR2GRAY` to the bit).
+//! `COLOR_RGB2GRAY`/`COLOR_BGR2GRAY` to the bit), through the one image reader
+//! ([`super::image_arg`]) every image-taking binding uses.
 
-use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::PyArray2;
 use pyo3::prelude::*;
 
-use crate::vision::grey::{ChannelOrder, colour_to_grey};
+use super::image_arg::read_image;
+use crate::vision::grey::ChannelOrder;
 
-fn invalid(reason: String) -> PyErr {
-    crate::Error::InvalidImage { what: "image".to_string(), reason }.into()
-}
-
-/// The grey image of a colour image: `image` a `(height, width, 3)` uint8 array whose
-/// channels are in `order` (`"rgb"`, the default when None, or `"bgr"`); a non-contiguous
-/// array is copied once.
+/// The grey image of `image`: `(height, width, 3)` or `(height, width, 4)` (alpha ignored)
+/// uint8 whose colour channels are in `order` (`"rgb"`, the default when None, or `"bgr"`);
+/// a grey `(height, width)` or `(height, width, 1)` array is returned as a copy.
 #[pyfunction]
 #[pyo3(signature = (image, order = None))]
 pub fn to_grey<'py>(
@@ -25,7 +23,7 @@ pub fn to_grey<'py>(
         None => ChannelOrder::Rgb,
         Some(order) => channel_order(order)?,
     };
-    convert(py, image, order)
+    read_image(image, "image", order)?.into_array(py)
 }
 
 /// `"rgb"` or `"bgr"`; anything else raises `InvalidInput` naming `order`.
@@ -39,40 +37,6 @@ fn channel_order(order: &Bound<'_, PyAny>) -> PyResult<ChannelOrder> {
             Err(crate::Error::InvalidParameter { name: "order", reason }.into())
         }
     }
-}
-
-/// The conversion of a checked `(height, width, 3)` uint8 array, without the GIL.
-fn convert<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: ChannelOrder) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let Ok(any) = image.cast::<numpy::PyUntypedArray>() else {
-        let kind = image.get_type().name()?.to_string();
-        return Err(invalid(format!("expected a (height, width, 3) uint8 NumPy array, got {kind}")));
-    };
-    let dtype = any.dtype().str()?.to_string();
-    let shape = any.shape().to_vec();
-    if shape.len() != 3 || shape[2] != 3 || dtype != "uint8" {
-        return Err(invalid(format!(
-            "expected a (height, width, 3) uint8 array, got dtype {dtype} with shape {shape:?}"
-        )));
-    }
-    let (Ok(h), Ok(w)) = (u32::try_from(shape[0]), u32::try_from(shape[1])) else {
-        return Err(invalid(format!("image too large {shape:?}")));
-    };
-    crate::vision::image::check_dimensions("image", u64::from(w), u64::from(h))?;
-    let array = image
-        .cast::<PyArray3<u8>>()?
-        .try_readonly()
-        .map_err(|e| invalid(format!("array is being written to ({e})")))?;
-    // `as_slice` also takes a Fortran-ordered array, whose bytes are not rows: C order only.
-    let c_order = if array.is_c_contiguous() { array.as_slice().ok() } else { None };
-    let grey = match c_order {
-        Some(data) => py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, data, order))?,
-        None => {
-            let owned: Vec<u8> = array.as_array().iter().copied().collect();
-            py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, &owned, order))?
-        }
-    };
-    let (w, h) = grey.dimensions();
-    PyArray1::from_vec(py, grey.into_raw()).reshape([h as usize, w as usize])
 }
 
 /// Adds `to_grey`.

@@ -7,12 +7,13 @@ use pyo3::types::PyDict;
 
 use super::arrays::{f64_array, mat, points2};
 use super::errors::invalid_argument;
+use super::image_arg::image_arg;
 use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
 use super::shared::Shared;
 use super::tags::{decimation_arg, family_arg};
-use super::vision::{image_arg, polarity_arg};
+use super::vision::polarity_arg;
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
 use crate::vision::tracker::TrackerConfig;
 
@@ -186,7 +187,7 @@ impl PyImageServo {
         Ok(Self { inner: Shared::new(inner, "ImageServo") })
     }
 
-    /// One frame (a `(height, width)` uint8 array): the twist to send, the verdict, the
+    /// One frame (an image: grey, or BGR/BGRA converted): the twist to send, the verdict, the
     /// telemetry, and per point the pixel found and whether it was found.
     fn step(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
         let image = image_arg(image, "image")?;

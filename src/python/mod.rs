@@ -13,6 +13,7 @@ mod control;
 mod errors;
 mod grey;
 mod hand_eye;
+mod image_arg;
 mod image_servo;
 mod invariant;
 mod kinematics;

@@ -6,12 +6,13 @@ use nalgebra::Vector3;
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use super::arrays::{bool_array, f64_array, mat, points2, vec1};
+use super::arrays::{bool_array, f64_array, mat, points2, points3, vec1};
 use super::errors::{PyError, invalid_argument, shape_error, shape_error_saying};
 use super::{BasisArg, pixels_arg};
 use crate::core::depth::{ResectionDepths, depths_from_translation as core_depths_from_translation};
 use crate::core::invariant::{BasisFrame, non_basis_indices, validate_basis};
 use crate::core::planning::{InvariantPath, PlaneParallax, estimate_plane_parallax as core_estimate};
+use crate::core::reference_depths::reference_depths as core_reference_depths;
 
 /// Invariant points of the non-basis points of a current and a reference image.
 fn invariant_pairs(
@@ -247,6 +248,27 @@ impl PyResectionDepths {
     }
 }
 
+/// The reference depths zeta* (n,) of a photo taken with any camera: `object_points` (n, 3),
+/// the object's model in any frame (metres), seen at `reference_pixels` (n, 2) in the photo
+/// (undistorted pixels). At least 6 points not on one plane need no intrinsics (a DLT
+/// resection); points on one plane (at least 4) need `K`, the photo's camera matrix (3x3 or
+/// Intrinsics).
+#[pyfunction]
+#[pyo3(signature = (object_points, reference_pixels, K = None))]
+#[allow(non_snake_case)]
+pub fn reference_depths<'py>(
+    py: Python<'py>,
+    object_points: &Bound<'py, PyAny>,
+    reference_pixels: &Bound<'py, PyAny>,
+    K: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let points = f64_array(object_points, "object_points", &[None, Some(3)])?;
+    let pixels = pixels_arg(reference_pixels, "reference_pixels")?;
+    let k = K.map(|k| super::intrinsics(k, "K")).transpose()?.map(|k| k.matrix());
+    let z = core_reference_depths(points3(&points)?, points2(&pixels)?, k.as_ref())?;
+    Ok(PyArray1::from_vec(py, z))
+}
+
 /// Adds path planning and depth estimation.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyPlaneParallax>()?;
@@ -254,5 +276,6 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyResectionDepths>()?;
     m.add_function(wrap_pyfunction!(estimate_plane_parallax, m)?)?;
     m.add_function(wrap_pyfunction!(depths_from_translation, m)?)?;
+    m.add_function(wrap_pyfunction!(reference_depths, m)?)?;
     Ok(())
 }

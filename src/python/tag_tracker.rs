@@ -5,9 +5,9 @@
 use pyo3::prelude::*;
 
 use super::errors::invalid_argument;
+use super::image_arg::image_arg;
 use super::shared::Shared;
 use super::tags::{PyTags, decimation_arg, family_arg, tags_out};
-use super::vision::image_arg;
 use crate::vision::detector::tags::{DEFAULT_REFRESH, TagDetector};
 use crate::vision::tags::TagDecoder;
 
@@ -43,7 +43,7 @@ impl PyTagTracker {
         Ok(Self { inner: Shared::new(detector.with_refresh(refresh).with_following(follow), "TagTracker") })
     }
 
-    /// The tags in the next frame (a `(height, width)` uint8 array), sorted by id; their
+    /// The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their
     /// `stopped_early` says whether a quad search of this frame stopped early.
     fn track(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
         let image = image_arg(image, "image")?;

@@ -7,7 +7,7 @@ use std::cell::RefCell;
 use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
-use super::vision::image_arg;
+use super::image_arg::image_arg;
 use crate::error::Result;
 use crate::vision::image::{GreyBuffer, Pixels};
 use crate::vision::tags::{MAX_DECIMATION, Tag, TagDecoder, TagFamily, TagReport};
@@ -105,7 +105,7 @@ pub(super) fn decimation_arg(decimation: Option<i64>) -> PyResult<Option<u32>> {
     })
 }
 
-/// The AprilTags of `family` in a `(height, width)` uint8 image, sorted by id: their ids and
+/// The AprilTags of `family` in an image (grey, or BGR/BGRA converted), sorted by id: their ids and
 /// the four corners of each black square in OpenCV's order (top-left, top-right,
 /// bottom-right, bottom-left of the marker as OpenCV's aruco module draws it, clockwise in
 /// the image) and pixel convention (pixel `(u, v)` centred at integer coordinates). An empty

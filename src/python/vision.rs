@@ -1,75 +1,26 @@
-//! Images in Python: `render`, `render_view`, `detect_dots` and `DotTracker`. Images are
-//! `(height, width)` uint8 arrays, read in place (a non-contiguous array is copied once) and
-//! returned without a copy; the work runs with the GIL released.
+//! Images in Python: `render`, `render_view`, `detect_dots` and `DotTracker`. Images are read
+//! by [`super::image_arg`] (grey read in place, colour BGR/BGRA converted to grey) and
+//! returned as `(height, width)` uint8 arrays without a copy; the work runs with the GIL
+//! released.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
-use pyo3::sync::PyOnceLock;
 
 use super::arrays::{f64_array, mat, points2};
+use super::image_arg::{image_arg, image_error};
 use super::shared::Shared;
 use super::sim::scenario_arg;
 use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
-use crate::vision::image::{GreyBuffer, GreyImage, check_dimensions, load_image as load_image_file, save_png, view};
+use crate::vision::image::{GreyImage, load_image as load_image_file, save_png};
 use crate::vision::polarity::Polarity;
 use crate::vision::tracker::{DotTracker, TrackerConfig};
-
-/// `InvalidInput("{what}: {reason}")`, the core's `Error::InvalidImage` (kind `invalid_image`).
-fn image_error(what: &str, reason: String) -> PyErr {
-    crate::Error::InvalidImage { what: what.to_string(), reason }.into()
-}
 
 /// `(n, 2)` pixels and `(n,)` flags, as returned to Python.
 type PixelArray<'py> = Bound<'py, PyArray2<f64>>;
 type FlagArray<'py> = Bound<'py, PyArray1<bool>>;
 type ImageArray<'py> = Bound<'py, PyArray2<u8>>;
-
-/// A `(height, width)` uint8 array borrowed from Python, C-contiguous.
-pub(super) struct ImageArg<'py> {
-    array: numpy::PyReadonlyArray2<'py, u8>,
-}
-
-impl ImageArg<'_> {
-    pub(super) fn buffer(&self, what: &str) -> PyResult<GreyBuffer<&[u8]>> {
-        let shape = self.array.shape();
-        let data = self.array.as_slice().map_err(|e| image_error(what, e.to_string()))?;
-        let (h, w) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
-        let (Ok(h), Ok(w)) = (h, w) else { return Err(image_error(what, format!("image too large {shape:?}"))) };
-        Ok(view(what, w, h, data)?)
-    }
-}
-
-/// Reads `obj` as an 8-bit grey image: a 2-d uint8 NumPy array (anything else is refused with
-/// `InvalidInput` naming its dtype or shape, as is an image larger than `check_dimensions`
-/// allows: 2^28 pixels, 65536 a side).
-pub(super) fn image_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
-    let py = obj.py();
-    let Ok(any) = obj.cast::<numpy::PyUntypedArray>() else {
-        let kind = obj.get_type().name()?.to_string();
-        return Err(image_error(what, format!("expected a (height, width) uint8 NumPy array, got {kind}")));
-    };
-    let dtype = any.dtype().str()?.to_string();
-    if any.ndim() != 2 || dtype != "uint8" {
-        let shape = any.shape().to_vec();
-        let reason = format!("expected a (height, width) uint8 array, got dtype {dtype} with shape {shape:?}");
-        return Err(image_error(what, format!("{reason} (convert colour images to grey first)")));
-    }
-    // The size is checked before anything is allocated for it (a zero-stride view of a huge
-    // image is copied below, and the detectors allocate after its pixels).
-    let shape = any.shape();
-    check_dimensions(what, shape[1] as u64, shape[0] as u64)?;
-    let mut array = obj.cast::<PyArray2<u8>>()?.clone();
-    if !array.is_c_contiguous() {
-        static CONTIGUOUS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
-        let f = CONTIGUOUS
-            .get_or_try_init(py, || Ok::<_, PyErr>(py.import("numpy")?.getattr("ascontiguousarray")?.unbind()))?;
-        array = f.call1(py, (obj,))?.bind(py).cast::<PyArray2<u8>>()?.clone();
-    }
-    let array = array.try_readonly().map_err(|e| image_error(what, format!("array is being written to ({e})")))?;
-    Ok(ImageArg { array })
-}
 
 /// A `GreyImage` moved into a `(height, width)` uint8 array without a copy.
 fn image_out(py: Python<'_>, image: GreyImage) -> PyResult<Bound<'_, PyArray2<u8>>> {
@@ -280,7 +231,7 @@ pub fn load_image<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<Im
     image_out(py, image)
 }
 
-/// Writes a `(height, width)` uint8 array as a PNG file.
+/// Writes an image as a grey PNG file (a colour array, BGR or BGRA, is written as its grey).
 #[pyfunction]
 pub fn save_image(py: Python<'_>, image: &Bound<'_, PyAny>, path: std::path::PathBuf) -> PyResult<()> {
     let image = image_arg(image, "image")?;

@@ -5,7 +5,7 @@
 //! | concept | module |
 //! |---|---|
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
-//! | colour (RGB, BGR) frames to grey by Rec. 601 luma | [`grey`] |
+//! | colour (RGB, BGR, with or without alpha) frames to grey by Rec. 601 luma | [`grey`] |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |
 //! | a rig of AprilTags of any [`TagFamily`] ([`TagRig`]) | [`target::tags`] |
