@@ -108,3 +108,32 @@ def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match="order"):
         vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
 
+
+
+def test_compressed_images_are_decoded_and_their_size_checked() -> None:
+    """image_transport's compressed messages: the format string read (JPEG, PNG, or the
+    data's signature when empty; compressedDepth and others refused), the pixels decoded in
+    Rust as OpenCV decodes a PNG, the decoded size given to the gate (a CompressedImage has
+    no width and height)."""
+    cv2 = pytest.importorskip("cv2")
+    from vsinv.ros.conversions import compressed_format, compressed_to_grey
+
+    assert compressed_format("bgr8; jpeg compressed bgr8") == "jpeg" and compressed_format("jpeg") == "jpeg"
+    assert compressed_format("mono8; png compressed mono8") == "png" and compressed_format("") is None
+    for bad in ("16UC1; compressedDepth png", "tiff", "theora"):
+        with pytest.raises(vsinv.InvalidInput, match="format"):
+            compressed_format(bad)
+    grey = np.random.default_rng(1).integers(0, 256, (48, 64), dtype=np.uint8)
+    png = cv2.imencode(".png", grey)[1].tobytes()
+    compressed = SimpleNamespace(format="mono8; png compressed mono8", data=png, header=msg(1).header)
+    decoded = compressed_to_grey(compressed)
+    np.testing.assert_array_equal(decoded, grey)
+    with pytest.raises(vsinv.InvalidInput, match="the format says jpeg but the data is png"):
+        compressed_to_grey(SimpleNamespace(format="jpeg", data=png))
+    gate = ImageGate("cam")
+    size = (decoded.shape[1], decoded.shape[0])
+    assert gate.check(compressed, size) is None
+    gate.used(compressed, size)
+    assert gate.size() == (64, 48)
+    later = SimpleNamespace(format="png", data=png, header=msg(2).header)
+    assert "image size 32x48 is not the first image's 64x48" in gate.check(later, (32, 48))

@@ -12,15 +12,15 @@ vsinv's camera frame), sensor_msgs/CameraInfo's K (3x3 row-major), D and distort
 
 from __future__ import annotations
 
-from typing import Any, Literal, cast
+from typing import Any, Literal, Optional, cast
 
 import numpy as np
 import numpy.typing as npt
 
-from .._core import Distortion, Intrinsics, InvalidInput, to_grey
+from .._core import Distortion, Intrinsics, InvalidInput, decode_image, to_grey
 
 __all__ = [
-    "ENCODINGS", "image_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
+    "ENCODINGS", "image_to_grey", "compressed_format", "compressed_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
     "twist_in_end_effector_frame",
 ]
 
@@ -47,6 +47,35 @@ def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     if channels == 1:
         return np.ascontiguousarray(rows)
     return to_grey(rows.reshape(height, width, 3), order="bgr" if encoding == "bgr8" else "rgb")
+
+
+def compressed_format(text: str) -> Optional[Literal["png", "jpeg"]]:
+    """The compression a sensor_msgs/CompressedImage's ``format`` names: image_transport's
+    ``"<encoding>; jpeg compressed <encoding>"`` or ``"...; png compressed ..."``, or the older
+    plain ``"jpeg"``/``"png"``; an empty format leaves it to the data's signature (None).
+    compressedDepth and other formats are refused with InvalidInput."""
+    words = text.lower()
+    if "compresseddepth" in words.replace(" ", ""):
+        raise InvalidInput(f"compressed image: format {text!r} is a depth image (compressedDepth), not read")
+    if "jpeg" in words or "jpg" in words:
+        return "jpeg"
+    if "png" in words:
+        return "png"
+    if not words.strip():
+        return None
+    raise InvalidInput(f"compressed image: format {text!r} is not read (expected jpeg or png)")
+
+
+def compressed_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
+    """A sensor_msgs/CompressedImage (JPEG or PNG, :func:`compressed_format`) as a (height,
+    width) uint8 array, decoded in Rust (:func:`vsinv.decode_image`: the declared size checked
+    against the pixel limit before decoding); undecodable, oversized or mislabelled data is
+    refused with InvalidInput."""
+    expected = compressed_format(str(msg.format))
+    try:
+        return decode_image(msg.data, expected)
+    except InvalidInput as e:
+        raise InvalidInput(f"compressed image ({msg.format!r}): {e}") from None
 
 
 def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics, Distortion]:
