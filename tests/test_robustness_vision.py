@@ -386,7 +386,7 @@ def colour_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
         V(np.asfortranarray(valid), SAME, "fortran"),
         V(np.repeat(valid, 2, axis=1)[:, ::2], SAME, "strided"),
         V(valid[:, :, 0], INVALID, "grey"),
-        V(np.concatenate([valid, valid[:, :, :1]], axis=2), INVALID, "rgba"),
+        V(np.concatenate([valid, valid[:, :, :1]], axis=2), SAME, "rgba"),
         V(valid[:, :, :2], INVALID, "two channels"),
         V(valid.astype(np.float64), INVALID, "float64"),
         V(valid.astype(np.uint16), INVALID, "uint16"),

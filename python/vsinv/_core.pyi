@@ -944,10 +944,12 @@ def decode_image(data: bytes | bytearray | memoryview | array.array[int] | npt.N
     raise InvalidInput; another ``format`` InvalidInput naming it."""
 
 def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = None) -> _U8Image:
-    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image whose
-    channels are in ``order`` (None: ``"rgb"``), by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the
-    bit), in Rust with the GIL released; a non-contiguous array is copied once. Another shape or
-    dtype raises InvalidInput, another order InvalidInput naming ``order``."""
+    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or
+    (height, width, 4) with alpha last (ignored), whose colour channels are in ``order`` (None:
+    ``"rgb"``), by Rec. 601 luma in integer arithmetic (OpenCV's COLOR_RGB2GRAY, COLOR_BGR2GRAY,
+    COLOR_RGBA2GRAY, COLOR_BGRA2GRAY to the bit), vectorised (AVX2 when the processor has it), in
+    Rust with the GIL released; a non-contiguous array is copied once. Another shape or dtype
+    raises InvalidInput, another order InvalidInput naming ``order``."""
 
 @final
 class Distortion:

@@ -1,19 +1,20 @@
-//! `to_grey`: a `(height, width, 3)` uint8 colour array (RGB or BGR) to the `(height, width)`
-//! grey array the detectors read, in Rust with the GIL released (Rec. 601 luma, OpenCV's
-//! `COLOR_RGB2GRAY`/`COLOR_BGR2GRAY` to the bit).
+//! `to_grey`: a `(height, width, 3)` or `(height, width, 4)` uint8 colour array (RGB, BGR,
+//! RGBA or BGRA) to the `(height, width)` grey array the detectors read, in Rust with the GIL
+//! released (Rec. 601 luma, OpenCV's `COLOR_RGB2GRAY`/`COLOR_BGR2GRAY`/`COLOR_RGBA2GRAY`/
+//! `COLOR_BGRA2GRAY` to the bit).
 
 use numpy::{PyArray1, PyArray2, PyArray3, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use crate::vision::grey::{ChannelOrder, colour_to_grey};
+use crate::vision::grey::{ChannelOrder, pixels_to_grey};
 
 fn invalid(reason: String) -> PyErr {
     crate::Error::InvalidImage { what: "image".to_string(), reason }.into()
 }
 
-/// The grey image of a colour image: `image` a `(height, width, 3)` uint8 array whose
-/// channels are in `order` (`"rgb"`, the default when None, or `"bgr"`); a non-contiguous
-/// array is copied once.
+/// The grey image of a colour image: `image` a `(height, width, 3)` uint8 array, or
+/// `(height, width, 4)` with alpha last (ignored), whose colour channels are in `order`
+/// (`"rgb"`, the default when None, or `"bgr"`); a non-contiguous array is copied once.
 #[pyfunction]
 #[pyo3(signature = (image, order = None))]
 pub fn to_grey<'py>(
@@ -45,15 +46,16 @@ fn channel_order(order: &Bound<'_, PyAny>) -> PyResult<ChannelOrder> {
 fn convert<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: ChannelOrder) -> PyResult<Bound<'py, PyArray2<u8>>> {
     let Ok(any) = image.cast::<numpy::PyUntypedArray>() else {
         let kind = image.get_type().name()?.to_string();
-        return Err(invalid(format!("expected a (height, width, 3) uint8 NumPy array, got {kind}")));
+        return Err(invalid(format!("expected a (height, width, 3 or 4) uint8 NumPy array, got {kind}")));
     };
     let dtype = any.dtype().str()?.to_string();
     let shape = any.shape().to_vec();
-    if shape.len() != 3 || shape[2] != 3 || dtype != "uint8" {
+    if shape.len() != 3 || !(shape[2] == 3 || shape[2] == 4) || dtype != "uint8" {
         return Err(invalid(format!(
-            "expected a (height, width, 3) uint8 array, got dtype {dtype} with shape {shape:?}"
+            "expected a (height, width, 3) or (height, width, 4) uint8 array, got dtype {dtype} with shape {shape:?}"
         )));
     }
+    let channels = shape[2];
     let (Ok(h), Ok(w)) = (u32::try_from(shape[0]), u32::try_from(shape[1])) else {
         return Err(invalid(format!("image too large {shape:?}")));
     };
@@ -65,10 +67,10 @@ fn convert<'py>(py: Python<'py>, image: &Bound<'py, PyAny>, order: ChannelOrder)
     // `as_slice` also takes a Fortran-ordered array, whose bytes are not rows: C order only.
     let c_order = if array.is_c_contiguous() { array.as_slice().ok() } else { None };
     let grey = match c_order {
-        Some(data) => py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, data, order))?,
+        Some(data) => py.detach(|| pixels_to_grey("image", w, h, channels, channels * w as usize, data, order))?,
         None => {
             let owned: Vec<u8> = array.as_array().iter().copied().collect();
-            py.detach(|| colour_to_grey("image", w, h, 3 * w as usize, &owned, order))?
+            py.detach(|| pixels_to_grey("image", w, h, channels, channels * w as usize, &owned, order))?
         }
     };
     let (w, h) = grey.dimensions();

@@ -5,7 +5,7 @@
 //! | concept | module |
 //! |---|---|
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
-//! | colour (RGB, BGR) frames to grey by Rec. 601 luma | [`grey`] |
+//! | colour (RGB, BGR, RGBA, BGRA) frames to grey by Rec. 601 luma | [`grey`] |
 //! | compressed frames (PNG, JPEG bytes) to grey | [`compressed`] |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |

@@ -25,16 +25,17 @@ __all__ = [
 ]
 
 #: The image encodings the bridge reads (sensor_msgs/image_encodings), each to 8-bit grey.
-ENCODINGS = ("mono8", "rgb8", "bgr8")
+ENCODINGS = ("mono8", "rgb8", "bgr8", "rgba8", "bgra8")
 
 def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
-    """A sensor_msgs/Image (mono8, rgb8 or bgr8; rows of ``step`` bytes) as a (height, width)
-    uint8 array (colour by Rec. 601 luma in Rust: :func:`vsinv.to_grey`); another encoding or
-    inconsistent sizes are refused with InvalidInput."""
+    """A sensor_msgs/Image (mono8, rgb8, bgr8, rgba8 or bgra8; rows of ``step`` bytes) as a
+    (height, width) uint8 array (colour by Rec. 601 luma in Rust, alpha ignored:
+    :func:`vsinv.to_grey`); another encoding or inconsistent sizes are refused with
+    InvalidInput."""
     encoding, height, width, step = str(msg.encoding), int(msg.height), int(msg.width), int(msg.step)
     if encoding not in ENCODINGS:
         raise InvalidInput(f"image: encoding {encoding!r} is not read (expected one of {', '.join(ENCODINGS)})")
-    channels = 1 if encoding == "mono8" else 3
+    channels = 1 if encoding == "mono8" else len(encoding) - 1  # rgb8: 3, rgba8: 4
     try:
         data = np.frombuffer(msg.data, np.uint8)  # array.array('B') or bytes: no copy
     except TypeError:
@@ -46,7 +47,7 @@ def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     rows = data[: height * step].reshape(height, step)[:, : width * channels]
     if channels == 1:
         return np.ascontiguousarray(rows)
-    return to_grey(rows.reshape(height, width, 3), order="bgr" if encoding == "bgr8" else "rgb")
+    return to_grey(rows.reshape(height, width, channels), order="bgr" if encoding.startswith("bgr") else "rgb")
 
 
 def compressed_format(text: str) -> Optional[Literal["png", "jpeg"]]:

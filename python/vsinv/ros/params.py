@@ -113,7 +113,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        "(MoveIt Servo's incoming_command_timeout, 0.1 s); changed at once by a parameter set"),
     _P("autostart", "bool", False, "start servoing at the first image (otherwise call the start service)"),
     _P("publish_annotated", "bool", True, "publish the image with the points found"),
-    _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8 or bgr8)"),
+    _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8, bgr8, rgba8 or bgra8)"),
     _P("camera_info_topic", "str", "camera_info", "sensor_msgs/CameraInfo in"),
     _P("twist_topic", "str", "~/twist", "geometry_msgs/TwistStamped out (MoveIt Servo: /servo_node/delta_twist_cmds)"),
     _P("status_topic", "str", "~/status", "std_msgs/String out: the status as JSON"),
