@@ -30,7 +30,7 @@ from geometry_msgs.msg import PoseStamped, TwistStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import QoSProfile
-from sensor_msgs.msg import CameraInfo, Image
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
@@ -56,11 +56,29 @@ def pose_from_msg(msg: PoseStamped) -> np.ndarray:
     return vsinv.pose_from_position_thetau([p.x, p.y, p.z], thetau)
 
 
+def compress(grey: np.ndarray, how: str) -> CompressedImage:
+    """image_transport's compressed message: PNG of the mono8 image, or JPEG (quality 95) of
+    it as bgr8, with image_transport's format strings."""
+    import cv2
+
+    if how == "png":
+        ok, data = cv2.imencode(".png", grey)
+        fmt = "mono8; png compressed mono8"
+    else:
+        ok, data = cv2.imencode(".jpg", np.repeat(grey[:, :, None], 3, 2), [cv2.IMWRITE_JPEG_QUALITY, 95])
+        fmt = "bgr8; jpeg compressed bgr8"
+    assert ok
+    return CompressedImage(format=fmt, data=data.tobytes())
+
+
 class SimCamera(Node):
     def __init__(self, scenario: vsinv.Scenario, K: list[float], start_pose: np.ndarray, encoding: str = "mono8") -> None:
         super().__init__("sim_camera")
         self.scenario, self.K, self.encoding = scenario, K, encoding
-        self.image_pub = self.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=1))
+        if encoding in ("png", "jpeg"):  # image_transport's compressed topic
+            self.image_pub = self.create_publisher(CompressedImage, "/camera/image_raw/compressed", QoSProfile(depth=1))
+        else:
+            self.image_pub = self.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=1))
         self.info_pub = self.create_publisher(CameraInfo, "/camera/camera_info", QoSProfile(depth=1))
         self.create_subscription(PoseStamped, "/sim/camera_pose", self.on_pose, QoSProfile(depth=1))
         self.create_timer(0.2, self.on_timer)
@@ -72,7 +90,9 @@ class SimCamera(Node):
     def render(self, pose: np.ndarray) -> None:
         grey = vsinv.render(self.scenario, pose=pose)
         h, w = grey.shape
-        if self.encoding == "mono8":
+        if self.encoding in ("png", "jpeg"):
+            self.image = compress(grey, self.encoding)
+        elif self.encoding == "mono8":
             self.image = Image(height=h, width=w, encoding="mono8", step=w, data=grey.tobytes())
         else:  # the grey scene in colour: every channel the same
             self.image = Image(height=h, width=w, encoding=self.encoding, step=3 * w, data=np.repeat(grey[:, :, None], 3, 2).tobytes())

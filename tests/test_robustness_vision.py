@@ -401,6 +401,28 @@ def colour_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
     ])
 
 
+@covers("decode_image")
+@fuzz_settings(100)
+@given(st.data())
+def test_decode_image(data: Any) -> None:
+    grey, _, _ = rendered()
+    png = cv2.imencode(".png", grey)[1].tobytes()
+    jpeg = cv2.imencode(".jpg", grey)[1].tobytes()
+    ref = vsinv.decode_image(png)
+    # Independent: OpenCV's decoder of the same bytes, to the bit (a lossless grey PNG).
+    assert np.array_equal(ref, cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE))
+    payloads = st.sampled_from([
+        V(png, SAME, "bytes"), V(bytearray(png), SAME, "bytearray"), V(memoryview(png), SAME, "memoryview"),
+        V(np.frombuffer(png, np.uint8), SAME, "array"), V(jpeg, ANY, "jpeg"), V(b"", INVALID, "empty"),
+        V(png[: len(png) // 2], INVALID, "truncated"), V(png[::-1], INVALID, "reversed"), V(b"GIF89a", INVALID, "gif"),
+        V(list(png[:16]), INVALID, "list"), V(None, INVALID, "none"), V("png", INVALID, "str"),
+    ])
+    formats = st.sampled_from([V("png", SAME, "png"), V(None, SAME, "none"), V("jpeg", INVALID, "other"),
+                               V("PNG", INVALID, "upper"), V(1, INVALID, "int")])
+    fuzz(data, vsinv.decode_image, {"data": png, "format": "png"}, {"data": payloads, "format": formats}, ref=ref,
+         names={"data": ("data",), "format": ("format", "data")})
+
+
 @covers("to_grey")
 @fuzz_settings(100)
 @given(st.data())

@@ -177,7 +177,7 @@ def test_images_become_grey_as_opencv_converts_them() -> None:
     np.testing.assert_array_equal(image_to_grey(msg), grey)
 
 
-@pytest.mark.parametrize("encoding", ["16UC1", "rgba8", "yuv422", "bayer_rggb8", ""])
+@pytest.mark.parametrize("encoding", ["16UC1", "rgba16", "yuv422", "bayer_rggb8", ""])
 def test_other_encodings_are_refused_by_name(encoding: str) -> None:
     msg = image_msg(np.zeros((4, 4), np.uint8), encoding)
     with pytest.raises(vsinv.InvalidInput, match=f"encoding {encoding!r} is not read"):

@@ -100,7 +100,30 @@ def test_to_grey_is_opencvs_cvtcolor(shape: tuple[int, int]) -> None:
     np.testing.assert_array_equal(vsinv.to_grey(strided), cv2.cvtColor(np.ascontiguousarray(strided), cv2.COLOR_RGB2GRAY))
 
 
-@pytest.mark.parametrize("bad, what", [(np.zeros((4, 4, 2), np.uint8), r"shape \(4, 4, 2\)"), (np.zeros((4, 4, 3)), "dtype float64"),
+@pytest.mark.parametrize("shape", [(1080, 1920), (481, 643), (7, 5), (33, 37), (1, 1), (513, 1)])
+def test_to_grey_with_alpha_and_any_strides_is_opencvs_cvtcolor(shape: tuple[int, int]) -> None:
+    """RGB, BGR, RGBA and BGRA, odd widths, and views that are not contiguous (a crop with
+    padded rows, every other column, rows upside down, Fortran order, a channel-reversed view):
+    each equal to OpenCV's cvtColor of the same pixels, to the bit."""
+    cv2 = pytest.importorskip("cv2")
+    rng = np.random.default_rng(shape[0] * 7 + shape[1])
+    codes = {(3, "rgb"): cv2.COLOR_RGB2GRAY, (3, "bgr"): cv2.COLOR_BGR2GRAY, (4, "rgb"): cv2.COLOR_RGBA2GRAY,
+             (4, "bgr"): cv2.COLOR_BGRA2GRAY}
+    for channels in (3, 4):
+        big = rng.integers(0, 256, (shape[0] + 3, 2 * shape[1] + 5, channels), dtype=np.uint8)
+        views = {"contiguous": np.ascontiguousarray(big[: shape[0], : shape[1]]), "crop": big[1 : shape[0] + 1, 2 : shape[1] + 2],
+                 "every other column": big[: shape[0], : 2 * shape[1] : 2], "upside down": big[shape[0] - 1 :: -1, : shape[1]][: shape[0]],
+                 "fortran": np.asfortranarray(big[: shape[0], : shape[1]]),
+                 "channels reversed": big[: shape[0], : shape[1], ::-1]}
+        for name, view in views.items():
+            for order in ("rgb", "bgr"):
+                expected = cv2.cvtColor(np.ascontiguousarray(view), codes[(channels, order)])
+                got = vsinv.to_grey(view, order=order)  # type: ignore[arg-type]
+                assert got.shape == view.shape[:2], (name, channels, order)
+                np.testing.assert_array_equal(got, expected.reshape(view.shape[:2]), err_msg=f"{name} {channels} {order}")
+
+
+@pytest.mark.parametrize("bad, what", [(np.zeros((4, 4, 2), np.uint8), r"shape \(4, 4, 2\)"), (np.zeros((4, 4, 5), np.uint8), r"shape \(4, 4, 5\)"), (np.zeros((4, 4, 3)), "dtype float64"),
                                        (np.zeros((0, 4, 3), np.uint8), "empty"), ([1, 2, 3], "list")])
 def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match=what):
@@ -108,3 +131,50 @@ def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match="order"):
         vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
 
+
+
+def test_compressed_images_are_decoded_and_their_size_checked() -> None:
+    """image_transport's compressed messages: the format string read (JPEG, PNG, or the
+    data's signature when empty; compressedDepth and others refused), the pixels decoded in
+    Rust as OpenCV decodes a PNG, the decoded size given to the gate (a CompressedImage has
+    no width and height)."""
+    cv2 = pytest.importorskip("cv2")
+    from vsinv.ros.conversions import compressed_format, compressed_to_grey
+
+    assert compressed_format("bgr8; jpeg compressed bgr8") == "jpeg" and compressed_format("jpeg") == "jpeg"
+    assert compressed_format("mono8; png compressed mono8") == "png" and compressed_format("") is None
+    for bad in ("16UC1; compressedDepth png", "tiff", "theora"):
+        with pytest.raises(vsinv.InvalidInput, match="format"):
+            compressed_format(bad)
+    grey = np.random.default_rng(1).integers(0, 256, (48, 64), dtype=np.uint8)
+    png = cv2.imencode(".png", grey)[1].tobytes()
+    compressed = SimpleNamespace(format="mono8; png compressed mono8", data=png, header=msg(1).header)
+    decoded = compressed_to_grey(compressed)
+    np.testing.assert_array_equal(decoded, grey)
+    with pytest.raises(vsinv.InvalidInput, match="the format says jpeg but the data is png"):
+        compressed_to_grey(SimpleNamespace(format="jpeg", data=png))
+    gate = ImageGate("cam")
+    size = (decoded.shape[1], decoded.shape[0])
+    assert gate.check(compressed, size) is None
+    gate.used(compressed, size)
+    assert gate.size() == (64, 48)
+    later = SimpleNamespace(format="png", data=png, header=msg(2).header)
+    assert "image size 32x48 is not the first image's 64x48" in gate.check(later, (32, 48))
+
+
+def test_images_with_alpha_are_read_as_opencv_reads_them() -> None:
+    """sensor_msgs/Image rgba8 and bgra8 (rows padded), to grey as cv2.cvtColor RGBA2GRAY /
+    BGRA2GRAY of the same pixels."""
+    cv2 = pytest.importorskip("cv2")
+    from vsinv.ros.conversions import image_to_grey
+
+    rng = np.random.default_rng(5)
+    h, w, step = 31, 45, 4 * 45 + 8
+    rows = rng.integers(0, 256, (h, step), dtype=np.uint8)
+    pixels = np.ascontiguousarray(rows[:, : 4 * w].reshape(h, w, 4))
+    for encoding, code in (("rgba8", cv2.COLOR_RGBA2GRAY), ("bgra8", cv2.COLOR_BGRA2GRAY)):
+        image = SimpleNamespace(encoding=encoding, height=h, width=w, step=step, data=rows.tobytes())
+        np.testing.assert_array_equal(image_to_grey(image), cv2.cvtColor(pixels, code))
+    short = SimpleNamespace(encoding="rgba8", height=h, width=w, step=3 * w, data=rows.tobytes())
+    with pytest.raises(vsinv.InvalidInput, match="does not fit"):
+        image_to_grey(short)

@@ -193,13 +193,14 @@ def test_bad_parameters_stop_the_node_at_start(tmp_path: Path) -> None:
         assert "refused to start: parameter" in done.stderr and name in done.stderr, (change, done.stderr)
 
 
-def run_bridge_with(tmp_path: Path, parameters: dict[str, Any], script: str, config: dict[str, Any], timeout: float) -> tuple[dict[str, Any], str]:
-    """The bridge with ``parameters`` and a simulation script with ``config``: its JSON output
-    and the bridge's stderr."""
+def run_bridge_with(tmp_path: Path, parameters: dict[str, Any], script: str, config: dict[str, Any], timeout: float,
+                    options: tuple[str, ...] = ()) -> tuple[dict[str, Any], str]:
+    """The bridge with ``parameters`` (and command line ``options``, e.g. --lifecycle) and a
+    simulation script with ``config``: its JSON output and the bridge's stderr."""
     env = ros_env()
     params = write_params(tmp_path / "bridge.yaml", parameters)
     (tmp_path / "sim.json").write_text(json.dumps(config))
-    bridge = subprocess.Popen([sys.executable, "-m", "vsinv.ros", "--ros-args", "--params-file", str(params)],
+    bridge = subprocess.Popen([sys.executable, "-m", "vsinv.ros", *options, "--ros-args", "--params-file", str(params)],
                               env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         sim = subprocess.run([sys.executable, str(HERE / script), "--config", str(tmp_path / "sim.json"), "--out", str(tmp_path / "out.json")],

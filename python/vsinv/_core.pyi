@@ -1,5 +1,6 @@
 """Type stubs for the compiled core (Rust, PyO3)."""
 
+import array
 import os
 from typing import Any, Callable, Iterable, Literal, Sequence, TypedDict, Union, final
 
@@ -89,6 +90,7 @@ __all__ = [
     "TAG_FAMILIES",
     "detect_tags",
     "load_image",
+    "decode_image",
     "save_image",
     "to_grey",
     "Distortion",
@@ -947,14 +949,24 @@ def load_image(path: str | os.PathLike[str]) -> _U8Image:
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes an image as a grey PNG file (a BGR or BGRA array is written as its grey)."""
 
+def decode_image(data: bytes | bytearray | memoryview | array.array[int] | npt.NDArray[np.uint8],
+                 format: Literal["png", "jpeg"] | None = None) -> _U8Image:
+    """The (height, width) uint8 grey image of PNG or JPEG bytes (a ROS
+    sensor_msgs/CompressedImage's data), in Rust with the GIL released: the declared size is
+    checked against the pixel limit (2^28, 65536 a side) before decoding, at most 64 MiB of data
+    and 512 MiB to decode; colour by Rec. 601 luma. ``format`` "png" or "jpeg" refuses the
+    other one (None: either). Empty, unknown, corrupt or truncated data, or 16-bit samples,
+    raise InvalidInput; another ``format`` InvalidInput naming it."""
+
 def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = None) -> _U8Image:
     """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or a
-    (height, width, 4) one with alpha (ignored), whose colour channels are in ``order`` (None:
-    ``"rgb"``), by Rec. 601 luma (OpenCV's COLOR_RGB2GRAY / COLOR_BGR2GRAY to the bit), in Rust
-    with the GIL released; a non-contiguous array is copied once, a grey (height, width) or
-    (height, width, 1) array is returned as a copy. Another shape or dtype raises InvalidInput,
-    another order InvalidInput naming ``order``. (Every function that takes an image reads
-    colour itself, in OpenCV's BGR order.)"""
+    (height, width, 4) one with alpha last (ignored), whose colour channels are in ``order``
+    (None: ``"rgb"``), by Rec. 601 luma in integer arithmetic (OpenCV's COLOR_RGB2GRAY,
+    COLOR_BGR2GRAY, COLOR_RGBA2GRAY, COLOR_BGRA2GRAY to the bit), vectorised (AVX2 when the
+    processor has it), in Rust with the GIL released; a non-contiguous array is copied once, a
+    grey (height, width) or (height, width, 1) array is returned as a copy. Another shape or
+    dtype raises InvalidInput, another order InvalidInput naming ``order``. (Every function
+    that takes an image reads colour itself, in OpenCV's BGR order.)"""
 
 @final
 class Distortion:

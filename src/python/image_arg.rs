@@ -11,7 +11,7 @@ use numpy::{PyArray1, PyArray2, PyArray3, PyArrayDyn, PyArrayMethods, PyReadonly
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 
-use crate::vision::grey::{ChannelOrder, colour_to_grey};
+use crate::vision::grey::{ChannelOrder, pixels_to_grey};
 use crate::vision::image::{GreyBuffer, GreyImage, check_dimensions, view};
 
 /// What an image argument may be, for error messages.
@@ -92,13 +92,7 @@ pub(super) fn read_image<'py>(obj: &Bound<'py, PyAny>, what: &str, order: Channe
     if channels == 1 {
         return grey(obj, what);
     }
-    let order = match (order, channels) {
-        (ChannelOrder::Rgb | ChannelOrder::Rgba, 4) => ChannelOrder::Rgba,
-        (ChannelOrder::Bgr | ChannelOrder::Bgra, 4) => ChannelOrder::Bgra,
-        (ChannelOrder::Rgb | ChannelOrder::Rgba, _) => ChannelOrder::Rgb,
-        (ChannelOrder::Bgr | ChannelOrder::Bgra, _) => ChannelOrder::Bgr,
-    };
-    Ok(ImageArg::Converted(colour(obj, what, order)?))
+    Ok(ImageArg::Converted(colour(obj, what, channels, order)?))
 }
 
 /// A shape as NumPy writes it: `(10, 10, 2)`, `(5,)`.
@@ -123,7 +117,7 @@ fn grey<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<ImageArg<'py>> {
 
 /// The grey image of a checked `(height, width, channels)` array, without the GIL; a
 /// non-C-contiguous array is copied once into C order first.
-fn colour(obj: &Bound<'_, PyAny>, what: &str, order: ChannelOrder) -> PyResult<GreyImage> {
+fn colour(obj: &Bound<'_, PyAny>, what: &str, channels: usize, order: ChannelOrder) -> PyResult<GreyImage> {
     let py = obj.py();
     let array = obj
         .cast::<PyArray3<u8>>()?
@@ -133,16 +127,16 @@ fn colour(obj: &Bound<'_, PyAny>, what: &str, order: ChannelOrder) -> PyResult<G
     let (Ok(h), Ok(w)) = (u32::try_from(shape[0]), u32::try_from(shape[1])) else {
         return Err(image_error(what, format!("image too large {shape:?}")));
     };
-    let stride = order.channels() * w as usize;
+    let stride = channels * w as usize;
     // `as_slice` also takes a Fortran-ordered array, whose bytes are not rows: C order only.
     let c_order = if array.is_c_contiguous() { array.as_slice().ok() } else { None };
     let image = match c_order {
-        Some(data) => py.detach(|| colour_to_grey(what, w, h, stride, data, order))?,
+        Some(data) => py.detach(|| pixels_to_grey(what, w, h, channels, stride, data, order))?,
         None => {
             let view = array.as_array();
             py.detach(|| {
                 let owned: Vec<u8> = view.iter().copied().collect();
-                colour_to_grey(what, w, h, stride, &owned, order)
+                pixels_to_grey(what, w, h, channels, stride, &owned, order)
             })?
         }
     };

@@ -9,6 +9,7 @@ mod args;
 mod arrays;
 mod batch_watch;
 mod camera;
+mod compressed;
 mod control;
 mod errors;
 mod grey;
@@ -52,6 +53,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     sim::register(m)?;
     vision::register(m)?;
     grey::register(m)?;
+    compressed::register(m)?;
     image_servo::register(m)?;
     tags::register(m)?;
     tag_tracker::register(m)?;

@@ -5,7 +5,8 @@
 //! | concept | module |
 //! |---|---|
 //! | 8-bit grey images, image files (PNG, PGM/PPM, JPEG) | [`image`](mod@image) |
-//! | colour (RGB, BGR, with or without alpha) frames to grey by Rec. 601 luma | [`grey`] |
+//! | colour (RGB, BGR, RGBA, BGRA) frames to grey by Rec. 601 luma | [`grey`] |
+//! | compressed frames (PNG, JPEG bytes) to grey | [`compressed`] |
 //! | what is drawn: the [`Target`] trait | [`target`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |
 //! | a rig of AprilTags of any [`TagFamily`] ([`TagRig`]) | [`target::tags`] |
@@ -43,6 +44,7 @@
 
 pub mod background;
 pub mod centroid;
+pub mod compressed;
 pub mod detector;
 pub mod dots;
 pub mod grey;

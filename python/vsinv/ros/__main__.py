@@ -10,13 +10,17 @@ from typing import Any, Optional, Sequence
 
 from .params import parameter_help
 
-USAGE = """usage: vsinv-ros [--ros-args -p NAME:=VALUE ... | --params-file FILE]
+USAGE = """usage: vsinv-ros [--lifecycle] [--ros-args -p NAME:=VALUE ... | --params-file FILE]
 
 The vsinv ROS 2 bridge: images and CameraInfo in, a TwistStamped for MoveIt Servo out.
 Services ~/start, ~/stop, ~/reset (std_srvs/Trigger); status as JSON on ~/status (latched,
 a heartbeat every status_period) and on /diagnostics. An unusable image publishes a zero
 twist at once and stops. As a ROS 2 package (ros/vsinv, colcon build):
 ros2 launch vsinv servo.launch.py params_file:=FILE, or ros2 run vsinv vsinv_ros.
+
+--lifecycle: a managed node (configure reads the parameters, activate starts servoing,
+deactivate sends one zero twist and goes silent, cleanup undoes configure); the
+~/start, ~/stop and ~/reset services are then not offered.
 
 parameters:
 """
@@ -34,6 +38,10 @@ def _interrupt(_signum: int, _frame: Any) -> None:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Runs the node; returns the exit status."""
     args = list(sys.argv if argv is None else argv)
+    ros_at = args.index("--ros-args") if "--ros-args" in args else len(args)
+    lifecycle = "--lifecycle" in args[1:ros_at]
+    if lifecycle:
+        args.remove("--lifecycle")
     if any(a in ("-h", "--help") for a in args[1:2]):
         print(USAGE + parameter_help())
         return 0
@@ -41,7 +49,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         import rclpy
         from rclpy.executors import ExternalShutdownException
 
-        from .node import BridgeNode
+        from .node import BridgeNode, LifecycleBridgeNode
     except ImportError as e:
         print(f"{NO_RCLPY} ({e})", file=sys.stderr)
         return 2
@@ -54,7 +62,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     signal.signal(signal.SIGTERM, _interrupt)
     try:
         try:
-            node = BridgeNode()
+            node = LifecycleBridgeNode() if lifecycle else BridgeNode()
         except VsinvError as e:
             print(f"vsinv-ros: refused to start: {e}", file=sys.stderr)
             return 2

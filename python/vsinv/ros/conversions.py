@@ -12,29 +12,30 @@ vsinv's camera frame), sensor_msgs/CameraInfo's K (3x3 row-major), D and distort
 
 from __future__ import annotations
 
-from typing import Any, Literal, cast
+from typing import Any, Literal, Optional, cast
 
 import numpy as np
 import numpy.typing as npt
 
-from .._core import Distortion, Intrinsics, InvalidInput, to_grey, twist_adjoint
+from .._core import Distortion, Intrinsics, InvalidInput, decode_image, to_grey, twist_adjoint
 
 __all__ = [
-    "ENCODINGS", "image_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
+    "ENCODINGS", "image_to_grey", "compressed_format", "compressed_to_grey", "lens_from_camera_info", "intrinsics_from_numbers", "hand_eye_matrix",
     "twist_in_end_effector_frame",
 ]
 
 #: The image encodings the bridge reads (sensor_msgs/image_encodings), each to 8-bit grey.
-ENCODINGS = ("mono8", "rgb8", "bgr8")
+ENCODINGS = ("mono8", "rgb8", "bgr8", "rgba8", "bgra8")
 
 def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
-    """A sensor_msgs/Image (mono8, rgb8 or bgr8; rows of ``step`` bytes) as a (height, width)
-    uint8 array (colour by Rec. 601 luma in Rust: :func:`vsinv.to_grey`); another encoding or
-    inconsistent sizes are refused with InvalidInput."""
+    """A sensor_msgs/Image (mono8, rgb8, bgr8, rgba8 or bgra8; rows of ``step`` bytes) as a
+    (height, width) uint8 array (colour by Rec. 601 luma in Rust, alpha ignored:
+    :func:`vsinv.to_grey`); another encoding or inconsistent sizes are refused with
+    InvalidInput."""
     encoding, height, width, step = str(msg.encoding), int(msg.height), int(msg.width), int(msg.step)
     if encoding not in ENCODINGS:
         raise InvalidInput(f"image: encoding {encoding!r} is not read (expected one of {', '.join(ENCODINGS)})")
-    channels = 1 if encoding == "mono8" else 3
+    channels = 1 if encoding == "mono8" else len(encoding) - 1  # rgb8: 3, rgba8: 4
     try:
         data = np.frombuffer(msg.data, np.uint8)  # array.array('B') or bytes: no copy
     except TypeError:
@@ -46,7 +47,36 @@ def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     rows = data[: height * step].reshape(height, step)[:, : width * channels]
     if channels == 1:
         return np.ascontiguousarray(rows)
-    return to_grey(rows.reshape(height, width, 3), order="bgr" if encoding == "bgr8" else "rgb")
+    return to_grey(rows.reshape(height, width, channels), order="bgr" if encoding.startswith("bgr") else "rgb")
+
+
+def compressed_format(text: str) -> Optional[Literal["png", "jpeg"]]:
+    """The compression a sensor_msgs/CompressedImage's ``format`` names: image_transport's
+    ``"<encoding>; jpeg compressed <encoding>"`` or ``"...; png compressed ..."``, or the older
+    plain ``"jpeg"``/``"png"``; an empty format leaves it to the data's signature (None).
+    compressedDepth and other formats are refused with InvalidInput."""
+    words = text.lower()
+    if "compresseddepth" in words.replace(" ", ""):
+        raise InvalidInput(f"compressed image: format {text!r} is a depth image (compressedDepth), not read")
+    if "jpeg" in words or "jpg" in words:
+        return "jpeg"
+    if "png" in words:
+        return "png"
+    if not words.strip():
+        return None
+    raise InvalidInput(f"compressed image: format {text!r} is not read (expected jpeg or png)")
+
+
+def compressed_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
+    """A sensor_msgs/CompressedImage (JPEG or PNG, :func:`compressed_format`) as a (height,
+    width) uint8 array, decoded in Rust (:func:`vsinv.decode_image`: the declared size checked
+    against the pixel limit before decoding); undecodable, oversized or mislabelled data is
+    refused with InvalidInput."""
+    expected = compressed_format(str(msg.format))
+    try:
+        return decode_image(msg.data, expected)
+    except InvalidInput as e:
+        raise InvalidInput(f"compressed image ({msg.format!r}): {e}") from None
 
 
 def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics, Distortion]:

@@ -36,8 +36,9 @@ class ImageGate:
         """The (width, height) images must have: the CameraInfo's, else the first image's."""
         return self.info_size or self.image_size
 
-    def check(self, msg: Any) -> Optional[str]:
-        """Why the image ``msg`` cannot be used now, or None."""
+    def check(self, msg: Any, size: Optional[tuple[int, int]] = None) -> Optional[str]:
+        """Why the image ``msg`` cannot be used now, or None; ``size`` (width, height) is the
+        decoded size of a compressed image (which has no width and height fields)."""
         frame = str(msg.header.frame_id)
         if self.frame is not None and frame != self.frame:
             return f"image frame_id {frame!r} is not the camera's {self.frame!r}"
@@ -46,19 +47,20 @@ class ImageGate:
             what = "a duplicate" if stamp == self.last_stamp else "out of order"
             return (f"image stamp {stamp[0] + 1e-9 * stamp[1]:.9f} s is not after the last image used "
                     f"({self.last_stamp[0] + 1e-9 * self.last_stamp[1]:.9f} s): {what}")
-        size, expected = (int(msg.width), int(msg.height)), self.size()
+        size, expected = size or (int(msg.width), int(msg.height)), self.size()
         if expected is not None and size != expected:
             source = "CameraInfo's" if self.info_size else "first image's"
             return f"image size {size[0]}x{size[1]} is not the {source} {expected[0]}x{expected[1]}"
         return None
 
-    def used(self, msg: Any) -> None:
-        """Records an image that was stepped on: its stamp, and its frame and size if none yet."""
+    def used(self, msg: Any, size: Optional[tuple[int, int]] = None) -> None:
+        """Records an image that was stepped on: its stamp, and its frame and size (``size``
+        for a compressed image) if none yet."""
         self.last_stamp = (int(msg.header.stamp.sec), int(msg.header.stamp.nanosec))
         if self.frame is None:
             self.frame = str(msg.header.frame_id)
         if self.image_size is None:
-            self.image_size = (int(msg.width), int(msg.height))
+            self.image_size = size or (int(msg.width), int(msg.height))
 
     def camera_info(self, msg: Any) -> Optional[str]:
         """Why the CameraInfo ``msg`` is refused (its size is not the images'), or None (its

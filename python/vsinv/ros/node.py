@@ -24,16 +24,21 @@ import numpy as np
 import rclpy
 from geometry_msgs.msg import TwistStamped
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, SetParametersResult
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.publisher import Publisher
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
-from sensor_msgs.msg import CameraInfo, Image
+from rclpy.service import Service
+from rclpy.subscription import Subscription
+from rclpy.timer import Timer
+from sensor_msgs.msg import CameraInfo, CompressedImage, Image
 from std_msgs.msg import String
 from std_srvs.srv import Trigger
 
-from .._core import InvalidInput
+from .._core import InvalidInput, VsinvError
 from .annotate import annotate
-from .conversions import image_to_grey, lens_from_camera_info
+from .conversions import compressed_to_grey, image_to_grey, lens_from_camera_info
 from .gate import ImageGate, stamp_seconds
 from .live import apply_change
 from .params import PARAMETERS, parse_parameters
@@ -44,7 +49,7 @@ try:  # diagnostic_msgs is in every ROS 2 installation; the PyPI wheels install 
 except ImportError:  # pragma: no cover
     DiagnosticArray = None
 
-__all__ = ["BridgeNode"]
+__all__ = ["BridgeNode", "LifecycleBridgeNode"]
 
 _TYPES = {"str": Parameter.Type.STRING, "bool": Parameter.Type.BOOL, "int": Parameter.Type.INTEGER,
           "float": Parameter.Type.DOUBLE, "floats": Parameter.Type.DOUBLE_ARRAY, "ints": Parameter.Type.INTEGER_ARRAY}
@@ -67,17 +72,25 @@ def _descriptor(name: str) -> ParameterDescriptor:
     return d
 
 
-class BridgeNode(Node):
-    """The bridge. Its parameters are read at construction (a misspelt one is refused by name)
-    and a bad one raises :class:`vsinv.InvalidInput` there; afterwards nothing raises out of a
-    callback: a bad frame is said in the status and the robot is stopped with a zero twist."""
+class _Bridge(Node):
+    """The bridge's ROS side, shared by :class:`BridgeNode` (set up at construction) and
+    :class:`LifecycleBridgeNode` (set up at configure): parameters, publishers, subscriptions,
+    services and timers, and the callbacks. Nothing raises out of a callback: a bad frame is
+    said in the status and the robot is stopped with a zero twist."""
 
-    def __init__(self, name: str = "vsinv_ros", **kwargs: Any) -> None:
-        super().__init__(name, **kwargs)
-        overrides = {k: p.value for k, p in self._parameter_overrides.items()}
-        self.config = parse_parameters(overrides)
+    #: Whether images are stepped on and twists sent (a lifecycle node: only while active).
+    _live = True
+    #: The ~/start, ~/stop and ~/reset services (a lifecycle node's transitions replace them).
+    _offer_services = True
+
+    def _setup(self, values: dict[str, Any], declare: bool) -> None:
+        """Reads the parameters (``values``; a bad one raises :class:`vsinv.InvalidInput`
+        naming it), declares them when ``declare``, and creates everything the bridge uses
+        (kept in ``_entities`` for a lifecycle cleanup)."""
+        self.config = parse_parameters(values)
         validate_pipeline(self.config)
-        self._declare(overrides)
+        if declare:
+            self._declare(values)
         self.session = BridgeSession(self.config)
         c = self.config
         self.frame_id = c.end_effector_frame if c.output_frame == "end_effector" else c.camera_frame
@@ -88,26 +101,44 @@ class BridgeNode(Node):
         self.status_pub = self.create_publisher(String, topics["status"], latched)
         self.diag_pub = self.create_publisher(DiagnosticArray, "/diagnostics", QoSProfile(depth=10)) if DiagnosticArray else None
         self.annotated_pub = self.create_publisher(Image, topics["annotated"], QoSProfile(depth=1))
+        self._entities: list[Any] = [self.twist_pub, self.status_pub, self.annotated_pub] + ([self.diag_pub] if self.diag_pub else [])
         reliability = ReliabilityPolicy.RELIABLE if c.image_reliability == "reliable" else ReliabilityPolicy.BEST_EFFORT
         images = QoSProfile(depth=c.image_depth, history=HistoryPolicy.KEEP_LAST, reliability=reliability)
-        self.create_subscription(Image, topics["image"], self._on_image, images, event_callbacks=self._qos_events("image"))
-        self.create_subscription(CameraInfo, topics["camera_info"], self._on_camera_info, QoSProfile(depth=1, reliability=reliability),
-                                 event_callbacks=self._qos_events("camera_info"))
-        self.create_service(Trigger, "~/start", self._on_start)
-        self.create_service(Trigger, "~/stop", self._on_stop)
-        self.create_service(Trigger, "~/reset", self._on_reset)
-        self.create_timer(0.01, self._on_watchdog)  # 10 ms: a stop at most that late after the timeout
-        self.create_timer(c.status_period, self._publish_status)
+        if c.image_transport == "compressed":  # image_transport's naming: the raw topic + /compressed
+            self._entities.append(self.create_subscription(
+                CompressedImage, f"{topics['image'].rstrip('/')}/compressed", self._on_image, images,
+                event_callbacks=self._qos_events("image")))
+        else:
+            self._entities.append(self.create_subscription(Image, topics["image"], self._on_image, images,
+                                                           event_callbacks=self._qos_events("image")))
+        self._entities.append(self.create_subscription(CameraInfo, topics["camera_info"], self._on_camera_info,
+                                                       QoSProfile(depth=1, reliability=reliability),
+                                                       event_callbacks=self._qos_events("camera_info")))
+        if self._offer_services:
+            self._entities += [self.create_service(Trigger, "~/start", self._on_start),
+                               self.create_service(Trigger, "~/stop", self._on_stop),
+                               self.create_service(Trigger, "~/reset", self._on_reset)]
+        self._entities += [self.create_timer(0.01, self._on_watchdog),  # 10 ms: a stop at most that late after the timeout
+                           self.create_timer(c.status_period, self._publish_status)]
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self.latency: Optional[float] = None
         self.image_stamp: Optional[float] = None
         self.qos_message: Optional[str] = None
         self._publish_status()
+        start = "activate to servo" if not self._offer_services else "servoing at the first image" if c.autostart else "call ~/start to servo"
         self.get_logger().info(
             f"vsinv_ros: {c.target} target, twist to {self.twist_pub.topic_name} in frame {self.frame_id!r}; "
-            f"images {c.image_reliability}, keep last {c.image_depth}; "
-            f"{'servoing at the first image' if c.autostart else 'call ~/start to servo'}"
+            f"images {c.image_transport}, {c.image_reliability}, keep last {c.image_depth}; {start}"
         )
+
+    def _teardown(self) -> None:
+        """Destroys what :meth:`_setup` created (a lifecycle cleanup)."""
+        self.remove_on_set_parameters_callback(self._on_set_parameters)
+        destroy = {Publisher: self.destroy_publisher, Subscription: self.destroy_subscription,
+                   Service: self.destroy_service, Timer: self.destroy_timer}
+        for entity in self._entities:
+            next(f for kind, f in destroy.items() if isinstance(entity, kind))(entity)
+        self._entities = []
 
     def _declare(self, overrides: dict[str, Any]) -> None:
         """Every parameter declared with its descriptor (`ros2 param describe`), at its value."""
@@ -150,20 +181,28 @@ class BridgeNode(Node):
         if first:
             self._publish_status()
 
-    def _on_image(self, msg: Image) -> None:
+    def _on_image(self, msg: Image | CompressedImage) -> None:
+        if not self._live:
+            return
         try:
             self._servo_on(msg)
         except Exception as e:  # a fault of the bridge itself: the robot stops, the node stays up
             self.get_logger().error(f"vsinv_ros: internal error on an image: {e!r}")
             self._send(self.session.stop(f"internal error: {e!r}"))
 
-    def _servo_on(self, msg: Image) -> None:
-        """One image: checked (a refusal publishes a zero twist at once), converted, stepped
-        while running; the twist, status and annotated image sent."""
+    def _servo_on(self, msg: Image | CompressedImage) -> None:
+        """One image: checked (a refusal publishes a zero twist at once), converted (a
+        compressed one decoded), stepped while running; the twist, status and annotated image
+        sent."""
         received = time.monotonic()
+        size: Optional[tuple[int, int]] = None
         try:
-            grey = image_to_grey(msg)
-            refused = self.gate.check(msg)
+            if isinstance(msg, CompressedImage):
+                grey = compressed_to_grey(msg)
+                size = (grey.shape[1], grey.shape[0])
+            else:
+                grey = image_to_grey(msg)
+            refused = self.gate.check(msg, size)
         except InvalidInput as e:
             refused = str(e)
         if refused is not None:
@@ -173,7 +212,7 @@ class BridgeNode(Node):
             return
         out = self.session.frame(grey, received)
         if out.frame_used:
-            self.gate.used(msg)
+            self.gate.used(msg, size)
             self.image_stamp = stamp_seconds(msg.header.stamp)
         if out.twist is not None:
             self._publish_twist(out.twist)
@@ -226,7 +265,7 @@ class BridgeNode(Node):
         return sec + 1e-9 * nanosec
 
     def _send(self, out: Output) -> None:
-        if out.twist is not None:
+        if out.twist is not None and self._live:
             self._publish_twist(out.twist)
         self._publish_status()
 
@@ -266,7 +305,7 @@ class BridgeNode(Node):
         array.header.stamp = self.get_clock().now().to_msg()
         return array
 
-    def _publish_annotated(self, source: Image, rgb: np.ndarray) -> None:
+    def _publish_annotated(self, source: Image | CompressedImage, rgb: np.ndarray) -> None:
         msg = Image()
         msg.header = source.header
         msg.height, msg.width = rgb.shape[:2]
@@ -276,5 +315,91 @@ class BridgeNode(Node):
 
     def halt(self) -> None:
         """At shutdown: a last zero twist, whatever the state."""
-        if rclpy.ok(context=self.context):
+        if rclpy.ok(context=self.context) and getattr(self, "session", None) is not None:
             self._send(self.session.stop("node shut down"))
+
+
+class BridgeNode(_Bridge):
+    """The bridge as a plain node. Its parameters are read at construction (a misspelt one is
+    refused by name) and a bad one raises :class:`vsinv.InvalidInput` there; servoing starts
+    by the ~/start service (or ``autostart``)."""
+
+    def __init__(self, name: str = "vsinv_ros", **kwargs: Any) -> None:
+        super().__init__(name, **kwargs)
+        self._setup({k: p.value for k, p in self._parameter_overrides.items()}, declare=True)
+
+
+class LifecycleBridgeNode(_Bridge, LifecycleNode):
+    """The bridge as a managed (lifecycle) node, for a system that brings its nodes up in
+    order (``vsinv-ros --lifecycle``; ``ros2 lifecycle set /vsinv_ros configure`` ...):
+
+    - configure: reads the parameters (a bad one fails the transition, named in the log) and
+      creates the publishers, subscriptions and timers; the status is latched from then on;
+    - activate: starts servoing (a new session after a final verdict), as ~/start; it fails
+      without a lens (no CameraInfo yet and no K_hat);
+    - deactivate: one zero twist, then silent: images are not read and no twist is sent
+      until the next activate (the status and /diagnostics go on);
+    - cleanup: destroys what configure created (the parameters stay declared: a new
+      configure reads their current values); shutdown: a last zero twist if active.
+
+    The ~/start, ~/stop and ~/reset services are not offered: the transitions replace them."""
+
+    _live = False
+    _offer_services = False
+
+    def __init__(self, name: str = "vsinv_ros", **kwargs: Any) -> None:
+        super().__init__(name, **kwargs)
+        self.session: Optional[BridgeSession] = None  # type: ignore[assignment]
+
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        declared = self.has_parameter("reference_image")
+        if declared:  # a configure after a cleanup: the current values that are not the defaults
+            current = {p.name: (self.get_parameter_or(p.name, Parameter(p.name)).value, p.default) for p in PARAMETERS}
+            values = {k: v for k, (v, default) in current.items() if v is not None and v != default}
+        else:
+            values = {k: p.value for k, p in self._parameter_overrides.items()}
+        try:
+            self._setup(values, declare=not declared)
+        except VsinvError as e:
+            self.get_logger().error(f"vsinv_ros: refused to configure: {e}")
+            return TransitionCallbackReturn.FAILURE
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        assert self.session is not None
+        if self.session.pipeline is None or self.session.finished:
+            self.gate.reset()  # a new session: a new frame, stamps and size
+        ok, message = self.session.start(time.monotonic())
+        self._publish_status()
+        if not ok:
+            self.get_logger().error(f"vsinv_ros: cannot activate: {message}")
+            return TransitionCallbackReturn.FAILURE
+        self._live = True
+        return super().on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._stop_once("deactivated")
+        return super().on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._teardown()
+        self.session = None
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._stop_once("node shut down")
+        if self.session is not None:
+            self._teardown()
+        return TransitionCallbackReturn.SUCCESS
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        self._stop_once("lifecycle error")
+        return TransitionCallbackReturn.SUCCESS
+
+    def _stop_once(self, reason: str) -> None:
+        """While active: the session stopped with one zero twist, then nothing more is sent."""
+        if self.session is not None and self._live:
+            self._send(self.session.stop(reason))
+        self._live = False
+        if self.session is not None:
+            self._publish_status()

@@ -113,7 +113,7 @@ PARAMETERS: tuple[Parameter, ...] = (
        "(MoveIt Servo's incoming_command_timeout, 0.1 s); changed at once by a parameter set"),
     _P("autostart", "bool", False, "start servoing at the first image (otherwise call the start service)"),
     _P("publish_annotated", "bool", True, "publish the image with the points found"),
-    _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8 or bgr8)"),
+    _P("image_topic", "str", "image", "sensor_msgs/Image in (mono8, rgb8, bgr8, rgba8 or bgra8)"),
     _P("camera_info_topic", "str", "camera_info", "sensor_msgs/CameraInfo in"),
     _P("twist_topic", "str", "~/twist", "geometry_msgs/TwistStamped out (MoveIt Servo: /servo_node/delta_twist_cmds)"),
     _P("status_topic", "str", "~/status", "std_msgs/String out: the status as JSON"),
@@ -124,6 +124,8 @@ PARAMETERS: tuple[Parameter, ...] = (
        "loses large images between processes)", ("reliable", "best_effort")),
     _P("image_qos.depth", "int", 1, "the image subscription's history depth (keep last): 1 steps on the newest image"),
     _P("status_period", "float", 1.0, "the status and /diagnostics heartbeat, seconds"),
+    _P("image_transport", "str", "raw", "raw: sensor_msgs/Image on image_topic; compressed: sensor_msgs/CompressedImage "
+       "(JPEG or PNG, decoded in Rust) on image_topic/compressed", ("raw", "compressed")),
 )
 
 _BY_NAME = {p.name: p for p in PARAMETERS}
@@ -155,6 +157,7 @@ class BridgeConfig:
     image_reliability: str = "reliable"
     image_depth: int = 1
     status_period: float = 1.0
+    image_transport: str = "raw"
     autostart: bool = False
     publish_annotated: bool = True
     topics: dict[str, str] = field(default_factory=dict)
@@ -386,6 +389,7 @@ def _interface(given: dict[str, Any], config: BridgeConfig) -> None:
     if not 0.01 <= period <= 60.0:
         raise _refuse("status_period", f"expected 0.01..=60 seconds, got {period}")
     config.status_period = period
+    config.image_transport = given["image_transport"]
 
 
 def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:

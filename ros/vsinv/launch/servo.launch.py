@@ -27,6 +27,7 @@ def generate_launch_description() -> LaunchDescription:
         parameters=[LaunchConfiguration("params_file")],
         remappings=[
             ("image", LaunchConfiguration("image")),
+            ("image/compressed", [LaunchConfiguration("image"), "/compressed"]),  # image_transport: compressed
             ("camera_info", LaunchConfiguration("camera_info")),
             ("~/twist", LaunchConfiguration("twist")),
         ],
