@@ -14,8 +14,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.qos import QoSProfile
 from sensor_msgs.msg import CompressedImage
 
-import vsinv
-from ros_fault_sim import FRAME, Rig, fault, spin_until
+from ros_fault_sim import FRAME, Rig, fault, spin_until, spun_rig
 
 PNG_FORMAT = "mono8; png compressed mono8"
 
@@ -76,19 +75,11 @@ def faults(ex: SingleThreadedExecutor, rig: CompressedRig) -> dict[str, Any]:
 
 
 def run(config: dict[str, Any]) -> dict[str, Any]:
-    scenario = vsinv.load_scenario(config["scenario"])
-    start = np.asarray(config["start_pose"], dtype=float)
-    rig = CompressedRig(vsinv.render(scenario, pose=start), config["K"])
-    ex = SingleThreadedExecutor()
-    ex.add_node(rig)
-    try:
+    with spun_rig(CompressedRig, config) as (ex, rig):
         spin_until(ex, lambda: rig.statuses > 0, 30.0)
         rig.info_pub.publish(rig.info)
         spin_until(ex, lambda: rig.status.get("K_hat") is not None, 10.0)
         return {"faults": faults(ex, rig)}
-    finally:
-        ex.shutdown()
-        rig.destroy_node()
 
 
 if __name__ == "__main__":

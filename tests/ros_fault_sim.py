@@ -9,9 +9,10 @@ sets (applied, refused) and descriptions; the watchdog set shorter. Writes JSON 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Iterator
 
 import numpy as np
 import rclpy
@@ -173,13 +174,23 @@ def parameters(ex: SingleThreadedExecutor, rig: Rig) -> dict[str, Any]:
     return out
 
 
-def run(config: dict[str, Any]) -> dict[str, Any]:
+@contextlib.contextmanager
+def spun_rig(make: Callable[..., Any], config: dict[str, Any]) -> Iterator[tuple[SingleThreadedExecutor, Any]]:
+    """A rig (`make(first image, K)`, the config's scenario rendered at its start pose) spun by
+    its own executor; both shut down after."""
     scenario = vsinv.load_scenario(config["scenario"])
-    start = np.asarray(config["start_pose"], dtype=float)
-    rig = Rig(vsinv.render(scenario, pose=start), config["K"])
+    rig = make(vsinv.render(scenario, pose=np.asarray(config["start_pose"], dtype=float)), config["K"])
     ex = SingleThreadedExecutor()
     ex.add_node(rig)
     try:
+        yield ex, rig
+    finally:
+        ex.shutdown()
+        rig.destroy_node()
+
+
+def run(config: dict[str, Any]) -> dict[str, Any]:
+    with spun_rig(Rig, config) as (ex, rig):
         spin_until(ex, lambda: rig.statuses > 0, 30.0)
         out: dict[str, Any] = {"status_before_images": dict(rig.status)}
         rig.info_pub.publish(rig.info)
@@ -195,9 +206,6 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
         out["diagnostics"] = [(s.level if isinstance(s.level, int) else int.from_bytes(s.level, "little"), s.name, s.message)
                               for a in rig.diagnostics for s in a.status]
         return out
-    finally:
-        ex.shutdown()
-        rig.destroy_node()
 
 
 if __name__ == "__main__":

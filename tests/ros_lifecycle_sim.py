@@ -13,8 +13,7 @@ from lifecycle_msgs.msg import Transition
 from lifecycle_msgs.srv import ChangeState, GetState
 from rclpy.executors import SingleThreadedExecutor
 
-import vsinv
-from ros_fault_sim import Rig, call, spin_until
+from ros_fault_sim import Rig, call, spin_until, spun_rig
 
 
 class LifecycleRig(Rig):
@@ -46,12 +45,8 @@ def twists_for(ex: SingleThreadedExecutor, rig: LifecycleRig, images: int) -> li
 
 
 def run(config: dict[str, Any]) -> dict[str, Any]:
-    scenario = vsinv.load_scenario(config["scenario"])
-    rig = LifecycleRig(vsinv.render(scenario, pose=np.asarray(config["start_pose"], dtype=float)), config["K"])
-    ex = SingleThreadedExecutor()
-    ex.add_node(rig)
-    out: dict[str, Any] = {}
-    try:
+    with spun_rig(LifecycleRig, config) as (ex, rig):
+        out: dict[str, Any] = {}
         out["initial"] = state(ex, rig)
         out["status_unconfigured"] = rig.statuses
         out["configure"] = transition(ex, rig, Transition.TRANSITION_CONFIGURE)
@@ -86,9 +81,6 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
         out["reactivate_after_cleanup"] = transition(ex, rig, Transition.TRANSITION_ACTIVATE)
         out["twists_after_cleanup"] = twists_for(ex, rig, 5)
         return out
-    finally:
-        ex.shutdown()
-        rig.destroy_node()
 
 
 if __name__ == "__main__":
