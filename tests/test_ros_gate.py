@@ -100,11 +100,15 @@ def test_to_grey_is_opencvs_cvtcolor(shape: tuple[int, int]) -> None:
     np.testing.assert_array_equal(vsinv.to_grey(strided), cv2.cvtColor(np.ascontiguousarray(strided), cv2.COLOR_RGB2GRAY))
 
 
-@pytest.mark.parametrize("bad, what", [(np.zeros((4, 4), np.uint8), "shape"), (np.zeros((4, 4, 3)), "dtype float64"),
-                                       (np.zeros((0, 4, 3), np.uint8), "empty"), ([1, 2, 3], "list")])
+@pytest.mark.parametrize("bad, what", [
+    (np.zeros((4, 4), np.uint8), r"image: expected a \(height, width, 3\) uint8 array, got dtype uint8 with shape \[4, 4\]"),
+    (np.zeros((4, 4, 3)), r"image: expected a \(height, width, 3\) uint8 array, got dtype float64 with shape \[4, 4, 3\]"),
+    (np.zeros((0, 4, 3), np.uint8), r"image: empty image \(0 x 4\)"),
+    ([1, 2, 3], r"image: expected a \(height, width, 3\) uint8 NumPy array, got list"),
+])
 def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match=what):
         vsinv.to_grey(bad)
-    with pytest.raises(vsinv.InvalidInput, match="order"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `order`: expected 'rgb' or 'bgr'"):
         vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
 
