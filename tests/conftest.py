@@ -53,13 +53,24 @@ AREAS = {
 }
 AREA_OF = {name: area for area, names in AREAS.items() for name in names}
 
+# Cases of parametrised tests marked slow here rather than in their file (node ids, as pytest
+# prints them, without "tests/"): each took 3 s of CPU or more (30 s and more of wall time at a
+# load average of 14 on 2 cores) in one run of the whole suite timed test by test. Whole tests are marked with @pytest.mark.slow where
+# they are defined. `make test-fast` (-m "not slow") leaves both out; `make test` runs them.
+SLOW = {
+    "test_docs.py::test_page_code_runs[getting-started.md]",
+}
+
 
 def pytest_collection_modifyitems(config, items):
-    """Marks each test with its file's area (from AREAS) unless the file declares one itself."""
+    """Marks each test with its file's area (from AREAS) unless the file declares one itself,
+    and the cases of SLOW with `slow`."""
     for item in items:
         area = AREA_OF.get(item.path.name)
         if area is not None and not any(m.name in AREAS for m in item.iter_markers()):
             item.add_marker(getattr(pytest.mark, area))
+        if item.nodeid.removeprefix("tests/") in SLOW:
+            item.add_marker(pytest.mark.slow)
 
 
 def object_points() -> np.ndarray:

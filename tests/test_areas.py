@@ -6,7 +6,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
-from conftest import AREA_OF, AREAS
+from conftest import AREA_OF, AREAS, SLOW
 
 TESTS = Path(__file__).parent
 OWN_MARK = re.compile(r"^pytestmark\s*=\s*\[?\s*pytest\.mark\.(\w+)", re.MULTILINE)
@@ -51,3 +51,23 @@ def test_own_marker_is_found(tmp_path):
 def test_the_area_marker_is_given(request):
     assert request.node.get_closest_marker("package") is not None
     assert request.node.get_closest_marker("vision") is None
+
+
+def test_slow_cases_name_existing_tests():
+    """Each case of conftest's SLOW names a test function of an existing file (the case's
+    parameters are checked by the marker taking effect: test_slow_cases_are_marked)."""
+    for case in SLOW:
+        file, function = case.split("[")[0].split("::")
+        assert f"def {function}(" in (TESTS / file).read_text(encoding="utf-8"), case
+
+
+def test_slow_cases_are_marked(pytestconfig):
+    """Collects the SLOW cases on their own: every one is found and carries `slow`."""
+    import subprocess
+    import sys
+
+    ids = sorted(f"tests/{case}" for case in SLOW)
+    done = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-m", "slow", "-p", "no:cacheprovider", *ids],
+                          cwd=TESTS.parent, capture_output=True, text=True)
+    collected = sorted(line for line in done.stdout.splitlines() if "::" in line)
+    assert collected == ids, done.stdout[-2000:] + done.stderr[-2000:]
