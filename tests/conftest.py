@@ -53,12 +53,22 @@ AREAS = {
 }
 AREA_OF = {name: area for area, names in AREAS.items() for name in names}
 
-# Cases of parametrised tests marked slow here rather than in their file (node ids, as pytest
-# prints them, without "tests/"): each took 3 s of CPU or more (30 s and more of wall time at a
-# load average of 14 on 2 cores) in one run of the whole suite timed test by test. Whole tests are marked with @pytest.mark.slow where
-# they are defined. `make test-fast` (-m "not slow") leaves both out; `make test` runs them.
+# Tests and cases of parametrised tests marked slow here rather than in their file (node ids, as
+# pytest prints them, without "tests/"): each took 3 s of CPU or more (30 s and more of wall time at a
+# load average of 14 on 2 cores) in one run of the whole suite timed test by test. Other slow
+# tests carry @pytest.mark.slow where they are defined. `make test-fast` (-m "not slow") leaves
+# both out; `make test` runs them.
 SLOW = {
     "test_docs.py::test_page_code_runs[getting-started.md]",
+    "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
+    "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
+    "test_tag_families.py::test_a_tag_standard_41h12_rig_runs_to_converged",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.8-1.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCustom48h12-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCustom48h12-0.8-1.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagStandard52h13-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagStandard52h13-0.8-1.0]",
 }
 
 
