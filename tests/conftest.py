@@ -59,9 +59,13 @@ AREA_OF = {name: area for area, names in AREAS.items() for name in names}
 # tests carry @pytest.mark.slow where they are defined. `make test-fast` (-m "not slow") leaves
 # both out; `make test` runs them.
 SLOW = {
+    "test_arm.py::test_arm_figures",
     "test_docs.py::test_page_code_runs[getting-started.md]",
     "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
     "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
+    "test_robustness_threads.py::test_tag_tracker_from_threads",
+    "test_robustness_vision.py::test_to_grey",
+    "test_schema.py::test_scenario_is_converted_once_per_figure_set",
     "test_tag_families.py::test_a_tag_standard_41h12_rig_runs_to_converged",
     "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.0-0.0]",
     "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.8-1.0]",
