@@ -7,7 +7,7 @@ RUST_EXAMPLES := control_loop servo_loop simulation batch
 ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
 	robustness_vision robustness_regressions
 
-.PHONY: docs wheels install install-run test test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
+.PHONY: docs wheels install install-run test test-fast test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
 # No -q: the first install compiles the Rust extension in release mode (several minutes on
 # 2 cores); -v passes cargo's progress through, so the build is seen to move.
@@ -30,8 +30,14 @@ test-embedded:
 test-examples:
 	for ex in $(RUST_EXAMPLES); do cargo run -q --release --example $$ex || exit 1; done
 
+# PYTEST_ARGS narrows or widens the Python tests, e.g. PYTEST_ARGS='-m vision' (one area: core,
+# servo, vision, sim, calibration, ros, cli, docs, robustness, package; docs/development.md).
 test-python:
-	$(PYTHON) -m pytest -q
+	$(PYTHON) -m pytest -q $(PYTEST_ARGS)
+
+# The Python tests without those marked slow: for the edit-test loop (make test runs them all).
+test-fast:
+	$(PYTHON) -m pytest -q -m "not slow" $(PYTEST_ARGS)
 
 stubtest:
 	$(PYTHON) -m mypy.stubtest vsinv._core

@@ -15,6 +15,78 @@ settings.register_profile("explore", derandomize=False, max_examples=500)
 settings.load_profile(os.environ.get("VSINV_HYPOTHESIS", "ci"))
 
 
+# The area (layer) of each test file: `pytest -m vision` runs the vision tests. Every test file has
+# one, from this table or from its own module-level marker (``pytestmark = pytest.mark.vision``,
+# which a new file may use instead of a line here); tests/test_areas.py fails on a file with none.
+# The areas are registered in pyproject.toml ([tool.pytest.ini_options] markers, --strict-markers).
+AREAS = {
+    "core": [
+        "test_api.py", "test_planning.py", "test_scaling.py", "test_se3.py",
+    ],
+    "servo": [
+        "test_commands.py", "test_law_options.py", "test_parity.py", "test_servo.py", "test_uncertainty.py",
+    ],
+    "vision": [
+        "test_dot_filters.py", "test_image_formats.py", "test_image_servo.py", "test_polarity.py",
+        "test_real_images.py", "test_tag_families.py", "test_tag_options.py", "test_tag_rig.py",
+        "test_tag_tracking.py", "test_tags.py", "test_tags_robustness.py", "test_tracker_border.py",
+        "test_tracker_lost.py", "test_tracker_shape.py", "test_vision.py",
+    ],
+    "sim": [
+        "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
+        "test_mount_error.py", "test_mujoco_world.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
+    ],
+    "calibration": ["test_distortion.py", "test_hand_eye.py"],
+    "ros": ["test_ros_bridge.py", "test_ros_gate.py", "test_ros_loop.py", "test_ros_package.py"],
+    "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py"],
+    "docs": ["test_docs.py", "test_readme_blocks.py"],
+    "robustness": [
+        "test_errors.py", "test_fork_safety.py", "test_fuzz_scenarios.py", "test_hostile_files.py",
+        "test_hostile_sizes.py", "test_robustness_camera.py", "test_robustness_control.py",
+        "test_robustness_geometry.py", "test_robustness_kinematics.py", "test_robustness_limits.py",
+        "test_robustness_planning.py", "test_robustness_registry.py", "test_robustness_scenarios.py",
+        "test_robustness_se3.py", "test_robustness_threads.py", "test_robustness_vision.py",
+    ],
+    "package": [
+        "test_areas.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
+    ],
+}
+AREA_OF = {name: area for area, names in AREAS.items() for name in names}
+
+# Tests and cases of parametrised tests marked slow here rather than in their file (node ids, as
+# pytest prints them, without "tests/"): each took 3 s of CPU or more (30 s and more of wall time at a
+# load average of 14 on 2 cores) in one run of the whole suite timed test by test. Other slow
+# tests carry @pytest.mark.slow where they are defined. `make test-fast` (-m "not slow") leaves
+# both out; `make test` runs them.
+SLOW = {
+    "test_arm.py::test_arm_figures",
+    "test_docs.py::test_page_code_runs[getting-started.md]",
+    "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
+    "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
+    "test_robustness_threads.py::test_tag_tracker_from_threads",
+    "test_robustness_vision.py::test_to_grey",
+    "test_schema.py::test_scenario_is_converted_once_per_figure_set",
+    "test_tag_families.py::test_a_tag_standard_41h12_rig_runs_to_converged",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCircle49h12-0.8-1.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCustom48h12-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagCustom48h12-0.8-1.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagStandard52h13-0.0-0.0]",
+    "test_tag_families.py::test_rendered_tags_of_every_family_decode_at_their_projected_corners[tagStandard52h13-0.8-1.0]",
+}
+
+
+def pytest_collection_modifyitems(config, items):
+    """Marks each test with its file's area (from AREAS) unless the file declares one itself,
+    and the cases of SLOW with `slow`."""
+    for item in items:
+        area = AREA_OF.get(item.path.name)
+        if area is not None and not any(m.name in AREAS for m in item.iter_markers()):
+            item.add_marker(getattr(pytest.mark, area))
+        if item.nodeid.removeprefix("tests/") in SLOW:
+            item.add_marker(pytest.mark.slow)
+
+
 def object_points() -> np.ndarray:
     """Twelve points in a 300 x 240 mm area about 600 mm in front of F*, +-60 mm relief."""
     xs = [-0.15, -0.05, 0.05, 0.15]

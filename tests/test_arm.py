@@ -46,5 +46,5 @@ def test_arm_keys_are_checked():
     d = vsinv.load_scenario("arm-ur5-12-6").to_dict()
     assert "start" not in d
     d["robot"]["joints"] = d["robot"]["joints"][:5]
-    with pytest.raises(vsinv.InvalidInput, match="robot.joints"):
+    with pytest.raises(vsinv.InvalidInput, match=r"robot\.joints: 5 values given, the arm ur5 has 6 joints"):
         vsinv.run_scenario(d)

@@ -44,7 +44,7 @@ def test_progress_true_draws_a_tqdm_bar_on_stderr(capsys: pytest.CaptureFixture[
 
 
 def test_a_bad_progress_is_a_type_error_naming_it() -> None:
-    with pytest.raises(TypeError, match="progress"):
+    with pytest.raises(TypeError, match=r"progress: expected None, True, False or a callable progress\(done, total\)"):
         vsinv.run_batch(["lens-12-6"], progress="yes")  # type: ignore[arg-type]
 
 
@@ -55,7 +55,7 @@ def test_an_exception_in_progress_stops_the_batch_and_is_raised() -> None:
         calls.append(done)
         raise RuntimeError("stop here")
 
-    with pytest.raises(RuntimeError, match="stop here"):
+    with pytest.raises(RuntimeError, match="^stop here$"):
         vsinv.run_batch(["noise-12-6"] * 64, threads=1, progress=stop)
     assert len(calls) == 1
     # The pool is still usable afterwards.

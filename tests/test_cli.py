@@ -169,7 +169,7 @@ def test_save_figures_and_npz_api(tmp_path):
     import matplotlib.pyplot as plt
 
     assert plt.get_fignums() == []  # every figure closed after saving
-    with pytest.raises(ValueError, match="record"):
+    with pytest.raises(ValueError, match=r"the run was not recorded \(run_scenario\(\.\.\., record=False\)\): nothing to plot"):
         save_figures(vsinv.run_scenario("lens-12-6", record=False), tmp_path / "none")
 
 

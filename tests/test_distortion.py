@@ -122,9 +122,9 @@ def test_distortion_object_and_models():
     assert r.model == "rational_polynomial" and r.coefficients.shape == (8,)
     assert vsinv.Distortion([0.0] * 5, model="plumb_bob") == vsinv.Distortion([0.0] * 4)
     for bad in ([0.1, 0.2, 0.0], [0.0] * 6, [0.0] * 12, [0.0] * 14):
-        with pytest.raises(vsinv.InvalidInput, match="coefficients"):
+        with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `distortion coefficients`: expected 4 or 5 \(plumb_bob"):
             vsinv.Distortion(bad)
-    with pytest.raises(vsinv.InvalidInput, match="non-finite"):
+    with pytest.raises(vsinv.InvalidInput, match="distortion coefficients: non-finite value at index 1"):
         vsinv.Distortion([0.1, math.nan, 0.0, 0.0, 0.0])
     with pytest.raises(vsinv.InvalidInput, match="unknown distortion model"):
         vsinv.Distortion([0.0] * 5, model="equidistant")
@@ -138,9 +138,9 @@ def test_distortion_object_and_models():
     np.testing.assert_array_equal(a, vsinv.distort_points(px, k.matrix, np.array([[-0.3, 0.1, 0.001, -0.002, 0.0]])))
     np.testing.assert_array_equal(vsinv.distort_points(px, k, [0.0] * 5), px)
     assert vsinv.distort_points(np.zeros((0, 2)), k, d).shape == (0, 2)
-    with pytest.raises(vsinv.InvalidInput, match="pixels"):
+    with pytest.raises(vsinv.InvalidInput, match="pixels: non-finite value at row 0, column 1"):
         vsinv.distort_points([[1.0, math.nan]], k, d)
-    with pytest.raises(vsinv.InvalidInput, match="max_iter"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `max_iter`: must be >= 1"):
         vsinv.undistort_points(px, k, d, max_iter=0)
 
 

@@ -56,7 +56,7 @@ def test_console_blocks_check_quoted_output() -> None:
     program = pages.console_as_python("$ echo hello\nhello\n...\n")
     exec(program, {"_subprocess": __import__("subprocess")})
     wrong = pages.console_as_python("$ echo hello\ngoodbye\n")
-    with pytest.raises(AssertionError, match="goodbye"):
+    with pytest.raises(AssertionError, match="not printed: 'goodbye'"):
         exec(wrong, {"_subprocess": __import__("subprocess")})
 
 

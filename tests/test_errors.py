@@ -34,9 +34,9 @@ def test_bad_intrinsics(args):
 
 
 def test_bad_matrices():
-    with pytest.raises(vsinv.InvalidInput, match="upper triangular"):
+    with pytest.raises(vsinv.InvalidInput, match=r"invalid intrinsics: K must be upper triangular with last row \(0, 0, 1\)"):
         vsinv.Intrinsics.from_matrix(np.ones((3, 3)))
-    with pytest.raises(vsinv.InvalidInput, match="shape"):
+    with pytest.raises(vsinv.InvalidInput, match=r"K: expected shape \(3, 3\)"):
         vsinv.Intrinsics.from_matrix(np.eye(4))
     with pytest.raises(vsinv.InvalidInput):
         vsinv.Intrinsics.from_matrix(np.diag([-500.0, 500.0, 1.0]))
@@ -59,11 +59,11 @@ def test_nan_and_inf_pixels_and_depths(ref):
     for ctl in controllers(px):
         bad = px.copy()
         bad[4, 1] = np.nan
-        with pytest.raises(vsinv.InvalidInput, match="non-finite"):
+        with pytest.raises(vsinv.InvalidInput, match="pixels: non-finite value at row 4, column 1"):
             ctl.step(bad, z)
         badz = z.copy()
         badz[5] = np.inf
-        with pytest.raises(vsinv.InvalidInput, match="non-finite"):
+        with pytest.raises(vsinv.InvalidInput, match="depths: non-finite value at index 5"):
             ctl.step(px, badz)
     with pytest.raises(vsinv.InvalidInput):
         vsinv.invariant_points(np.full((6, 2), np.nan))
@@ -85,9 +85,9 @@ def test_wrong_shapes_and_dtypes(ref, pixels):
 def test_wrong_counts(ref):
     px, z = ref
     for ctl in controllers(px):
-        with pytest.raises(vsinv.InvalidInput, match="12 points"):
+        with pytest.raises(vsinv.InvalidInput, match=r"pixels: expected 12 points \(as in the reference image\)"):
             ctl.step(px[:10], z[:10])
-        with pytest.raises(vsinv.InvalidInput, match="depths"):
+        with pytest.raises(vsinv.InvalidInput, match=r"depths: expected 12 values \(one per point\)"):
             ctl.step(px, z[:5])
         with pytest.raises(vsinv.InvalidInput):
             ctl.step(px, z.reshape(3, 4))
@@ -105,12 +105,12 @@ def test_collinear_basis(ref):
     px, z = ref
     line = px.copy()
     line[2] = (line[0] + line[1]) / 2
-    with pytest.raises(vsinv.DegenerateGeometry, match="collinear"):
+    with pytest.raises(vsinv.DegenerateGeometry, match=r"basis points \[0, 1, 2\] are collinear in the reference image"):
         vsinv.InvariantController(line, lens(1200.0))
-    with pytest.raises(vsinv.DegenerateGeometry, match="collinear"):
+    with pytest.raises(vsinv.DegenerateGeometry, match=r"basis points \[0, 1, 2\] are collinear in the current image"):
         vsinv.invariant_points(line)
     ctl = vsinv.InvariantController(px, lens(1200.0))
-    with pytest.raises(vsinv.DegenerateGeometry, match="collinear.*current"):
+    with pytest.raises(vsinv.DegenerateGeometry, match=r"basis points \[0, 1, 2\] are collinear in the current image"):
         ctl.step(line, z)
 
 
@@ -132,10 +132,10 @@ def test_planar_object_and_equal_depths(ref):
     planar[:, 2] = 0.6 + 0.2 * planar[:, 0]
     ppx, pz = view(planar, np.eye(4), lens(1200.0))
     ctl = vsinv.InvariantController(ppx, lens(1200.0), basis=(0, 3, 8))
-    with pytest.raises(vsinv.DegenerateGeometry, match="planar"):
+    with pytest.raises(vsinv.DegenerateGeometry, match="the object is planar or the depth estimates are all equal"):
         ctl.step(ppx + 3.0, pz)
     ctl = vsinv.InvariantController(px, lens(1200.0))
-    with pytest.raises(vsinv.DegenerateGeometry, match="equal"):
+    with pytest.raises(vsinv.DegenerateGeometry, match="the object is planar or the depth estimates are all equal"):
         ctl.step(px + 3.0, np.full(12, 0.6))
     assert vsinv.structure_ratio(ppx, pz, lens(1200.0), basis=(0, 3, 8)) < 1e-6
 
@@ -150,26 +150,26 @@ def test_non_positive_focal_estimate(ref, k_hat):
 
 def test_bad_parameters(ref):
     px, z = ref
-    with pytest.raises(vsinv.InvalidInput, match="gain"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `gain`: must be finite and > 0"):
         vsinv.InvariantController(px, lens(1200.0), gain=0.0)
-    with pytest.raises(vsinv.InvalidInput, match="gain_rz"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `gain_rz`: must be finite and > 0"):
         vsinv.InvariantController(px, lens(1200.0), gain_rz=np.nan)
-    with pytest.raises(vsinv.InvalidInput, match="basis"):
+    with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `basis`: indices \[0, 1, 12\] out of range for 12 points"):
         vsinv.InvariantController(px, lens(1200.0), basis=(0, 1, 12))
-    with pytest.raises(vsinv.InvalidInput, match="basis"):
+    with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `basis`: indices \[0, 0, 1\] must be distinct"):
         vsinv.InvariantController(px, lens(1200.0), basis=(0, 0, 1))
-    with pytest.raises(vsinv.InvalidInput, match="basis"):
+    with pytest.raises(vsinv.InvalidInput, match="basis: expected three non-negative indices"):
         vsinv.InvariantController(px, lens(1200.0), basis=(0, -1, 2))
-    with pytest.raises(vsinv.InvalidInput, match="basis"):
+    with pytest.raises(vsinv.InvalidInput, match='basis: expected three indices or "auto"'):
         vsinv.InvariantController(px, lens(1200.0), basis="widest")
-    with pytest.raises(vsinv.InvalidInput, match="interaction"):
+    with pytest.raises(vsinv.InvalidInput, match='invalid parameter `interaction`: expected "current", "desired" or "mean"'):
         vsinv.IbvsController(px, lens(1200.0), interaction="sideways")
-    with pytest.raises(vsinv.InvalidInput, match="reference_depths"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `reference_depths`: required when the interaction matrix uses the desired points"):
         vsinv.IbvsController(px, lens(1200.0), interaction="desired")
     ctl = vsinv.InvariantController(px, lens(1200.0))
     with pytest.raises(vsinv.InvalidInput, match="sum to 1"):
         ctl.set_reference(np.zeros((9, 3)))
-    with pytest.raises(vsinv.InvalidInput, match="s_star"):
+    with pytest.raises(vsinv.InvalidInput, match=r"s_star: expected 9 invariant points \(one per non-basis point\)"):
         ctl.set_reference(np.zeros((8, 3)))
     with pytest.raises(vsinv.NotReady, match="no control step"):
         _ = ctl.eps
@@ -211,7 +211,7 @@ def test_nan_in_a_point_array_is_reported_by_row_and_column(scene):
 
 def test_equal_depths_are_refused_with_what_to_do_instead(scene):
     ctl = vsinv.InvariantController(scene["ref"], scene["k"])
-    with pytest.raises(vsinv.DegenerateGeometry, match="reference depths") as info:
+    with pytest.raises(vsinv.DegenerateGeometry, match="with a constant-depth guess, pass the reference depths zeta") as info:
         ctl.step(scene["cur"], np.full(len(scene["cur"]), 0.6))
     assert "estimated" in str(info.value)
 
@@ -253,58 +253,65 @@ def test_non_finite_entries_of_2d_arrays_are_reported_by_row_and_column(scene):
 def test_non_finite_intrinsics_name_the_parameter(i, name):
     args = [600.0, 600.0, 384.0, 288.0, np.pi / 2]
     args[i] = np.nan
-    with pytest.raises(vsinv.InvalidInput, match=name):
+    with pytest.raises(vsinv.InvalidInput, match=f"invalid intrinsics: {name} must be finite, got NaN"):
         vsinv.Intrinsics(*args)
 
 
 def test_tracking_bound_names_its_arguments():
-    for args, name in [((np.nan, 1.0, 1.0), "gain"), ((1.0, np.nan, 1.0), "sigma"), ((1.0, 1.0, np.inf), "max_b"),
-                       ((0.0, 1.0, 1.0), "gain"), ((1.0, 1.0, -1.0), "max_b")]:
+    for args, name in [((np.nan, 1.0, 1.0), "gain: non-finite value at index 0"),
+                       ((1.0, np.nan, 1.0), "sigma: non-finite value at index 0"),
+                       ((1.0, 1.0, np.inf), "max_b: non-finite value at index 0"),
+                       ((0.0, 1.0, 1.0), "invalid parameter `gain`: must be > 0, got 0"),
+                       ((1.0, 1.0, -1.0), "invalid parameter `max_b`: must be >= 0, got -1")]:
         with pytest.raises(vsinv.InvalidInput, match=name):
             vsinv.tracking_bound(*args)
-    with pytest.raises(vsinv.InvalidInput, match="kappa"):
+    with pytest.raises(vsinv.InvalidInput, match="kappa: non-finite value at index 0"):
         vsinv.check_stability(lens(600.0), lens(600.0), kappa=np.nan)
 
 
 def test_out_of_range_integers_raise_invalid_input_naming_the_argument(scene):
     image = np.zeros((20, 20), np.uint8)
     image[5:9, 5:9] = 200
-    for kwargs, name in [({"threshold": 300}, "threshold"), ({"threshold": -1}, "threshold"),
-                         ({"min_area": -1}, "min_area"), ({"max_area": -1}, "max_area"), ({"max_area": 2**70}, "max_area")]:
+    for kwargs, name in [({"threshold": 300}, r"threshold: expected an integer in \[0, 255\], got 300"),
+                         ({"threshold": -1}, r"threshold: expected an integer in \[0, 255\], got -1"),
+                         ({"min_area": -1}, r"min_area: expected an integer in \[0, 18446744073709551615\], got -1"),
+                         ({"max_area": -1}, r"max_area: expected an integer in \[0, 18446744073709551615\], got -1"),
+                         ({"max_area": 2**70}, r"max_area: expected an integer in \[0, 18446744073709551615\], got 2{70}".replace("2{70}", str(2**70)))]:
         with pytest.raises(vsinv.InvalidInput, match=name):  # was OverflowError
             vsinv.detect_dots(image, **kwargs)
-    with pytest.raises(vsinv.InvalidInput, match="min_area"):
+    with pytest.raises(vsinv.InvalidInput, match=r"min_area: expected an integer in \[0, 18446744073709551615\]"):
         vsinv.DotTracker(image, [[7.0, 7.0]], min_area=-4)
-    with pytest.raises(vsinv.InvalidInput, match="max_iter"):
+    with pytest.raises(vsinv.InvalidInput, match=r"max_iter: expected an integer in \[0, 18446744073709551615\]"):
         vsinv.undistort_points(scene["cur"], scene["k"], [0.1, 0.0, 0.0, 0.0], max_iter=-1)
     for threads in (-1, 2**31, 2**70):  # 2**31 used to start that many threads
-        with pytest.raises(vsinv.InvalidInput, match="threads"):
+        limit = r"invalid parameter `threads`: must be at most 1024" if threads == 2**31 else r"threads: expected an integer"
+        with pytest.raises(vsinv.InvalidInput, match=f"{limit}.*, got {threads}"):
             vsinv.run_batch([], threads=threads)
-    with pytest.raises(TypeError, match="progress"):
+    with pytest.raises(TypeError, match=r"progress: expected a callable progress\(done, total\) or None"):
         vsinv.run_scenario("lens-12-12", progress="abc")
 
 
 @pytest.mark.parametrize("bad", [(1.0, 2.0), (1.0, 2.0, 3.0, 4.0)])
 def test_adaptive_gain_of_the_wrong_length(scene, bad):
     for cls in (vsinv.InvariantController, vsinv.IbvsController):
-        with pytest.raises(vsinv.InvalidInput, match="adaptive_gain"):  # was ValueError
+        with pytest.raises(vsinv.InvalidInput, match=r"adaptive_gain: expected \(lambda_0, lambda_inf, lambda'_0\), three numbers"):  # was ValueError
             cls(scene["ref"], scene["k"], adaptive_gain=bad)
 
 
 def test_overflowing_results_raise_instead_of_returning_nan(scene):
-    with pytest.raises(vsinv.InvalidInput, match="twist"):
+    with pytest.raises(vsinv.InvalidInput, match=r"twist, dt: the motion twist \* dt overflows \(twist \[1\.0, 1\.0, 1\.0, 1\.0, 1\.0, 1\.0\], dt 1\.0e300\)"):
         vsinv.exp_twist(np.ones(6), 1e300)
-    with pytest.raises(vsinv.InvalidInput, match="thetau"):
+    with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `thetau`: out of range: the rotation \(angle too large\) overflow"):
         vsinv.pose_from_position_thetau([0.0, 0.0, 0.0], [1e300, 0.0, 0.0])
     huge = scene["cur"] * 1e300
-    with pytest.raises(vsinv.VsinvError, match="pixels"):
+    with pytest.raises(vsinv.VsinvError, match="invalid parameter `pixels, depths`: out of range: the interaction matrices overflow"):
         vsinv.interaction_matrix(huge, scene["z"], scene["k"])
-    with pytest.raises(vsinv.VsinvError, match="pixels"):
+    with pytest.raises(vsinv.VsinvError, match="invalid parameter `pixels, depths`: out of range: the rz coefficients overflow"):
         vsinv.rz_coefficients(huge, scene["z"], scene["ref"], scene["k"])
 
 
 def test_length_mismatches_name_the_arguments(scene):
-    with pytest.raises(vsinv.InvalidInput, match="reference_depths"):
+    with pytest.raises(vsinv.InvalidInput, match=r"reference_depths: expected 12 values \(one per reference pixel\)"):
         vsinv.IbvsController(scene["ref"], scene["k"], reference_depths=scene["z_star"][:5])
     with pytest.raises(vsinv.InvalidInput, match="first_depths.*first_pixels"):
         vsinv.ResectionDepths(scene["cur"][:0], scene["z"], scene["ref"])
@@ -318,7 +325,7 @@ def test_resection_visibility_is_a_bool_array_like_step_visible(scene):
     a = est.estimate(scene["cur"], np.ones(n, bool))
     np.testing.assert_allclose(a, est.estimate(scene["cur"], [True] * n))
     for bad in ("abc", np.ones(n, int), np.ones(n - 1, bool)):
-        with pytest.raises(vsinv.InvalidInput, match="visible"):  # "abc" was a TypeError
+        with pytest.raises(vsinv.InvalidInput, match=r"visible: expected (a bool array, got dtype|shape \(12,\), got \(11,\))"):  # "abc" was a TypeError
             est.estimate(scene["cur"], bad)
 
 
@@ -339,8 +346,11 @@ def test_sweep_helpers_refuse_bad_input_with_invalid_input():
         with pytest.raises(vsinv.InvalidInput):
             noise_seeds(seed, points, np.zeros(len(points), int) if points and not isinstance(points[0], list) else [0])
     assert noise_seeds(np.int64(7), [0, 1], [0, 0]).tolist() == noise_seeds(7, [0, 1], [0, 0]).tolist()  # was OverflowError
-    for bad in ([np.nan, 0.0, 0.0], "abc", [1e300, 1e300, 0.0], [1.0, 2.0]):
-        with pytest.raises(vsinv.InvalidInput, match="thetau"):  # NaN matrices or ValueError before
+    for bad, message in [([np.nan, 0.0, 0.0], "thetau: non-finite value at index 0"),
+                         ("abc", "thetau: expected real numbers, got dtype <U3"),
+                         ([1e300, 1e300, 0.0], r"invalid parameter `thetau`: out of range: the rotation \(angle too large\)"),
+                         ([1.0, 2.0], r"thetau: expected shape \(3,\), got \(2,\)")]:
+        with pytest.raises(vsinv.InvalidInput, match=message):  # NaN matrices or ValueError before
             rotation_from_thetau(bad)
     with pytest.raises(vsinv.InvalidInput, match="rot: non-finite value at row 0, column 0"):
         thetau_from_rotation(np.full((3, 3), np.nan))
@@ -348,7 +358,7 @@ def test_sweep_helpers_refuse_bad_input_with_invalid_input():
     assert np.isfinite(s).all() and (np.abs(s) <= 1e308).all()
     s = LogUniform(1e300, 1e300).sample(np.random.default_rng(0), 10)  # rounded past hi before
     assert (s == 1e300).all()
-    with pytest.raises(vsinv.InvalidInput, match="Choice"):
+    with pytest.raises(vsinv.InvalidInput, match="Choice: values must be a sequence"):
         Choice(None)
 
 
@@ -356,7 +366,7 @@ def test_summary_by_an_unknown_column_raises_invalid_input():
     from vsinv.sweep import SweepResult
 
     res = SweepResult(columns={"repeat": np.array([0]), "status": np.array(["converged"])})
-    with pytest.raises(vsinv.InvalidInput, match="nope"):  # was KeyError
+    with pytest.raises(vsinv.InvalidInput, match=r"summary_by: keys: no column 'nope' \(columns: repeat, status\)"):  # was KeyError
         res.summary_by("nope")
 
 
@@ -376,7 +386,7 @@ def test_more_regressions(scene):
     out = vsinv.run_batch([])
     assert out["status"].dtype.kind == "U" and out["message"].dtype.kind == "U"  # float64 when empty before
     base = vsinv.load_scenario("lens-12-12").to_dict()
-    with pytest.raises(vsinv.InvalidInput, match="repeats"):  # was NumPy's ValueError
+    with pytest.raises(vsinv.InvalidInput, match=r"repeats, draws, vary: 1180591620717411303424 runs .*; at most 2147483648 in one sweep"):  # was NumPy's ValueError
         vsinv.run_sweep(base, {"control.gain": [1.0]}, repeats=2**70, progress=False)
     base["object"]["points"][7][1] = 2.0**70
     once = vsinv.Scenario.from_dict(base).to_dict()
@@ -392,24 +402,25 @@ def test_more_regressions(scene):
 def test_issue16_non_finite_results_raise_invalid_input():
     """Issue 16, item 4: these returned inf/NaN or accepted values the paper excludes."""
     for twist, dt in [([0, 0, 0, 1e300, 0, 0], 1.0), ([1.0, 0, 0, 1e200, 0, 0], 1.0), ([1e300] * 6, 1e10)]:
-        with pytest.raises(vsinv.InvalidInput, match="twist"):
+        with pytest.raises(vsinv.InvalidInput, match=r"twist, dt: the motion twist \* dt overflows"):
             vsinv.exp_twist(twist, dt)
-    for position, thetau, name in [([0, 0, 0], [np.nan, 0, 0], "thetau"), ([np.inf, 0, 0], [0, 0, 0], "position"),
-                                   ([0, 0, 0], [1e300, 1e300, 0], "thetau")]:
+    for position, thetau, name in [([0, 0, 0], [np.nan, 0, 0], "thetau: non-finite value at index 0"),
+                                   ([np.inf, 0, 0], [0, 0, 0], "position: non-finite value at index 0"),
+                                   ([0, 0, 0], [1e300, 1e300, 0], r"invalid parameter `thetau`: out of range: the rotation")]:
         with pytest.raises(vsinv.InvalidInput, match=name):
             vsinv.pose_from_position_thetau(position, thetau)
     for skew in (1e-300, 1e-4, np.pi - 1e-4):
-        with pytest.raises(vsinv.InvalidInput, match="skew"):
+        with pytest.raises(vsinv.InvalidInput, match=r"invalid intrinsics: skew angle must be in \[1e-3, pi - 1e-3\] rad"):
             vsinv.Intrinsics(800.0, 800.0, 384.0, 288.0, skew=skew)
     for kappa in (0.0, -1.0, -1e-320):
-        with pytest.raises(vsinv.InvalidInput, match="kappa"):
+        with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `kappa`: the depth scale of sec\. 4\.1 must be > 0"):
             vsinv.check_stability(lens(600.0), lens(600.0), kappa=kappa)
     for sigma in (0.0, -0.5, -1e300):
-        with pytest.raises(vsinv.InvalidInput, match="sigma"):
+        with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `sigma`: must be > 0 \(smallest eigenvalue of A \+ A\^T; Prop\. 2 fails"):
             vsinv.tracking_bound(1.0, sigma, 1.0)
     report = vsinv.check_stability(lens(600.0), -np.diag([600.0, 600.0, -1.0]), kappa=1.0)
     assert not report.prop2 and report.sigma <= 0
-    with pytest.raises(vsinv.InvalidInput, match="sigma"):
+    with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `sigma`: must be > 0 \(smallest eigenvalue of A \+ A\^T; Prop\. 2 fails"):
         report.tracking_bound(0.1)
 
 

@@ -6,9 +6,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 FUZZER = Path(__file__).resolve().parent / "scenario_fuzz.py"
 
 
+@pytest.mark.slow
 def test_every_mutated_key_runs_or_is_refused_by_name():
     env = dict(os.environ, RUST_BACKTRACE="0")
     done = subprocess.run(

@@ -138,7 +138,7 @@ def test_bad_arguments_are_refused_by_name(scenario: vsinv.Scenario) -> None:
         with pytest.raises(vsinv.InvalidInput) as e:
             vsinv.ImageServo(ref, target, K_HAT, **args)
         assert name in str(e.value), (change, str(e.value))
-    with pytest.raises(vsinv.InvalidInput, match="reference_image"):
+    with pytest.raises(vsinv.InvalidInput, match=r"reference_image: expected a \(height, width\) uint8 array"):
         vsinv.ImageServo(ref.astype(np.float32), "dots", K_HAT, reference_points=ref_px, **SESSION)
     pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, **SESSION)
     with pytest.raises(vsinv.InvalidInput, match=r"^image: expected a uint8 NumPy array.* shape \(10, 10, 2\)"):
@@ -159,8 +159,10 @@ def test_frame_sources(tmp_path: Path) -> None:
     got = list(vsinv.frames(folder))
     assert [n for n, _ in got] == ["img-0.png", "img-1.png", "img-2.png"]
     assert all(np.array_equal(img, stack[k]) for k, (_, img) in enumerate(got))
-    for bad in (tmp_path / "missing", np.zeros((2, 2, 2, 2), np.uint8), 3.5):
-        with pytest.raises(vsinv.InvalidInput, match="source"):
+    for bad, message in [(tmp_path / "missing", "missing is neither a folder of images nor a video file"),
+                         (np.zeros((2, 2, 2, 2), np.uint8), r"got shape \(2, 2, 2, 2\)"),
+                         (3.5, "expected arrays, a folder or a video file, got float")]:
+        with pytest.raises(vsinv.InvalidInput, match=f"^source: .*{message}"):
             list(vsinv.frames(bad))
     (tmp_path / "empty").mkdir()
     with pytest.raises(vsinv.InvalidInput, match="no image files"):
@@ -170,7 +172,7 @@ def test_frame_sources(tmp_path: Path) -> None:
     assert [n for n, _ in vsinv.frames(endless, max_frames=2)] == ["frame-0000", "frame-0001"]
     assert len(list(vsinv.frames(folder, max_frames=10))) == 3
     for bad in (0, -1, 2.5, True, "3"):
-        with pytest.raises(vsinv.InvalidInput, match="max_frames"):
+        with pytest.raises(vsinv.InvalidInput, match="max_frames: expected an integer >= 1 or None"):
             vsinv.frames(stack, max_frames=bad)  # type: ignore[arg-type]
 
 
@@ -269,11 +271,14 @@ def test_tags_match_by_identity_across_images() -> None:
     np.testing.assert_array_equal(step.found, np.repeat([True, False, True], 4))
     some = vsinv.ImageServo(reference, "tags", K_HAT, tag_ids=[3, 1], law="none", depths=0.5)
     np.testing.assert_array_equal(some.ids, [4, 5, 6, 7, 12, 13, 14, 15])
-    for kwargs, name in [({"tag_ids": [1, 5]}, "tag 5"), ({"family": "tag99"}, "family"), ({"tag_ids": []}, "tag_ids"),
-                         ({"reference_points": np.zeros((3, 2))}, "reference_points"), ({"tag_ids": "abc"}, "tag_ids")]:
+    for kwargs, name in [({"tag_ids": [1, 5]}, r"reference_image: tag 5 \(of the target's ids\) is not decoded in it"),
+                         ({"family": "tag99"}, 'family: expected one of "tag36h11", .*, got "tag99"'),
+                         ({"tag_ids": []}, r"tag_ids: empty \(None: every tag in the reference image\)"),
+                         ({"reference_points": np.zeros((3, 2))}, 'reference_points: not an argument of target "tags"'),
+                         ({"tag_ids": "abc"}, r"tag_ids: expected a sequence of tag ids \(non-negative integers\)")]:
         with pytest.raises(vsinv.InvalidInput, match=name):
             vsinv.ImageServo(reference, "tags", K_HAT, law="none", depths=0.5, **kwargs)
-    with pytest.raises(vsinv.InvalidInput, match="tag_ids"):
+    with pytest.raises(vsinv.InvalidInput, match='tag_ids: not an argument of target "dots"'):
         vsinv.ImageServo(reference, "dots", K_HAT, reference_points=np.zeros((3, 2)), tag_ids=[1], law="none", depths=0.5)
 
 

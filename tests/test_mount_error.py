@@ -46,5 +46,5 @@ def test_mount_error_is_checked_and_for_arms_only() -> None:
         vsinv.run_scenario(bad)
     free = vsinv.load_scenario("lens-12-6").to_dict()
     free["robot"] = {"mount_error": {"position": [0.0, 0.0, 0.0], "rotation_deg": [0.0, 0.0, 0.0]}}
-    with pytest.raises(vsinv.InvalidInput, match=r"robot\.mount_error.*urdf"):
+    with pytest.raises(vsinv.InvalidInput, match=r'scenario: robot\.mount_error: applies to kind = "urdf" only'):
         vsinv.run_scenario(free)

@@ -188,6 +188,7 @@ def _runs(world: mw.BoxWorld, law: str, session: dict) -> list[ms.RunEnd]:
     return [ms.run(world, LENS, law, start, k, session) for k, start in enumerate(ms.start_poses(world, LENS, STARTS))]
 
 
+@pytest.mark.slow
 def test_invariant_law_converges_through_mujoco_images(world: mw.BoxWorld) -> None:
     """The issue's requirement: from every start the invariant law ends `converged`, and the
     camera is within 1 mm and 0.2 degrees of the reference pose."""
@@ -198,6 +199,7 @@ def test_invariant_law_converges_through_mujoco_images(world: mw.BoxWorld) -> No
     assert all(e.error_mm < GOAL_MM and e.error_deg < GOAL_DEG for e in ends), table
 
 
+@pytest.mark.slow
 def test_ibvs_never_claims_converged_on_the_lens_change(world: mw.BoxWorld) -> None:
     """IBVS on the same lens change matches pixels of another lens: it ends away from the goal
     and must never say `converged`."""

@@ -121,12 +121,13 @@ def test_bad_parameters_are_refused_by_name(views: dict[str, Any], change: dict[
     assert name in str(e.value), str(e.value)
 
 
-@pytest.mark.parametrize("change, name", [({"law": "ibvs", "rz_task": None, "gain_rz": 2.0}, "gain_rz"),
-                                           ({"stop.window": 0}, "window"),
-                                           ({"tracker.polarity": "grey"}, "polarity"), ({"reference_depths": [0.6]}, "depth")])
+@pytest.mark.parametrize("change, name", [({"law": "ibvs", "rz_task": None, "gain_rz": 2.0}, 'gain_rz: not an argument of the "ibvs" law'),
+                                           ({"stop.window": 0}, "invalid parameter `stop`: window and max_iterations must be >= 1"),
+                                           ({"tracker.polarity": "grey"}, 'polarity: expected one of "light", "dark", "auto", got "grey"'),
+                                           ({"reference_depths": [0.6]}, "reference_depths: expected 12 depths, got 1")])
 def test_bad_law_options_are_refused_at_start(views: dict[str, Any], change: dict[str, Any], name: str) -> None:
     config = parse_parameters(good(views, **change))
-    with pytest.raises(vsinv.InvalidInput, match="parameters: .*" + name):
+    with pytest.raises(vsinv.InvalidInput, match="^parameters: " + name):
         validate_pipeline(config)
     # the same without K_hat: a stand-in lens checks the options before any CameraInfo
     config = parse_parameters(good(views, K_hat=None, **change))
@@ -209,7 +210,7 @@ def test_camera_info_gives_k_hat_and_distortion() -> None:
     assert not d.coefficients.any()
     d8 = [0.1, -0.2, 0.001, 0.002, 0.05, 0.01, 0.0, 0.0]
     assert lens_from_camera_info(camera_info(d=d8, distortion_model="rational_polynomial"))[1].model == "rational_polynomial"
-    with pytest.raises(vsinv.InvalidInput, match="uncalibrated"):
+    with pytest.raises(vsinv.InvalidInput, match=r"camera_info: K is all zeros \(an uncalibrated camera\): calibrate it, or set the K_hat parameter"):
         lens_from_camera_info(camera_info(k=[0.0] * 9))
     with pytest.raises(vsinv.InvalidInput, match="distortion_model 'equidistant'"):
         lens_from_camera_info(camera_info(distortion_model="equidistant", d=[0.1, 0.0, 0.0, 0.0]))

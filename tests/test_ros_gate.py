@@ -128,7 +128,7 @@ def test_to_grey_with_alpha_and_any_strides_is_opencvs_cvtcolor(shape: tuple[int
 def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match=what):
         vsinv.to_grey(bad)
-    with pytest.raises(vsinv.InvalidInput, match="order"):
+    with pytest.raises(vsinv.InvalidInput, match="invalid parameter `order`: expected 'rgb' or 'bgr'"):
         vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
 
 

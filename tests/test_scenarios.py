@@ -98,7 +98,16 @@ def test_progress_callback_and_its_errors():
         vsinv.run_scenario(d, progress=stop)
 
 
-@pytest.mark.parametrize("name", [n for n, _ in vsinv.list_scenarios()])
+#: The CLI smoke test's sample, one built-in of each kind (points, IBVS, a stationary camera, a
+#: failure mode, an arm, images); the other built-ins are marked slow (make test runs them all,
+#: make test-fast the sample; tests/builtin_results.rs checks every built-in's result).
+CLI_SAMPLE = ("lens-12-6", "ibvs-12-6", "zoom-stationary", "planar", "arm-ur5-12-6", "vision-12-6")
+
+
+@pytest.mark.parametrize(
+    "name",
+    [n if n in CLI_SAMPLE else pytest.param(n, marks=pytest.mark.slow) for n, _ in vsinv.list_scenarios()],
+)
 def test_every_builtin_runs_from_the_command_line(name, capsys):
     import json
 
@@ -111,6 +120,10 @@ def test_every_builtin_runs_from_the_command_line(name, capsys):
     assert summary["status"] in statuses
     # 0 for converged, 1 for every other status.
     assert code == (0 if summary["status"] == "converged" else 1)
+
+
+def test_the_cli_sample_names_built_ins():
+    assert set(CLI_SAMPLE) <= {n for n, _ in vsinv.list_scenarios()}
 
 
 # ---------------------------------------------------------------------------------------------

@@ -145,7 +145,7 @@ def test_one_axes_per_panel(lens: vsinv.RunResult) -> None:
 
 
 def test_plot_refuses_unknown_kinds(lens: vsinv.RunResult) -> None:
-    with pytest.raises(vsinv.InvalidInput, match="kind"):
+    with pytest.raises(vsinv.InvalidInput, match="kind: expected one of image_trajectories, errors, task_functions, velocities"):
         lens.plot("nonsense")  # type: ignore[arg-type]
     with pytest.raises(vsinv.InvalidInput, match=r"kind: .joints. is drawn for an arm only"):
         lens.plot("joints")

@@ -136,8 +136,9 @@ def test_tags_leaving_entering_and_no_false_identities() -> None:
 
 @pytest.mark.parametrize(
     ("kwargs", "name"),
-    [({"family": "tag99"}, "family"), ({"decimation": 0}, "decimation"), ({"decimation": 9}, "decimation"),
-     ({"refresh": -1}, "refresh")],
+    [({"family": "tag99"}, 'family: expected one of "tag36h11", .*, got "tag99"'),
+     ({"decimation": 0}, "decimation: must be in 1..=8, got 0"), ({"decimation": 9}, "decimation: must be in 1..=8, got 9"),
+     ({"refresh": -1}, "refresh: expected a whole number of frames >= 0, got -1")],
 )
 def test_bad_arguments_are_refused_by_name(kwargs, name) -> None:
     with pytest.raises(vsinv.InvalidInput, match=name):

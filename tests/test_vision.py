@@ -128,11 +128,11 @@ def test_run_reports_detection_errors() -> None:
 @pytest.mark.parametrize(
     "image, fragment",
     [
-        (np.zeros((10, 10), np.float64), "uint8"),
-        (np.zeros((10, 10, 3), np.uint8), "shape"),
-        (np.zeros((0, 10), np.uint8), "empty"),
-        (np.zeros((20, 20), np.uint8), "uniform"),
-        ([[0, 1], [2, 3]], "NumPy array"),
+        (np.zeros((10, 10), np.float64), r"image: expected a \(height, width\) uint8 array, got dtype float64 with shape \[10, 10\]"),
+        (np.zeros((10, 10, 3), np.uint8), r"image: expected a \(height, width\) uint8 array, got dtype uint8 with shape \[10, 10, 3\]"),
+        (np.zeros((0, 10), np.uint8), r"image: empty image \(0 x 10\)"),
+        (np.zeros((20, 20), np.uint8), r"image: uniform image \(every pixel is 0\): no dot can stand out"),
+        ([[0, 1], [2, 3]], r"image: expected a \(height, width\) uint8 NumPy array, got list"),
     ],
 )
 def test_bad_images_raise_invalid_input(image: object, fragment: str) -> None:
@@ -142,11 +142,11 @@ def test_bad_images_raise_invalid_input(image: object, fragment: str) -> None:
 
 def test_tracker_refuses_clicks_without_a_dot() -> None:
     image = vsinv.render("vision-12-12", reference=True)
-    with pytest.raises(vsinv.InvalidInput, match="point 0"):
+    with pytest.raises(vsinv.InvalidInput, match=r"initial_pixels: point 0 at \(5\.0, 5\.0\): no dot around it \(no whole dot under it\)"):
         vsinv.DotTracker(image, [[5.0, 5.0]])
-    with pytest.raises(vsinv.InvalidInput, match="initial_pixels"):
+    with pytest.raises(vsinv.InvalidInput, match="initial_pixels: non-finite value at row 0, column 0"):
         vsinv.DotTracker(image, [[np.nan, 5.0]])
-    with pytest.raises(vsinv.InvalidInput, match="initial_pixels"):
+    with pytest.raises(vsinv.InvalidInput, match=r"initial_pixels: expected shape \(n, 2\)"):
         vsinv.DotTracker(image, np.zeros((3, 3)))
     tracker = vsinv.DotTracker(image, vsinv.render_view("vision-12-12", reference=True)[1])
     with pytest.raises(vsinv.InvalidInput, match="tracker was started"):

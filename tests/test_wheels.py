@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.mark.skipif(not os.environ.get("VSINV_WHEELS"), reason="builds the release wheel (up to 15 min): set VSINV_WHEELS=1")
+@pytest.mark.slow
 def test_make_wheels_installs_and_runs_the_main_job():
     pythons = os.environ.get("VSINV_WHEEL_PYTHONS", sys.executable)
     done = subprocess.run(
