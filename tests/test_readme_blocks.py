@@ -376,12 +376,21 @@ def check_full_scenario(block: Block) -> None:
 
 def test_long_compiles_show_progress() -> None:
     """`make run` and `make test` install first, which compiles the extension for minutes: the
-    install targets must not silence it (`-q`), and the README says how long to expect."""
+    install targets must not silence it (`-q`), `make run` builds with maturin itself (pip
+    would hold cargo's progress back) in the lighter profile `light` and installs no extra,
+    and the README says how long to expect."""
     makefile = (ROOT / "Makefile").read_text(encoding="utf-8")
+    recipes = {}
     for target in ("install:", "install-run:"):
         recipe = makefile.split("\n" + target, 1)[1].split("\n\n", 1)[0]
         assert "pip" in recipe.lower() or "$(PIP)" in recipe, recipe
         assert " -q" not in recipe, f"{target} silences the compile: {recipe!r}"
+        recipes[target] = recipe
+    run = recipes["install-run:"]
+    assert "MATURIN) build --profile light" in run and "[" not in run, run  # "[": an extra
+    cargo = (ROOT / "Cargo.toml").read_text(encoding="utf-8")
+    profile = re.search(r"^\[profile\.light\]\n((?:[^\[\n].*\n)+)", cargo, re.M)
+    assert profile and 'inherits = "release"' in profile.group(1) and "lto = false" in profile.group(1), profile
     assert re.search(r"first `make run`.*compiles.*several minutes", readme_text(), re.S)
 
 
