@@ -14,8 +14,18 @@ ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control r
 install:
 	$(PIP) install -v -e ".[test]"
 
+# `make run`'s install: maturin builds the wheel in the lighter profile `light` (Cargo.toml) on
+# the terminal, so cargo's progress shows (pip holds a build's output back until a line ends),
+# then pip installs it with what running needs (numpy, matplotlib, tqdm), no extra.
+# RUN_MATURIN=maturin where maturin's command is not beside $(PYTHON) (a venv seeing the system's).
+RUN_WHEELS := target/wheels-run
+RUN_MATURIN ?= $(PYTHON) -m maturin
 install-run:
-	$(PIP) install -v -e .
+	$(PIP) install "maturin>=1.9.4,<2"
+	rm -rf $(RUN_WHEELS)
+	$(RUN_MATURIN) build --profile light --interpreter $(PYTHON) --out $(RUN_WHEELS)
+	$(PIP) install --force-reinstall --no-deps $(RUN_WHEELS)/vsinv-*.whl
+	$(PIP) install $(RUN_WHEELS)/vsinv-*.whl
 
 test: install test-rust test-embedded test-examples test-python stubtest docs
 

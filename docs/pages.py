@@ -12,9 +12,10 @@ A ```console block lists commands, one per line after ``$ ``; ``vsinv`` stands f
 (installation commands).
 
 The manual's pages (`MANUAL`: the guides, references and results that were the README's
-sections) are the exception: their blocks are fragments that tests/test_readme_blocks.py runs
-one by one, each with the inputs it names and a check of what the text says of it, so they
-are not run here as one program. Usage:
+sections) are the exception: tests/test_readme_blocks.py runs their blocks one by one, each
+exactly as written in a fresh interpreter (a block makes or loads its own inputs, so it runs
+when pasted), with a check of what the text says of it; they are not run here as one program.
+Usage:
 
     python docs/pages.py run [PAGE ...] [--cwd DIR]   # every page by default, cwd docs/
     python docs/pages.py rust                         # cargo doc into docs/rust/ (the Rust API)

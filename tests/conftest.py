@@ -21,7 +21,7 @@ settings.load_profile(os.environ.get("VSINV_HYPOTHESIS", "ci"))
 # The areas are registered in pyproject.toml ([tool.pytest.ini_options] markers, --strict-markers).
 AREAS = {
     "core": [
-        "test_api.py", "test_planning.py", "test_scaling.py", "test_se3.py",
+        "test_api.py", "test_planning.py", "test_reference_depths.py", "test_scaling.py", "test_se3.py",
     ],
     "servo": [
         "test_commands.py", "test_law_options.py", "test_parity.py", "test_servo.py", "test_uncertainty.py",
@@ -30,14 +30,18 @@ AREAS = {
         "test_dot_filters.py", "test_image_formats.py", "test_image_servo.py", "test_polarity.py",
         "test_real_images.py", "test_tag_families.py", "test_tag_options.py", "test_tag_rig.py",
         "test_tag_tracking.py", "test_tags.py", "test_tags_robustness.py", "test_tracker_border.py",
-        "test_tracker_lost.py", "test_tracker_shape.py", "test_vision.py",
+        "test_tracker_lost.py", "test_tracker_shape.py", "test_vision.py", "test_camera_source.py",
+        "test_colour_images.py", "test_decode_image.py",
     ],
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
         "test_mount_error.py", "test_mujoco_world.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
     ],
     "calibration": ["test_distortion.py", "test_hand_eye.py"],
-    "ros": ["test_ros_bridge.py", "test_ros_gate.py", "test_ros_loop.py", "test_ros_package.py"],
+    "ros": [
+        "test_ros_bridge.py", "test_ros_compressed.py", "test_ros_gate.py", "test_ros_lifecycle.py", "test_ros_loop.py",
+        "test_ros_package.py",
+    ],
     "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py"],
     "docs": ["test_docs.py", "test_readme_blocks.py"],
     "robustness": [
@@ -48,7 +52,7 @@ AREAS = {
         "test_robustness_se3.py", "test_robustness_threads.py", "test_robustness_vision.py",
     ],
     "package": [
-        "test_areas.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
+        "test_areas.py", "test_binding_boundary.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
     ],
 }
 AREA_OF = {name: area for area, names in AREAS.items() for name in names}
