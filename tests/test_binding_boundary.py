@@ -42,8 +42,11 @@ def test_run_result_plot_is_the_packages_figure() -> None:
 
     result = vsinv.run_scenario("lens-12-6")
     assert vsinv.RunResult.plot is vsinv.plots._run_result_plot
+    import matplotlib.pyplot as plt
+
     fig = result.plot("errors")
     assert fig.axes
+    plt.close(fig)
     with pytest.raises(vsinv.InvalidInput, match="kind: expected one of"):
         result.plot("nope")
 

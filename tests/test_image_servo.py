@@ -138,7 +138,7 @@ def test_bad_arguments_are_refused_by_name(scenario: vsinv.Scenario) -> None:
         with pytest.raises(vsinv.InvalidInput) as e:
             vsinv.ImageServo(ref, target, K_HAT, **args)
         assert name in str(e.value), (change, str(e.value))
-    with pytest.raises(vsinv.InvalidInput, match=r"reference_image: expected a \(height, width\) uint8 array"):
+    with pytest.raises(vsinv.InvalidInput, match=r"reference_image: expected a uint8 NumPy array: grey .* got dtype float32 with shape \(624, 832\)"):
         vsinv.ImageServo(ref.astype(np.float32), "dots", K_HAT, reference_points=ref_px, **SESSION)
     pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, **SESSION)
     with pytest.raises(vsinv.InvalidInput, match=r"^image: expected a uint8 NumPy array.* shape \(10, 10, 2\)"):
@@ -159,9 +159,9 @@ def test_frame_sources(tmp_path: Path) -> None:
     got = list(vsinv.frames(folder))
     assert [n for n, _ in got] == ["img-0.png", "img-1.png", "img-2.png"]
     assert all(np.array_equal(img, stack[k]) for k, (_, img) in enumerate(got))
-    for bad, message in [(tmp_path / "missing", "missing is neither a folder of images nor a video file"),
+    for bad, message in [(tmp_path / "missing", "missing is neither a folder of images, a video file nor a camera device"),
                          (np.zeros((2, 2, 2, 2), np.uint8), r"got shape \(2, 2, 2, 2\)"),
-                         (3.5, "expected arrays, a folder or a video file, got float")]:
+                         (3.5, r"expected arrays, a folder, a video file or a camera \(0, ./dev/video0.\), got float")]:
         with pytest.raises(vsinv.InvalidInput, match=f"^source: .*{message}"):
             list(vsinv.frames(bad))
     (tmp_path / "empty").mkdir()

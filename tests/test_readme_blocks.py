@@ -256,6 +256,8 @@ BLOCKS: list[Entry] = [
     Entry("yaml", "vsinv_ros:", NOT_RUN, "a ROS 2 parameters file for a real camera and arm: "
           "tests/test_ros_bridge.py parses it with the bridge's parser (with files of its own), and "
           "tests/test_ros_loop.py runs the bridge from such a file over ROS 2 topics"),
+    Entry("sh", "vsinv-ros --lifecycle", NOT_RUN, "needs ROS 2's command line (ros2 lifecycle): "
+          "tests/test_ros_lifecycle.py drives the same transitions over the node's lifecycle services"),
     Entry("sh", "colcon build --base-paths ros", NOT_RUN, "needs a ROS 2 installation with colcon, launch and launch_ros (not on "
           "PyPI); tests/test_ros_package.py builds the package with colcon when it is installed"),
     Entry("sh", "ros2 service call /servo_node/switch_command_type", NOT_RUN, "needs ROS 2, a camera driver and MoveIt Servo; "

@@ -142,10 +142,10 @@ def test_no_tags_and_bad_arguments() -> None:
     image, _ = draw_markers({3: (20, 20, 0)}, cell=5)
     with pytest.raises(vsinv.InvalidInput, match=r'family.*"tag36h11".*"tagCustom48h12", got "tag36h12"'):
         vsinv.detect_tags(image, family="tag36h12")
-    for bad, message in [(image.astype(np.float64), r"expected a \(height, width\) uint8 array, got dtype float64"),
-                         (np.stack([image] * 3, axis=-1), r"expected a \(height, width\) uint8 array, got dtype uint8 with shape \[320, 420, 3\]"),
+    for bad, message in [(image.astype(np.float64), r"expected a uint8 NumPy array: grey .* got dtype float64 with shape \(320, 420\)"),
+                         (np.stack([image] * 2, axis=-1), r"expected a uint8 NumPy array: grey .* got dtype uint8 with shape \(320, 420, 2\)"),
                          (np.zeros((0, 5), np.uint8), r"empty image \(0 x 5\)"),
-                         ([[1, 2]], r"expected a \(height, width\) uint8 NumPy array, got list")]:
+                         ([[1, 2]], r"expected a uint8 NumPy array: grey .* got list")]:
         with pytest.raises(vsinv.InvalidInput, match=f"^image: {message}"):
             vsinv.detect_tags(bad)
     # A tag36h11 marker is not a tag16h5 one; the family is named in the result.

@@ -128,11 +128,12 @@ def test_run_reports_detection_errors() -> None:
 @pytest.mark.parametrize(
     "image, fragment",
     [
-        (np.zeros((10, 10), np.float64), r"image: expected a \(height, width\) uint8 array, got dtype float64 with shape \[10, 10\]"),
-        (np.zeros((10, 10, 3), np.uint8), r"image: expected a \(height, width\) uint8 array, got dtype uint8 with shape \[10, 10, 3\]"),
+        (np.zeros((10, 10), np.float64), r"image: expected a uint8 NumPy array: grey \(height, width\) .* got dtype float64 with shape \(10, 10\)"),
+        (np.zeros((10, 10, 2), np.uint8), r"image: expected a uint8 NumPy array: grey \(height, width\) .* got dtype uint8 with shape \(10, 10, 2\)"),
+        (np.zeros((10, 10, 3), np.uint8), r"image: uniform image \(every pixel is 0\): no dot can stand out"),  # colour: read as grey
         (np.zeros((0, 10), np.uint8), r"image: empty image \(0 x 10\)"),
         (np.zeros((20, 20), np.uint8), r"image: uniform image \(every pixel is 0\): no dot can stand out"),
-        ([[0, 1], [2, 3]], r"image: expected a \(height, width\) uint8 NumPy array, got list"),
+        ([[0, 1], [2, 3]], r"image: expected a uint8 NumPy array: grey \(height, width\) .* got list"),
     ],
 )
 def test_bad_images_raise_invalid_input(image: object, fragment: str) -> None:
