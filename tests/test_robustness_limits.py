@@ -278,6 +278,13 @@ def test_a_cluttered_frame_is_searched_within_a_bound_and_says_so(wall: str) -> 
     tracker = vsinv.TagTracker(family)
     assert tracker.track(image).stopped_early
     assert not tracker.track(ordinary).stopped_early
+    # And ImageServo's step, for its telemetry: a frame of dark squares alone, searched in part,
+    # where none of the six tags is found, says so.
+    if wall == "dark squares":
+        pipeline = vsinv.ImageServo(ordinary, "tags", np.diag([900.0, 900.0, 1.0]), law="none", depths=0.5)
+        assert not pipeline.step(ordinary).stopped_early
+        step = pipeline.step(image)
+        assert step.stopped_early and not step.found.any()
 
 
 def test_the_dot_trackers_start_search_is_bounded() -> None:

@@ -158,7 +158,7 @@ def test_results_from_threads(scene: dict[str, Any], tmp_path: Any) -> None:
         "Intrinsics": lambda: (k.matrix, repr(k)),
         "StabilityReport": lambda: vsinv.check_stability(k, k).tracking_bound(0.1),
         "ServoStep": (lambda s: lambda: (s.twist, s.verdict, s.telemetry))(servo.step(px)),
-        "ImageStep": lambda: (image_step.found, image_step.pixels, image_step.telemetry),
+        "ImageStep": lambda: (image_step.found, image_step.pixels, image_step.stopped_early, image_step.telemetry),
         "PoseUncertainty": (lambda u: lambda: (u.covariance, u.translation_bound()))(
             vsinv.InvariantController(ref, k).pose_uncertainty(px, scene["start_z"], pixel_sigma=0.5)),
         "PlaneParallax": (lambda p: lambda: (p.gamma, p.epipole))(path.plane_parallax),

@@ -253,7 +253,7 @@ def test_tag_tracker(data: Any) -> None:
 
 
 @covers("ImageServo", "ImageServo.step", "ImageServo.ids", "ImageServo.reference_pixels", "ImageServo.iterations",
-        "ImageServo.basis", "ImageServo.basis_switches", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.twist",
+        "ImageServo.basis", "ImageServo.basis_switches", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.stopped_early", "ImageStep.twist",
         "ImageStep.verdict", "ImageStep.reason", "ImageStep.running", "ImageStep.telemetry")
 @fuzz_settings(60)
 @given(st.data())
@@ -288,6 +288,7 @@ def test_image_servo(data: Any) -> None:
         found = call(getattr, step, "found", _api="ImageStep.found")
         assert found.shape == (n,) and found.dtype == np.bool_
         assert call(getattr, step, "pixels", _api="ImageStep.pixels").shape == (n, 2)
+        assert call(getattr, step, "stopped_early", _api="ImageStep.stopped_early") in (False, True)
         assert call(getattr, step, "twist", _api="ImageStep.twist").shape == (6,)
         verdict = call(getattr, step, "verdict", _api="ImageStep.verdict")
         running = call(getattr, step, "running", _api="ImageStep.running")

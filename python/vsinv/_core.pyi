@@ -519,6 +519,11 @@ class ImageStep(ServoStep):
     @property
     def pixels(self) -> _F64Array:
         """Per point: the pixel found (distorted, as detected), or its last known pixel (n, 2)."""
+    @property
+    def stopped_early(self) -> bool:
+        """Whether the detector's search of this frame stopped at its bound on its work (a frame
+        too cluttered to be searched whole, as ``Tags.stopped_early``): a point not found may be
+        in view."""
 
 @final
 class PoseUncertainty:

@@ -192,11 +192,17 @@ impl PyImageServo {
     fn step(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Py<PyImageStep>> {
         let image = image_arg(image, "image")?;
         let image = image.buffer("image")?;
-        let (step, found, pixels) = self.inner.detached(py, |pipeline| {
+        let (step, found, pixels, stopped_early) = self.inner.detached(py, |pipeline| {
             let step = pipeline.step(&image)?;
-            Ok::<_, crate::Error>((step, pipeline.found().to_vec(), pipeline.pixels().to_vec()))
+            Ok::<_, crate::Error>((
+                step,
+                pipeline.found().to_vec(),
+                pipeline.pixels().to_vec(),
+                pipeline.stopped_early(),
+            ))
         })??;
-        let init = PyClassInitializer::from(PyServoStep::from(step)).add_subclass(PyImageStep { found, pixels });
+        let image_step = PyImageStep { found, pixels, stopped_early };
+        let init = PyClassInitializer::from(PyServoStep::from(step)).add_subclass(image_step);
         Py::new(py, init)
     }
 
@@ -251,6 +257,11 @@ impl PyImageServo {
 pub(super) struct PyImageStep {
     found: Vec<bool>,
     pixels: Vec<[f64; 2]>,
+    /// Whether the detector's search of this frame stopped at its bound on its work (a frame
+    /// too cluttered to be searched whole, as `Tags.stopped_early`): a point not found may be
+    /// in view.
+    #[pyo3(get)]
+    stopped_early: bool,
 }
 
 #[pymethods]

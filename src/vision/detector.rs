@@ -42,4 +42,11 @@ pub trait Detector: Send + Sync {
     /// The points in the next image (after [`Detector::start`]); a point may be missing from
     /// the list or reported with `found` false.
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>>;
+
+    /// Whether the search of the last image stopped at the detector's bound on its work (a
+    /// frame too cluttered to be searched whole): a point it did not report may be there.
+    /// `false` for a detector without such a bound.
+    fn stopped_early(&self) -> bool {
+        false
+    }
 }

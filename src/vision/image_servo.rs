@@ -237,6 +237,12 @@ impl ImageServo {
         &self.found
     }
 
+    /// Whether the detector's search of the last frame stopped at its bound on its work (a
+    /// cluttered frame, [`Detector::stopped_early`]): a point not found may be in view.
+    pub fn stopped_early(&self) -> bool {
+        self.detector.stopped_early()
+    }
+
     /// The servo session (its reference pixels, basis, telemetry, certainty).
     pub fn servo(&self) -> &Servo {
         &self.servo

@@ -357,6 +357,10 @@ impl Detector for TagDetector {
         let tags = self.track(image)?;
         Self::detections(&tags)
     }
+
+    fn stopped_early(&self) -> bool {
+        TagDetector::stopped_early(self)
+    }
 }
 
 #[cfg(test)]
