@@ -7,6 +7,8 @@ How to run (from the repository root, with rclpy: a ROS 2 installation or the ex
     python benches/ros_latency.py              # about 2 minutes
     python benches/ros_latency.py --quick      # fewer images
     python benches/ros_latency.py --json out.json
+    python benches/ros_latency.py --compressed  # also JPEG (image_transport: compressed)
+    python benches/ros_latency.py --only 1920x1080:bgr8 --publisher-depth 10   # one run; the camera's queue
 
 For each image size (640x480, 1280x720, 1920x1080) and encoding (mono8, bgr8) the bridge
 (``python -m vsinv.ros``, its own process, default QoS: reliable, keep last 1) servos on the
@@ -18,6 +20,11 @@ process publishes the images, stamped at publication, and times each twist's arr
   publication of the newest image published before it; twists/s over the run;
 - lock-step: the next image as soon as the twist of the previous one arrived (the bridge's
   largest rate); latency from publication to arrival.
+
+With ``--compressed`` (needs OpenCV to encode) the bridge also runs with ``image_transport:
+compressed`` at 640x480 and 1280x720: the same image as bgr8 JPEG (quality 95, encoded once,
+image_transport's format string ``bgr8; jpeg compressed bgr8``) on
+``/camera/image_raw/compressed``; the bridge decodes it in Rust for every image.
 
 Then the time from each kind of unusable image to the zero twist is in tests/test_ros_loop.py
 (``-s`` prints it). Colour to grey: ``vsinv.to_grey`` and ``cv2.cvtColor(COLOR_BGR2GRAY)``,
@@ -43,6 +50,7 @@ import vsinv
 from vsinv.images import write_scenario_images
 
 SIZES = [(640, 480), (1280, 720), (1920, 1080)]
+COMPRESSED_SIZES = [(640, 480), (1280, 720)]
 SCENARIO = "vision-12-6"
 K_6MM = [600.0, 600.0, 416.0, 312.0]
 
@@ -89,18 +97,34 @@ def image_of(width: int, height: int) -> np.ndarray:
     return vsinv.render(vsinv.Scenario.from_dict(d))
 
 
-def measure(grey: np.ndarray, encoding: str, images: int) -> dict[str, Any]:
-    """Both modes against a running bridge (in this process: rclpy)."""
+def jpeg_of(grey: np.ndarray) -> bytes:
+    """The image as bgr8 encoded in JPEG (quality 95), as image_transport's compressed plugin sends it."""
+    import cv2
+
+    ok, data = cv2.imencode(".jpg", np.repeat(grey[:, :, None], 3, 2), [cv2.IMWRITE_JPEG_QUALITY, 95])
+    if not ok:
+        raise RuntimeError("cv2.imencode failed")
+    return bytes(data.tobytes())
+
+
+def measure(grey: np.ndarray, encoding: str, images: int, publisher_depth: int = 1) -> dict[str, Any]:
+    """Both modes against a running bridge (in this process: rclpy); encoding mono8, bgr8 or
+    jpeg (a CompressedImage on the raw topic + /compressed); the image publisher is reliable,
+    keep last ``publisher_depth``."""
     import rclpy
     from geometry_msgs.msg import TwistStamped
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import QoSProfile
-    from sensor_msgs.msg import Image
+    from sensor_msgs.msg import CompressedImage, Image
 
     node = rclpy.create_node("bench_camera")
     h, w = grey.shape
-    data = grey.tobytes() if encoding == "mono8" else np.repeat(grey[:, :, None], 3, 2).tobytes()
-    pub = node.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=1))
+    if encoding == "jpeg":
+        data = jpeg_of(grey)
+        pub = node.create_publisher(CompressedImage, "/camera/image_raw/compressed", QoSProfile(depth=publisher_depth))
+    else:
+        data = grey.tobytes() if encoding == "mono8" else np.repeat(grey[:, :, None], 3, 2).tobytes()
+        pub = node.create_publisher(Image, "/camera/image_raw", QoSProfile(depth=publisher_depth))
     arrivals: list[float] = []
     node.create_subscription(TwistStamped, "/servo_node/delta_twist_cmds", lambda m: arrivals.append(time.monotonic()), QoSProfile(depth=100))
     sent: list[float] = []
@@ -108,7 +132,10 @@ def measure(grey: np.ndarray, encoding: str, images: int) -> dict[str, Any]:
     ex.add_node(node)
 
     def publish() -> None:
-        msg = Image(height=h, width=w, encoding=encoding, step=w if encoding == "mono8" else 3 * w, data=data)
+        if encoding == "jpeg":
+            msg = CompressedImage(format="bgr8; jpeg compressed bgr8", data=data)
+        else:
+            msg = Image(height=h, width=w, encoding=encoding, step=w if encoding == "mono8" else 3 * w, data=data)
         msg.header.frame_id = "camera_optical_frame"
         msg.header.stamp = node.get_clock().now().to_msg()
         sent.append(time.monotonic())
@@ -119,7 +146,10 @@ def measure(grey: np.ndarray, encoding: str, images: int) -> dict[str, Any]:
         while time.monotonic() < end and not until():
             ex.spin_once(timeout_sec=0.001)
 
-    while pub.get_subscription_count() == 0:  # discovery
+    deadline = time.monotonic() + 60.0
+    while pub.get_subscription_count() == 0:  # discovery, bounded: a bridge that died never subscribes
+        if time.monotonic() > deadline:
+            raise RuntimeError("the bridge did not subscribe to the images within 60 s")
         spin(0.1)
     for _ in range(50):  # warm up: the bridge started servoing
         publish()
@@ -163,6 +193,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--json")
+    parser.add_argument("--compressed", action="store_true", help="also JPEG (image_transport: compressed) at 640x480 and 1280x720")
+    parser.add_argument("--only", nargs="+", metavar="WxH:ENCODING", help="only these runs, e.g. 1920x1080:bgr8 640x480:jpeg")
+    parser.add_argument("--publisher-depth", type=int, default=1, help="the image publisher's history depth (keep last; default 1)")
     args = parser.parse_args()
     images = 60 if args.quick else 150
     import rclpy
@@ -177,25 +210,30 @@ def main() -> None:
     print("image -> twist over ROS 2 (ms): size encoding mode: median, p99, twists/s")
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            for w, h in SIZES:
+            runs = [(w, h, e) for w, h in SIZES for e in ("mono8", "bgr8")]
+            runs += [(w, h, "jpeg") for w, h in COMPRESSED_SIZES] if args.compressed else []
+            if args.only:
+                runs = [(int(w), int(h), e) for w, h, e in (s.replace("x", ":").split(":") for s in args.only)]
+            for w, h, encoding in runs:
                 grey = image_of(w, h)
-                for encoding in ("mono8", "bgr8"):
-                    params = Path(tmp) / "bridge.yaml"
-                    params.write_text(json.dumps({"/**": {"ros__parameters": bridge_parameters(Path(tmp), w, h)}}))
-                    bridge = subprocess.Popen([sys.executable, "-m", "vsinv.ros", "--ros-args", "--params-file", str(params)],
-                                              env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                given = bridge_parameters(Path(tmp), w, h)
+                given["image_transport"] = "compressed" if encoding == "jpeg" else "raw"
+                params = Path(tmp) / "bridge.yaml"
+                params.write_text(json.dumps({"/**": {"ros__parameters": given}}))
+                bridge = subprocess.Popen([sys.executable, "-m", "vsinv.ros", "--ros-args", "--params-file", str(params)],
+                                          env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                try:
+                    m = measure(grey, encoding, images, args.publisher_depth)
+                finally:
+                    bridge.send_signal(signal.SIGINT)
                     try:
-                        m = measure(grey, encoding, images)
-                    finally:
-                        bridge.send_signal(signal.SIGINT)
-                        try:
-                            bridge.communicate(timeout=10)
-                        except subprocess.TimeoutExpired:
-                            bridge.kill()
-                    for mode, r in m.items():
-                        results["ros"].append({"size": f"{w}x{h}", "encoding": encoding, "mode": mode, **r})
-                        print(f"  {w}x{h:<5} {encoding:<6} {mode:<9} {r['median_ms']:7.2f} {r['p99_ms']:7.2f} {r['twists_per_s']:7.1f}",
-                              flush=True)
+                        bridge.communicate(timeout=10)
+                    except subprocess.TimeoutExpired:
+                        bridge.kill()
+                for mode, r in m.items():
+                    results["ros"].append({"size": f"{w}x{h}", "encoding": encoding, "mode": mode, **r})
+                    print(f"  {w}x{h:<5} {encoding:<6} {mode:<9} {r['median_ms']:7.2f} {r['p99_ms']:7.2f} {r['twists_per_s']:7.1f}",
+                          flush=True)
     finally:
         rclpy.try_shutdown()
     if args.json:
