@@ -25,6 +25,32 @@ fn int_in_range(obj: &Bound<'_, PyAny>, what: &str, min: i128, max: i128) -> PyR
     Ok(value)
 }
 
+/// One of the named `choices` (`[("png", Png), ...]`); anything else raises `InvalidInput`
+/// naming `what` and listing the names (`or None` when `none_too`: the argument may be left
+/// out).
+pub fn choice<T: Copy>(
+    obj: &Bound<'_, PyAny>,
+    what: &'static str,
+    choices: &[(&str, T)],
+    none_too: bool,
+) -> PyResult<T> {
+    let text = obj.extract::<String>().ok();
+    if let Some(&(_, value)) = choices.iter().find(|(name, _)| text.as_deref() == Some(*name)) {
+        return Ok(value);
+    }
+    let mut names: Vec<String> = choices.iter().map(|(name, _)| format!("'{name}'")).collect();
+    if none_too {
+        names.push("None".into());
+    }
+    let listed = match names.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    };
+    let other = obj.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+    Err(crate::Error::InvalidParameter { name: what, reason: format!("expected {listed}, got {other}") }.into())
+}
+
 /// A non-negative integer that fits in `usize`.
 pub fn count(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<usize> {
     Ok(int_in_range(obj, what, 0, usize::MAX as i128)? as usize)

@@ -23,7 +23,8 @@ pub fn decode_image<'py>(
     data: &Bound<'py, PyAny>,
     format: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<u8>>> {
-    let expected = format.map(compression).transpose()?;
+    let choices = [("png", Compression::Png), ("jpeg", Compression::Jpeg)];
+    let expected = format.map(|f| super::args::choice(f, "format", &choices, true)).transpose()?;
     let bytes = owned_bytes(py, data)?;
     let grey = py.detach(|| decode_compressed("data", &bytes, expected))?;
     let (w, h) = grey.dimensions();
@@ -54,19 +55,6 @@ fn owned_bytes(py: Python<'_>, data: &Bound<'_, PyAny>) -> PyResult<Vec<u8>> {
         return Err(invalid(format!("{} bytes of data: more than {MAX_IMAGE_BYTES}", slice.len())));
     }
     Ok(slice.to_vec())
-}
-
-/// `"png"` or `"jpeg"`; anything else raises `InvalidInput` naming `format`.
-fn compression(format: &Bound<'_, PyAny>) -> PyResult<Compression> {
-    match format.extract::<String>().ok().as_deref() {
-        Some("png") => Ok(Compression::Png),
-        Some("jpeg") => Ok(Compression::Jpeg),
-        _ => {
-            let other = format.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
-            let reason = format!("expected 'png', 'jpeg' or None, got {other}");
-            Err(crate::Error::InvalidParameter { name: "format", reason }.into())
-        }
-    }
 }
 
 /// Adds `decode_image`.

@@ -21,22 +21,11 @@ pub fn to_grey<'py>(
 ) -> PyResult<Bound<'py, PyArray2<u8>>> {
     let order = match order {
         None => ChannelOrder::Rgb,
-        Some(order) => channel_order(order)?,
+        Some(order) => {
+            super::args::choice(order, "order", &[("rgb", ChannelOrder::Rgb), ("bgr", ChannelOrder::Bgr)], false)?
+        }
     };
     read_image(image, "image", order)?.into_array(py)
-}
-
-/// `"rgb"` or `"bgr"`; anything else raises `InvalidInput` naming `order`.
-fn channel_order(order: &Bound<'_, PyAny>) -> PyResult<ChannelOrder> {
-    match order.extract::<String>().ok().as_deref() {
-        Some("rgb") => Ok(ChannelOrder::Rgb),
-        Some("bgr") => Ok(ChannelOrder::Bgr),
-        _ => {
-            let other = order.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
-            let reason = format!("expected 'rgb' or 'bgr', got {other}");
-            Err(crate::Error::InvalidParameter { name: "order", reason }.into())
-        }
-    }
 }
 
 /// Adds `to_grey`.
