@@ -193,7 +193,7 @@ def pose_errors(pose: np.ndarray) -> tuple[float, float]:
 
 def part_step(repeat: int) -> dict:
     s = make_scene(12)
-    ctl = vsinv.InvariantController(s.reference, s.k_hat, gain=GAIN, gain_rz=GAIN_RZ, basis=s.basis)
+    ctl = vsinv.InvariantController(s.reference, s.k_hat, gain=GAIN, gain_rz=GAIN_RZ, basis=s.basis, rz_task="tau21")
     ref = NumpyInvariantController(s.reference, s.k_hat, s.basis, gain=GAIN, gain_rz=GAIN_RZ)
     pixels, depths = np.ascontiguousarray(s.pixels, dtype=np.float64), np.ascontiguousarray(s.depths)
     check_same_twist(12, ref.step(pixels, depths), ctl.step(pixels, depths))
