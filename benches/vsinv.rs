@@ -338,7 +338,7 @@ fn basis_choice(c: &mut Criterion) {
     let mut group = c.benchmark_group("choose_basis");
     group.sample_size(10).measurement_time(Duration::from_secs(3)).sampling_mode(SamplingMode::Flat);
     let cases = [
-        ("uniform", &[1_000, 10_000, 100_000, 1_000_000][..]),
+        ("uniform", &[16, 32, 33, 64, 128, 200, 201, 256, 1_000, 10_000, 100_000, 1_000_000][..]),
         ("disk", &[1_000, 10_000, 100_000, 1_000_000][..]),
         ("circle", &[1_000, 10_000][..]),
     ];

@@ -19,8 +19,13 @@
 use super::convex_hull::{convex_hull, cross};
 use crate::error::{Error, Result};
 
-/// Up to this many points the search is exhaustive (`O(n^3)`, under a millisecond).
-pub const EXHAUSTIVE_MAX_POINTS: usize = 200;
+/// Up to this many points the search is exhaustive (`O(n^3)`); above, the hull's path, which
+/// picks the same triangle (up to 500 points near the boundary, so always below 500 points).
+/// 32 is where the two cost the same (`benches/vsinv.rs`, `choose_basis/uniform/n`, one
+/// machine: exhaustive 8.5 us at 32 points, the hull's path 7.0 us at 33); with the
+/// exhaustive search up to 200 points, 64, 128 and 200 points took 70 us, 0.53 ms and 2.1 ms,
+/// the hull's path takes 13, 28 and 40 us.
+pub const EXHAUSTIVE_MAX_POINTS: usize = 32;
 
 /// Above [`EXHAUSTIVE_MAX_POINTS`] points, the exhaustive search runs on the points near the
 /// hull's boundary when there are at most this many (`O(m^3)`: about 20 ms for 500).

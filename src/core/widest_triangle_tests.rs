@@ -120,7 +120,7 @@ fn fast_search_picks_the_exhaustive_searchs_triangle() {
     let mut exact = 0;
     for kind in 0..9 {
         for seed in 0..8 {
-            let n = 201 + rng.below(60);
+            let n = EXHAUSTIVE_MAX_POINTS + 1 + rng.below(230);
             let px = point_set(kind, n, &mut rng);
             check_against_reference(&px, &format!("kind {kind}, seed {seed}, n {n}"));
             exact += usize::from(on_boundary(&px) <= EXACT_MAX_BOUNDARY_POINTS);
