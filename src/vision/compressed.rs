@@ -20,12 +20,10 @@ pub enum Compression {
 impl Compression {
     /// The compression whose signature `bytes` start with, if PNG or JPEG.
     pub fn of(bytes: &[u8]) -> Option<Self> {
-        if bytes.starts_with(&[0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A]) {
-            Some(Self::Png)
-        } else if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
-            Some(Self::Jpeg)
-        } else {
-            None
+        match ::image::guess_format(bytes).ok()? {
+            ::image::ImageFormat::Png => Some(Self::Png),
+            ::image::ImageFormat::Jpeg => Some(Self::Jpeg),
+            _ => None,
         }
     }
 
