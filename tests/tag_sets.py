@@ -69,6 +69,72 @@ def benchmark(family: str, resolution: str) -> Case:
     return Case(f"{resolution}", family, image, set(truth), truth if resolution == "640x480" else None)
 
 
+# Five tags of 50-120 px, drawn by `rendered` at 640 x 480 (moved and scaled with the image): id, centre (u, v), side of the black square (px), turn (rad), perspective (the far side
+# shrunk by this fraction).
+RENDERED_PLACEMENTS = [
+    (0, (140.0, 130.0), 90.0, 0.3, 0.15),
+    (1, (470.0, 120.0), 100.0, -0.5, 0.10),
+    (2, (320.0, 290.0), 120.0, 1.2, 0.20),
+    (3, (120.0, 380.0), 60.0, 2.0, 0.05),
+    (4, (530.0, 390.0), 50.0, -2.5, 0.25),
+]
+#: Supersampling of `rendered`: each pixel is the mean of 8 x 8 samples of the tag.
+RENDER_SAMPLES = 8
+
+
+def rendered(family: str, resolution: str) -> Case:
+    """Tags whose corners are known exactly, drawn independently of vsinv: OpenCV's own marker
+    image (`generateImageMarker`, black 30 on white 220, a quiet zone of two cells) mapped by a
+    homography (`warpPerspective`) at 8 x 8 samples a pixel, then averaged over each pixel
+    (`resize` with `INTER_AREA`), as a camera's pixel integrates light. The corners are the
+    homography's images of the black square's corners, in OpenCV's convention. ViSP's published
+    corners (`benchmark`) come from a detector (they agree with pupil-apriltags to 0.05 px, with
+    the projections of ViSP's own `cMo_*.txt` poses only to 0.26 px): this set is the truth that
+    owes nothing to any detector."""
+    width, height = (int(x) for x in resolution.split("x"))
+    scale = np.array([width / 640.0, height / 480.0])
+    dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, FAMILIES[family][1]))
+    image = np.full((height, width), 220, np.uint8)
+    truth = {}
+    for tag, centre, side, turn, perspective in RENDERED_PLACEMENTS:
+        h = _tag_homography(np.multiply(centre, scale), side * scale.min(), turn, perspective)
+        truth[tag] = _draw_marker(image, dictionary, tag, h)
+    return Case(f"rendered {resolution}", family, image, set(truth), truth)
+
+
+def _tag_homography(centre: np.ndarray, side: float, turn: float, perspective: float) -> np.ndarray:
+    """The map from the unit square (the black square's edge coordinates) to the image's edge
+    coordinates (a pixel u spans [u, u + 1])."""
+    c, s = np.cos(turn), np.sin(turn)
+    unit = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    corners = (unit - 0.5) * side @ np.array([[c, s], [-s, c]])
+    corners[2:] *= 1.0 - perspective
+    corners += centre + 0.5
+    return cv2.getPerspectiveTransform(unit.astype(np.float32), corners.astype(np.float32))
+
+
+def _draw_marker(image: np.ndarray, dictionary, tag: int, h: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Draws marker `tag` through `h` (unit square -> image edge coordinates) into `image`,
+    supersampled in the tag's bounding box only; returns its corners (OpenCV's convention)."""
+    cell, n = 32, RENDER_SAMPLES
+    side = (dictionary.markerSize + 2) * cell
+    marker = cv2.aruco.generateImageMarker(dictionary, tag, side, borderBits=1)
+    marker = cv2.copyMakeBorder(np.where(marker > 127, 220, 30).astype(np.uint8), *[2 * cell] * 4, cv2.BORDER_CONSTANT, value=220)
+    # Marker pixel centres -> marker edges -> unit square -> image edges.
+    to_unit = np.array([[1.0 / side, 0.0, (0.5 - 2 * cell) / side], [0.0, 1.0 / side, (0.5 - 2 * cell) / side], [0.0, 0.0, 1.0]])
+    q = 2.0 / (dictionary.markerSize + 2)  # the quiet zone, in units of the black square
+    outline = cv2.perspectiveTransform(np.array([[[-q, -q], [1 + q, -q], [1 + q, 1 + q], [-q, 1 + q]]]), h)[0]
+    u0, v0 = np.maximum(np.floor(outline.min(axis=0)).astype(int), 0)
+    u1, v1 = np.minimum(np.ceil(outline.max(axis=0)).astype(int), image.shape[::-1])
+    # Image edges -> the box's supersampled pixel centres.
+    to_box = np.array([[n, 0.0, -n * u0 - 0.5], [0.0, n, -n * v0 - 0.5], [0.0, 0.0, 1.0]])
+    size = ((u1 - u0) * n, (v1 - v0) * n)
+    drawn = cv2.warpPerspective(marker, to_box @ h @ to_unit, size, flags=cv2.INTER_LINEAR, borderValue=220)
+    image[v0:v1, u0:u1] = np.minimum(image[v0:v1, u0:u1], cv2.resize(drawn, (u1 - u0, v1 - v0), interpolation=cv2.INTER_AREA))
+    unit_corners = np.array([[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]])
+    return cv2.perspectiveTransform(unit_corners, h)[0] - 0.5
+
+
 def _affine(case: Case, name: str, image: np.ndarray, m: np.ndarray) -> Case:
     """`case` with `image`, its truth moved by the 2x3 map `m` (OpenCV's convention)."""
     truth = None if case.truth is None else {t: c @ m[:, :2].T + m[:, 2] for t, c in case.truth.items()}
@@ -133,14 +199,16 @@ DEGRADATIONS: dict[str, Callable[[Case], Case]] = {
 }
 
 
-def cases(families: list[str], resolutions: list[str], degradations: list[str]) -> Iterator[Case]:
+def cases(families: list[str], resolutions: list[str], degradations: list[str], base=benchmark) -> Iterator[Case]:  # type: ignore[no-untyped-def]
+    """Every degradation of every family's `base` image (ViSP's `benchmark`, or `rendered`) at
+    every resolution (upscaled 3x only from 640 x 480)."""
     for family in families:
         for resolution in resolutions:
-            base = benchmark(family, resolution)
+            image = base(family, resolution)
             for name in degradations:
                 if name == "x3" and resolution != "640x480":
                     continue  # 5760 x 3240: no more than x2 shows
-                yield DEGRADATIONS[name](base)
+                yield DEGRADATIONS[name](image)
 
 
 # --------------------------------------------------------------------------- reference detectors
@@ -201,6 +269,17 @@ def vsinv_detector(family: str) -> Callable[[np.ndarray], Corners]:
         return {int(i): c for i, c in zip(tags.ids, tags.corners)}
 
     return detect
+
+
+def in_view(case: Case) -> set[int]:
+    """The ids of the tags whose four true corners are in the image (all of them where no truth
+    is known). A tag cut by the border has a corner nobody can measure: vsinv does not report it
+    (pupil-apriltags does, with that corner pixels off: 4.3 px for tag 1 of the rendered set
+    turned by 45 degrees)."""
+    if case.truth is None:
+        return case.ids
+    h, w = case.image.shape[:2]
+    return {t for t, c in case.truth.items() if np.all((c >= -0.5) & (c <= np.array([w, h]) - 0.5))}
 
 
 def corner_errors(found: Corners, truth: Corners | None) -> np.ndarray:
