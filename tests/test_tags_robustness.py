@@ -101,11 +101,10 @@ def test_the_small_tag_blurred_by_2_px_is_found_as_accurately_as_by_the_referenc
 
 
 # Rendered tags (tests/tag_sets.py's `rendered`: corners known exactly, owing nothing to any
-# detector). Sharp, blurred, resampled or turned, vsinv's corners are the most accurate of all
-# (medians 0.001-0.03 px; pupil-apriltags 0.02-0.06, OpenCV's AprilTag refinement 0.05-0.12,
-# its subpixel refinement 0.2-0.7, measured by benches/tags_robustness.py). Under noise and
-# JPEG artefacts the profiles across an edge carry the noise; there vsinv is within 0.04 px of
-# the best (pupil-apriltags on 7 of 63 sets, by up to 0.03 px).
+# detector). On the tags both decode, vsinv's corners are the most accurate of all: sharp,
+# blurred, resampled or turned (medians 0.001-0.03 px; pupil-apriltags 0.02-0.07, OpenCV's
+# AprilTag refinement 0.05-0.2, its subpixel refinement 0.2-1.2), and under noise and JPEG
+# artefacts (0.02-0.09 px; pupil-apriltags 0.06-0.10), measured by benches/tags_robustness.py.
 RENDERED_BEST = [
     ("tag36h11", "640x480", ["clean", "blur1", "blur2", "x2", "rot90", "rot15", "320x240"]),
     ("tag36h11", "1920x1080", ["clean", "blur3", "rot15"]),
@@ -113,45 +112,56 @@ RENDERED_BEST = [
     ("tag36h11", "640x480", ["rot45"]),
     ("tag16h5", "640x480", ["clean", "blur3", "320x240"]),
 ]
-RENDERED_NOISY = [("tag36h11", "640x480", ["noise10", "noise20", "jpeg20"]), ("tag16h5", "1920x1080", ["jpeg20"])]
+RENDERED_NOISY = [
+    ("tag36h11", "640x480", ["noise10", "noise20", "jpeg20"]),
+    ("tag25h9", "640x480", ["blur3", "noise10"]),
+    ("tag16h5", "1920x1080", ["noise10", "jpeg20"]),
+]
 
 
 def rendered_params(sets: list) -> list:
     return [pytest.param(f, r, d, id=f"{f}-{r}-{d}") for f, r, degs in sets for d in degs]
 
 
-def rendered_medians(family: str, resolution: str, degradation: str) -> dict[str, float]:
-    """Every detector's median corner error on the rendered set; vsinv must report no id that is
-    not in the image and every tag a reference decodes whose corners are all in the image."""
+def rendered_medians(family: str, resolution: str, degradation: str) -> dict[str, tuple[float, float]]:
+    """Per reference detector, vsinv's median corner error and the reference's on the tags of the
+    rendered set both decode; vsinv must report no id that is not in the image and every tag a
+    reference decodes whose corners are all in the image."""
     case = tag_sets.DEGRADATIONS[degradation](tag_sets.rendered(family, resolution))
     ours = tag_sets.vsinv_detector(family)(case.image)
     assert set(ours) <= case.ids, f"{case.name}: wrong ids {sorted(set(ours) - case.ids)}"
-    detectors = {"vsinv": tag_sets.vsinv_detector(family), "cv subpix": tag_sets.opencv(family),
-                 "cv april": tag_sets.opencv(family, "apriltag"), "pupil": tag_sets.pupil(family)}
-    medians = {}
-    for name, detect in detectors.items():
+    references = {"cv subpix": tag_sets.opencv(family), "cv april": tag_sets.opencv(family, "apriltag"),
+                  "pupil": tag_sets.pupil(family)}
+    medians = {"vsinv": (float(np.median(tag_sets.corner_errors(ours, case.truth))),) * 2}
+    for name, detect in references.items():
         found = detect(case.image)  # type: ignore[misc]
         missed = set(found) & tag_sets.in_view(case) - set(ours)
         assert not missed, f"{case.name}: {name} decoded {sorted(missed)} too"
-        errors = tag_sets.corner_errors(found, case.truth)
-        if errors.size:
-            medians[name] = float(np.median(errors))
-    print(case.name, {k: round(v, 3) for k, v in medians.items()})
+        both = set(found) & set(ours)
+        if both:
+            medians[name] = tuple(  # type: ignore[assignment]
+                float(np.median(tag_sets.corner_errors({t: f[t] for t in both}, case.truth))) for f in (ours, found)
+            )
+    print(case.name, {k: tuple(round(m, 3) for m in v) for k, v in medians.items()})
     return medians
 
 
 @pytest.mark.parametrize(("family", "resolution", "degradation"), rendered_params(RENDERED_BEST))
 def test_rendered_tags_corners_are_the_most_accurate(family: str, resolution: str, degradation: str) -> None:
     medians = rendered_medians(family, resolution, degradation)
-    assert medians["vsinv"] < 0.05
-    assert medians["vsinv"] <= min(m for k, m in medians.items() if k != "vsinv")
+    assert medians.pop("vsinv")[0] < 0.05
+    for name, (ours, theirs) in medians.items():
+        assert ours <= theirs, f"{name}: {theirs:.3f} px, vsinv {ours:.3f} px on the same tags"
 
 
 @pytest.mark.parametrize(("family", "resolution", "degradation"), rendered_params(RENDERED_NOISY))
-def test_rendered_noisy_tags_corners_are_within_a_few_hundredths_of_the_best(family: str, resolution: str, degradation: str) -> None:
+def test_rendered_noisy_tags_corners_are_the_most_accurate_too(family: str, resolution: str, degradation: str) -> None:
     medians = rendered_medians(family, resolution, degradation)
-    assert medians["vsinv"] < 0.15
-    assert medians["vsinv"] <= min(m for k, m in medians.items() if k != "vsinv") + 0.04
+    # Blur of 3 px reaches the data cells of 9 px cells: vsinv decodes all five tags (the
+    # smallest at 0.1-1.1 px), pupil-apriltags four.
+    assert medians.pop("vsinv")[0] < (0.15 if degradation == "blur3" else 0.1)
+    for name, (ours, theirs) in medians.items():
+        assert ours <= theirs, f"{name}: {theirs:.3f} px, vsinv {ours:.3f} px on the same tags"
 
 
 def test_rendered_corners_are_where_the_homography_puts_them() -> None:
