@@ -3,11 +3,12 @@
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 RUST_EXAMPLES := control_loop servo_loop simulation batch
-# The property tests of tests/robustness_*.rs (the census, a report, is left out).
+# The property tests of tests/robustness_*.rs (the census, a report, is left out): modules of the
+# one integration-test binary (tests/integration.rs), selected by their `NAME::` prefix.
 ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
 	robustness_vision robustness_regressions
 
-.PHONY: docs wheels install install-run test test-fast test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
+.PHONY: docs wheels install install-run test test-fast test-rust test-builtins test-embedded test-examples test-python stubtest lint bench soak fuzz run
 
 # No -q: the first install compiles the Rust extension in release mode (several minutes on
 # 2 cores); -v passes cargo's progress through, so the build is seen to move.
@@ -29,8 +30,15 @@ install-run:
 
 test: install test-rust test-embedded test-examples test-python stubtest docs
 
+# The unit tests, the integration tests (tests/*.rs, one binary: tests/integration.rs, each file a
+# module; one file's tests: cargo test --release --test integration NAME::), the doc tests.
 test-rust:
 	cargo test --release
+
+# Every built-in scenario gives its recorded result (tests/builtin_results.rs): the guard of
+# refactors. VSINV_RECORD_BUILTINS=1 records the table anew.
+test-builtins:
+	cargo test --release --test integration builtin_results::
 
 # The core alone, as a controller embeds it: a 100 Hz loop and the zero-allocation test.
 test-embedded:
@@ -90,9 +98,9 @@ bench: install
 FUZZ_SECONDS ?= 120
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
-	VSINV_FUZZ_SECONDS=$(FUZZ_SECONDS) cargo test --release --test fuzz_images mutations -- --nocapture
+	VSINV_FUZZ_SECONDS=$(FUZZ_SECONDS) cargo test --release --test integration fuzz_images::mutations -- --nocapture
 	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness_*.py tests/test_api.py tests/test_se3.py
-	VSINV_PROPTEST_RANDOM=1 cargo test --release $(addprefix --test ,$(ROBUSTNESS_TESTS)) --test invariance
+	VSINV_PROPTEST_RANDOM=1 cargo test --release --test integration -- $(addsuffix ::,$(ROBUSTNESS_TESTS)) invariance::
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run
