@@ -5,7 +5,8 @@
 //!
 //! One file's tests: `cargo test --release --test integration NAME::`, e.g. the check that every
 //! built-in gives its recorded result, `cargo test --release --test integration builtin_results::`
-//! (also `make test-builtins`). A new file is a new `mod` line below.
+//! (also `make test-builtins`). A new file is a new `mod` line below (the last test here fails
+//! on a file of tests/ that has none).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 /// Scene helpers shared by the tests (tests/common/mod.rs).
@@ -63,3 +64,23 @@ mod stability;
 mod vision_loop;
 #[cfg(feature = "vision")]
 mod vision_tracking;
+
+/// With `autotests = false` a file of tests/ that is not declared above would never be built:
+/// every `tests/*.rs` but this one is a `mod` line of this file.
+#[test]
+fn every_test_file_is_a_module_of_this_binary() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests");
+    let this = std::fs::read_to_string(dir.join("integration.rs")).unwrap();
+    let declared: std::collections::BTreeSet<&str> =
+        this.lines().filter_map(|l| l.strip_prefix("mod ")?.strip_suffix(';')).collect();
+    let mut files = std::collections::BTreeSet::new();
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let name = entry.unwrap().file_name().into_string().unwrap();
+        if let Some(stem) = name.strip_suffix(".rs").filter(|s| *s != "integration") {
+            files.insert(stem.to_string());
+        }
+    }
+    let missing: Vec<&String> = files.iter().filter(|f| !declared.contains(f.as_str())).collect();
+    assert!(missing.is_empty(), "tests/*.rs not declared as `mod NAME;` in tests/integration.rs: {missing:?}");
+    assert!(declared.len() >= 33 && declared.contains("builtin_results"), "{declared:?}");
+}
