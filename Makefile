@@ -3,11 +3,12 @@
 PYTHON ?= python3
 PIP := $(PYTHON) -m pip
 RUST_EXAMPLES := control_loop servo_loop simulation batch
-# The property tests of tests/robustness_*.rs (the census, a report, is left out).
+# The property tests of tests/robustness_*.rs (the census, a report, is left out): modules of the
+# one integration-test binary (tests/integration.rs), selected by their `NAME::` prefix.
 ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
 	robustness_vision robustness_regressions
 
-.PHONY: docs wheels install install-run test test-fast test-rust test-embedded test-examples test-python stubtest lint bench soak fuzz run
+.PHONY: docs wheels install install-run test test-fast test-rust test-builtins test-embedded test-examples test-python stubtest lint bench bench-quick soak fuzz run
 
 # No -q: the first install compiles the Rust extension in release mode (several minutes on
 # 2 cores); -v passes cargo's progress through, so the build is seen to move.
@@ -29,8 +30,15 @@ install-run:
 
 test: install test-rust test-embedded test-examples test-python stubtest docs
 
+# The unit tests, the integration tests (tests/*.rs, one binary: tests/integration.rs, each file a
+# module; one file's tests: cargo test --release --test integration NAME::), the doc tests.
 test-rust:
 	cargo test --release
+
+# Every built-in scenario gives its recorded result (tests/builtin_results.rs): the guard of
+# refactors. VSINV_RECORD_BUILTINS=1 records the table anew.
+test-builtins:
+	cargo test --release --test integration builtin_results::
 
 # The core alone, as a controller embeds it: a 100 Hz loop and the zero-allocation test.
 test-embedded:
@@ -71,17 +79,24 @@ docs:
 	$(PYTHON) docs/pages.py run
 	NO_MKDOCS_2_WARNING=1 $(PYTHON) -m mkdocs build --strict
 
+# Every benchmark script of benches/ (each checks that vsinv agrees with its peer, or with itself,
+# before it times anything, and exits non-zero when not); the criterion benches in Rust first
+# (benches/tracker_mire2.rs runs from tracker_mire2.py). soak.py takes the longest (100,000 runs).
+BENCH_SCRIPTS := bench_step compare vision tags_vs_opencv tags_tracked tags_robustness image_servo dots_vs_opencv \
+	grey noise_honesty mount_error tracker_mire2 lens_change_accuracy hand_eye_vs_opencv ik hostile_rerun \
+	ros_latency soak
 bench: install
 	cargo bench --bench vsinv
-	$(PYTHON) benches/bench_step.py
-	$(PYTHON) benches/compare.py
-	$(PYTHON) benches/vision.py
-	$(PYTHON) benches/tags_vs_opencv.py
-	$(PYTHON) benches/image_servo.py
-	$(PYTHON) benches/dots_vs_opencv.py
-	$(PYTHON) benches/noise_honesty.py
-	$(PYTHON) benches/tracker_mire2.py
-	$(PYTHON) benches/lens_change_accuracy.py
+	for b in $(BENCH_SCRIPTS); do echo "== benches/$$b.py"; $(PYTHON) benches/$$b.py || exit 1; done
+
+# Every bench once in its quick mode, so that a broken bench fails CI (.ci/run): criterion's
+# test mode (each benchmark run once, from the release build of `cargo test --release`) and
+# each script with --quick (a few rounds on small inputs, the agreement checks as in full).
+# A bench whose peer or data is not installed (ViSP's C++ library, roboticstoolbox, rclpy,
+# visp-images-data) says so and skips that part. Needs the package installed (make install).
+bench-quick:
+	cargo test --release --bench vsinv
+	for b in $(BENCH_SCRIPTS); do echo "== benches/$$b.py --quick"; $(PYTHON) benches/$$b.py --quick || exit 1; done
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
 # the image decoders and detectors on mutated image files for FUZZ_SECONDS (the CI part replays
@@ -90,9 +105,9 @@ bench: install
 FUZZ_SECONDS ?= 120
 fuzz: install
 	$(PYTHON) tests/scenario_fuzz.py
-	VSINV_FUZZ_SECONDS=$(FUZZ_SECONDS) cargo test --release --test fuzz_images mutations -- --nocapture
+	VSINV_FUZZ_SECONDS=$(FUZZ_SECONDS) cargo test --release --test integration fuzz_images::mutations -- --nocapture
 	VSINV_HYPOTHESIS=explore $(PYTHON) -m pytest -q tests/test_robustness_*.py tests/test_api.py tests/test_se3.py
-	VSINV_PROPTEST_RANDOM=1 cargo test --release $(addprefix --test ,$(ROBUSTNESS_TESTS)) --test invariance
+	VSINV_PROPTEST_RANDOM=1 cargo test --release --test integration -- $(addsuffix ::,$(ROBUSTNESS_TESTS)) invariance::
 
 # 100,000 simulated runs and 1,000,000 controller steps; fails if resident memory grows > 5 MB.
 soak: install-run

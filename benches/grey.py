@@ -40,7 +40,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=200, help="calls per cell (best of them)")
     parser.add_argument("--threads", type=int, default=1, help="vsinv's threads (0: one per core)")
+    parser.add_argument("--quick", action="store_true", help="640 x 480 only, 3 calls a cell (make bench-quick)")
     args = parser.parse_args()
+    sizes, calls = (SIZES[:1], 3) if args.quick else (SIZES, args.calls)
     if args.threads > 0:
         os.environ["RAYON_NUM_THREADS"] = str(args.threads)
     import cv2
@@ -53,14 +55,14 @@ def main() -> None:
     print(f"{'size':>10} {'layout':>6} {'vsinv ms':>9} {'OpenCV ms':>10} {'ratio':>6}")
     layouts = {"RGB": (3, "rgb", cv2.COLOR_RGB2GRAY), "BGR": (3, "bgr", cv2.COLOR_BGR2GRAY),
                "RGBA": (4, "rgb", cv2.COLOR_RGBA2GRAY), "BGRA": (4, "bgr", cv2.COLOR_BGRA2GRAY)}
-    for w, h in SIZES:
+    for w, h in sizes:
         for name, (channels, order, code) in layouts.items():
             frame = rng.integers(0, 256, (h, w, channels), dtype=np.uint8)
             mine = lambda f: vsinv.to_grey(f, order=order)  # noqa: E731
             theirs = lambda f: cv2.cvtColor(f, code)  # noqa: E731
             if not np.array_equal(mine(frame), theirs(frame)):
                 raise SystemExit(f"{w}x{h} {name}: to_grey differs from cvtColor")
-            t_mine, t_cv = best(mine, frame, args.calls), best(theirs, frame, args.calls)
+            t_mine, t_cv = best(mine, frame, calls), best(theirs, frame, calls)
             print(f"{w:>5}x{h:<4} {name:>6} {1e3 * t_mine:9.3f} {1e3 * t_cv:10.3f} {t_mine / t_cv:6.2f}")
 
 

@@ -80,23 +80,46 @@ def cell(method: str, noise: tuple[float, float], trials: int, n: int, seed: int
     }
 
 
+def agreement(n: int, seed: int) -> str | None:
+    """Before timing: on noise-free stations every method of both libraries recovers the true
+    mount (within 1e-6 degrees and 1e-6 mm); the first disagreement found, or None."""
+    rng = np.random.default_rng(seed)
+    g, c, x = stations(rng, n, (0.0, 0.0))
+    cv_args = (list(g[:, :3, :3]), list(g[:, :3, 3].copy()), list(c[:, :3, :3]), list(c[:, :3, 3].copy()))
+    for method in METHODS:
+        r, t = cv2.calibrateHandEye(*cv_args, method=getattr(cv2, METHODS[method]))
+        m = np.eye(4)
+        m[:3, :3], m[:3, 3] = r, t.ravel()
+        for who, found in (("vsinv", vsinv.calibrate_hand_eye(g, c, method=method).matrix), ("OpenCV", m)):
+            rot_deg, tr_mm = in_mm(errors(found, x))
+            if not (rot_deg < 1e-6 and tr_mm < 1e-6):
+                return f"{who} {method} on noise-free stations: {rot_deg:.3g} deg, {tr_mm:.3g} mm from the true mount"
+    return None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--trials", type=int, default=200)
     parser.add_argument("--stations", type=int, default=15)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--quick", action="store_true", help="3 trials a cell, noise-free and one noise level (make bench-quick)")
     args = parser.parse_args()
+    trials, levels = (3, NOISE_LEVELS[:2]) if args.quick else (args.trials, NOISE_LEVELS)
     if cv2 is None or not hasattr(cv2, "calibrateHandEye"):
         print("needs cv2.calibrateHandEye: pip install 'opencv-python-headless>=4.8,<5'")
         return 1
-    print(f"vsinv {vsinv.__version__}, OpenCV {cv2.__version__}; {args.trials} trials of {args.stations} stations "
+    mismatch = agreement(args.stations, args.seed)
+    if mismatch:
+        print(f"MISMATCH: {mismatch}")
+        return 1
+    print(f"vsinv {vsinv.__version__}, OpenCV {cv2.__version__}; {trials} trials of {args.stations} stations "
           f"per cell (noise on the target poses)\n")
     print("| method | noise (deg, mm) | rotation error, deg: median / max (vsinv) | (OpenCV) "
           "| translation error, mm: median / max (vsinv) | (OpenCV) | time per call, us (vsinv / OpenCV) | ratio |")
     print("|---|---|---|---|---|---|---|---|")
     for method in METHODS:
-        for noise in NOISE_LEVELS:
-            r = cell(method, noise, args.trials, args.stations, args.seed)
+        for noise in levels:
+            r = cell(method, noise, trials, args.stations, args.seed)
             print(f"| {method} | {noise[0]:g}, {noise[1] * 1000:g} "
                   f"| {r['rot_med']:.3g} / {r['rot_max']:.3g} | {r['cv_rot_med']:.3g} / {r['cv_rot_max']:.3g} "
                   f"| {r['tr_med']:.3g} / {r['tr_max']:.3g} | {r['cv_tr_med']:.3g} / {r['cv_tr_max']:.3g} "

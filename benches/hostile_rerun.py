@@ -215,6 +215,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", default="")
     parser.add_argument("--json")
+    parser.add_argument("--quick", action="store_true", help="the first case only (make bench-quick)")
     args = parser.parse_args()
     rows = []
     print("| case | outcome | wall s | peak RSS MiB |\n|---|---|---|---|")
@@ -226,6 +227,8 @@ def main() -> int:
             outcome, wall, peak = run_case(code, folder)
             rows.append({"case": name, "outcome": outcome, "wall_s": round(wall, 2), "peak_rss_mib": round(peak, 1)})
             print(f"| {name} | {outcome} | {wall:.2f} | {peak:.0f} |", flush=True)
+            if args.quick:
+                break
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1))
     return 0

@@ -115,7 +115,10 @@ def main() -> None:
     parser.add_argument("--n", type=int, default=1000)
     parser.add_argument("--no-peer", action="store_true")
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--quick", action="store_true", help="20 poses an arm (make bench-quick)")
     args = parser.parse_args()
+    if args.quick:
+        args.n = 20
     rng = np.random.default_rng(20)
     results = {"machine": platform.processor() or platform.machine(), "n": args.n, "arms": {}}
     for arm in ARMS:
@@ -123,6 +126,8 @@ def main() -> None:
         row = {"vsinv": bench_vsinv(arm, targets)}
         if not args.no_peer:
             row["rtb_ikine_LM"] = bench_rtb(arm, targets)
+            if row["rtb_ikine_LM"] is None:
+                print("roboticstoolbox is not installed (pip install roboticstoolbox-python): its ikine_LM skipped")
             row["rtb_ikine_LM_tight"] = bench_rtb(arm, targets, tol=1e-20)
         results["arms"][arm] = row
         v = row["vsinv"]

@@ -10,6 +10,7 @@ alone on the same frames. Run: `python benches/image_servo.py` (part of `make be
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import time
 from typing import Any, Callable
@@ -44,6 +45,11 @@ def per_frame(step: Callable[[np.ndarray], Any], images: list[np.ndarray]) -> fl
 
 
 def main() -> None:
+    global FRAMES, REPEATS
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="5 frames, 1 repeat (make bench-quick)")
+    if parser.parse_args().quick:
+        FRAMES, REPEATS = 5, 1
     k_hat = vsinv.Intrinsics(648.0, 570.0, 427.0, 304.0)
     rows = []
     _, ref, _, images = frames_of("tags-12-6")

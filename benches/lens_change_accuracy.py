@@ -165,7 +165,10 @@ def main() -> None:
     parser.add_argument("--starts", type=int, default=10)
     parser.add_argument("--iterations", type=int, default=200)
     parser.add_argument("--supersample", default="1,3", help="comma-separated MuJoCo supersampling factors")
+    parser.add_argument("--quick", action="store_true", help="1 start of 20 iterations, no supersampling (make bench-quick)")
     args = parser.parse_args()
+    if args.quick:
+        args.starts, args.iterations, args.supersample = 1, 20, "1"
     for row in benchmark_pair():
         print(row, flush=True)
     for supersample in (int(k) for k in args.supersample.split(",")):

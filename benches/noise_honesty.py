@@ -111,7 +111,10 @@ def main() -> int:
     parser.add_argument("--seeds", type=int, default=50)
     parser.add_argument("--levels", default="0.25,0.5,1,2")
     parser.add_argument("--points", default="8,12,20")
+    parser.add_argument("--quick", action="store_true", help="2 seeds, 12 points, noise 0.5 px (make bench-quick)")
     args = parser.parse_args()
+    if args.quick:
+        args.seeds, args.levels, args.points = 2, "0.5", "12"
     print(HEADER)
     wrong = 0
     for points in (int(p) for p in args.points.split(",")):

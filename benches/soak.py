@@ -114,7 +114,10 @@ def main() -> int:
     parser.add_argument("--runs", type=int, default=100_000)
     parser.add_argument("--steps", type=int, default=1_000_000)
     parser.add_argument("--max-growth-mb", type=float, default=5.0)
+    parser.add_argument("--quick", action="store_true", help="10,000 runs and 200,000 steps (make bench-quick)")
     args = parser.parse_args()
+    if args.quick:
+        args.runs, args.steps = 10_000, 200_000
     runs = soak_runs(args.runs)
     steps = soak_steps(args.steps)
     print(f"growth after warm-up: runs {runs:.2f} MB, steps {steps:.2f} MB (limit {args.max_growth_mb} MB)")

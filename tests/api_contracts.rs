@@ -8,9 +8,7 @@
 //! lists them with the verdict per function).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::{Lcg, lens, object_points, random_pose, view};
+use crate::common::{Lcg, lens, object_points, random_pose, view};
 use nalgebra::{DMatrix, Isometry3, Matrix3, Point3, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{RngSeed, TestCaseError, TestRunner};

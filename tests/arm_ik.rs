@@ -4,9 +4,7 @@
 //! `tests/fixtures/ik/make_ik_fixtures.py`); and arm scenarios placed by the camera pose.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::Lcg;
+use crate::common::Lcg;
 use nalgebra::{Isometry3, Matrix4};
 use serde::Deserialize;
 use vsinv::Error;

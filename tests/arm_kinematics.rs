@@ -3,9 +3,7 @@
 //! `tests/fixtures/make_arm_fixtures.py`) and against finite differences; bad input.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::Lcg;
+use crate::common::Lcg;
 use nalgebra::{Isometry3, Matrix4, Matrix6xX, Vector3};
 use serde::Deserialize;
 use vsinv::Error;

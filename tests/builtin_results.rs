@@ -4,7 +4,8 @@
 //! Each line holds a scenario's status, iteration count and a 64-bit FNV-1a digest of every
 //! number of its summary and recording (the bits of each f64, in a fixed order). Record the
 //! table anew (only for a change that is meant to alter results, and say so in its commit)
-//! with `VSINV_RECORD_BUILTINS=1 cargo test --release --test builtin_results`.
+//! with `VSINV_RECORD_BUILTINS=1 cargo test --release --test integration builtin_results::` (or
+//! `VSINV_RECORD_BUILTINS=1 make test-builtins`).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use vsinv::sim::scenario::{BUILTIN, builtin};

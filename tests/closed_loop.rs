@@ -1,9 +1,7 @@
 //! Closed-loop behaviour of the control laws, integrated exactly with the SE(3) exponential.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use vsinv::core::se3::pose_error;
 use vsinv::{IbvsController, Interaction, Intrinsics, InvariantController, InvariantControllerConfig};

@@ -2,9 +2,7 @@
 //! of ViSP's `vpAdaptiveGain`, in both controllers and in scenarios.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{Isometry3, Vector6};
 use vsinv::core::adaptive_gain::AdaptiveGain;
 use vsinv::core::saturation::TwistLimits;

@@ -1,9 +1,7 @@
 //! Depth estimation up to scale (appendix A, correction 10).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vsinv::Intrinsics;
 use vsinv::core::depth::{ResectionDepths, depths_from_translation};

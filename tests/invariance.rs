@@ -2,10 +2,8 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 //! independent computations: re-projection with other cameras and finite differences.
 
-mod common;
-
+use crate::common::*;
 use approx::assert_relative_eq;
-use common::*;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use proptest::prelude::*;
 use vsinv::core::se3::exp_twist;

@@ -1,9 +1,7 @@
 //! Path planning in the invariant space (sec. 3): plane + parallax estimation and the path.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use nalgebra::{Isometry3, Vector3};
 use vsinv::core::planning::{InvariantPath, estimate_plane_parallax};
 use vsinv::{Error, Intrinsics, invariant_points};

@@ -9,13 +9,7 @@
 //! tests/common/robustness/camera.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-#[path = "common/robustness/camera.rs"]
-mod camera;
-mod common;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
-use camera::{prop_distortion, prop_intrinsics, prop_project_points};
+use crate::robustness::camera::{prop_distortion, prop_intrinsics, prop_project_points};
 
 // ---------------------------------------------------------------------------------------------
 // The tests: cases per API group.

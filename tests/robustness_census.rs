@@ -1,40 +1,24 @@
 //! Robustness of the public Rust API: the census of the calls tried per API by the properties of
 //! tests/robustness_*.rs.
 //!
-//! `cargo test --release --test robustness_census -- --ignored --nocapture census` prints, per
+//! `cargo test --release --test integration robustness_census:: -- --ignored --nocapture` prints, per
 //! API, the calls tried and how many returned `Ok` and `Err`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-#[path = "common/robustness/camera.rs"]
-mod camera;
-mod common;
-#[path = "common/robustness/control.rs"]
-mod control;
-#[path = "common/robustness/files.rs"]
-mod files;
-#[path = "common/robustness/invariants.rs"]
-mod invariants;
-#[path = "common/robustness/planning.rs"]
-mod planning;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-#[path = "common/robustness/vision.rs"]
-mod vision;
-
-use camera::{prop_distortion, prop_intrinsics, prop_project_points};
-use control::{
+use crate::robustness::CENSUS;
+use crate::robustness::camera::{prop_distortion, prop_intrinsics, prop_project_points};
+use crate::robustness::control::{
     prop_gains, prop_ibvs_controller, prop_invariant_controller, prop_invariant_controller_reference, prop_rz_task,
     prop_se3, prop_stability,
 };
-use files::{prop_calibration, prop_scenario};
-use invariants::{prop_invariant, prop_jacobians};
-use planning::{prop_depths, prop_planning};
-use robustness::CENSUS;
-use vision::{prop_detect_and_track, prop_render};
+use crate::robustness::files::{prop_calibration, prop_scenario};
+use crate::robustness::invariants::{prop_invariant, prop_jacobians};
+use crate::robustness::planning::{prop_depths, prop_planning};
+use crate::robustness::vision::{prop_detect_and_track, prop_render};
 
 /// Every group with `CENSUS_CASES` cases (default 200), then the table of calls per API.
 #[test]
-#[ignore = "a report: cargo test --release --test robustness_census -- --ignored --nocapture census"]
+#[ignore = "a report: cargo test --release --test integration robustness_census:: -- --ignored --nocapture"]
 fn census() {
     let n = std::env::var("CENSUS_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(200);
     let groups: &[fn(u32)] = &[

@@ -9,13 +9,7 @@
 //! tests/common/robustness/control.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/control.rs"]
-mod control;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
-use control::{
+use crate::robustness::control::{
     prop_gains, prop_ibvs_controller, prop_invariant_controller, prop_invariant_controller_reference, prop_rz_task,
     prop_se3, prop_stability,
 };

@@ -9,13 +9,7 @@
 //! tests/common/robustness/files.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/files.rs"]
-mod files;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
-use files::{prop_calibration, prop_scenario};
+use crate::robustness::files::{prop_calibration, prop_scenario};
 
 // ---------------------------------------------------------------------------------------------
 // The tests: cases per API group.

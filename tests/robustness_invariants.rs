@@ -9,13 +9,7 @@
 //! tests/common/robustness/invariants.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/invariants.rs"]
-mod invariants;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
-use invariants::{prop_invariant, prop_jacobians};
+use crate::robustness::invariants::{prop_invariant, prop_jacobians};
 
 // ---------------------------------------------------------------------------------------------
 // The tests: cases per API group.

@@ -8,13 +8,7 @@
 //! tests/common/robustness/planning.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/planning.rs"]
-mod planning;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
-use planning::{prop_depths, prop_planning};
+use crate::robustness::planning::{prop_depths, prop_planning};
 
 // ---------------------------------------------------------------------------------------------
 // The tests: cases per API group.

@@ -8,13 +8,9 @@
 //! harness is tests/common/robustness/mod.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-
 use crate::common::{lens, object_points};
+use crate::robustness::{CALIBRATION_FILES, invariants, scene, translation_pair};
 use nalgebra::Vector3;
-use robustness::{CALIBRATION_FILES, invariants, scene, translation_pair};
 use vsinv::core::depth::{ResectionDepths, depths_from_translation, resect};
 use vsinv::core::planning::{InvariantPath, estimate_plane_parallax};
 use vsinv::{

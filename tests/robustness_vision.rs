@@ -9,13 +9,7 @@
 //! tests/common/robustness/vision.rs.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-#[path = "common/robustness/mod.rs"]
-mod robustness;
-#[path = "common/robustness/vision.rs"]
-mod vision;
-
-use vision::{prop_detect_and_track, prop_render};
+use crate::robustness::vision::{prop_detect_and_track, prop_render};
 
 // ---------------------------------------------------------------------------------------------
 // The tests: cases per API group.

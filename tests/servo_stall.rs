@@ -9,9 +9,7 @@ use vsinv::nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use vsinv::servo::{Law, Servo, ServoConfig, ServoDepths, ServoReference, Status};
 use vsinv::{Intrinsics, InvariantControllerConfig};
 
-mod common;
-
-use common::{grid_object as object, grid_view as view};
+use crate::common::{grid_object as object, grid_view as view};
 
 const DT: f64 = 0.04;
 

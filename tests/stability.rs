@@ -1,10 +1,8 @@
 //! Props. 1-3 (appendix B): the block form of A = J_hat^+ J and the verdicts.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
-
+use crate::common::*;
 use approx::assert_relative_eq;
-use common::*;
 use nalgebra::{DMatrix, Matrix3};
 use vsinv::{Intrinsics, a_matrix, check_stability, invariant_jacobian};
 

@@ -491,7 +491,7 @@ def test_vision_table_status_is_the_recorded_one() -> None:
 @pytest.mark.skipif(os.environ.get("VSINV_README_SLOW") != "1", reason="slow (about 2 minutes): VSINV_README_SLOW=1 runs it")
 def test_vision_table_is_what_the_runs_print() -> None:
     """The README's table of the built-ins through images (also printed by
-    `cargo test --release --test vision_loop -- --nocapture`)."""
+    `cargo test --release --test integration vision_loop:: -- --nocapture`)."""
     import vsinv
 
     rows = readme_table(VISION_TABLE)
