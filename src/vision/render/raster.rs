@@ -6,7 +6,7 @@
 use nalgebra::Vector2;
 
 use super::lens::{Local, Warp};
-use super::noise::Noise;
+use super::noise::{Noise, quantise};
 use crate::vision::image::GreyImage;
 
 /// Supersampling per axis on boundary pixels.
@@ -85,8 +85,13 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
     for (j, row) in coverage.chunks_exact(patch.w).enumerate() {
         let start = (patch.v0 as usize + j) * width + patch.u0 as usize;
         for (i, &c) in row.iter().enumerate() {
+            // Uncovered: the value would be the noisy background the pixel already holds (or
+            // less than what another shape drew there).
+            if c == 0.0 {
+                continue;
+            }
             let index = start + i;
-            let value = (bg + (fg - bg) * f64::from(c) + paint.noise.at(index)).round().clamp(0.0, 255.0) as u8;
+            let value = quantise(bg + (fg - bg) * f64::from(c) + paint.noise.at(index));
             // max: two overlapping shapes do not add up.
             data[index] = data[index].max(value);
         }
@@ -136,7 +141,8 @@ pub(super) fn gaussian_kernel(sigma: f64) -> Vec<f32> {
     taps.iter().map(|t| (t / sum) as f32).collect()
 }
 
-/// Separable convolution of a row-major patch with a symmetric kernel (zero outside).
+/// Separable convolution of a row-major patch with a symmetric kernel (zero outside): each
+/// output is the sum of `kernel[y + r - x] * input[y]` over the taps inside, in increasing `y`.
 fn blur(values: &mut [f32], patch: &Patch, kernel: &[f32]) {
     if kernel.len() == 1 {
         return;
@@ -144,20 +150,22 @@ fn blur(values: &mut [f32], patch: &Patch, kernel: &[f32]) {
     let r = kernel.len() / 2;
     let (w, h) = (patch.w, patch.h);
     let mut tmp = vec![0.0f32; values.len()];
-    let convolve = |get: &dyn Fn(usize) -> f32, n: usize, x: usize| -> f32 {
-        let lo = x.saturating_sub(r);
-        let hi = (x + r).min(n - 1);
-        (lo..=hi).map(|y| kernel[y + r - x] * get(y)).sum()
+    // The taps of output x of a line of n: the kernel slice and the input range they meet.
+    let taps = |x: usize, n: usize| {
+        let (lo, hi) = (x.saturating_sub(r), (x + r).min(n - 1));
+        (&kernel[lo + r - x..=hi + r - x], lo..=hi)
     };
-    for j in 0..h {
-        let row = &values[j * w..(j + 1) * w];
-        for i in 0..w {
-            tmp[j * w + i] = convolve(&|y| row[y], w, i);
+    for (row, out) in values.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        for (x, o) in out.iter_mut().enumerate() {
+            let (k, range) = taps(x, w);
+            *o = k.iter().zip(&row[range]).map(|(a, b)| a * b).sum();
         }
     }
-    for i in 0..w {
-        for j in 0..h {
-            values[j * w + i] = convolve(&|y| tmp[y * w + i], h, j);
+    for j in 0..h {
+        let (k, range) = taps(j, h);
+        let out = &mut values[j * w..(j + 1) * w];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = k.iter().zip(range.clone()).map(|(a, y)| a * tmp[y * w + i]).sum();
         }
     }
 }
@@ -185,7 +193,7 @@ mod tests {
     #[test]
     fn any_shape_is_rasterised_by_its_coverage() {
         let mut image = GreyImage::new(16, 4);
-        let noise = Noise { noisy_background: &[], background: 0, sigma: 0.0, seed: 0 };
+        let noise = Noise { pool: &[], background: 0, sigma: 0.0, seed: 0 };
         let paint = Paint { kernel: &[1.0], background: 0, foreground: 200, noise };
         assert!(paint_shape(&mut image, &paint));
         let row: Vec<u8> = (0..16).map(|u| image.get_pixel(u, 1)[0]).collect();
