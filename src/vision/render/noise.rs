@@ -150,11 +150,16 @@ impl Noise<'_> {
     pub(super) fn background_frame(&self, width: u32, height: u32) -> GreyImage {
         let n = width as usize * height as usize;
         let data = if self.sigma > 0.0 && !self.pool.is_empty() {
-            let mut data = Vec::with_capacity(n);
-            for run in 0..n.div_ceil(RUN) {
-                let (start, len) = (run_offset(self.seed, run), RUN.min(n - run * RUN));
-                data.extend_from_slice(&self.pool[start..start + len]);
+            // Zeroed by the allocator (fresh pages), then each run a fixed-size copy.
+            let mut data = vec![0u8; n];
+            let mut runs = data.chunks_exact_mut(RUN);
+            for (run, pixels) in runs.by_ref().enumerate() {
+                let start = run_offset(self.seed, run);
+                pixels.copy_from_slice(&self.pool[start..start + RUN]);
             }
+            let last = runs.into_remainder();
+            let start = run_offset(self.seed, n / RUN);
+            last.copy_from_slice(&self.pool[start..start + last.len()]);
             data
         } else {
             vec![self.background; n]
