@@ -4,7 +4,7 @@
 //! (splitmix64) from the frame's seed and the run's number. The pool is quantised once per
 //! background level and sigma ([`quantised_pool`], cached), so a frame's background is a copy
 //! of runs of it (memory speed, no per-pixel hash or table look-up), and the noise of any
-//! pixel is found again from its index ([`Noise::at`]) for the primitives drawn over it.
+//! pixel is found again from its index ([`Noise::span`]) for the primitives drawn over it.
 //!
 //! Statistics (tested against closed forms below): every pixel is `round(background + sigma
 //! n)` clamped to [0, 255] with `n` drawn from the table; two pixels take the same draw
@@ -134,8 +134,8 @@ pub(super) struct Noise<'a> {
 
 impl Noise<'_> {
     /// The noise added to pixel `index` (row-major) of the frame, grey levels: the draw the
-    /// background took there.
-    #[inline]
+    /// background took there (what `Noise::span` is tested against).
+    #[cfg(test)]
     pub(super) fn at(&self, index: usize) -> f64 {
         if self.sigma > 0.0 {
             let draw = pool_indices()[run_offset(self.seed, index / RUN) + index % RUN];
@@ -143,6 +143,22 @@ impl Noise<'_> {
         } else {
             0.0
         }
+    }
+
+    /// The noise added to the pixels `start..start + len` (row-major), in order: the run's
+    /// offset hashed once a run.
+    pub(super) fn span(&self, start: usize, len: usize) -> impl Iterator<Item = f64> + '_ {
+        let (draws, table) = (pool_indices(), gaussian_table());
+        let mut cached = (usize::MAX, 0);
+        (start..start + len).map(move |index| {
+            if self.sigma <= 0.0 {
+                return 0.0;
+            }
+            if cached.0 != index / RUN {
+                cached = (index / RUN, run_offset(self.seed, index / RUN));
+            }
+            self.sigma * f64::from(table[usize::from(draws[cached.1 + index % RUN])])
+        })
     }
 
     /// The background with its noise: each run of [`RUN`] pixels copied from the quantised
@@ -200,6 +216,10 @@ mod tests {
         for (i, &p) in img.as_raw().iter().enumerate() {
             assert_eq!(p, quantise(30.0 + n.at(i)), "pixel {i}");
         }
+        // A span across run boundaries gives the draws pixel by pixel.
+        let span: Vec<f64> = n.span(37, 150).collect();
+        assert_eq!(span, (37..187).map(|i| n.at(i)).collect::<Vec<f64>>());
+        assert!(Noise { sigma: 0.0, ..n }.span(0, 9).all(|x| x == 0.0));
         let flat = Noise { sigma: 0.0, ..n }.background_frame(5, 3);
         assert!(flat.as_raw().iter().all(|&p| p == 30));
         assert_eq!(Noise { sigma: 0.0, ..n }.at(4), 0.0);

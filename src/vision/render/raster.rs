@@ -98,14 +98,14 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
     let data: &mut [u8] = image;
     for (j, row) in coverage.chunks_exact(patch.w).enumerate() {
         let start = (patch.v0 as usize + j) * width + patch.u0 as usize;
-        for (i, &c) in row.iter().enumerate() {
+        for ((i, &c), noise) in row.iter().enumerate().zip(paint.noise.span(start, row.len())) {
             // Uncovered: the value would be the noisy background the pixel already holds (or
             // less than what another shape drew there).
             if c == 0.0 {
                 continue;
             }
             let index = start + i;
-            let value = quantise(bg + (fg - bg) * f64::from(c) + paint.noise.at(index));
+            let value = quantise(bg + (fg - bg) * f64::from(c) + noise);
             // max: two overlapping shapes do not add up.
             data[index] = data[index].max(value);
         }
