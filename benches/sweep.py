@@ -16,8 +16,11 @@ previous chunk's runs). Before timing, the script checks that both give the same
 
 Timing: the four calls (batch and sweep on 1 and 2 threads) alternate within each round so
 that they share the machine's load; each figure is the fastest of the rounds. The machine's
-load average is printed before and after: on a shared machine the 2-thread figures depend
-on it. Ratios: sweep time per run over batch time per run (1: as fast), and 2 threads over 1.
+load average is printed before and after, and for each call the process's CPU time over
+its wall time (`os.times`) in the fastest round: a 2-thread call that gets 1.0 had one core
+(the machine was busy), and an unchanged CPU time per run on 2 threads rules out time lost
+to locks or allocation in the runs. Ratios: sweep time per run over batch time per run (1:
+as fast), and 2 threads over 1.
 """
 
 from __future__ import annotations
@@ -91,11 +94,14 @@ def main(argv: list[str] | None = None) -> int:
     }
     load_before = os.getloadavg()
     best = {name: float("inf") for name in calls}
+    cpu = {name: 0.0 for name in calls}  # CPU seconds of the fastest round
     for _ in range(rounds):
         for name, fn in calls.items():
-            t0 = time.perf_counter()
+            c0, t0 = os.times(), time.perf_counter()
             fn()
-            best[name] = min(best[name], time.perf_counter() - t0)
+            c1, wall = os.times(), time.perf_counter() - t0
+            if wall < best[name]:
+                best[name], cpu[name] = wall, (c1.user - c0.user) + (c1.system - c0.system)
     plan_s = planning_s(runs)
     load_after = os.getloadavg()
 
@@ -104,19 +110,22 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n{n} runs of {BASE} per call, fastest of {rounds} alternating rounds; "
           f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, {load_after[0]:.1f} after; "
           f"vsinv {vsinv.__version__}, Python {platform.python_version()}")
-    head = f"{'threads':<8} {'run_batch runs/s':>17} {'run_sweep runs/s':>17} {'sweep / batch time':>19}"
+    head = (f"{'threads':<8} {'run_batch runs/s':>17} {'run_sweep runs/s':>17} {'sweep / batch time':>19} "
+            f"{'CPU/wall batch, sweep':>22} {'CPU us a run batch, sweep':>26}")
     print(head)
     print("-" * len(head))
     for t in (1, 2):
         b, s = rate[f"batch {t}"], rate[f"sweep {t}"]
-        print(f"{t:<8} {b:>17.0f} {s:>17.0f} {b / s:>19.2f}")
+        use = f"{cpu[f'batch {t}'] / best[f'batch {t}']:.2f}, {cpu[f'sweep {t}'] / best[f'sweep {t}']:.2f}"
+        per_run = f"{cpu[f'batch {t}'] / n * 1e6:.0f}, {cpu[f'sweep {t}'] / n * 1e6:.0f}"
+        print(f"{t:<8} {b:>17.0f} {s:>17.0f} {b / s:>19.2f} {use:>22} {per_run:>26}")
     print(f"{'2 / 1':<8} {rate['batch 2'] / rate['batch 1']:>16.2f}x {rate['sweep 2'] / rate['sweep 1']:>16.2f}x")
     print(f"the sweep's planning in Python: {plan_s / n * 1e6:.1f} us a run "
           f"(batch run on 1 thread: {best['batch 1'] / n * 1e6:.1f} us)")
     if args.json:
         write_json(args.json, {
             "runs": n, "rounds": rounds, "load_before": load_before, "load_after": load_after,
-            "runs_per_s": rate, "planning_us_per_run": plan_s / n * 1e6,
+            "runs_per_s": rate, "cpu_s": cpu, "wall_s": best, "planning_us_per_run": plan_s / n * 1e6,
         })
     return 0
 
