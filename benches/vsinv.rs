@@ -37,6 +37,10 @@
 //!   `max_iterations`; the scenario converges only at 572), `(T(51) - T(1)) / 50` per
 //!   iteration. The 1-iteration run also pays the reference image and the tracker's start,
 //!   which cancel out.
+//! - `vision/render_ratio` (printed, not a criterion measurement): the render of a
+//!   `vision-12-6` frame against what the loop does with it, tracking its 12 dots and one
+//!   step of the invariant law on 12 points, timed in alternating rounds of one run (each
+//!   the fastest of 7 rounds), with the ratio render / (track + law); the target is below 20.
 //! - `choose_basis/{uniform,disk}/n`: [`vsinv::choose_basis`] (basis `"auto"`, the widest
 //!   triangle) of n = 10^3 .. 10^6 pixels uniform in a 640 x 480 image or in a disc
 //!   (about 3.4 n^(1/3) hull vertices); `choose_basis/circle/n`: n points on a circle, all
@@ -302,6 +306,94 @@ fn vision(c: &mut Criterion) {
     group.sample_size(10).measurement_time(Duration::from_secs(8));
     group.bench_function("iteration", |b| b.iter_custom(|iters| per_iteration(iters, &long, &short, LONG)));
     group.finish();
+    render_ratio(&renderer, &dots_view(&config), &image, &obs.pixels);
+}
+
+/// The 12 dots of `config`'s scene as drawn (discs of the scenario's radius).
+fn dots_view(config: &SimulationConfig) -> Dots {
+    let radius = config.vision.expect("[vision]").dot_radius;
+    let scene = &config.scene;
+    let discs: vsinv::Result<Vec<Disc>> = match scene.normals() {
+        Some(normals) => scene.points().iter().zip(normals).map(|(&p, &n)| Disc::new(p, n, radius)).collect(),
+        None => scene.points().iter().map(|&p| Disc::facing_reference(p, radius)).collect(),
+    };
+    Dots::new(discs.expect("discs"))
+}
+
+/// Whether the command line's filter (criterion's positional argument) selects `name`.
+fn selected(name: &str) -> bool {
+    let filters: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    filters.is_empty() || filters.iter().any(|f| name.contains(f.as_str()))
+}
+
+/// Seconds per call of each closure: `rounds` rounds alternate between them (so that they
+/// share the machine's load), a round times enough calls to take at least 20 ms, and each
+/// closure's figure is its fastest round.
+fn interleaved(fns: &mut [&mut dyn FnMut()], rounds: usize) -> Vec<f64> {
+    let calls: Vec<u32> = fns
+        .iter_mut()
+        .map(|f| {
+            let mut n = 1u32;
+            loop {
+                let start = Instant::now();
+                (0..n).for_each(|_| f());
+                if start.elapsed() >= Duration::from_millis(20) {
+                    return n;
+                }
+                n *= 2;
+            }
+        })
+        .collect();
+    let mut best = vec![f64::INFINITY; fns.len()];
+    for _ in 0..rounds {
+        for ((f, &n), b) in fns.iter_mut().zip(&calls).zip(&mut best) {
+            let start = Instant::now();
+            (0..n).for_each(|_| f());
+            *b = b.min(start.elapsed().as_secs_f64() / f64::from(n));
+        }
+    }
+    best
+}
+
+/// `vision/render_ratio`: the render of one `vision-12-6` frame against what the loop does
+/// with it (track its 12 dots, one step of the invariant law on 12 points), timed
+/// alternately in one run; the target is a render under 20 times tracking plus the law.
+fn render_ratio(renderer: &Renderer, dots: &Dots, image: &vsinv::vision::GreyImage, truth: &[[f64; 2]]) {
+    if !selected("vision/render_ratio") {
+        return;
+    }
+    let config = vision_12_6(1);
+    let k = config.camera.at(0.0).expect("servo camera");
+    let none = vsinv::Distortion::none();
+    let view = CameraView { pose: &config.start, intrinsics: &k, distortion: &none, size: (832, 624) };
+    // Agreement first: the frame timed is the frame the loop tracks, every dot found.
+    let mut frame = 1u64;
+    let rendered = renderer.render(dots, None, &view, frame).expect("render");
+    assert_eq!(&rendered.image, image, "the frame rendered here is not the bench's frame 1");
+    let mut tracker = DotTracker::new(image, truth, TrackerConfig::default()).expect("tracker");
+    let tracked = tracker.track(image).expect("track");
+    assert!(tracked.found.iter().all(|&f| f), "a dot was lost");
+    let s = scene(12);
+    let mut law = InvariantController::new(&s.reference, s.k_hat, s.basis, InvariantControllerConfig::default())
+        .expect("invariant controller");
+    law.step(&s.pixels, &s.depths).expect("invariant step");
+
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    let mut render = || {
+        frame += 1;
+        black_box(renderer.render(dots, None, &view, frame).expect("render"));
+    };
+    let mut track = || {
+        black_box(tracker.track(black_box(image)).expect("track"));
+    };
+    let mut step = || {
+        black_box(law.step(black_box(&s.pixels), black_box(&s.depths)).expect("step"));
+    };
+    let t = interleaved(&mut [&mut render, &mut track, &mut step], 7);
+    let (render_us, track_us, law_us) = (t[0] * 1e6, t[1] * 1e6, t[2] * 1e6);
+    println!("vision/render_ratio (832 x 624, 12 dots; fastest of 7 alternating rounds; load {})", load.trim());
+    println!("  render {render_us:.1} us, track {track_us:.2} us, invariant law {law_us:.2} us");
+    println!("  render / (track + law) = {:.1} (target: below 20)", render_us / (track_us + law_us));
 }
 
 fn config() -> Criterion {

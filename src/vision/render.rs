@@ -23,7 +23,7 @@ mod raster;
 use nalgebra::Isometry3;
 
 pub use self::canvas::{Canvas, Disc, Polygon};
-use self::noise::{Noise, frame_seed, noisy_background};
+use self::noise::{Noise, frame_seed, quantised_pool};
 use self::raster::{Paint, gaussian_kernel};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
@@ -117,12 +117,13 @@ pub struct CameraView<'a> {
     pub size: (u32, u32),
 }
 
-/// Renders images with one configuration (it keeps the noise tables).
+/// Renders images with one configuration (it keeps the noise pool and the blur kernel: build
+/// it once and render every frame with it).
 #[derive(Debug, Clone)]
 pub struct Renderer {
     config: RenderConfig,
-    /// `background + noise` quantised, indexed by 16 random bits.
-    noisy_background: Vec<u8>,
+    /// `background + noise` quantised for every draw of the noise pool (shared).
+    noise_pool: std::sync::Arc<[u8]>,
     /// The blur kernel (normalised), `2 radius + 1` taps.
     kernel: Vec<f32>,
 }
@@ -131,8 +132,8 @@ impl Renderer {
     /// A renderer for a configuration.
     pub fn new(config: RenderConfig) -> Result<Self> {
         config.validate()?;
-        let noisy_background = noisy_background(config.background, config.noise_sigma);
-        Ok(Self { config, noisy_background, kernel: gaussian_kernel(config.blur_sigma) })
+        let noise_pool = quantised_pool(config.background, config.noise_sigma);
+        Ok(Self { config, noise_pool, kernel: gaussian_kernel(config.blur_sigma) })
     }
 
     /// The configuration.
@@ -159,7 +160,7 @@ impl Renderer {
         let n = target.point_count();
         check_flags("visible", visible.map_or(n, <[bool]>::len), n)?;
         let noise = Noise {
-            noisy_background: &self.noisy_background,
+            pool: &self.noise_pool,
             background: self.config.background,
             sigma: self.config.noise_sigma,
             seed: frame_seed(self.config.seed, frame),

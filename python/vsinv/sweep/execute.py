@@ -38,12 +38,16 @@ def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
     """The chunk's scenarios as JSON texts. A run's dict shares the sections it does not
     change with ``base`` (same objects), so those are serialised once per chunk."""
     cache: dict[int, str] = {id(v): json.dumps(v) for v in base.values()}
+    names: dict[str, str] = {k: json.dumps(k) + ":" for k in base}  # keys repeat in every run
     out = []
     for d in chunk:
         parts = []
         for k, v in d.items():
             text = cache.get(id(v)) if base.get(k) is v else None
-            parts.append(json.dumps(k) + ":" + (text if text is not None else json.dumps(v)))
+            name = names.get(k)
+            if name is None:
+                name = names[k] = json.dumps(k) + ":"
+            parts.append(name + (text if text is not None else json.dumps(v)))
         out.append("{" + ",".join(parts) + "}")
     return out
 

@@ -3,6 +3,7 @@ principal_point_error, roll_deg), applied to a copy of the base scenario."""
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from typing import Any, Callable, Union
@@ -211,12 +212,20 @@ def _apply_principal_point_error(d: dict[str, Any], px: float) -> None:
     d["estimate"] = est
 
 
+@functools.lru_cache(maxsize=64)
+def _start_rotation(thetau_deg: tuple[float, ...]) -> npt.NDArray[np.float64]:
+    """The pose of a start rotation (theta-u degrees): a sweep asks for its base's on every run."""
+    pose = pose_from_position_thetau(_ORIGIN, np.radians(np.asarray(thetau_deg, dtype=np.float64)))
+    pose.setflags(write=False)
+    return pose
+
+
 def _apply_roll(d: dict[str, Any], deg: float) -> None:
     """R' = R Rz(roll), written back as theta-u degrees (angle in [0, 180])."""
     start = dict(d["start"])
     # rotation_deg (older files: rotation, read as degrees too)
     thetau_deg = start.pop("rotation", None) or start.get("rotation_deg", [0.0, 0.0, 0.0])
-    rotation = pose_from_position_thetau(_ORIGIN, np.radians(np.asarray(thetau_deg, dtype=np.float64)))
+    rotation = _start_rotation(tuple(float(x) for x in thetau_deg))
     roll = pose_from_position_thetau(_ORIGIN, [0.0, 0.0, math.radians(deg)])
     start["rotation_deg"] = np.degrees(thetau_from_pose(rotation @ roll)[1]).tolist()
     d["start"] = start

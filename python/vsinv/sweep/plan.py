@@ -17,6 +17,11 @@ from .distributions import Distribution
 from .keys import _apply, _numeric_array, _split
 
 
+def _listed(v: Any) -> Any:
+    """A column's value as ``_item`` gives it (tuples of list values back to lists)."""
+    return [_native(x) for x in v] if isinstance(v, tuple) else v
+
+
 #: The most runs one sweep plans (its columns are allocated up front).
 MAX_RUNS = 2**31
 
@@ -81,15 +86,22 @@ class _Plan:
         return {k: _item(self.columns[k], i) for k in self.keys}
 
     def scenario(self, i: int) -> dict[str, Any]:
-        d = _apply(self.base, self.values(i), self.paths)
-        if not self.seed_varied:
-            noise = dict(d.get("noise") or {})
-            noise["seed"] = int(self.columns["seed"][i])
-            d["noise"] = noise
-        return d
+        return self.scenarios(i, i + 1)[0]
 
     def scenarios(self, start: int, stop: int) -> list[dict[str, Any]]:
-        return [self.scenario(i) for i in range(start, stop)]
+        """Runs ``start`` to ``stop - 1``, as :meth:`scenario` builds them (the columns are
+        read as Python values once for the chunk rather than one item at a time)."""
+        cols = {k: self.columns[k][start:stop].tolist() for k in self.keys}
+        seeds = self.columns["seed"][start:stop].tolist()
+        out = []
+        for j in range(stop - start):
+            d = _apply(self.base, {k: _listed(cols[k][j]) for k in self.keys}, self.paths)
+            if not self.seed_varied:
+                noise = dict(d.get("noise") or {})
+                noise["seed"] = int(seeds[j])
+                d["noise"] = noise
+            out.append(d)
+        return out
 
 
 def _plan(

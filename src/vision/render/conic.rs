@@ -76,6 +76,23 @@ impl Shape for ImageEllipse {
             2.0 * (c[(0, 1)] * u + c[(1, 1)] * v + c[(1, 2)]),
         )
     }
+
+    #[inline]
+    fn quadratic_scale(&self, u: f64, v: f64) -> Option<f64> {
+        let c = self.conic.map(f64::abs);
+        Some(
+            c[(0, 0)] * u * u
+                + 2.0 * c[(0, 1)] * u * v
+                + c[(1, 1)] * v * v
+                + 2.0 * (c[(0, 2)] * u + c[(1, 2)] * v)
+                + c[(2, 2)],
+        )
+    }
+
+    #[inline]
+    fn second_order(&self) -> [f64; 3] {
+        [self.conic[(0, 0)], self.conic[(0, 1)], self.conic[(1, 1)]]
+    }
 }
 
 /// The roots of `a - 2 b x + c x^2 = 0` (a tangent line `x = const` of a dual conic), sorted.
