@@ -138,18 +138,12 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
         });
     }
     check_config(config)?;
-    let (lo, hi) = image.pixels().fold((u8::MAX, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
-    if lo == hi {
-        return Err(Error::InvalidImage {
-            what: "image".into(),
-            reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
-        });
-    }
-    crate::parallel::install(|| dots_of(image, config))
+    crate::parallel::install(|| dots_of(image, config))?
 }
 
-/// [`detect_dots`] of a checked image and configuration, on the calling thread's rayon pool.
-fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> {
+/// [`detect_dots`] of a checked image and configuration, on the calling thread's rayon pool;
+/// a uniform image (found by the labelling's pass: no pass of its own) is an error.
+fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Vec<Dot>> {
     let dark = config.polarity.dark_dots(image);
     let thresholds = match config.threshold {
         Some(t) if dark => TileThresholds::uniform(image, 255 - t),
@@ -157,6 +151,14 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> 
         None => TileThresholds::local(image, dark, config.min_contrast),
     };
     let labelling = label(image, &thresholds, dark);
+    if let [lo, hi] = labelling.range
+        && lo == hi
+    {
+        return Err(Error::InvalidImage {
+            what: "image".into(),
+            reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
+        });
+    }
     let whole = Window::full(image);
     let mut dots: Vec<Dot> = labelling
         .components
@@ -182,7 +184,7 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> 
         })
         .collect();
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
-    dots
+    Ok(dots)
 }
 
 fn check_config(config: &DetectConfig) -> Result<()> {

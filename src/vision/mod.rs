@@ -44,6 +44,7 @@
 
 pub mod background;
 pub mod centroid;
+pub mod coarse;
 pub mod compressed;
 pub mod detector;
 pub mod dots;
@@ -52,9 +53,11 @@ pub mod image;
 pub mod image_servo;
 pub mod polarity;
 pub mod render;
+pub mod row_scan;
 pub mod runs;
 pub mod tags;
 pub mod target;
+pub mod tile_stats;
 pub mod tracker;
 
 pub use self::detector::dot_tracking::DotTracking;
