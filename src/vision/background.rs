@@ -16,7 +16,7 @@
 //!
 //! All levels are in the dots' domain: the grey level for light dots, `255 - g` for dark ones.
 
-use crate::vision::coarse::Pyramid;
+use crate::vision::coarse::{Pyramid, Tile};
 use crate::vision::image::{GreyBuffer, Pixels};
 use crate::vision::tile_stats::{TileStats, tile_statistics};
 
@@ -57,11 +57,8 @@ impl TileThresholds {
                 let b = lower_quartile(&medians, columns, rows, row, column);
                 let p = largest(&peaks, columns, rows, row, column);
                 let fine = (threshold(b, p, min_contrast), b);
-                let (level, b) = if flat(b, p, min_contrast) {
-                    coarse.inside_large_dot(row, column, fine, min_contrast)
-                } else {
-                    fine
-                };
+                let tile = Tile { row, column, flat: flat(b, p, min_contrast) };
+                let (level, b) = coarse.inside_large_dot(tile, fine, min_contrast);
                 levels.push(level);
                 background.push(b);
             }
@@ -142,8 +139,9 @@ fn order_statistic(values: &[u8; AROUND], k: usize) -> u8 {
     let mut m = 0u8;
     for bit in (0..8).rev() {
         let candidate = m | (1 << bit);
-        let below: usize = values.iter().map(|&x| usize::from(x < candidate)).sum();
-        if below <= k {
+        // Counted in bytes (at most AROUND): one byte lane per value.
+        let below = values.iter().fold(0u8, |n, &x| n.wrapping_add(u8::from(x < candidate)));
+        if usize::from(below) <= k {
             m = candidate;
         }
     }

@@ -9,11 +9,15 @@
 //! with the median of its four children's medians (the lower one of an even count) and the
 //! largest of their peaks; per coarse tile, the background (the lower quartile of the 5 x 5
 //! coarse tiles around it) and the peak (the largest of the 3 x 3), as at level 0. A tile
-//! whose own neighbourhood is flat (no contrast beyond `min_contrast`) takes the threshold of
-//! the finest level that does show contrast (half way between its background and peak) when
-//! that is lower than its own: the inside of a dot of any size is then above it. A flat tile
-//! of a plain background keeps its own threshold (bit for bit): a coarser background is no
-//! higher there, so the coarser threshold, at least `min_contrast` above it, is not lower.
+//! takes the threshold of the finest level that shows contrast (half way between its
+//! background and peak) when that is lower than its own and the tile is inside a dot at that
+//! level: its own neighbourhood is flat (no contrast beyond `min_contrast`), or its own
+//! background is above that threshold (its whole neighbourhood is inside the dot: a dot with
+//! marks printed inside, whose neighbourhood is not flat). The inside of a dot of any size is
+//! then above its threshold. A tile of a plain background keeps its own threshold (bit for
+//! bit): its background is under the coarser threshold, and when flat, a coarser background
+//! is no higher there, so the coarser threshold, at least `min_contrast` above it, is not
+//! lower.
 
 use crate::vision::background::{flat, largest, lower_quartile, threshold};
 
@@ -50,19 +54,32 @@ impl Pyramid {
         Self { levels }
     }
 
-    /// The threshold and background of flat tile `(row, column)`, whose own are `fine` (see
-    /// the module's documentation).
-    pub fn inside_large_dot(&self, row: usize, column: usize, fine: (u8, u8), min_contrast: u8) -> (u8, u8) {
+    /// The threshold and background of `tile`, whose own are `fine` (see the module's
+    /// documentation): those of the finest level with contrast, when they are lower and the
+    /// tile is flat or its own background is above them (its neighbourhood is inside a dot).
+    pub fn inside_large_dot(&self, tile: Tile, fine: (u8, u8), min_contrast: u8) -> (u8, u8) {
         for level in &self.levels {
-            let i = (row >> level.shift) * level.columns + (column >> level.shift);
+            let i = (tile.row >> level.shift) * level.columns + (tile.column >> level.shift);
             let (b, p) = (level.background[i], level.peak[i]);
             if !flat(b, p, min_contrast) {
                 let t = threshold(b, p, min_contrast);
-                return if t < fine.0 { (t, b) } else { fine };
+                let inside = tile.flat || fine.1 > t;
+                return if t < fine.0 && inside { (t, b) } else { fine };
             }
         }
         fine
     }
+}
+
+/// A tile of level 0, as the pyramid sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct Tile {
+    /// Row of tiles.
+    pub row: usize,
+    /// Column of tiles.
+    pub column: usize,
+    /// Whether its neighbourhood shows no contrast beyond `min_contrast`.
+    pub flat: bool,
 }
 
 /// The next level: each coarse tile has the lower median of its (up to four) children's
@@ -117,8 +134,12 @@ mod tests {
         let medians: Vec<u8> = (0..256).map(|i| if inside(i / 16, i % 16) { 200 } else { 40 }).collect();
         let pyramid = Pyramid::new(&medians, &medians, columns, rows);
         let fine = (220, 200);
-        assert_eq!(pyramid.inside_large_dot(8, 8, fine, 20), (120, 40));
-        // A flat tile of the background keeps its own threshold.
-        assert_eq!(pyramid.inside_large_dot(0, 0, (60, 40), 20), (60, 40));
+        let tile = |row, column, flat| Tile { row, column, flat };
+        assert_eq!(pyramid.inside_large_dot(tile(8, 8, true), fine, 20), (120, 40));
+        // Not flat (a mark inside the dot): the coarse threshold still, its own background being above.
+        assert_eq!(pyramid.inside_large_dot(tile(8, 8, false), (180, 150), 20), (120, 40));
+        // A tile of the background keeps its own threshold, flat or not.
+        assert_eq!(pyramid.inside_large_dot(tile(0, 0, true), (60, 40), 20), (60, 40));
+        assert_eq!(pyramid.inside_large_dot(tile(2, 2, false), (140, 40), 20), (140, 40));
     }
 }

@@ -473,6 +473,36 @@ mod tests {
     }
 
     #[test]
+    fn a_dot_wider_than_the_tile_neighbourhood_is_found_at_its_centre() {
+        // A disc 220 px across (the local threshold's neighbourhood is 160 px: its inside is
+        // thresholded at a coarser level; its own pixels are summed in lanes) on a lighting
+        // gradient, 4 x 4 supersampled coverage: found alone, at the closed-form centre.
+        let centre = [161.3, 158.6];
+        let image = GreyImage::from_fn(320, 320, |u, v| {
+            let mut inside = 0;
+            for i in 0..4 {
+                for j in 0..4 {
+                    let (x, y) = (f64::from(u) - 0.375 + f64::from(i) / 4.0, f64::from(v) - 0.375 + f64::from(j) / 4.0);
+                    inside += i32::from((x - centre[0]).hypot(y - centre[1]) < 110.0);
+                }
+            }
+            let g = 20.0 + 0.2 * f64::from(u) + 0.1 * f64::from(v) + 150.0 * f64::from(inside) / 16.0;
+            image::Luma([g.round() as u8])
+        });
+        for dark in [false, true] {
+            let (image, polarity) = if dark {
+                (GreyImage::from_fn(320, 320, |u, v| image::Luma([255 - image.get_pixel(u, v)[0]])), Polarity::Dark)
+            } else {
+                (image.clone(), Polarity::Light)
+            };
+            let dots = detect_dots(&image, &DetectConfig { polarity, ..Default::default() }).unwrap();
+            assert_eq!(dots.len(), 1, "dark {dark}: {dots:?}");
+            let d = dots[0].centroid;
+            assert!((d[0] - centre[0]).hypot(d[1] - centre[1]) < 0.02, "dark {dark}: {d:?}");
+        }
+    }
+
+    #[test]
     fn background_noise_around_a_dot_does_not_weigh_on_its_centroid() {
         // A disc on a background with +-3 levels of checkerboard noise (ring RMS 3): a pixel of
         // the box at 5 levels above the background is noise and leaves the centroid as it is;
