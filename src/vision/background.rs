@@ -4,7 +4,8 @@
 //! cut by the gradient).
 //!
 //! The image is cut into square tiles of [`TILE`] pixels. Per tile: the median of a 2 x 2
-//! subsample (a histogram) and the largest level. Per tile again, over its neighbourhood:
+//! subsample and the largest level ([`tile_stats`](super::tile_stats)). Per tile again, over
+//! its neighbourhood:
 //! - the background `b`: the lower quartile of the tile medians of the 5 x 5 tiles around it
 //!   (a dot, or a cluster of dots, may fill most of a tile and some of its neighbours: the
 //!   lower quartile of the neighbourhood still falls on the background, as long as a quarter
@@ -12,7 +13,9 @@
 //! - the peak `p`: the largest level of the 3 x 3 tiles around it;
 //! - the threshold `b + max(min_contrast, (p - b) / 2)`: half way between the background and
 //!   the brightest dot nearby (the full width at half maximum of a blurred dot), never closer
-//!   to the background than `min_contrast` grey levels (noise and texture).
+//!   to the background than `min_contrast` grey levels (noise and texture);
+//! - inside a dot wider than that neighbourhood, the threshold of a coarser level
+//!   ([`coarse`](super::coarse)).
 //!
 //! All levels are in the dots' domain: the grey level for light dots, `255 - g` for dark ones.
 
