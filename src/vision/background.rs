@@ -55,9 +55,10 @@ impl TileThresholds {
         let coarse = Pyramid::new(&medians, &peaks, columns, rows);
         let mut levels = Vec::with_capacity(columns * rows);
         let mut background = Vec::with_capacity(columns * rows);
+        let mut quartiles = Vec::with_capacity(columns);
         for row in 0..rows {
-            for column in 0..columns {
-                let b = lower_quartile(&medians, columns, rows, row, column);
+            lower_quartiles_of_row(&medians, columns, rows, row, &mut quartiles);
+            for (column, &b) in quartiles.iter().enumerate() {
                 let p = largest(&peaks, columns, rows, row, column);
                 let fine = (threshold(b, p, min_contrast), b);
                 let tile = Tile { row, column, flat: flat(b, p, min_contrast) };
@@ -116,6 +117,64 @@ fn neighbourhood(
     (r0..=r1, c0..=c1)
 }
 
+/// [`lower_quartile`] of every tile of row `row`, left to right, into `out`: a histogram of
+/// the neighbourhood slid along the row (Huang's running median: 2 x 5 updates a tile), the
+/// quartile moved from the last tile's (a step or two where the background changes slowly).
+fn lower_quartiles_of_row(medians: &[u8], columns: usize, rows: usize, row: usize, out: &mut Vec<u8>) {
+    out.clear();
+    let (r0, r1) = (row.saturating_sub(BACKGROUND_REACH), (row + BACKGROUND_REACH).min(rows - 1));
+    let mut window = Window { histogram: [0; 256], m: 0, below: 0, count: 0 };
+    let column_of = |c: usize| (r0..=r1).map(move |r| medians[r * columns + c]);
+    for column in 0..BACKGROUND_REACH.min(columns) {
+        column_of(column).for_each(|x| window.add(x));
+    }
+    for column in 0..columns {
+        if column + BACKGROUND_REACH < columns {
+            column_of(column + BACKGROUND_REACH).for_each(|x| window.add(x));
+        }
+        if column > BACKGROUND_REACH {
+            column_of(column - BACKGROUND_REACH - 1).for_each(|x| window.remove(x));
+        }
+        out.push(window.order_statistic((window.count - 1) / 4));
+    }
+}
+
+/// A histogram of levels and a level `m` with the count of the values below it.
+struct Window {
+    histogram: [u32; 256],
+    m: usize,
+    below: usize,
+    count: usize,
+}
+
+impl Window {
+    fn add(&mut self, x: u8) {
+        self.histogram[usize::from(x)] += 1;
+        self.count += 1;
+        self.below += usize::from(usize::from(x) < self.m);
+    }
+
+    fn remove(&mut self, x: u8) {
+        self.histogram[usize::from(x)] -= 1;
+        self.count -= 1;
+        self.below -= usize::from(usize::from(x) < self.m);
+    }
+
+    /// The `k`-th smallest value (`k < count`): the level with `below <= k < below + its
+    /// count`, `m` moved there.
+    fn order_statistic(&mut self, k: usize) -> u8 {
+        while self.below > k {
+            self.m -= 1;
+            self.below -= self.histogram[self.m] as usize;
+        }
+        while self.below + self.histogram[self.m] as usize <= k {
+            self.below += self.histogram[self.m] as usize;
+            self.m += 1;
+        }
+        self.m as u8
+    }
+}
+
 /// Values of a neighbourhood, padded with 255 (above any candidate of [`order_statistic`]).
 const AROUND: usize = 32;
 
@@ -164,6 +223,27 @@ pub(crate) fn largest(peaks: &[u8], columns: usize, rows: usize, row: usize, col
 mod tests {
     use super::*;
     use crate::vision::image::GreyImage;
+
+    #[test]
+    fn sliding_quartiles_are_each_tiles_own() {
+        // Grids of random medians (ties, narrow and wide spreads, one row or column, smaller
+        // than the neighbourhood): each row's slid quartiles against the tile-by-tile ones.
+        let mut state = 11u64;
+        for (columns, rows, spread) in [(9usize, 7usize, 256u64), (1, 5, 9), (6, 1, 256), (40, 12, 3), (3, 3, 50)] {
+            let medians: Vec<u8> = (0..columns * rows)
+                .map(|_| {
+                    state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    ((state >> 33) % spread) as u8
+                })
+                .collect();
+            let mut row_out = Vec::new();
+            for row in 0..rows {
+                lower_quartiles_of_row(&medians, columns, rows, row, &mut row_out);
+                let each: Vec<u8> = (0..columns).map(|c| lower_quartile(&medians, columns, rows, row, c)).collect();
+                assert_eq!(row_out, each, "{columns} x {rows}, row {row}");
+            }
+        }
+    }
 
     #[test]
     fn order_statistics_are_those_of_a_sort() {
