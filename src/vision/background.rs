@@ -4,7 +4,8 @@
 //! cut by the gradient).
 //!
 //! The image is cut into square tiles of [`TILE`] pixels. Per tile: the median of a 2 x 2
-//! subsample (a histogram) and the largest level. Per tile again, over its neighbourhood:
+//! subsample and the largest level ([`tile_stats`](super::tile_stats)). Per tile again, over
+//! its neighbourhood:
 //! - the background `b`: the lower quartile of the tile medians of the 5 x 5 tiles around it
 //!   (a dot, or a cluster of dots, may fill most of a tile and some of its neighbours: the
 //!   lower quartile of the neighbourhood still falls on the background, as long as a quarter
@@ -12,18 +13,22 @@
 //! - the peak `p`: the largest level of the 3 x 3 tiles around it;
 //! - the threshold `b + max(min_contrast, (p - b) / 2)`: half way between the background and
 //!   the brightest dot nearby (the full width at half maximum of a blurred dot), never closer
-//!   to the background than `min_contrast` grey levels (noise and texture).
+//!   to the background than `min_contrast` grey levels (noise and texture);
+//! - inside a dot wider than that neighbourhood, the threshold of a coarser level
+//!   ([`coarse`](super::coarse)).
 //!
 //! All levels are in the dots' domain: the grey level for light dots, `255 - g` for dark ones.
 
+use crate::vision::coarse::{Pyramid, Tile};
 use crate::vision::image::{GreyBuffer, Pixels};
+use crate::vision::tile_stats::{TileStats, tile_statistics};
 
 /// Side of a tile, pixels.
 pub const TILE: u32 = 32;
 /// Tiles on each side of a tile in its background neighbourhood (5 x 5 tiles).
-const BACKGROUND_REACH: usize = 2;
+pub const BACKGROUND_REACH: usize = 2;
 /// Tiles on each side of a tile in its peak neighbourhood (3 x 3 tiles).
-const PEAK_REACH: usize = 1;
+pub const PEAK_REACH: usize = 1;
 
 /// One threshold (and background level) per tile, in the dots' domain.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,15 +51,19 @@ impl TileThresholds {
     /// The local thresholds of an image (see the module's documentation).
     pub fn local<C: Pixels>(image: &GreyBuffer<C>, dark: bool, min_contrast: u8) -> Self {
         let (columns, rows) = grid(image);
-        let stats = tile_statistics(image, dark, columns, rows);
+        let TileStats { medians, peaks } = tile_statistics(image, dark, columns, rows);
+        let coarse = Pyramid::new(&medians, &peaks, columns, rows);
         let mut levels = Vec::with_capacity(columns * rows);
         let mut background = Vec::with_capacity(columns * rows);
+        let mut quartiles = Vec::with_capacity(columns);
         for row in 0..rows {
-            for column in 0..columns {
-                let b = lower_quartile(&stats, columns, rows, row, column);
-                let p = neighbourhood(columns, rows, row, column, PEAK_REACH).map(|i| stats[i].peak).max().unwrap_or(b);
-                let half = p.saturating_sub(b) / 2;
-                levels.push(b.saturating_add(half.max(min_contrast)));
+            lower_quartiles_of_row(&medians, columns, rows, row, &mut quartiles);
+            for (column, &b) in quartiles.iter().enumerate() {
+                let p = largest(&peaks, columns, rows, row, column);
+                let fine = (threshold(b, p, min_contrast), b);
+                let tile = Tile { row, column, flat: flat(b, p, min_contrast) };
+                let (level, b) = coarse.inside_large_dot(tile, fine, min_contrast);
+                levels.push(level);
                 background.push(b);
             }
         }
@@ -82,73 +91,131 @@ fn grid<C: Pixels>(image: &GreyBuffer<C>) -> (usize, usize) {
     (image.width().div_ceil(TILE) as usize, image.height().div_ceil(TILE) as usize)
 }
 
-/// The indices of the tiles within `reach` tiles of `(row, column)`, clipped to the grid.
-fn neighbourhood(columns: usize, rows: usize, row: usize, column: usize, reach: usize) -> impl Iterator<Item = usize> {
+/// Half way between the background `b` and the peak `p`, at least `min_contrast` above `b`.
+pub(crate) fn threshold(b: u8, p: u8, min_contrast: u8) -> u8 {
+    b.saturating_add((p.saturating_sub(b) / 2).max(min_contrast))
+}
+
+/// Whether the neighbourhood of a tile shows no contrast beyond `min_contrast` (its threshold
+/// is `b + min_contrast`): a plain background, or the inside of a dot larger than the
+/// neighbourhood.
+pub(crate) fn flat(b: u8, p: u8, min_contrast: u8) -> bool {
+    p.saturating_sub(b) / 2 <= min_contrast
+}
+
+/// The rows and columns of the tiles within `reach` tiles of `(row, column)`, clipped to the
+/// grid.
+fn neighbourhood(
+    columns: usize,
+    rows: usize,
+    row: usize,
+    column: usize,
+    reach: usize,
+) -> (std::ops::RangeInclusive<usize>, std::ops::RangeInclusive<usize>) {
     let (r0, r1) = (row.saturating_sub(reach), (row + reach).min(rows - 1));
     let (c0, c1) = (column.saturating_sub(reach), (column + reach).min(columns - 1));
-    (r0..=r1).flat_map(move |r| (c0..=c1).map(move |c| r * columns + c))
+    (r0..=r1, c0..=c1)
 }
 
-/// The lower quartile of the tile medians around a tile.
-fn lower_quartile(stats: &[TileStats], columns: usize, rows: usize, row: usize, column: usize) -> u8 {
-    let mut medians = [0u8; (2 * BACKGROUND_REACH + 1) * (2 * BACKGROUND_REACH + 1)];
-    let tiles = neighbourhood(columns, rows, row, column, BACKGROUND_REACH);
-    let n = medians.iter_mut().zip(tiles).map(|(m, i)| *m = stats[i].median).count();
-    let medians = &mut medians[..n];
-    medians.sort_unstable();
-    medians[(n - 1) / 4]
-}
-
-/// A tile's median (of its 2 x 2 subsample) and largest level.
-#[derive(Debug, Clone, Copy, Default)]
-struct TileStats {
-    median: u8,
-    peak: u8,
-}
-
-/// The statistics of every tile, row-major; the rows of tiles in parallel (rayon).
-fn tile_statistics<C: Pixels>(image: &GreyBuffer<C>, dark: bool, columns: usize, rows: usize) -> Vec<TileStats> {
-    use rayon::prelude::*;
-    let mut stats = vec![TileStats::default(); columns * rows];
-    stats.par_chunks_mut(columns).enumerate().for_each(|(row, out)| tile_row(image, dark, row as u32, out));
-    stats
-}
-
-/// The statistics of the tiles of one row of tiles.
-fn tile_row<C: Pixels>(image: &GreyBuffer<C>, dark: bool, row: u32, out: &mut [TileStats]) {
-    let (width, height) = (image.width() as usize, image.height());
-    let flip = if dark { 255u8 } else { 0 };
-    let data: &[u8] = image.as_raw();
-    let (v0, v1) = (row * TILE, ((row + 1) * TILE).min(height));
-    for (column, tile) in out.iter_mut().enumerate() {
-        let (u0, u1) = (column * TILE as usize, ((column + 1) * TILE as usize).min(width));
-        let mut histogram = [0u16; 256];
-        let mut peak = 0u8;
-        let mut counted = 0u32;
-        for v in v0..v1 {
-            let line = &data[v as usize * width + u0..v as usize * width + u1];
-            peak = peak.max(line.iter().map(|&g| g ^ flip).max().unwrap_or(0));
-            if (v - v0) % 2 == 0 {
-                for &g in line.iter().step_by(2) {
-                    histogram[usize::from(g ^ flip)] += 1;
-                    counted += 1;
-                }
-            }
+/// [`lower_quartile`] of every tile of row `row`, left to right, into `out`: a histogram of
+/// the neighbourhood slid along the row (Huang's running median: 2 x 5 updates a tile), the
+/// quartile moved from the last tile's (a step or two where the background changes slowly).
+fn lower_quartiles_of_row(medians: &[u8], columns: usize, rows: usize, row: usize, out: &mut Vec<u8>) {
+    out.clear();
+    let (r0, r1) = (row.saturating_sub(BACKGROUND_REACH), (row + BACKGROUND_REACH).min(rows - 1));
+    let mut window = Window { histogram: [0; 256], m: 0, below: 0, count: 0 };
+    let column_of = |c: usize| (r0..=r1).map(move |r| medians[r * columns + c]);
+    for column in 0..BACKGROUND_REACH.min(columns) {
+        column_of(column).for_each(|x| window.add(x));
+    }
+    for column in 0..columns {
+        if column + BACKGROUND_REACH < columns {
+            column_of(column + BACKGROUND_REACH).for_each(|x| window.add(x));
         }
-        *tile = TileStats { median: histogram_median(&histogram, counted), peak };
+        if column > BACKGROUND_REACH {
+            column_of(column - BACKGROUND_REACH - 1).for_each(|x| window.remove(x));
+        }
+        out.push(window.order_statistic((window.count - 1) / 4));
     }
 }
 
-fn histogram_median(histogram: &[u16; 256], total: u32) -> u8 {
-    let half = total.div_ceil(2);
-    let mut seen = 0u32;
-    for (level, &count) in histogram.iter().enumerate() {
-        seen += u32::from(count);
-        if seen >= half {
-            return level as u8;
+/// A histogram of levels and a level `m` with the count of the values below it.
+struct Window {
+    histogram: [u32; 256],
+    m: usize,
+    below: usize,
+    count: usize,
+}
+
+impl Window {
+    fn add(&mut self, x: u8) {
+        self.histogram[usize::from(x)] += 1;
+        self.count += 1;
+        self.below += usize::from(usize::from(x) < self.m);
+    }
+
+    fn remove(&mut self, x: u8) {
+        self.histogram[usize::from(x)] -= 1;
+        self.count -= 1;
+        self.below -= usize::from(usize::from(x) < self.m);
+    }
+
+    /// The `k`-th smallest value (`k < count`): the level with `below <= k < below + its
+    /// count`, `m` moved there.
+    fn order_statistic(&mut self, k: usize) -> u8 {
+        while self.below > k {
+            self.m -= 1;
+            self.below -= self.histogram[self.m] as usize;
+        }
+        while self.below + self.histogram[self.m] as usize <= k {
+            self.below += self.histogram[self.m] as usize;
+            self.m += 1;
+        }
+        self.m as u8
+    }
+}
+
+/// Values of a neighbourhood, padded with 255 (above any candidate of [`order_statistic`]).
+const AROUND: usize = 32;
+
+/// The lower quartile of the tile medians around a tile ([`BACKGROUND_REACH`] tiles on each
+/// side).
+pub(crate) fn lower_quartile(medians: &[u8], columns: usize, rows: usize, row: usize, column: usize) -> u8 {
+    const { assert!((2 * BACKGROUND_REACH + 1) * (2 * BACKGROUND_REACH + 1) <= AROUND) };
+    let mut around = [u8::MAX; AROUND];
+    let (rs, cs) = neighbourhood(columns, rows, row, column, BACKGROUND_REACH);
+    let mut n = 0;
+    for r in rs {
+        for c in cs.clone() {
+            around[n] = medians[r * columns + c];
+            n += 1;
         }
     }
-    255
+    order_statistic(&around, (n - 1) / 4)
+}
+
+/// The `k`-th smallest of `values` (from 0): the largest `m` with at most `k` values below
+/// it, built from its highest bit down (the value a sort would put at `k`; the counts
+/// vectorise).
+fn order_statistic(values: &[u8; AROUND], k: usize) -> u8 {
+    let mut m = 0u8;
+    for bit in (0..8).rev() {
+        let candidate = m | (1 << bit);
+        // Counted in bytes (at most AROUND): one byte lane per value.
+        let below = values.iter().fold(0u8, |n, &x| n.wrapping_add(u8::from(x < candidate)));
+        if usize::from(below) <= k {
+            m = candidate;
+        }
+    }
+    m
+}
+
+/// The largest peak around a tile ([`PEAK_REACH`] tiles on each side).
+pub(crate) fn largest(peaks: &[u8], columns: usize, rows: usize, row: usize, column: usize) -> u8 {
+    let (rs, cs) = neighbourhood(columns, rows, row, column, PEAK_REACH);
+    rs.map(|r| peaks[r * columns + cs.start()..=r * columns + cs.end()].iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -156,6 +223,46 @@ fn histogram_median(histogram: &[u16; 256], total: u32) -> u8 {
 mod tests {
     use super::*;
     use crate::vision::image::GreyImage;
+
+    #[test]
+    fn sliding_quartiles_are_each_tiles_own() {
+        // Grids of random medians (ties, narrow and wide spreads, one row or column, smaller
+        // than the neighbourhood): each row's slid quartiles against the tile-by-tile ones.
+        let mut state = 11u64;
+        for (columns, rows, spread) in [(9usize, 7usize, 256u64), (1, 5, 9), (6, 1, 256), (40, 12, 3), (3, 3, 50)] {
+            let medians: Vec<u8> = (0..columns * rows)
+                .map(|_| {
+                    state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    ((state >> 33) % spread) as u8
+                })
+                .collect();
+            let mut row_out = Vec::new();
+            for row in 0..rows {
+                lower_quartiles_of_row(&medians, columns, rows, row, &mut row_out);
+                let each: Vec<u8> = (0..columns).map(|c| lower_quartile(&medians, columns, rows, row, c)).collect();
+                assert_eq!(row_out, each, "{columns} x {rows}, row {row}");
+            }
+        }
+    }
+
+    #[test]
+    fn order_statistics_are_those_of_a_sort() {
+        let mut state = 3u64;
+        for n in 1..=25 {
+            for spread in [4u64, 256] {
+                let mut values = [u8::MAX; AROUND];
+                for x in &mut values[..n] {
+                    state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                    *x = ((state >> 33) % spread) as u8 * if spread == 4 { 60 } else { 1 };
+                }
+                let mut sorted = values[..n].to_vec();
+                sorted.sort_unstable();
+                for (k, &expected) in sorted.iter().enumerate() {
+                    assert_eq!(order_statistic(&values, k), expected, "n {n}, k {k}: {sorted:?}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn a_gradient_background_gets_thresholds_that_follow_it() {

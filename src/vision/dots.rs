@@ -138,18 +138,12 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
         });
     }
     check_config(config)?;
-    let (lo, hi) = image.pixels().fold((u8::MAX, 0u8), |(lo, hi), p| (lo.min(p[0]), hi.max(p[0])));
-    if lo == hi {
-        return Err(Error::InvalidImage {
-            what: "image".into(),
-            reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
-        });
-    }
-    crate::parallel::install(|| dots_of(image, config))
+    crate::parallel::install(|| dots_of(image, config))?
 }
 
-/// [`detect_dots`] of a checked image and configuration, on the calling thread's rayon pool.
-fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> {
+/// [`detect_dots`] of a checked image and configuration, on the calling thread's rayon pool;
+/// a uniform image (found by the labelling's pass: no pass of its own) is an error.
+fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Vec<Dot>> {
     let dark = config.polarity.dark_dots(image);
     let thresholds = match config.threshold {
         Some(t) if dark => TileThresholds::uniform(image, 255 - t),
@@ -157,6 +151,14 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> 
         None => TileThresholds::local(image, dark, config.min_contrast),
     };
     let labelling = label(image, &thresholds, dark);
+    if let [lo, hi] = labelling.range
+        && lo == hi
+    {
+        return Err(Error::InvalidImage {
+            what: "image".into(),
+            reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
+        });
+    }
     let whole = Window::full(image);
     let mut dots: Vec<Dot> = labelling
         .components
@@ -182,7 +184,7 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Vec<Dot> 
         })
         .collect();
     dots.sort_by(|a, b| a.centroid[1].total_cmp(&b.centroid[1]).then(a.centroid[0].total_cmp(&b.centroid[0])));
-    dots
+    Ok(dots)
 }
 
 fn check_config(config: &DetectConfig) -> Result<()> {
@@ -468,6 +470,36 @@ mod tests {
         let flat = disc_on_gradient(centre, 6.0, 120.0, [40.0, 0.0, 0.0]);
         let d = detect_dots(&flat, &DetectConfig::default()).unwrap()[0].centroid;
         assert!((d[0] - centre[0]).hypot(d[1] - centre[1]) < 0.02, "{d:?}");
+    }
+
+    #[test]
+    fn a_dot_wider_than_the_tile_neighbourhood_is_found_at_its_centre() {
+        // A disc 220 px across (the local threshold's neighbourhood is 160 px: its inside is
+        // thresholded at a coarser level; its own pixels are summed in lanes) on a lighting
+        // gradient, 4 x 4 supersampled coverage: found alone, at the closed-form centre.
+        let centre = [161.3, 158.6];
+        let image = GreyImage::from_fn(320, 320, |u, v| {
+            let mut inside = 0;
+            for i in 0..4 {
+                for j in 0..4 {
+                    let (x, y) = (f64::from(u) - 0.375 + f64::from(i) / 4.0, f64::from(v) - 0.375 + f64::from(j) / 4.0);
+                    inside += i32::from((x - centre[0]).hypot(y - centre[1]) < 110.0);
+                }
+            }
+            let g = 20.0 + 0.2 * f64::from(u) + 0.1 * f64::from(v) + 150.0 * f64::from(inside) / 16.0;
+            image::Luma([g.round() as u8])
+        });
+        for dark in [false, true] {
+            let (image, polarity) = if dark {
+                (GreyImage::from_fn(320, 320, |u, v| image::Luma([255 - image.get_pixel(u, v)[0]])), Polarity::Dark)
+            } else {
+                (image.clone(), Polarity::Light)
+            };
+            let dots = detect_dots(&image, &DetectConfig { polarity, ..Default::default() }).unwrap();
+            assert_eq!(dots.len(), 1, "dark {dark}: {dots:?}");
+            let d = dots[0].centroid;
+            assert!((d[0] - centre[0]).hypot(d[1] - centre[1]) < 0.02, "dark {dark}: {d:?}");
+        }
     }
 
     #[test]

@@ -17,6 +17,9 @@
 //! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
 //! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
 //! | the local threshold: a background model on tiles | [`background`] |
+//! | each tile's median and peak, 32 bytes at a time | [`tile_stats`] |
+//! | coarser tiles, for dots wider than a tile's neighbourhood | [`coarse`] |
+//! | the runs of dot pixels of rows, from 32-bit masks | [`row_scan`] |
 //! | 8-connected components as runs, with moments | [`runs`] |
 //! | a dot's subpixel centroid over a local background plane | [`centroid`] |
 //! | bright or dark dots, or decided by the image | [`polarity`] |
@@ -44,6 +47,7 @@
 
 pub mod background;
 pub mod centroid;
+pub mod coarse;
 pub mod compressed;
 pub mod detector;
 pub mod dots;
@@ -52,9 +56,11 @@ pub mod image;
 pub mod image_servo;
 pub mod polarity;
 pub mod render;
+pub mod row_scan;
 pub mod runs;
 pub mod tags;
 pub mod target;
+pub mod tile_stats;
 pub mod tracker;
 
 pub use self::detector::dot_tracking::DotTracking;

@@ -1,14 +1,15 @@
 //! 8-connected components of the pixels above a threshold, as runs: each row's horizontal
 //! runs of dot pixels, runs of neighbouring rows that touch (8-connectivity: overlapping or
 //! diagonal) joined by union-find, then per component its area, bounding box and first and
-//! second moments, summed run by run in closed form. The rows are scanned in parallel; no
+//! second moments, summed run by run in closed form. The rows are scanned in parallel
+//! ([`row_scan`](super::row_scan)); no
 //! memory per pixel (a label image) is needed: the runs are the labels.
 
 use rayon::prelude::*;
 
-use crate::vision::background::TILE;
 use crate::vision::background::TileThresholds;
 use crate::vision::image::{GreyBuffer, Pixels};
+use crate::vision::row_scan::scan_rows;
 
 /// Rows scanned by one parallel task.
 const BAND: usize = 64;
@@ -103,6 +104,8 @@ pub struct Labelling {
     component_of: Vec<u32>,
     /// The components, in the raster order of their first pixel.
     pub components: Vec<Component>,
+    /// The smallest and largest grey level of the image.
+    pub range: [u8; 2],
 }
 
 impl Labelling {
@@ -116,18 +119,19 @@ impl Labelling {
 /// The components of the pixels whose level (grey level, or `255 - g` when `dark`) is above
 /// their tile's threshold.
 pub fn label<C: Pixels>(image: &GreyBuffer<C>, thresholds: &TileThresholds, dark: bool) -> Labelling {
-    let height = image.height() as usize;
-    let bands: Vec<Vec<Run>> = (0..height.div_ceil(BAND))
+    let (width, height) = (image.width() as usize, image.height() as usize);
+    let data: &[u8] = image.as_raw();
+    let bands: Vec<(Vec<Run>, [u8; 2])> = (0..height.div_ceil(BAND))
         .into_par_iter()
         .map(|band| {
             let mut runs = Vec::new();
-            for v in band * BAND..((band + 1) * BAND).min(height) {
-                row_runs(image, thresholds, dark, v as u32, &mut runs);
-            }
-            runs
+            let rows = band * BAND..((band + 1) * BAND).min(height);
+            let range = scan_rows(data, width, rows, thresholds, dark, &mut runs);
+            (runs, range)
         })
         .collect();
-    let runs: Vec<Run> = bands.concat();
+    let range = bands.iter().fold([u8::MAX, 0], |[lo, hi], (_, [a, b])| [lo.min(*a), hi.max(*b)]);
+    let runs: Vec<Run> = bands.into_iter().flat_map(|(runs, _)| runs).collect();
     let mut row_start = vec![0usize; height + 1];
     for r in &runs {
         row_start[r.v as usize + 1] += 1;
@@ -140,33 +144,7 @@ pub fn label<C: Pixels>(image: &GreyBuffer<C>, thresholds: &TileThresholds, dark
         join_rows(&runs, row_start[v - 1]..row_start[v], row_start[v]..row_start[v + 1], &mut parent);
     }
     let (component_of, components) = components(&runs, &mut parent);
-    Labelling { runs, row_start, component_of, components }
-}
-
-/// Appends the runs of row `v`.
-fn row_runs<C: Pixels>(image: &GreyBuffer<C>, thresholds: &TileThresholds, dark: bool, v: u32, out: &mut Vec<Run>) {
-    let width = image.width() as usize;
-    let line = &image.as_raw()[v as usize * width..(v as usize + 1) * width];
-    let flip = if dark { 255u8 } else { 0 };
-    let mut start: Option<u32> = None;
-    for (tile, &level) in thresholds.row(v).iter().enumerate() {
-        let u0 = tile * TILE as usize;
-        let segment = &line[u0..(u0 + TILE as usize).min(width)];
-        for (i, &g) in segment.iter().enumerate() {
-            let inside = (g ^ flip) > level;
-            match (inside, start) {
-                (true, None) => start = Some((u0 + i) as u32),
-                (false, Some(s)) => {
-                    out.push(Run { v, u0: s, u1: (u0 + i) as u32 });
-                    start = None;
-                }
-                _ => {}
-            }
-        }
-    }
-    if let Some(s) = start {
-        out.push(Run { v, u0: s, u1: width as u32 });
-    }
+    Labelling { runs, row_start, component_of, components, range }
 }
 
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
