@@ -42,17 +42,18 @@ fn lens_change_through_images_ends_within_2mm_and_0_2_degree() {
 /// between the 12 mm reference image and the current one, no clicks; the paper's accuracy.
 /// With the same lens the 0.5 px image rule can go unmet (within the pose targets, a pan of
 /// about 0.04 deg shifts the image by 1 px, which the invariant features barely see):
-/// tags-12-12 ends by its stall rule, `converged` with the pose the images certify.
+/// tags-12-12 then ends by its stall rule, `converged` with the pose the images certify.
 #[test]
 fn tag_rigs_through_images_reach_the_papers_accuracy() {
     let (s, rec) = run("tags-12-12");
     assert_eq!(s.status, Status::Converged, "{}", s.message);
-    assert!(s.message.contains("stalled"), "{}", s.message);
+    assert!(s.message.contains("stalled") || s.message.contains("stop rule met"), "{}", s.message);
     assert!(s.final_translation_error < 1e-3 && s.final_rotation_error.to_degrees() < 0.1);
-    // Where the stall leaves the image error depends on the noise draw: over the seeds 1-6
-    // it ended at 0.37-1.91 px (1.91 px: seed 1, the built-in's), 0.46-1.50 px with the
+    // Where the run leaves the image error depends on the noise draw: over the seeds 1-5 it
+    // ended at 0.37-0.64 px (0.37 px, the 0.5 px rule met: seed 1, the built-in's); with the
+    // edges read over half a cell it was 0.37-1.91 px over seeds 1-6, 0.46-1.50 px with the
     // renderer's earlier noise generator.
-    assert!(s.final_image_error < 2.5, "{} px", s.final_image_error);
+    assert!(s.final_image_error < 1.0, "{} px", s.final_image_error);
     assert_eq!(rec.n_points, 12);
     let (s, _) = run("tags-12-6");
     assert_eq!(s.status, Status::Converged, "{}", s.message);
