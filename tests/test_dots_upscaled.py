@@ -20,23 +20,13 @@ import pytest
 import vsinv
 
 cv2 = pytest.importorskip("cv2")
+from blob_reference import blob_detector  # noqa: E402
 
 VISP = Path("/usr/share/visp-images-data/ViSP-images")
 FRAMES = {"mire-2": ("mire-2/image.0001.pgm", False, 5), "grid36": ("calibration/grid36-01.pgm", True, 36)}
 SIZES = [(1920, 1080), (3840, 2160)]
 
 pytestmark = pytest.mark.skipif(not VISP.is_dir(), reason="ViSP's images (visp-images-data) are not installed")
-
-
-def blob_detector(dark: bool, scale: float):
-    p = cv2.SimpleBlobDetector_Params()
-    p.filterByColor, p.blobColor = True, 0 if dark else 255
-    p.minThreshold, p.maxThreshold, p.thresholdStep, p.minRepeatability = 10, 250, 10, 2
-    p.filterByArea, p.minArea, p.maxArea = True, 40 * scale, 1e9
-    p.filterByCircularity, p.minCircularity = True, 0.8
-    p.filterByConvexity, p.minConvexity = True, 0.95
-    p.filterByInertia, p.minInertiaRatio = True, 0.4
-    return cv2.SimpleBlobDetector_create(p)
 
 
 def keypoints(image: np.ndarray, dark: bool, scale: float) -> tuple[np.ndarray, np.ndarray]:

@@ -99,10 +99,12 @@ def test_rendered_tags_of_every_family_decode_at_their_projected_corners(family,
     image, truth, visible = vsinv.render_view(_rig(family, blur, noise), reference=True)
     assert visible.all()
     reference = _reference(family, image, tmp_path)
-    # tag16h5's codes are 5 bits apart: a decoder may read a random square of the blurred
-    # image as a tag too (the family's known false positives); vsinv reads one bit error at
-    # most for it and does not.
-    assert set(IDS) <= set(reference) and (family == "tag16h5" or sorted(reference) == IDS), (family, sorted(reference))
+    # tag16h5's codes are 5 bits apart, tagCircle21h7's 7: the reference decoder may read a
+    # random square of the blurred, noisy image as a tag too (pupil-apriltags reads a tag 31 of
+    # tagCircle21h7 in this image); vsinv reads one bit error at most for tag16h5, and reports
+    # exactly the tags drawn (below).
+    few_bits = family in ("tag16h5", "tagCircle21h7")
+    assert set(IDS) <= set(reference) and (few_bits or sorted(reference) == IDS), (family, sorted(reference))
     tags = vsinv.detect_tags(image, family=family)
     ours = {int(i): c for i, c in zip(tags.ids, tags.corners)}
     assert sorted(ours) == IDS, family

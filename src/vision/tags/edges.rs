@@ -9,10 +9,10 @@
 //! crosses the level halfway between the black border inside and the white quiet zone
 //! outside; a line is fitted to those crossings (total least squares), and each corner is
 //! the intersection of its two edges. Again, with profiles centred on the last lines, until
-//! the corners settle (two or three readings). The first reading reaches half a cell on each
-//! side and measures how wide each edge's step is; the next ones reach a few times that width
-//! (a sharp edge's few pixels, a blurred one's half cell), so that the noise of the pixels
-//! away from a sharp edge stays out of its crossings (on tags rendered with exact corners,
+//! the corners settle (two or three readings). These readings reach half a cell on each side
+//! and measure how wide each edge's step is; then the corners settle again on readings that
+//! reach a few times that width (a sharp edge's few pixels, a blurred one's half cell), so that
+//! the noise of the pixels away from a sharp edge stays out of its crossings (on tags rendered with exact corners,
 //! noise of 10 grey levels: median corner error 0.075 -> 0.031 px; JPEG at quality 20: 0.093
 //! -> 0.042 px; sharp and blurred tags unchanged, `benches/tags_robustness.py`).
 //!
@@ -97,31 +97,49 @@ pub(super) fn refine_blurred_corners<C: Pixels>(
 }
 
 /// Reads the edges again and again from `corners` until they settle (at most `passes`
-/// readings), as [`refine_corners`] describes.
+/// readings), as [`refine_corners`] describes: first with profiles reaching half a cell, then,
+/// from where those settled, with profiles reaching a few times each edge's width as the last
+/// of those readings measured it (a narrower profile would make a blurred edge look sharper).
+/// Both stages settle from where the first one does, so a tag's corners do not depend on where
+/// the refinement started (the detector's quad or a tracked tag's last corners).
 fn settle<C: Pixels>(image: &GreyBuffer<C>, corners: &[P; 4], border: Border, passes: usize) -> Option<[P; 4]> {
-    let border_cells = border.cells;
-    let cell = (0..4).map(|i| dist(corners[i], corners[(i + 1) % 4])).sum::<f64>() / (4.0 * border_cells);
+    let cell = (0..4).map(|i| dist(corners[i], corners[(i + 1) % 4])).sum::<f64>() / (4.0 * border.cells);
     let limit = MAX_MOVE_PX.max(MAX_MOVE_CELLS * cell);
-    let mut current = *corners;
-    // The first reading reaches half a cell; the edges' widths it measures set the reach of
-    // the next ones (a narrower profile would make a blurred edge look sharper).
-    let mut reaches = [f64::INFINITY; 4];
-    for pass in 0..passes {
-        let (lines, widths) = fit_edges(image, &current, border, &reaches)?;
-        if pass == 0 {
-            reaches = widths.map(reach_for_width);
+    let read = Readings { image, start: corners, border, passes, limit };
+    let (wide, widths) = read.settle(*corners, [f64::INFINITY; 4])?;
+    // Where the narrow readings do not settle (a noisy edge a few pixels wide), the wide ones'
+    // corners stand: they passed every check.
+    Some(read.settle(wide, widths.map(reach_for_width)).map_or(wide, |(narrow, _)| narrow))
+}
+
+/// The readings of one tag's edges: the image, the corners they started from, the square, and
+/// the bounds (at most `passes` readings a stage, no corner farther than `limit` from the start).
+struct Readings<'a, C: Pixels> {
+    image: &'a GreyBuffer<C>,
+    start: &'a [P; 4],
+    border: Border,
+    passes: usize,
+    limit: f64,
+}
+
+impl<C: Pixels> Readings<'_, C> {
+    /// The corners where readings from `current` with the profiles reaching at most `reaches`
+    /// settle, and the edges' widths the last reading measured.
+    fn settle(&self, mut current: [P; 4], reaches: [f64; 4]) -> Option<([P; 4], [f64; 4])> {
+        for _ in 0..self.passes {
+            let (lines, widths) = fit_edges(self.image, &current, self.border, &reaches)?;
+            let next = intersect_all(&lines)?;
+            if next.iter().zip(self.start).any(|(n, c)| dist(*n, *c) > self.limit) {
+                return None;
+            }
+            let change = next.iter().zip(&current).map(|(n, c)| dist(*n, *c)).fold(0.0, f64::max);
+            current = next;
+            if change <= SETTLED_PX {
+                return Some((current, widths));
+            }
         }
-        let next = intersect_all(&lines)?;
-        if next.iter().zip(corners).any(|(n, c)| dist(*n, *c) > limit) {
-            return None;
-        }
-        let change = next.iter().zip(&current).map(|(n, c)| dist(*n, *c)).fold(0.0, f64::max);
-        current = next;
-        if change <= SETTLED_PX {
-            return Some(current);
-        }
+        None
     }
-    None
 }
 
 /// A line `normal . x = offset` with a unit normal.
