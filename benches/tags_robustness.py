@@ -78,11 +78,8 @@ def most_accurate(found: dict, case: tag_sets.Case) -> bool:
     compared on the tags both decoded."""
     ours = found["vsinv"]
     for name, theirs in found.items():
-        both = set(ours) & set(theirs)
-        if name == "vsinv" or not both:
-            continue
-        median = [np.median(tag_sets.corner_errors({t: f[t] for t in both}, case.truth)) for f in (ours, theirs)]
-        if median[0] > median[1]:
+        medians = None if name == "vsinv" else tag_sets.paired_medians(ours, theirs, case.truth)
+        if medians is not None and medians[0] > medians[1]:
             return False
     return True
 

@@ -271,6 +271,15 @@ def vsinv_detector(family: str) -> Callable[[np.ndarray], Corners]:
     return detect
 
 
+def paired_medians(ours: Corners, theirs: Corners, truth: Corners | None) -> tuple[float, float] | None:
+    """The median corner errors of two detectors on the tags both decoded (None: no such tag)."""
+    both = set(ours) & set(theirs)
+    if not both:
+        return None
+    a, b = (float(np.median(corner_errors({t: f[t] for t in both}, truth))) for f in (ours, theirs))
+    return a, b
+
+
 def in_view(case: Case) -> set[int]:
     """The ids of the tags whose four true corners are in the image (all of them where no truth
     is known). A tag cut by the border has a corner nobody can measure: vsinv does not report it

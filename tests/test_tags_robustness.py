@@ -137,11 +137,9 @@ def rendered_medians(family: str, resolution: str, degradation: str) -> dict[str
         found = detect(case.image)  # type: ignore[misc]
         missed = set(found) & tag_sets.in_view(case) - set(ours)
         assert not missed, f"{case.name}: {name} decoded {sorted(missed)} too"
-        both = set(found) & set(ours)
-        if both:
-            medians[name] = tuple(  # type: ignore[assignment]
-                float(np.median(tag_sets.corner_errors({t: f[t] for t in both}, case.truth))) for f in (ours, found)
-            )
+        paired = tag_sets.paired_medians(ours, found, case.truth)
+        if paired is not None:
+            medians[name] = paired
     print(case.name, {k: tuple(round(m, 3) for m in v) for k, v in medians.items()})
     return medians
 

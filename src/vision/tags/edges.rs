@@ -211,12 +211,14 @@ fn fit_edge<C: Pixels>(
     }
     let count = ((length - 2.0 * skip).floor() as usize + 1).min(MAX_PROFILES);
     let spacing = (length - 2.0 * skip) / (count - 1).max(1) as f64;
-    let mut widths = Vec::with_capacity(count);
+    // Only the wide readings' widths are used (`settle`): the narrow ones skip the walk.
+    let want_width = max_reach.is_infinite();
+    let mut widths = Vec::with_capacity(if want_width { count } else { 0 });
     let crossings: Vec<P> = (0..count)
         .filter_map(|k| {
             let s = skip + spacing * k as f64;
             let p = [a[0] + along[0] * s, a[1] + along[1] * s];
-            let (e, width) = crossing_and_width(image, p, out, reach, border.reversed)?;
+            let (e, width) = crossing_and_width(image, p, out, reach, (border.reversed, want_width))?;
             widths.extend(width);
             Some([p[0] + out[0] * e, p[1] + out[1] * e])
         })
@@ -237,18 +239,18 @@ fn fit_edge<C: Pixels>(
 /// symmetric blur (the level-crossing of a pixel-sampled step is off by up to a tenth of a
 /// pixel). `None` without contrast or when the edge is not inside the profile.
 pub(super) fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64, reversed: bool) -> Option<f64> {
-    crossing_and_width(image, p, out, reach, reversed).map(|(edge, _)| edge)
+    crossing_and_width(image, p, out, reach, (reversed, false)).map(|(edge, _)| edge)
 }
 
 /// [`crossing`], and the distance between the profile's first crossings of the levels a quarter
 /// and three quarters of the way from black to white on either side of the edge (`None` when
-/// one is not inside the profile).
+/// one is not inside the profile, or not `want_width`).
 fn crossing_and_width<C: Pixels>(
     image: &GreyBuffer<C>,
     p: P,
     out: P,
     reach: f64,
-    reversed: bool,
+    (reversed, want_width): (bool, bool),
 ) -> Option<(f64, Option<f64>)> {
     let steps = (2.0 * reach / STEP).round() as usize;
     let start = -(steps as f64) * STEP / 2.0;
@@ -272,6 +274,9 @@ fn crossing_and_width<C: Pixels>(
         return None;
     }
     // The sample at the edge, then outwards to the first sample past each quartile level.
+    if !want_width {
+        return Some((edge, None));
+    }
     let at_edge = (((edge - start) / STEP).round() as usize).min(steps);
     let level_at = |level: f64, outwards: bool| -> Option<f64> {
         let (mut k, w) = (at_edge, |k: usize| whiteness(profile[k]));
@@ -417,7 +422,7 @@ pub(super) mod tests {
     fn the_width_of_an_edge_is_its_quartile_distance() {
         for (sigma, reach) in [(0.0f32, 2.5), (0.6, 3.0), (1.0, 6.0), (2.0, 7.5)] {
             let image = step_image(40.3, sigma);
-            let (edge, width) = crossing_and_width(&image, [40.3, 20.0], [1.0, 0.0], reach, false).unwrap();
+            let (edge, width) = crossing_and_width(&image, [40.3, 20.0], [1.0, 0.0], reach, (false, true)).unwrap();
             let width = width.unwrap();
             let expected = 1.349 * (f64::from(sigma).powi(2) + 1.0 / 12.0 + 1.0 / 6.0).sqrt();
             assert!(edge.abs() < 0.02, "sigma {sigma}: crossing {edge}");
@@ -428,8 +433,8 @@ pub(super) mod tests {
         // Reversed polarity reads the same width.
         let image = step_image(40.3, 1.0);
         let dark = GreyImage::from_fn(80, 40, |u, v| ::image::Luma([255 - image.get_pixel(u, v)[0]]));
-        let (_, width) = crossing_and_width(&dark, [40.3, 20.0], [1.0, 0.0], 6.0, true).unwrap();
-        let (_, same) = crossing_and_width(&image, [40.3, 20.0], [1.0, 0.0], 6.0, false).unwrap();
+        let (_, width) = crossing_and_width(&dark, [40.3, 20.0], [1.0, 0.0], 6.0, (true, true)).unwrap();
+        let (_, same) = crossing_and_width(&image, [40.3, 20.0], [1.0, 0.0], 6.0, (false, true)).unwrap();
         assert!((width.unwrap() - same.unwrap()).abs() < 0.02);
     }
 
