@@ -61,6 +61,8 @@ mod servo_stall;
 mod simulator;
 mod stability;
 #[cfg(feature = "sim")]
+mod targets;
+#[cfg(feature = "sim")]
 mod vision_loop;
 #[cfg(feature = "vision")]
 mod vision_tracking;

@@ -40,6 +40,14 @@ def check_law_option(name: str, value: object) -> None:
 def law_options_markdown() -> str:
     """`LAW_OPTIONS` as a Markdown table, for the reference pages of the docs."""
 
+#: The targets, declared once in the vision layer (Rust `vision::targets::TARGETS`): name (the
+#: `target` of `ImageServo`, `--target`, the ROS parameter `target`), meaning, the detector that
+#: finds it (name, module, doc), its keyword arguments of `ImageServo` (another target's are
+#: refused by name) and the scenario keys it reads. A test checks that `ImageServo` below declares
+#: every name and argument. Keys: name, doc, detector, args (each: name, kind ("points", "choice",
+#: "ids", "count", "tracker"), choices, min, max, default, required, doc), scenario_keys.
+TARGETS: tuple[dict[str, Any], ...]
+
 __version__: str
 __all__ = [
     "ImageServo",
@@ -113,10 +121,13 @@ __all__ = [
     "LAW_OPTIONS",
     "check_law_option",
     "law_options_markdown",
+    "TARGETS",
     "__version__",
 ]
 
 _ArrayLike = npt.ArrayLike
+#: The names of ``TARGETS`` (a test checks they are the same).
+_TargetName = Literal["dots", "tags"]
 _F64Array = npt.NDArray[np.float64]
 _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 
@@ -445,6 +456,8 @@ class ImageServo:
     camera: no K* needed), then each ``step(image)`` detects or tracks it, matches the points by
     identity, undistorts them with ``K_hat`` and ``distortion`` and steps a ``Servo`` session.
 
+    ``target`` is a name of ``TARGETS``, whose entry lists the keyword arguments it takes (another
+    target's are refused by name).
     ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
     ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
     ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
@@ -468,19 +481,19 @@ class ImageServo:
     def __new__(
         cls,
         reference_image: npt.NDArray[np.uint8],
-        target: Literal["dots", "tags"],
+        target: _TargetName,
         K_hat: _IntrinsicsLike,
         *,
         reference_points: _ArrayLike | None = None,
         first_points: _ArrayLike | None = None,
         tracker: dict[str, float | int | str] | None = None,
-        family: _TagFamily = "tag36h11",
+        family: _TagFamily | None = None,
         tag_ids: Sequence[int] | None = None,
         decimation: int | None = None,
         distortion: Distortion | _ArrayLike | None = None,
         reference_K: _IntrinsicsLike | None = None,
         reference_distortion: Distortion | _ArrayLike | None = None,
-        **servo: Any,
+        **options: Any,
     ) -> ImageServo: ...
     def step(self, image: npt.NDArray[np.uint8]) -> ImageStep:
         """One frame: the twist to send (zero when stopping), the verdict, the telemetry, and per
