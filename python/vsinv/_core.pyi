@@ -48,6 +48,15 @@ def law_options_markdown() -> str:
 #: "ids", "count", "tracker"), choices, min, max, default, required, doc), scenario_keys.
 TARGETS: tuple[dict[str, Any], ...]
 
+#: The exception classes, declared once (Rust `src/python/errors.rs`, `CLASSES`): name, parent
+#: (None: the root), builtin (the Python exception it also derives from), doc. A test checks the
+#: classes below against it.
+ERROR_CLASSES: tuple[dict[str, Any], ...]
+#: Every `kind` an exception carries: kind, class (raised with it), doc.
+ERROR_KINDS: tuple[dict[str, str], ...]
+#: Every attribute of `VsinvError`: name, type, doc.
+ERROR_ATTRIBUTES: tuple[dict[str, str], ...]
+
 __version__: str
 __all__ = [
     "ImageServo",
@@ -122,6 +131,9 @@ __all__ = [
     "check_law_option",
     "law_options_markdown",
     "TARGETS",
+    "ERROR_CLASSES",
+    "ERROR_KINDS",
+    "ERROR_ATTRIBUTES",
     "__version__",
 ]
 
@@ -137,13 +149,12 @@ class VsinvError(Exception):
     The structured fields of the error are attributes, None where they do not apply (and on
     exceptions raised by Python code); match on them rather than on the message.
     """
-
     kind: str | None
-    """The kind of error: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics',
-    'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis',
-    'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario',
-    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
-    'invalid_pose', 'degenerate_motion' or 'not_ready'."""
+    """The kind of error, one of ERROR_KINDS: 'non_finite', 'non_finite_point', 'shape',
+    'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points',
+    'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate',
+    'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
+    'invalid_pose', 'degenerate_motion', 'not_ready'."""
     argument: str | None
     """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
     index: int | None
@@ -188,16 +199,16 @@ class VsinvError(Exception):
     """The smallest position residual (m) inverse kinematics reached for an unreachable pose."""
 
 class InvalidInput(VsinvError, ValueError):
-    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or
-    parameters, a bad scenario, image, URDF or calibration file."""
+    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, a bad
+    scenario, image, URDF or calibration file."""
 
 class DegenerateGeometry(VsinvError, ValueError):
-    """Geometry the method cannot work with: collinear basis points, too few points, a planar
-    object or equal depth estimates, points at or behind the camera, robot motions that do not
-    determine a hand-eye calibration."""
+    """Geometry the method cannot work with: collinear basis points, too few points, a planar object or
+    equal depth estimates, points at or behind the camera, robot motions that do not determine a
+    hand-eye calibration."""
 
 class NotReady(VsinvError, RuntimeError):
-    """A state read before it exists (kind 'not_ready')."""
+    """A state read before it exists, e.g. a controller's eps before its first step (kind 'not_ready')."""
 
 @final
 class Intrinsics:
