@@ -63,6 +63,8 @@ mod stability;
 #[cfg(feature = "sim")]
 mod targets;
 #[cfg(feature = "sim")]
+mod units;
+#[cfg(feature = "sim")]
 mod vision_loop;
 #[cfg(feature = "vision")]
 mod vision_tracking;
