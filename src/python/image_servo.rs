@@ -100,11 +100,11 @@ fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<ImageTarget> {
     })
 }
 
-/// The pipeline from image to twist: finds the target in the reference image (taken with any
-/// camera), then each `step(image)` detects or tracks it, matches the points by identity,
-/// undistorts them with K_hat and `distortion`, and steps the servo session. `target` is a
-/// name of `vsinv._core.TARGETS`, whose entry lists the keyword arguments it takes; the other
-/// keyword arguments are the `Servo` session's (law, depths, gain, stop, ...).
+/// The pipeline from image to twist: finds the target in the reference image (taken with any camera: no K* needed),
+/// then each `step(image)` detects or tracks it, matches the points by identity, undistorts them with `K_hat` and
+/// `distortion` and steps a `Servo` session. `target` is a name of `vsinv._core.TARGETS`, whose entry lists the
+/// keyword arguments it takes; the other keyword arguments are the `Servo` session's (law, depths, gain, stop,
+/// ...).
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "ImageServo", module = "vsinv._core", frozen)]
@@ -199,7 +199,7 @@ impl PyImageServo {
     fn iterations(&self, py: Python<'_>) -> PyResult<usize> {
         Ok(self.inner.lock(py)?.servo().iterations())
     }
-    /// The basis in use (three point indices).
+    /// The basis in use (it changes when a basis point is not visible).
     #[getter]
     fn basis(&self, py: Python<'_>) -> PyResult<(usize, usize, usize)> {
         let [a, b, c] = self.inner.lock(py)?.servo().basis();
@@ -215,9 +215,10 @@ impl PyImageServo {
     fn pixel_sigma(&self, py: Python<'_>) -> PyResult<Option<f64>> {
         Ok(self.inner.lock(py)?.servo().pixel_sigma())
     }
-    /// What the frames say about the pose, as `Servo.certainty()`: pixel_sigma,
-    /// reference_pixel_sigma (pixels), translation_sigma, translation_bound (metres),
-    /// rotation_sigma, rotation_bound (radians); None when it cannot be computed.
+    /// What the frames say about the pose, as `Servo.certainty()` (pixel_sigma, reference_pixel_sigma,
+    /// translation_sigma, translation_bound in metres, rotation_sigma, rotation_bound in radians: the accuracy
+    /// ceiling, floor_pixel_sigma: the measured disagreement between reference and frame detections, pixels); None
+    /// when it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         super::servo::certainty_dict(py, self.inner.lock(py)?.servo())
     }
