@@ -24,8 +24,11 @@
 //! 4. `python/vsinv/_core.pyi`: the name in `ImageServo`'s `target` and its keyword
 //!    arguments;
 //! 5. what the scene holds of it, if a scenario describes it with new keys:
-//!    `src/sim/scenario/schema.rs` (the keys) and `src/sim/scenario/convert.rs` (into the
-//!    scene, `src/sim/scene.rs`).
+//!    `src/sim/scenario/schema.rs` (the keys), `src/sim/scenario/convert.rs` (into the scene,
+//!    `src/sim/scene.rs`) and the scenario-files page's block (`docs/reference/scenario-files.md`,
+//!    which names every key); and a built-in scenario that shows it (`scenarios/<name>.toml`,
+//!    `src/sim/scenario/builtin.rs`, its recorded result in `tests/fixtures/builtin_results.txt`), which
+//!    `tests/targets.rs` renders and detects.
 //!
 //! **Adding a detector** (for a target no detector finds) is one more file,
 //! `src/vision/detector/<name>.rs` (declared in `detector.rs`), implementing
