@@ -13,7 +13,7 @@ use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
 use super::shared::Shared;
 use super::vision::polarity_arg;
-use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTargetKind};
 use crate::vision::targets::{self, ArgKind, ArgValue, TARGETS, TargetArg, TargetArgs, TargetSpec};
 use crate::vision::tracker::TrackerConfig;
 
@@ -93,7 +93,7 @@ fn split_options<'py>(
 
 /// The target named `target` (`vsinv._core.TARGETS`) from its arguments; an error of the
 /// target's names the argument.
-fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<ImageTarget> {
+fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageTargetKind>> {
     (spec.image)(args).map_err(|e| match e {
         crate::Error::InvalidParameter { name, reason } => invalid_argument(name, format!("{name}: {reason}")),
         other => other.into(),
@@ -159,7 +159,7 @@ impl PyImageServo {
             (None, None) => None,
         };
         let config = ImageServoConfig { servo: servo_config, reference_lens, reference_depths };
-        let inner = py.detach(|| ImageServo::new(&image, &target, config, depths))?;
+        let inner = py.detach(|| ImageServo::new(&image, &*target, config, depths))?;
         Ok(Self { inner: Shared::new(inner, "ImageServo") })
     }
 

@@ -60,7 +60,7 @@ pub use self::detector::tags::TagDetector;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, GreyView, load_image, load_png, save_png, view_of};
-pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget, ImageTargetKind};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
 pub use self::tags::{

@@ -16,14 +16,12 @@
 //! **Adding a target** touches these files:
 //! 1. `src/vision/target/<name>.rs` (declared in `target.rs`): a type implementing
 //!    [`Target`] (its points with identities, `draw` with the [`Canvas`](crate::vision::Canvas)
-//!    primitives);
+//!    primitives) and, for real images, one implementing [`ImageTargetKind`] (its detector and
+//!    the hints it starts with in the reference image and the first frame);
 //! 2. `src/vision/targets.rs`: one entry in [`TARGETS`] with its two builders;
-//! 3. for real images, one variant of [`ImageTarget`] and its arms in
-//!    `src/vision/image_servo.rs` (the hints and the detector of the reference image and the
-//!    first frame);
-//! 4. `python/vsinv/_core.pyi`: the name in `ImageServo`'s `target` and its keyword
+//! 3. `python/vsinv/_core.pyi`: the name in `ImageServo`'s `target` and its keyword
 //!    arguments;
-//! 5. what the scene holds of it, if a scenario describes it with new keys:
+//! 4. what the scene holds of it, if a scenario describes it with new keys:
 //!    `src/sim/scenario/schema.rs` (the keys), `src/sim/scenario/convert.rs` (into the scene,
 //!    `src/sim/scene.rs`) and the scenario-files page's block (`docs/reference/scenario-files.md`,
 //!    which names every key); and a built-in scenario that shows it (`scenarios/<name>.toml`,
@@ -42,7 +40,7 @@ use crate::error::{Error, Result};
 use crate::vision::detector::Detector;
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
-use crate::vision::image_servo::ImageTarget;
+use crate::vision::image_servo::{ImageTarget, ImageTargetKind};
 use crate::vision::render::{Disc, RenderConfig};
 use crate::vision::tags::{MAX_DECIMATION, TagFamily};
 use crate::vision::target::Target;
@@ -186,7 +184,7 @@ pub struct TargetSpec {
     /// The target of a scene and a fresh detector for it, with the `[vision]` settings.
     pub scene: fn(&SceneObject<'_>, &RenderConfig) -> Result<SceneVision>,
     /// The real-image pipeline's target from its arguments, each checked (errors name it).
-    pub image: fn(&TargetArgs) -> Result<ImageTarget>,
+    pub image: fn(&TargetArgs) -> Result<Box<dyn ImageTargetKind>>,
 }
 
 /// The dots' arguments.
@@ -320,7 +318,7 @@ fn tags_scene(object: &SceneObject<'_>, _config: &RenderConfig) -> Result<SceneV
     Ok(SceneVision { target: Box::new(tags), detector })
 }
 
-fn dots_image(args: &TargetArgs) -> Result<ImageTarget> {
+fn dots_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
     let reference_points = args.points("reference_points")?.ok_or_else(|| Error::InvalidParameter {
         name: "reference_points",
         reason: "target \"dots\" needs the dots' approximate pixels (n, 2) in the reference image".into(),
@@ -331,10 +329,10 @@ fn dots_image(args: &TargetArgs) -> Result<ImageTarget> {
         Some(ArgValue::Tracker(t)) => *t,
         Some(_) => return Err(expected("tracker", "the tracker's settings")),
     };
-    Ok(ImageTarget::Dots { reference_points, first_points, tracker })
+    Ok(Box::new(ImageTarget::Dots { reference_points, first_points, tracker }))
 }
 
-fn tags_image(args: &TargetArgs) -> Result<ImageTarget> {
+fn tags_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
     let family = match args.get("family") {
         None => TagFamily::default(),
         Some(ArgValue::Name(name)) => TagFamily::from_name(name).ok_or_else(|| {
@@ -362,7 +360,7 @@ fn tags_image(args: &TargetArgs) -> Result<ImageTarget> {
         }
         Some(_) => return Err(expected("decimation", "an integer")),
     };
-    Ok(ImageTarget::Tags { family, ids, decimation })
+    Ok(Box::new(ImageTarget::Tags { family, ids, decimation }))
 }
 
 #[cfg(test)]
@@ -402,9 +400,7 @@ mod tests {
         let bad = TargetArgs(vec![("family", ArgValue::Name("tag99".into()))]);
         assert!((TAGS.image)(&bad).unwrap_err().to_string().contains("expected one of"));
         let ok = TargetArgs(vec![("tag_ids", ArgValue::Ids(vec![1, 2])), ("decimation", ArgValue::Count(2))]);
-        assert_eq!(
-            (TAGS.image)(&ok).unwrap(),
-            ImageTarget::Tags { family: TagFamily::Tag36h11, ids: Some(vec![1, 2]), decimation: Some(2) }
-        );
+        let expected = ImageTarget::Tags { family: TagFamily::Tag36h11, ids: Some(vec![1, 2]), decimation: Some(2) };
+        assert_eq!(format!("{:?}", (TAGS.image)(&ok).unwrap()), format!("{expected:?}"));
     }
 }
