@@ -61,6 +61,10 @@ mod servo_stall;
 mod simulator;
 mod stability;
 #[cfg(feature = "sim")]
+mod targets;
+#[cfg(feature = "sim")]
+mod units;
+#[cfg(feature = "sim")]
 mod vision_loop;
 #[cfg(feature = "vision")]
 mod vision_tracking;

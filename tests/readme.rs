@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 
 use vsinv::sim::Scenario;
 
-fn readme_scenario_block() -> String {
+pub(crate) fn readme_scenario_block() -> String {
     let page = include_str!("../docs/reference/scenario-files.md");
     let section = page.split("# Scenario files").nth(1).expect("the page has a 'Scenario files' title");
     let block = section.split("```toml\n").nth(1).expect("a toml block in that section");

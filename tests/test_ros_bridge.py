@@ -86,7 +86,7 @@ def test_good_parameters_are_read(views: dict[str, Any]) -> None:
         ({"gain": -1.0}, "parameter gain: must be finite and > 0, got -1"),  # the table's range, at parsing
         ({"adaptive_gain": [1.0, 2.0, 3.0]}, "parameter adaptive_gain: the gain for a large error"),
         ({"stop.window": 2.5}, "parameter stop.window: expected an integer"),
-        ({"target": "circles"}, "parameter target: expected one of tags, dots"),
+        ({"target": "circles"}, "parameter target: expected one of dots, tags"),
         ({"reference_image": None}, "parameter reference_image: required"),
         ({"reference_image": "/nonexistent/ref.png"}, "parameter reference_image: no such file"),
         ({"reference_points": [1.0, 2.0, 3.0]}, "parameter reference_points: expected a flat list"),

@@ -38,7 +38,25 @@ def check_law_option(name: str, value: object) -> None:
     (or its part, `adaptive_gain.at_infinity`) for a value of another kind or out of its range."""
 
 def law_options_markdown() -> str:
-    """`LAW_OPTIONS` as a Markdown table, for the reference pages of the docs."""
+    """The table of the laws' options as Markdown (name, laws, values, default, unit, scenario key,
+    meaning), for the reference pages of the docs."""
+
+#: The targets, declared once in the vision layer (Rust `vision::targets::TARGETS`): name (the
+#: `target` of `ImageServo`, `--target`, the ROS parameter `target`), meaning, the detector that
+#: finds it (name, module, doc), its keyword arguments of `ImageServo` (another target's are
+#: refused by name) and the scenario keys it reads. A test checks that `ImageServo` below declares
+#: every name and argument. Keys: name, doc, detector, args (each: name, kind ("points", "choice",
+#: "ids", "count", "tracker"), choices, min, max, default, required, doc), scenario_keys.
+TARGETS: tuple[dict[str, Any], ...]
+
+#: The exception classes, declared once (Rust `src/python/errors.rs`, `CLASSES`): name, parent
+#: (None: the root), builtin (the Python exception it also derives from), doc. A test checks the
+#: classes below against it.
+ERROR_CLASSES: tuple[dict[str, Any], ...]
+#: Every `kind` an exception carries: kind, class (raised with it), doc.
+ERROR_KINDS: tuple[dict[str, str], ...]
+#: Every attribute of `VsinvError`: name, type, doc.
+ERROR_ATTRIBUTES: tuple[dict[str, str], ...]
 
 __version__: str
 __all__ = [
@@ -113,10 +131,16 @@ __all__ = [
     "LAW_OPTIONS",
     "check_law_option",
     "law_options_markdown",
+    "TARGETS",
+    "ERROR_CLASSES",
+    "ERROR_KINDS",
+    "ERROR_ATTRIBUTES",
     "__version__",
 ]
 
 _ArrayLike = npt.ArrayLike
+#: The names of ``TARGETS`` (a test checks they are the same).
+_TargetName = Literal["dots", "tags"]
 _F64Array = npt.NDArray[np.float64]
 _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 
@@ -126,13 +150,12 @@ class VsinvError(Exception):
     The structured fields of the error are attributes, None where they do not apply (and on
     exceptions raised by Python code); match on them rather than on the message.
     """
-
     kind: str | None
-    """The kind of error: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics',
-    'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis',
-    'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario',
-    'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
-    'invalid_pose', 'degenerate_motion' or 'not_ready'."""
+    """The kind of error, one of ERROR_KINDS: 'non_finite', 'non_finite_point', 'shape',
+    'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points',
+    'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate',
+    'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
+    'invalid_pose', 'degenerate_motion', 'not_ready'."""
     argument: str | None
     """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
     index: int | None
@@ -177,36 +200,43 @@ class VsinvError(Exception):
     """The smallest position residual (m) inverse kinematics reached for an unreachable pose."""
 
 class InvalidInput(VsinvError, ValueError):
-    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or
-    parameters, a bad scenario, image, URDF or calibration file."""
+    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, a bad
+    scenario, image, URDF or calibration file."""
 
 class DegenerateGeometry(VsinvError, ValueError):
-    """Geometry the method cannot work with: collinear basis points, too few points, a planar
-    object or equal depth estimates, points at or behind the camera, robot motions that do not
-    determine a hand-eye calibration."""
+    """Geometry the method cannot work with: collinear basis points, too few points, a planar object or
+    equal depth estimates, points at or behind the camera, robot motions that do not determine a
+    hand-eye calibration."""
 
 class NotReady(VsinvError, RuntimeError):
-    """A state read before it exists (kind 'not_ready')."""
+    """A state read before it exists, e.g. a controller's eps before its first step (kind 'not_ready')."""
 
 @final
 class Intrinsics:
-    """Intrinsic parameters of eq. (4): f ku, f kv, u0, v0 in pixels, skew angle in radians."""
+    """Intrinsic parameters of eq. (4): `Intrinsics(fku, fkv, u0, v0, skew=pi/2)`, pixels and radians."""
 
     def __new__(cls, fku: float, fkv: float, u0: float, v0: float, skew: float = ...) -> Intrinsics: ...
     @staticmethod
-    def from_matrix(k: _ArrayLike) -> Intrinsics: ...
+    def from_matrix(k: _ArrayLike) -> Intrinsics:
+        """From a 3x3 upper-triangular matrix K with K[2] = (0, 0, 1)."""
     @property
-    def fku(self) -> float: ...
+    def fku(self) -> float:
+        """f ku, the horizontal focal length in pixels."""
     @property
-    def fkv(self) -> float: ...
+    def fkv(self) -> float:
+        """f kv, the vertical focal length in pixels."""
     @property
-    def u0(self) -> float: ...
+    def u0(self) -> float:
+        """u0, the principal point's column in pixels."""
     @property
-    def v0(self) -> float: ...
+    def v0(self) -> float:
+        """v0, the principal point's row in pixels."""
     @property
-    def skew(self) -> float: ...
+    def skew(self) -> float:
+        """theta, the angle between the image axes in radians (pi/2: no skew)."""
     @property
-    def matrix(self) -> _F64Array: ...
+    def matrix(self) -> _F64Array:
+        """K, a new (3, 3) array."""
     def __eq__(self, other: object, /) -> bool: ...
     def __reduce__(self) -> tuple[type[Intrinsics], tuple[float, float, float, float, float]]: ...
 
@@ -229,7 +259,7 @@ def structure_ratio(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, 
     structure (a planar object, equal depths), where the law cannot tell motions apart."""
 
 def interaction_matrix(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike) -> _F64Array:
-    """The pixel interaction matrices (n, 2, 6) of the points: dp_k/dt = L_k (v, w)."""
+    """Pixel interaction matrices (n, 2, 6) of the points: dp_k/dt = L_k (v, w) (Espiau et al.)."""
 
 def jacobian_factors(pixels: _ArrayLike, depths: _ArrayLike, basis: _Basis = (0, 1, 2)) -> tuple[_F64Array, _F64Array]:
     """The factors (Phi (3(n-3), 3), Psi (3(n-3), 2)) of sec. 4.1, with J = [Phi K, Psi F(K)]."""
@@ -263,13 +293,21 @@ class InvariantController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> InvariantController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array:
+        """One control step from the current pixels (n, 2) and depth estimates (n,): the twist (vx, vy, vz,
+        wx, wy, wz) in the camera frame, m/s and rad/s."""
     def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with only the points flagged in `visible`, a bool array (n,)."""
+        """A step with some points hidden: `visible` is a bool array (n,); hidden points' pixels and depths
+        are ignored (may be NaN) and drop out of s and J_hat."""
     def set_k_hat(self, K_hat: _IntrinsicsLike) -> None:
-        """Replaces the estimated intrinsics (e.g. a zoom read-out); the next step uses them."""
-    def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None: ...
-    def converged(self, invariant_tol: float = 1e-4, tau21_tol: float = 1e-4) -> bool: ...
+        """Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom read-out
+        during the servo; the next step uses them."""
+    def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None:
+        """Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its derivative
+        ds*/dt (same shape) for the feed-forward term of eq. (17)."""
+    def converged(self, invariant_tol: float = 1e-4, tau21_tol: float = 1e-4) -> bool:
+        """Stop rule for different cameras: ||s - s*|| < invariant_tol, |tau_21| < tau21_tol, tau_11 > 0
+        and tau_22 > 0 (the last two exclude the rz = pi equilibrium)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -279,34 +317,49 @@ class InvariantController:
         averaged_images: int = 1,
         visible: npt.ArrayLike | None = None,
     ) -> PoseUncertainty:
-        """The pose uncertainty that pixel noise leaves at `pixels` under the invariant stop rule (s, tau_21)."""
+        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the reference
+        image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with `depths` (n,), under
+        the invariant stop rule (s and tau_21) with this controller's reference image, basis and K_hat;
+        `averaged_images` current images were averaged."""
     def __reduce__(self) -> tuple[type[InvariantController], tuple[Any, ...], tuple[_F64Array, _F64Array | None]]:
         """Pickling keeps the configuration and s*(t), not the state of the last step."""
     def __setstate__(self, state: tuple[_ArrayLike, _ArrayLike | None]) -> None: ...
     @property
-    def k_hat(self) -> Intrinsics: ...
+    def k_hat(self) -> Intrinsics:
+        """The estimated intrinsics K_hat used in the Jacobian."""
     @property
-    def basis(self) -> tuple[int, int, int]: ...
+    def basis(self) -> tuple[int, int, int]:
+        """The basis indices."""
     @property
-    def reference_invariants(self) -> _F64Array: ...
+    def reference_invariants(self) -> _F64Array:
+        """The reference s*(t): (n-3, 3) invariant points of the non-basis points."""
     @property
-    def eps(self) -> _F64Array: ...
+    def eps(self) -> _F64Array:
+        """Task function eps of eq. (14) at the last step, (5,)."""
     @property
-    def eps_z(self) -> float: ...
+    def eps_z(self) -> float:
+        """eps_z = det(Q*) tau_21 at the last step."""
     @property
-    def invariant_error(self) -> float: ...
+    def invariant_error(self) -> float:
+        """||s - s*|| at the last step."""
     @property
-    def tau_11(self) -> float: ...
+    def tau_11(self) -> float:
+        """tau_11 of T = Q Q*^-1 at the last step."""
     @property
-    def tau_21(self) -> float: ...
+    def tau_21(self) -> float:
+        """tau_21 of T at the last step."""
     @property
-    def tau_22(self) -> float: ...
+    def tau_22(self) -> float:
+        """tau_22 of T at the last step."""
     @property
-    def t_matrix(self) -> _F64Array: ...
+    def t_matrix(self) -> _F64Array:
+        """T = Q Q*^-1 (eq. 21) at the last step, (3, 3)."""
     @property
-    def last_gain(self) -> float: ...
+    def last_gain(self) -> float:
+        """The lambda used at the last step (`gain`, or the adaptive gain at the invariant error)."""
     @property
-    def saturation(self) -> float: ...
+    def saturation(self) -> float:
+        """The factor the speed limits scaled the last twist by (1.0: within the limits)."""
 
 @final
 class IbvsController:
@@ -323,9 +376,11 @@ class IbvsController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> IbvsController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array:
+        """One control step: the twist (6,) in the camera frame."""
     def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with only the points flagged in `visible`, a bool array (n,)."""
+        """A step with only the points flagged in `visible`, a bool array (n,) (hidden points' pixels and
+        depths are ignored and may be NaN); at least 4 must be visible (else DegenerateGeometry)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -335,19 +390,26 @@ class IbvsController:
         averaged_images: int = 1,
         visible: npt.ArrayLike | None = None,
     ) -> PoseUncertainty:
-        """The pose uncertainty that pixel noise leaves at `pixels` under the pixel stop rule (reference taken with the servo camera)."""
+        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the reference
+        image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with `depths` (n,), under
+        the pixel stop rule with this controller's reference image and K_hat (taken with the servo
+        camera); `averaged_images` current images were averaged."""
     def __reduce__(self) -> tuple[type[IbvsController], tuple[Any, ...]]:
         """Pickling keeps the configuration, not the state of the last step."""
     @property
-    def pixel_error(self) -> float | None: ...
+    def pixel_error(self) -> float | None:
+        """RMS pixel error at the last step (None before the first step)."""
     @property
-    def last_gain(self) -> float | None: ...
+    def last_gain(self) -> float | None:
+        """The lambda used at the last step (None before the first step)."""
     @property
-    def saturation(self) -> float | None: ...
+    def saturation(self) -> float | None:
+        """The factor the speed limits scaled the last twist by (None before the first step)."""
 
 @final
 class Servo:
-    """A servo session: the reference image, the law, the depth source and the stop rules.
+    """A servo session: the reference image, the law, the depth source and the stop rules; each
+    `step(pixels, visible, depths)` returns the twist to send and the verdict.
 
     The keyword arguments are the session's (``reference_depths`` to ``dt``) and the laws' options
     (``LAW_OPTIONS``: ``gain`` to ``max_angular_speed``; None or absent: the law's default).
@@ -386,23 +448,24 @@ class Servo:
     def step(
         self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None, depths: _ArrayLike | None = None
     ) -> ServoStep:
-        """One step: the twist to send (zero when stopping), the verdict and the telemetry.
-        After a stop, every later step returns that stop again (zero twist)."""
+        """One step from the current pixels (n, 2): `visible` a bool array (n,) of the points found (None:
+        all), `depths` (n,) with `depths="per_step"`. After a stop, every later step returns that stop
+        again (zero twist)."""
     @property
     def iterations(self) -> int:
         """Control steps applied."""
     @property
     def basis(self) -> tuple[int, int, int]:
-        """The basis in use (it changes when a basis point is not visible)."""
+        """The basis in use (three point indices; it changes when a basis point is not visible)."""
     @property
     def basis_switches(self) -> int:
         """How many times the basis changed because one of its points was not visible."""
     @property
     def law(self) -> Literal["invariant", "ibvs", "none"]:
-        """The law."""
+        """The law: "invariant", "ibvs" or "none"."""
     @property
     def stop_rule(self) -> Literal["pixel", "invariant"]:
-        """The image rule that decides convergence."""
+        """The image rule that decides convergence: "pixel" or "invariant"."""
     @property
     def reference_pixels(self) -> _F64Array:
         """The reference pixels (n, 2)."""
@@ -420,14 +483,16 @@ class ServoStep:
 
     @property
     def twist(self) -> _F64Array:
-        """(vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero when stopping."""
+        """The twist to send (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero when the
+        verdict is to stop."""
     @property
     def verdict(
         self,
     ) -> Literal[
         "running", "converged", "settled", "lost_features", "rz_trap", "degenerate", "diverged", "max_iterations", "observed"
     ]:
-        """"running", or why to stop."""
+        """"running", or why to stop: "converged", "settled", "lost_features", "rz_trap", "degenerate",
+        "diverged", "max_iterations", "observed"."""
     @property
     def reason(self) -> str | None:
         """Why the session stops, in words (None while running)."""
@@ -436,8 +501,10 @@ class ServoStep:
         """Whether the loop goes on."""
     @property
     def telemetry(self) -> dict[str, Any]:
-        """iteration, invariant_error, image_error, tau, eps_z, eps (5,), tracking_error, law_ran,
-        basis (the three point indices in use), basis_switches."""
+        """The figures of this step: a dict of iteration, invariant_error, image_error (pixels), tau
+        (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran, basis (the three point
+        indices in use) and basis_switches (how often a hidden basis point made the session change its
+        basis); NaN where a figure does not apply."""
 
 @final
 class ImageServo:
@@ -445,6 +512,8 @@ class ImageServo:
     camera: no K* needed), then each ``step(image)`` detects or tracks it, matches the points by
     identity, undistorts them with ``K_hat`` and ``distortion`` and steps a ``Servo`` session.
 
+    ``target`` is a name of ``TARGETS``, whose entry lists the keyword arguments it takes (another
+    target's are refused by name).
     ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
     ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
     ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
@@ -468,23 +537,23 @@ class ImageServo:
     def __new__(
         cls,
         reference_image: npt.NDArray[np.uint8],
-        target: Literal["dots", "tags"],
+        target: _TargetName,
         K_hat: _IntrinsicsLike,
         *,
         reference_points: _ArrayLike | None = None,
         first_points: _ArrayLike | None = None,
         tracker: dict[str, float | int | str] | None = None,
-        family: _TagFamily = "tag36h11",
+        family: _TagFamily | None = None,
         tag_ids: Sequence[int] | None = None,
         decimation: int | None = None,
         distortion: Distortion | _ArrayLike | None = None,
         reference_K: _IntrinsicsLike | None = None,
         reference_distortion: Distortion | _ArrayLike | None = None,
-        **servo: Any,
+        **options: Any,
     ) -> ImageServo: ...
     def step(self, image: npt.NDArray[np.uint8]) -> ImageStep:
-        """One frame: the twist to send (zero when stopping), the verdict, the telemetry, and per
-        point the pixel and whether it was found."""
+        """One frame (an image: grey, or BGR/BGRA converted): the twist to send, the verdict, the
+        telemetry, and per point the pixel found and whether it was found."""
     @property
     def ids(self) -> npt.NDArray[np.uint32]:
         """The points' identities, in the session's order (n,)."""
@@ -528,52 +597,62 @@ class ImageStep(ServoStep):
 @final
 class PoseUncertainty:
     """The camera displacement from the goal that the images still allow (first-order propagation of pixel
-    noise through the law's Jacobian), current camera frame: metres (depth estimates' scale) and radians."""
+    noise through the law's Jacobian), in the current camera frame: translation in metres (in the depth
+    estimates' scale), rotation in radians."""
 
     @property
     def covariance(self) -> _F64Array:
-        """Covariance of (tx, ty, tz, rx, ry, rz), (6, 6)."""
+        """Covariance of (tx, ty, tz, rx, ry, rz) caused by the pixel noise, (6, 6)."""
     @property
     def offset(self) -> _F64Array:
         """J^+ (m - m*): the displacement the measured error itself implies, (6,)."""
     @property
     def translation_sigma(self) -> float:
-        """RMS translation the noise leaves, metres."""
+        """RMS translation the noise leaves, metres: sqrt(trace Cov(t))."""
     @property
     def rotation_sigma(self) -> float:
-        """RMS rotation the noise leaves, radians."""
+        """RMS rotation the noise leaves, radians: sqrt(trace Cov(r))."""
     def translation_bound(self, sigmas: float = 3.0) -> float:
-        """sigmas * translation_sigma + |offset_t|, metres."""
+        """sigmas * translation_sigma + |offset_t|: how far from the goal the camera centre may be, metres."""
     def rotation_bound(self, sigmas: float = 3.0) -> float:
         """sigmas * rotation_sigma + |offset_r|, radians."""
 
 @final
 class PixelNoiseMeter:
-    """The pixel noise of an image stream, measured from its second differences over consecutive images."""
+    """The pixel noise of an image stream, measured from the images themselves: the second difference of
+    each point over three consecutive images cancels motion linear in time, and E[d^2] = 6 sigma^2 for
+    independent noise."""
 
     def __new__(cls, capacity: int = 32) -> PixelNoiseMeter: ...
     def push(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> None:
         """Adds an image's pixels (n, 2); another number of points starts the measurement again."""
     @property
     def sigma(self) -> float | None:
-        """Standard deviation of a pixel coordinate, pixels; None until a point was seen in three images."""
+        """The standard deviation of a pixel coordinate, pixels; None until a point was seen in three
+        consecutive images."""
     def clear(self) -> None:
         """Forgets the images."""
     def __len__(self) -> int: ...
 
 @final
 class StabilityReport:
-    """Verdicts of Props. 1-2 and the sigma of Prop. 3."""
+    """Stability verdicts of Props. 1-2 and the sigma of Prop. 3."""
 
     @property
-    def prop1(self) -> bool: ...
+    def prop1(self) -> bool:
+        """Prop. 1 (constant K): necessary and sufficient."""
     @property
-    def prop2(self) -> bool: ...
+    def prop2(self) -> bool:
+        """Prop. 2 (K varying over the schedule): sufficient."""
     @property
-    def sigma(self) -> float: ...
+    def sigma(self) -> float:
+        """Smallest eigenvalue of A + A^T over the schedule (Prop. 3's sigma when positive)."""
     @property
-    def eigenvalues(self) -> npt.NDArray[np.complex128]: ...
-    def tracking_bound(self, max_b: float) -> float: ...
+    def eigenvalues(self) -> npt.NDArray[np.complex128]:
+        """Eigenvalues of A: complex (5,) for one K, (m, 5) for a schedule of m matrices."""
+    def tracking_bound(self, max_b: float) -> float:
+        """Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b; InvalidInput when Prop. 2 fails
+        (sigma <= 0: no bound)."""
 
 def check_stability(K: _IntrinsicsLike, K_hat: _IntrinsicsLike, kappa: float = 1.0, gain: float = 1.0) -> StabilityReport:
     """Props. 1-2 for the true intrinsics `K` (one camera, or a schedule of cameras), an
@@ -588,18 +667,27 @@ def tracking_bound(gain: float, sigma: float, max_b: float) -> float:
 
 @final
 class Scenario:
-    """A validated scenario (schema in the README)."""
+    """A validated scenario (see the README for the schema)."""
 
     @staticmethod
-    def from_toml(text: str, allow_outside_files: bool = False) -> Scenario: ...
+    def from_toml(text: str, allow_outside_files: bool = False) -> Scenario:
+        """From TOML text; the files it names must be in the working directory unless
+        `allow_outside_files`."""
     @staticmethod
-    def from_dict(d: dict[str, Any], allow_outside_files: bool = False) -> Scenario: ...
+    def from_dict(d: dict[str, Any], allow_outside_files: bool = False) -> Scenario:
+        """From a dictionary with the structure of a scenario file; the files it names must be in the
+        working directory unless `allow_outside_files`."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The name."""
     @property
-    def description(self) -> str: ...
-    def to_dict(self) -> dict[str, Any]: ...
-    def to_toml(self) -> str: ...
+    def description(self) -> str:
+        """The description."""
+    def to_dict(self) -> dict[str, Any]:
+        """The scenario as a dictionary (every default filled in); edit it and pass it back to
+        `run_scenario` or `Scenario.from_dict`."""
+    def to_toml(self) -> str:
+        """The scenario as TOML text."""
 
 _ScenarioLike = Union[Scenario, dict[str, Any], str, os.PathLike[str]]
 
@@ -632,71 +720,103 @@ _PlotKind = Literal[
 
 @final
 class RunResult:
-    """A finished run: `.summary` (numbers in SI, see `summary_fields()`), the scenario, and
-    the recorded columns (see `recorded_columns()`), one attribute each."""
+    """The result of a run: `.summary` (a dict), the scenario, and the recorded columns (NumPy views of the
+    simulator's buffers, one row per iteration), one attribute each as declared in
+    `vsinv::sim::outcome::COLUMNS` (see `recorded_columns()`)."""
 
     columns: tuple[dict[str, Any], ...]
     """The declaration of the recorded columns (as `recorded_columns()`)."""
     @property
-    def summary(self) -> dict[str, Any]: ...
+    def summary(self) -> dict[str, Any]:
+        """The run's summary (status, iterations, final errors, ...), a dict."""
     @property
-    def scenario(self) -> Scenario: ...
+    def scenario(self) -> Scenario:
+        """The scenario that was run."""
     @property
-    def arrays(self) -> dict[str, npt.NDArray[Any]]: ...
+    def arrays(self) -> dict[str, npt.NDArray[Any]]:
+        """The recorded arrays by name (those this run recorded)."""
     def plot(self, kind: _PlotKind, ax: Any = None) -> Any:
         """The figure `kind` (`vsinv.plots.PLOTS`) drawn into `ax` (a matplotlib Axes, or one
         per panel) or a new figure; returns the matplotlib Figure."""
     @property
-    def time(self) -> _F64Array: ...
+    def time(self) -> _F64Array:
+        """time (s, shape (N,))."""
     @property
-    def pose(self) -> _F64Array: ...
+    def pose(self) -> _F64Array:
+        """camera pose in F* (4x4, translation in metres) (m, shape (N, 4, 4))."""
     @property
-    def twist(self) -> _F64Array: ...
+    def twist(self) -> _F64Array:
+        """twist sent to the robot (vx, vy, vz, wx, wy, wz; NaN on the last row when no step followed)
+        (m/s, rad/s, shape (N, 6))."""
     @property
-    def joints(self) -> _F64Array: ...
+    def joints(self) -> _F64Array:
+        """joint positions (x, y, z, theta-u for the free-flying camera) (m, rad, shape (N, n_joints))."""
     @property
-    def pixels(self) -> _F64Array: ...
+    def pixels(self) -> _F64Array:
+        """measured pixels (NaN where not visible) (px, shape (N, n, 2))."""
     @property
-    def visible(self) -> npt.NDArray[np.bool_]: ...
+    def visible(self) -> npt.NDArray[np.bool_]:
+        """visibility of each point (bool, shape (N, n))."""
     @property
-    def invariant_error(self) -> _F64Array: ...
+    def invariant_error(self) -> _F64Array:
+        """||s - s*||, to the reference image (1, shape (N,))."""
     @property
-    def tracking_error(self) -> _F64Array: ...
+    def tracking_error(self) -> _F64Array:
+        """||s - s*(t)||, to the moving reference of a planned path (NaN outside the invariant law) (1,
+        shape (N,))."""
     @property
-    def eps(self) -> _F64Array: ...
+    def eps(self) -> _F64Array:
+        """task function eps (NaN for IBVS) (m, rad, shape (N, 5))."""
     @property
-    def eps_z(self) -> _F64Array: ...
+    def eps_z(self) -> _F64Array:
+        """eps_z = det(Q*) tau_21 (px^2, shape (N,))."""
     @property
-    def image_error(self) -> _F64Array: ...
+    def image_error(self) -> _F64Array:
+        """largest distance of a visible point from its reference pixel (px, shape (N,))."""
     @property
-    def translation_error(self) -> _F64Array: ...
+    def translation_error(self) -> _F64Array:
+        """distance of the camera centre from the reference pose (m, shape (N,))."""
     @property
-    def rotation_error(self) -> _F64Array: ...
+    def rotation_error(self) -> _F64Array:
+        """rotation angle from the reference pose (rad, shape (N,))."""
     @property
-    def reference_pixels(self) -> _F64Array: ...
+    def reference_pixels(self) -> _F64Array:
+        """reference pixels (with their noise, if any); one row per point, not per iteration (px, shape (n,
+        2))."""
     @property
-    def detection_error(self) -> _F64Array | None: ...
+    def detection_error(self) -> _F64Array | None:
+        """distance of each tracked centroid from the true projection of its dot's centre (NaN where not
+        found) (px, shape (N, n); None without [vision])."""
     @property
-    def joint_velocities(self) -> _F64Array | None: ...
+    def joint_velocities(self) -> _F64Array | None:
+        """an arm's joint velocities after saturation (NaN on the last row) (m/s, rad/s, shape (N,
+        n_joints); None for robots other than an arm)."""
     @property
     def joint_limits(self) -> dict[str, Any] | None:
         """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`
         (per second); None for the other robots."""
 
 def load_scenario(source: _ScenarioLike, allow_outside_files: bool = False) -> Scenario:
-    """A built-in name, a TOML file, a dict or a Scenario. Scenario angles are degrees and their
-    keys say so (``rotation_deg``, ``skew_deg``, ``max_angular_speed_deg``; the older
-    ``rotation`` is read as degrees); the Python API itself is SI (radians). The files a
-    scenario names (``calibration``, ``robot.urdf``) must be inside its folder (the working
-    directory for a dict) unless ``allow_outside_files``."""
-def list_scenarios() -> list[tuple[str, str]]: ...
+    """Loads a scenario from a built-in name, a TOML file path or a dictionary. Scenario angles are degrees
+    and their keys say so (`rotation_deg`, `skew_deg`, `max_angular_speed_deg`; the older `rotation` is
+    read as degrees); the Python API itself is SI (radians). The files a scenario names (`calibration`,
+    `robot.urdf`) must be inside its folder (the working directory for a dict) unless
+    `allow_outside_files`."""
+def list_scenarios() -> list[tuple[str, str]]:
+    """The built-in scenarios as (name, description) pairs."""
 def run_batch(
     scenarios: Iterable[_ScenarioLike],
     threads: int | None = None,
     allow_outside_files: bool = False,
     progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, npt.NDArray[Any]]:
-    """Runs the scenarios in parallel (GIL released, recording off); one table row per run.
+    """Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths) in parallel
+    with the GIL released (recording off) and returns the table as a dict of NumPy arrays, one row per
+    scenario: status (str), iterations, the summary fields final_translation_error,
+    final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
+    observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where not
+    measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2, within_tolerance,
+    message (str).
 
     ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
     as runs finish (``done`` increasing to ``total``); ``vsinv.run_batch`` draws a tqdm bar
@@ -708,24 +828,32 @@ def run_scenario(
     record: bool = True,
     progress: Callable[[int, int], object] | None = None,
     allow_outside_files: bool = False,
-) -> RunResult: ...
+) -> RunResult:
+    """Runs a scenario (a `Scenario`, dict, built-in name or TOML path) with the GIL released.
+    `progress(done, total)` is called every 64 iterations if given; Ctrl-C stops the run."""
 
 @final
 class PlaneParallax:
-    """The plane + parallax parameters of eq. (9), gamma_3 = 1."""
+    """The plane + parallax parameters of eq. (9) (gamma_3 = 1)."""
 
     @property
-    def gamma(self) -> _F64Array: ...
+    def gamma(self) -> _F64Array:
+        """Gamma / gamma_3, (3,)."""
     @property
-    def epipole(self) -> _F64Array: ...
+    def epipole(self) -> _F64Array:
+        """The epipole e* (unit norm), (3,)."""
     @property
-    def mu_e(self) -> _F64Array: ...
+    def mu_e(self) -> _F64Array:
+        """mu_k* e* for each non-basis point, (n-3, 3)."""
     @property
-    def gamma_k(self) -> _F64Array: ...
+    def gamma_k(self) -> _F64Array:
+        """gamma_k / gamma_3 for each non-basis point, (n-3,)."""
     @property
-    def residual(self) -> float: ...
+    def residual(self) -> float:
+        """RMS distance between the current invariant points and those eq. (9) predicts."""
     @property
-    def candidates(self) -> int: ...
+    def candidates(self) -> int:
+        """Number of det F = 0 candidates of the minimal method (1 for the linear method)."""
 
 def estimate_plane_parallax(
     current_pixels: _ArrayLike, reference_pixels: _ArrayLike, basis: _Basis = (0, 1, 2)
@@ -741,10 +869,14 @@ class InvariantPath:
         cls, current_pixels: _ArrayLike, reference_pixels: _ArrayLike, duration: float, basis: _Basis = (0, 1, 2)
     ) -> InvariantPath: ...
     @property
-    def duration(self) -> float: ...
+    def duration(self) -> float:
+        """T, seconds."""
     @property
-    def plane_parallax(self) -> PlaneParallax: ...
-    def sample(self, t: float) -> tuple[_F64Array, _F64Array]: ...
+    def plane_parallax(self) -> PlaneParallax:
+        """The plane + parallax estimate the path was built from."""
+    def sample(self, t: float) -> tuple[_F64Array, _F64Array]:
+        """(q_k*(t), dq_k*/dt) for the non-basis points, two (n-3, 3) arrays; pass them to
+        `InvariantController.set_reference`."""
 
 def reference_depths(object_points: _ArrayLike, reference_pixels: _ArrayLike, K: _IntrinsicsLike | None = None) -> _F64Array:
     """The reference depths zeta* (n,) of a photo taken with any camera: `object_points` (n, 3),
@@ -760,7 +892,8 @@ def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike)
 
 @final
 class ResectionDepths:
-    """Appendix A on line: current depths up to kappa(t) > 0 by DLT resection."""
+    """Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera against
+    the reconstruction from the translation pair."""
 
     def __new__(
         cls,
@@ -769,7 +902,9 @@ class ResectionDepths:
         reference_pixels: _ArrayLike,
         reference_mean_depth: float = 1.0,
     ) -> ResectionDepths: ...
-    def estimate(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array: ...
+    def estimate(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
+        """Depths (n,) of the current image up to kappa(t) > 0, from the pixels of the visible points (all
+        by default; at least 6, not coplanar)."""
 
 # An image: returned, a (height, width) uint8 grey array; as an argument, any uint8 array read
 # by the bindings' one image reader: grey (height, width) or (height, width, 1), colour
@@ -784,9 +919,9 @@ def render(
     time: float = 0.0,
     reference: bool = False,
 ) -> _U8Image:
-    """The (height, width) uint8 image a scenario's camera sees: the servo camera K(time) at
-    `pose` (4x4, camera frame in F*; default the start pose), or the reference camera K*
-    (default at F*) when `reference` is true."""
+    """The image a scenario's camera sees: the servo camera K(time) at `pose` (a 4x4 camera frame in F*;
+    default the start pose), or the reference camera K* (default at F*) when `reference` is true;
+    rendered with the scenario's `[vision]` settings."""
 
 def render_view(
     scenario: _ScenarioLike,
@@ -794,7 +929,8 @@ def render_view(
     time: float = 0.0,
     reference: bool = False,
 ) -> tuple[_U8Image, _F64Array, npt.NDArray[np.bool_]]:
-    """`render` with the true projections of the dots' centres (n, 2) and their visibility."""
+    """`render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true projections of the
+    dots' centres and which dots are in the image."""
 
 @final
 class Dots:
@@ -802,13 +938,13 @@ class Dots:
 
     @property
     def centroids(self) -> _F64Array:
-        """Subpixel centroids (u, v), (m, 2)."""
+        """Subpixel centroids `(u, v)`, `(m, 2)` float64."""
     @property
     def areas(self) -> _F64Array:
-        """Pixels above the threshold, (m,)."""
+        """Pixels above the threshold, `(m,)` float64."""
     @property
     def bboxes(self) -> npt.NDArray[np.int64]:
-        """Bounding boxes [u_min, v_min, u_max, v_max] (inclusive), (m, 4)."""
+        """Bounding boxes `[u_min, v_min, u_max, v_max]` (inclusive), `(m, 4)` int64."""
     def __len__(self) -> int: ...
 
 def detect_dots(
@@ -821,9 +957,16 @@ def detect_dots(
     min_contrast: int = 20,
     max_ring_residual: float = 0.15,
 ) -> Dots:
-    """Bright dots on a dark background ("light"), dark dots on a bright one ("dark": the bright
-    dots of 255 - image, a threshold t standing for 255 - t) or as the image shows ("auto"),
-    with subpixel intensity-weighted centroids over a local background plane.
+    """Bright dots on a dark background (`polarity="light"`), dark dots on a bright one (`"dark"`: the
+    bright dots of `255 - image`, threshold `t` standing for `255 - t`) or as the image shows
+    (`"auto"`): a local threshold (a pixel is a dot pixel when it stands out of the background of its
+    neighbourhood by half the contrast of the dots nearby and at least `min_contrast`; `threshold=` sets
+    one level for the whole image instead), 8-connected components with `min_area <= area <= max_area`
+    (pixels) and a fill ratio (area over that of the ellipse of its second moments) of at least
+    `min_fill` (less `0.2 / sqrt(area)`, the digitised outline's share), a mean contrast over the
+    background plane around it of at least `min_contrast` grey levels and a ring around it that fits
+    that plane (RMS residual at most `max_ring_residual` times the contrast), intensity-weighted
+    subpixel centroids over that plane.
 
     threshold: None (default) for the local threshold (per 32 px tile: half way between the
     background of the neighbourhood and the brightest dot nearby, at least min_contrast above
@@ -834,13 +977,18 @@ def detect_dots(
     dot), a mean contrast over the background plane around it of at least
     min_contrast grey levels in [0, 255] (default 20), and a plain ring around it: the RMS
     residual of that plane on its bounding box's ring (grown by 2 px) at most
-    max_ring_residual >= 0 times its contrast (default 0.15; inf: no check)."""
+    max_ring_residual >= 0 times its contrast (default 0.15; inf: no check).
+    """
 
 @final
 class DotTracker:
-    """Tracks dots through images from one approximate pixel per dot in the first image.
+    """Tracks dots through images: `DotTracker(image, initial_pixels (n, 2), search_radius=20.0,
+    max_search_radius=80.0, min_area=4, polarity="light", max_area_ratio=1.5)` finds each dot near its
+    click in the first image (a dot larger than the window too; `"dark"`: dark dots, `"auto"`: decided
+    on the first image); `track(image)` returns `(pixels (n, 2), found (n,) bool)`.
 
-    Works from several threads: their calls take turns (each waits with the GIL released)."""
+    Works from several threads: their calls take turns (each waits with the GIL released).
+    """
 
     def __new__(
         cls,
@@ -858,10 +1006,10 @@ class DotTracker:
         principal spreads differ by more than its square root, is not that dot: the dot is
         reported not found and keeps its last position."""
     def track(self, image: _U8Image) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
-        """Finds the dots in the next image: (pixels (n, 2), found (n,))."""
+        """Finds the dots in the next image: `(pixels (n, 2), found (n,) bool)`."""
     @property
     def positions(self) -> _F64Array:
-        """The last known position of every dot, (n, 2)."""
+        """The last known position of every dot, `(n, 2)`."""
     def __len__(self) -> int: ...
 
 @final
@@ -907,7 +1055,7 @@ class Tags:
 
     @property
     def ids(self) -> npt.NDArray[np.int64]:
-        """Tag ids, (m,)."""
+        """Tag ids, `(m,)` int64."""
     @property
     def corners(self) -> _F64Array:
         """Corners (u, v) of each tag's black square, (m, 4, 2): top-left, top-right,
@@ -915,7 +1063,7 @@ class Tags:
         pixel (u, v) centred at integer coordinates (OpenCV's convention)."""
     @property
     def family(self) -> str:
-        """The family searched for ("tag36h11", ...)."""
+        """The family searched for (`"tag36h11"`, ...)."""
     @property
     def stopped_early(self) -> bool:
         """Whether the search stopped early: the frame was too cluttered to be searched whole
@@ -946,13 +1094,13 @@ def detect_tags(
     tags), never on ordinary frames."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
-    """Reads an image file (PNG, PGM/PPM, JPEG, or a GIF's first frame) as (height, width) uint8
-    grey; colour is converted with the Rec. 601 luma weights (as OpenCV), 16-bit images are refused.
-    At most 64 MiB of file, 2^28 pixels (65536 a side) and 512 MiB to decode; a PNG file's colour
-    profile (iCCP) and text chunks are skipped unread."""
+    """Reads an image file (PNG, PGM/PPM, JPEG, or GIF's first frame) as a `(height, width)` uint8 array;
+    colour images are converted to grey with the Rec. 601 luma weights (0.299, 0.587, 0.114, as OpenCV),
+    16-bit images are refused. At most 64 MiB of file, 2^28 pixels (65536 a side) and 512 MiB to decode;
+    a PNG file's colour profile (iCCP) and text chunks are skipped unread."""
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
-    """Writes an image as a grey PNG file (a BGR or BGRA array is written as its grey)."""
+    """Writes an image as a grey PNG file (a colour array, BGR or BGRA, is written as its grey)."""
 
 def decode_image(data: bytes | bytearray | memoryview | array.array[int] | npt.NDArray[np.uint8],
                  format: Literal["png", "jpeg"] | None = None) -> _U8Image:
@@ -975,21 +1123,24 @@ def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = 
 
 @final
 class Distortion:
-    """Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model."""
+    """Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model,
+    "plumb_bob" (4 or 5 coefficients) or "rational_polynomial" (8)."""
 
     def __new__(
         cls, coefficients: _ArrayLike, model: Literal["plumb_bob", "rational_polynomial"] | None = None
     ) -> Distortion: ...
     @property
-    def model(self) -> Literal["plumb_bob", "rational_polynomial"]: ...
+    def model(self) -> Literal["plumb_bob", "rational_polynomial"]:
+        """"plumb_bob" or "rational_polynomial"."""
     @property
-    def coefficients(self) -> _F64Array: ...
+    def coefficients(self) -> _F64Array:
+        """The coefficients in OpenCV's order, a new (5,) or (8,) array."""
     def __eq__(self, other: object, /) -> bool: ...
 
 _DistortionLike = Union[Distortion, _ArrayLike]
 
 def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
-    """Distorts pixels (n, 2) of the ideal pinhole image: K d(K^-1 p), OpenCV's model."""
+    """Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew."""
 
 def undistort_points(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
@@ -1002,25 +1153,29 @@ class Calibration:
     """A camera calibration read from a file: intrinsics, distortion and image size."""
 
     @property
-    def intrinsics(self) -> Intrinsics: ...
+    def intrinsics(self) -> Intrinsics:
+        """The camera matrix as `Intrinsics` (no skew)."""
     @property
-    def distortion(self) -> Distortion: ...
+    def distortion(self) -> Distortion:
+        """The lens distortion."""
     @property
-    def image_size(self) -> tuple[int, int] | None: ...
+    def image_size(self) -> tuple[int, int] | None:
+        """(width, height) in pixels, or None when the file does not give it."""
 
 def load_calibration(path: str | os.PathLike[str]) -> Calibration:
     """Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML (a
     regular file of at most 1 MiB; no YAML aliases)."""
 
 def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:
-    """The 4x4 rigid motion of holding a camera twist (vx, vy, vz, wx, wy, wz) for dt seconds:
-    the next pose is ``pose @ exp_twist(twist, dt)``."""
+    """The 4x4 rigid motion of holding the camera twist `(vx, vy, vz, wx, wy, wz)` (camera frame) for `dt`
+    seconds: the next pose is `pose @ exp_twist(twist, dt)`."""
 
 def pose_from_position_thetau(position: _ArrayLike, thetau: _ArrayLike) -> _F64Array:
-    """The 4x4 pose with camera centre ``position`` (m, F*) and theta-u rotation (rad, F*)."""
+    """The 4x4 pose with camera centre `position` (metres, F*) and theta-u rotation `thetau` (radians, F*)."""
 
 def thetau_from_pose(pose: _ArrayLike) -> tuple[_F64Array, _F64Array]:
-    """(position (3,), thetau (3,)) of a 4x4 pose, theta in [0, pi]."""
+    """`(position (3,), thetau (3,))` of a 4x4 pose: the camera centre and the theta-u rotation vector
+    (radians, theta in [0, pi])."""
 
 def thetau_from_rotations(rotations: _ArrayLike) -> _F64Array:
     """The theta-u vectors (rad, theta in [0, pi]) of rotation matrices ``(n, 3, 3)``, shape
@@ -1028,13 +1183,14 @@ def thetau_from_rotations(rotations: _ArrayLike) -> _F64Array:
     a non-finite entry or that is not a rotation (orthonormal, det +1, within 1e-6)."""
 
 def twist_adjoint(pose: _ArrayLike) -> _F64Array:
-    """The 6x6 twist transform (adjoint) of a 4x4 pose (R, t): a twist (v, w) in the pose's
-    frame to the same motion's twist in the parent frame, (R v + t x R w, R w)."""
+    """The 6x6 twist transform (adjoint) of a pose `(R, t)` (4x4): a twist `(v, w)` in the pose's frame to
+    the same motion's twist in the parent frame, `(R v + t x R w, R w)`; for the camera's pose in the
+    end effector's frame, the camera twist as the end effector's."""
 
 @final
 class IkSolution:
-    """A solution of :func:`ik`: joints within the limits and how far their pose is from the
-    target."""
+    """A solution of [`ik`]: the joints (radians; metres for prismatic joints) and how far their pose is
+    from the target."""
 
     @property
     def joints(self) -> _F64Array:
@@ -1084,11 +1240,11 @@ class HandEyeCalibration:
         """The 4x4 camera-to-gripper transform X (the camera frame in the gripper frame)."""
     @property
     def method(self) -> _HandEyeMethod:
-        """The method that computed it."""
+        """The method: 'tsai', 'park' or 'daniilidis'."""
     @property
     def residuals(self) -> _F64Array:
-        """(m, 2): the residual of A X = X B for each pair of stations (rows of ``pairs``):
-        rotation in degrees, translation in metres."""
+        """(m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`): rotation
+        in degrees, translation in metres."""
     @property
     def pairs(self) -> npt.NDArray[np.int64]:
         """(m, 2): the stations (i, j), i < j, of each residual row."""
@@ -1099,7 +1255,7 @@ class HandEyeCalibration:
         two motions; 0 when all are parallel, 90 for axes spread evenly)."""
     @property
     def axis_eigenvalues(self) -> _F64Array:
-        """(3,): the eigenvalues l1 >= l2 >= l3 of the mean u u^T, summing to 1."""
+        """(3,): the eigenvalues of the mean u u^T of the motions' unit axes, descending, sum 1."""
     @property
     def rotating_motions(self) -> int:
         """The number of gripper motions that rotate by 0.1 degree or more."""
@@ -1140,14 +1296,16 @@ class HandEyeAgreement:
 def calibrate_hand_eye(
     gripper_poses: _ArrayLike, target_poses: _ArrayLike, method: _HandEyeMethod | str = "tsai"
 ) -> HandEyeCalibration:
-    """The camera-to-gripper transform (OpenCV's ``calibrateHandEye`` convention).
+    """The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and target-to-camera
+    `target_poses` (OpenCV's calibrateHandEye convention), by `method` ('tsai', 'park' or 'daniilidis').
 
     ``gripper_poses``: (n, 4, 4) gripper-to-base poses reported by the robot;
     ``target_poses``: (n, 4, 4) target-to-camera poses (e.g. from solvePnP); ``method``:
     'tsai' (default), 'park' or 'daniilidis'. Raises InvalidInput for a pose that is not a
     rigid transform (naming the argument and the pose) and DegenerateGeometry (kind
     'degenerate_motion') for fewer than 3 poses, no rotation, or rotations about (nearly)
-    parallel axes only."""
+    parallel axes only.
+    """
 
 def compare_hand_eye_methods(gripper_poses: _ArrayLike, target_poses: _ArrayLike) -> HandEyeAgreement:
     """Runs every method on the same poses: their calibrations and how far apart they are."""

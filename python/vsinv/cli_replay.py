@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ._core import LAW_OPTIONS, Intrinsics, InvalidInput, VsinvError, check_law_option, load_calibration
+from ._core import LAW_OPTIONS, TARGETS, Intrinsics, InvalidInput, VsinvError, check_law_option, load_calibration
 from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import read_points
@@ -16,8 +16,8 @@ from .replaying import read_depths, replay
 
 __all__ = ["add_replay_command", "cmd_replay"]
 
-#: The targets the command can follow.
-TARGETS = ("dots", "tags")
+#: The targets the command can follow (``vsinv.TARGETS``, declared once in the vision layer).
+TARGET_NAMES = tuple(t["name"] for t in TARGETS)
 
 #: The replay's own defaults of law options (the table's otherwise): a gentler gain for
 #: frames that were recorded, not commanded.
@@ -80,7 +80,8 @@ def add_replay_command(sub: Any) -> None:
     )
     p.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
     p.add_argument("frames", metavar="FRAMES", type=Path, help="a folder of images or a video file")
-    p.add_argument("--target", choices=TARGETS, default="dots", help="what to follow: dots (tracked from clicks) or tags (AprilTags, by identity) (dots)")
+    what = "; ".join(f"{t['name']}: {t['doc']}" for t in TARGETS)
+    p.add_argument("--target", choices=TARGET_NAMES, default="dots", help=f"what to follow ({what}) (dots)")
     p.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate positions in REF (u, v columns)")
     p.add_argument("--first-points", metavar="CSV", type=Path, help="dots: approximate positions in the first frame (default: those found in REF)")
     add_tag_options(p)

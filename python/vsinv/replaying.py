@@ -11,7 +11,7 @@ import logging
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import IO, Any, Literal, Optional, Union
+from typing import IO, TYPE_CHECKING, Any, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -19,6 +19,9 @@ import numpy.typing as npt
 from ._core import ImageServo, InvalidInput, load_image
 from .sources import frames as frame_source
 from .safe_files import replace_text_file
+
+if TYPE_CHECKING:
+    from ._core import _TargetName
 
 log = logging.getLogger("vsinv")
 
@@ -103,7 +106,7 @@ def replay(
     reference: Union[str, Path, npt.NDArray[np.uint8]],
     source: Any,
     K_hat: Any,
-    target: Literal["dots", "tags"] = "dots",
+    target: _TargetName = "dots",
     max_frames: Optional[int] = None,
     **options: Any,
 ) -> ReplayResult:

@@ -94,8 +94,8 @@ pub(crate) fn intrinsics(obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult
     Ok(Intrinsics::from_matrix(&matrix3(obj, what)?)?)
 }
 
-/// Projects points given in the camera frame (n, 3), metres, with intrinsics K:
-/// returns (pixels (n, 2), depths (n,)).
+/// Projects points (n, 3) given in the camera frame (metres) with intrinsics `K` (eqs. 1-3): returns (pixels (n,
+/// 2), depths (n,)).
 #[pyfunction]
 #[allow(non_snake_case)]
 fn project<'py>(py: Python<'py>, points: &Bound<'py, PyAny>, K: &Bound<'py, PyAny>) -> PyResult<PixelsAndDepths<'py>> {

@@ -13,9 +13,11 @@ fn invalid(reason: String) -> PyErr {
     crate::Error::InvalidImage { what: "data".to_string(), reason }.into()
 }
 
-/// The grey image of `data` (bytes, bytearray, memoryview, `array.array('B')` or a 1-d uint8
-/// array), PNG or JPEG; `format` `"png"` or `"jpeg"` refuses the other one, None takes
-/// either.
+/// The (height, width) uint8 grey image of PNG or JPEG bytes (a ROS sensor_msgs/CompressedImage's data), in Rust
+/// with the GIL released: the declared size is checked against the pixel limit (2^28, 65536 a side) before
+/// decoding, at most 64 MiB of data and 512 MiB to decode; colour by Rec. 601 luma. `format` "png" or "jpeg"
+/// refuses the other one (None: either). Empty, unknown, corrupt or truncated data, or 16-bit samples, raise
+/// InvalidInput; another `format` InvalidInput naming it.
 #[pyfunction]
 #[pyo3(signature = (data, format = None))]
 pub fn decode_image<'py>(

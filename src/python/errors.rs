@@ -9,7 +9,7 @@
 //! ...; the table [`ATTRIBUTES`]), `None` where a field does not apply; the message is the
 //! error's `Display` text.
 
-use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
@@ -22,38 +22,101 @@ static INVALID_INPUT: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static DEGENERATE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static NOT_READY: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
-/// Every attribute an exception may carry, with its documentation. `VsinvError` sets them all
-/// to `None` at class level; an exception sets those its error has.
-pub(crate) const ATTRIBUTES: &[(&str, &str)] = &[
-    (
-        "kind",
-        "str: the kind of error, snake_case: 'non_finite', 'non_finite_point', 'shape', \
-         'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points', \
-         'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', \
-         'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable', \
-         'invalid_pose', 'degenerate_motion', 'not_ready'",
-    ),
-    ("argument", "str: the argument or parameter at fault (e.g. 'pixels', 'gain'; an image's file path)"),
-    ("index", "int: the flat index of a non-finite value, or the point (or pose) at fault"),
-    ("row", "int: the row of a non-finite entry of a 2-d array (the point)"),
-    ("column", "int: the column of a non-finite entry of a 2-d array (the coordinate)"),
-    ("expected", "str: what size was expected, in words (e.g. '12 points', 'shape (n, 2)')"),
-    ("got", "str: what size was given"),
-    ("needed", "int: the fewest points the task takes"),
-    ("count", "int: the number of points (or poses) given"),
-    ("reason", "str: what is wrong"),
-    ("basis", "tuple[int, int, int]: the basis indices of a collinear basis"),
-    ("image", "str: 'current' or 'reference', the image of a collinear basis"),
-    ("ratio", "float: the singular-value or area ratio that failed"),
-    ("threshold", "float: the threshold the ratio was held to"),
-    ("depth", "float: the depth of a point at or behind the camera"),
-    ("estimate", "str: what was being estimated (a degenerate estimate)"),
-    ("hint", "str: what usually causes a degenerate estimate"),
-    ("key", "str: the dotted scenario key at fault (e.g. 'control.gain'); None for the whole document"),
-    ("file", "str: the file at fault (a scenario, calibration or URDF file)"),
-    ("field", "str: the entry of a calibration file at fault (e.g. 'camera_matrix.data')"),
-    ("a_hat", "float: the vanishing coefficient of the rz law (eq. 23)"),
-    ("residual", "float: the smallest position residual (metres) inverse kinematics reached for an unreachable pose"),
+/// One exception class: its name, its parent in the hierarchy (None: the root), the Python
+/// built-in exception it also derives from, and its docstring.
+pub(crate) struct ClassSpec {
+    pub(crate) name: &'static str,
+    pub(crate) parent: Option<&'static str>,
+    pub(crate) builtin: &'static str,
+    pub(crate) doc: &'static str,
+}
+
+/// The exception classes, declared once: the module builds them from this table, Python sees it
+/// as `ERROR_CLASSES`, and a test checks the stub's classes and docstrings against it.
+pub(crate) const CLASSES: [ClassSpec; 4] = [
+    ClassSpec {
+        name: "VsinvError",
+        parent: None,
+        builtin: "Exception",
+        doc: "Base class of every vsinv error.\n\nThe structured fields of the error are attributes, None where \
+              they do not apply (and on exceptions raised by Python code); match on them rather than on the \
+              message.",
+    },
+    ClassSpec {
+        name: "InvalidInput",
+        parent: Some("VsinvError"),
+        builtin: "ValueError",
+        doc: "Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, a bad \
+              scenario, image, URDF or calibration file.",
+    },
+    ClassSpec {
+        name: "DegenerateGeometry",
+        parent: Some("VsinvError"),
+        builtin: "ValueError",
+        doc: "Geometry the method cannot work with: collinear basis points, too few points, a planar object or \
+              equal depth estimates, points at or behind the camera, robot motions that do not determine a \
+              hand-eye calibration.",
+    },
+    ClassSpec {
+        name: "NotReady",
+        parent: Some("VsinvError"),
+        builtin: "RuntimeError",
+        doc: "A state read before it exists, e.g. a controller's eps before its first step (kind 'not_ready').",
+    },
+];
+
+/// Every `kind` an exception carries: the kind, the class raised with it, and its meaning. The
+/// kinds of core errors are [`describe`]'s (a test checks each variant's kind is here with its
+/// class); `invalid_argument` and `not_ready` are the bindings' own.
+pub(crate) const KINDS: &[(&str, &str, &str)] = &[
+    ("non_finite", "InvalidInput", "a NaN or infinite value in an array"),
+    ("non_finite_point", "InvalidInput", "a NaN or infinite entry of a 2-d array (a point)"),
+    ("shape", "InvalidInput", "an array of the wrong size or shape"),
+    ("invalid_intrinsics", "InvalidInput", "intrinsics that are not a camera's"),
+    ("invalid_parameter", "InvalidInput", "a parameter out of its domain"),
+    ("invalid_argument", "InvalidInput", "an argument the bindings refuse (a name, a type, a combination)"),
+    ("too_few_points", "DegenerateGeometry", "fewer points than the task takes"),
+    ("collinear_basis", "DegenerateGeometry", "the three basis points on a line"),
+    ("point_behind_camera", "DegenerateGeometry", "a point at or behind the camera"),
+    ("degenerate_structure", "DegenerateGeometry", "a planar object or equal depths"),
+    ("degenerate_estimate", "DegenerateGeometry", "an estimate the data do not determine"),
+    ("scenario", "InvalidInput", "a bad scenario"),
+    ("invalid_image", "InvalidInput", "an image that cannot be used"),
+    ("urdf", "InvalidInput", "a bad URDF file"),
+    ("distortion", "InvalidInput", "bad lens distortion coefficients"),
+    ("calibration", "InvalidInput", "a bad calibration file"),
+    ("rz_singular", "DegenerateGeometry", "the rz law's coefficient vanishes (eq. 23)"),
+    ("unreachable", "InvalidInput", "a pose the arm cannot reach"),
+    ("invalid_pose", "InvalidInput", "a pose that is not a rigid motion"),
+    ("degenerate_motion", "DegenerateGeometry", "robot motions that do not determine a hand-eye calibration"),
+    ("not_ready", "NotReady", "a state read before it exists"),
+];
+
+/// Every attribute an exception may carry: name, Python type and documentation. `VsinvError`
+/// sets them all to `None` at class level; an exception sets those its error has.
+pub(crate) const ATTRIBUTES: &[(&str, &str, &str)] = &[
+    ("kind", "str", "The kind of error, one of ERROR_KINDS:"),
+    ("argument", "str", "The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."),
+    ("index", "int", "The flat index of a non-finite value, or the point (or pose) at fault."),
+    ("row", "int", "The row (point) of a non-finite entry of a 2-d array."),
+    ("column", "int", "The column (coordinate) of a non-finite entry of a 2-d array."),
+    ("expected", "str", "The size expected, in words ('12 points', 'shape (n, 2)')."),
+    ("got", "str", "The size given."),
+    ("needed", "int", "The fewest points the task takes."),
+    ("count", "int", "The number of points (or poses) given."),
+    ("reason", "str", "What is wrong."),
+    ("basis", "tuple[int, int, int]", "The basis indices of a collinear basis."),
+    ("image", "str", "'current' or 'reference': the image of a collinear basis."),
+    ("ratio", "float", "The singular-value or area ratio that failed."),
+    ("threshold", "float", "The threshold the ratio was held to."),
+    ("depth", "float", "The depth of a point at or behind the camera."),
+    ("estimate", "str", "What was being estimated (a degenerate estimate)."),
+    ("hint", "str", "What usually causes a degenerate estimate."),
+    ("key", "str", "The dotted scenario key at fault ('control.gain'); None for the whole document."),
+    ("file", "str", "The file at fault (a scenario, calibration or URDF file)."),
+    ("field", "str", "The entry of a calibration file at fault ('camera_matrix.data')."),
+    ("a_hat", "float", "The vanishing coefficient of the rz law (eq. 23)."),
+    ("residual", "float", "The smallest position residual (m) inverse kinematics reached for an unreachable pose."),
 ];
 
 fn new_class<'py>(py: Python<'py>, name: &str, bases: Bound<'py, PyTuple>, doc: &str) -> PyResult<Bound<'py, PyType>> {
@@ -64,53 +127,107 @@ fn new_class<'py>(py: Python<'py>, name: &str, bases: Bound<'py, PyTuple>, doc: 
     Ok(class.cast_into::<PyType>()?)
 }
 
-/// `VsinvError`, with every attribute `None` at class level and the table in its docstring.
-fn base_class(py: Python<'_>) -> PyResult<Bound<'_, PyType>> {
-    let mut doc = String::from(
-        "Base class of every vsinv error.\n\nAttributes (None where they do not apply; the message \
-         is str(err)):\n\n",
-    );
-    for (name, text) in ATTRIBUTES {
-        doc.push_str(&format!("{name}\n    {text}\n"));
+/// The docstring of a class at run time: the table's, and for the root the attributes with
+/// their types and meanings.
+fn runtime_doc(spec: &ClassSpec) -> String {
+    let mut doc = spec.doc.to_string();
+    if spec.parent.is_none() {
+        doc.push_str("\n\nAttributes (None where they do not apply; the message is str(err)):\n\n");
+        for (name, kind, _) in ATTRIBUTES {
+            doc.push_str(&format!("{name}\n    {kind}: {}\n", attribute_doc(name)));
+        }
+    } else {
+        doc.push_str(" Attributes: see VsinvError.");
     }
-    let bases = PyTuple::new(py, [py.get_type::<PyException>()])?;
-    let class = new_class(py, "VsinvError", bases, &doc)?;
-    for (name, _) in ATTRIBUTES {
-        class.setattr(*name, py.None())?;
+    doc
+}
+
+/// The documentation of the attribute `name`; that of `kind` lists the kinds.
+fn attribute_doc(name: &str) -> String {
+    let text = ATTRIBUTES.iter().find(|(n, _, _)| *n == name).map_or("", |(_, _, d)| d);
+    if name != "kind" {
+        return text.to_string();
+    }
+    let kinds: Vec<String> = KINDS.iter().map(|(k, _, _)| format!("'{k}'")).collect();
+    format!("{text} {}.", kinds.join(", "))
+}
+
+/// The cell holding the class named `name`.
+fn cell(name: &str) -> Option<&'static PyOnceLock<Py<PyType>>> {
+    match name {
+        "VsinvError" => Some(&VSINV_ERROR),
+        "InvalidInput" => Some(&INVALID_INPUT),
+        "DegenerateGeometry" => Some(&DEGENERATE),
+        "NotReady" => Some(&NOT_READY),
+        _ => None,
+    }
+}
+
+/// One class of [`CLASSES`], its parent made first; with every attribute `None` at the root.
+fn make_class<'py>(py: Python<'py>, spec: &ClassSpec) -> PyResult<Bound<'py, PyType>> {
+    let missing = || PyRuntimeError::new_err(format!("no cell for the exception class {}", spec.name));
+    let builtin = py.import("builtins")?.getattr(spec.builtin)?;
+    let bases = match spec.parent {
+        Some(parent) => {
+            let parent = cell(parent).and_then(|c| c.get(py)).ok_or_else(missing)?;
+            PyTuple::new(py, [parent.bind(py).clone().into_any(), builtin])?
+        }
+        None => PyTuple::new(py, [builtin])?,
+    };
+    let class = new_class(py, spec.name, bases, &runtime_doc(spec))?;
+    if spec.parent.is_none() {
+        for (name, _, _) in ATTRIBUTES {
+            class.setattr(*name, py.None())?;
+        }
     }
     Ok(class)
 }
 
-/// Creates the classes and adds them to the module.
+/// A tuple of dicts, one per row, with these keys.
+fn table<'py, const N: usize>(
+    py: Python<'py>,
+    keys: [&str; N],
+    rows: Vec<[Bound<'py, PyAny>; N]>,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let dicts = rows
+        .into_iter()
+        .map(|row| {
+            let d = PyDict::new(py);
+            keys.iter().zip(row).try_for_each(|(k, v)| d.set_item(k, v))?;
+            Ok(d)
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    PyTuple::new(py, dicts)
+}
+
+/// Adds `ERROR_CLASSES` (name, parent, builtin, doc), `ERROR_KINDS` (kind, class, doc) and
+/// `ERROR_ATTRIBUTES` (name, type, doc).
+fn register_tables(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let s = |x: &str| -> PyResult<Bound<'_, PyAny>> { Ok(x.into_pyobject(py)?.into_any()) };
+    let classes = CLASSES
+        .iter()
+        .map(|c| Ok([s(c.name)?, c.parent.into_pyobject(py)?.into_any(), s(c.builtin)?, s(c.doc)?]))
+        .collect::<PyResult<Vec<_>>>()?;
+    m.add("ERROR_CLASSES", table(py, ["name", "parent", "builtin", "doc"], classes)?)?;
+    let kinds = KINDS.iter().map(|(k, c, d)| Ok([s(k)?, s(c)?, s(d)?])).collect::<PyResult<Vec<_>>>()?;
+    m.add("ERROR_KINDS", table(py, ["kind", "class", "doc"], kinds)?)?;
+    let attributes =
+        ATTRIBUTES.iter().map(|(n, t, _)| Ok([s(n)?, s(t)?, s(&attribute_doc(n))?])).collect::<PyResult<Vec<_>>>()?;
+    m.add("ERROR_ATTRIBUTES", table(py, ["name", "type", "doc"], attributes)?)?;
+    Ok(())
+}
+
+/// Creates the classes of [`CLASSES`] (each after its parent) and adds them and the tables to
+/// the module.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    let base = VSINV_ERROR.get_or_try_init(py, || Ok::<_, PyErr>(base_class(py)?.unbind()))?;
-    let base = base.bind(py).clone();
-    let invalid = INVALID_INPUT.get_or_try_init(py, || {
-        let bases = PyTuple::new(py, [base.clone(), py.get_type::<PyValueError>()])?;
-        let doc = "Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, \
-                   a bad scenario, image, URDF or calibration file. Attributes: see VsinvError.";
-        Ok::<_, PyErr>(new_class(py, "InvalidInput", bases, doc)?.unbind())
-    })?;
-    let degenerate = DEGENERATE.get_or_try_init(py, || {
-        let bases = PyTuple::new(py, [base.clone(), py.get_type::<PyValueError>()])?;
-        let doc = "Geometry the method cannot work with: collinear basis points, fewer than 6 points, \
-                   a planar object or equal depth estimates, points at or behind the camera, robot \
-                   motions that do not determine a hand-eye calibration. \
-                   Attributes: see VsinvError.";
-        Ok::<_, PyErr>(new_class(py, "DegenerateGeometry", bases, doc)?.unbind())
-    })?;
-    let not_ready = NOT_READY.get_or_try_init(py, || {
-        let bases = PyTuple::new(py, [base.clone(), py.get_type::<PyRuntimeError>()])?;
-        let doc = "A state read before it exists, e.g. a controller's eps before its first step \
-                   (kind 'not_ready').";
-        Ok::<_, PyErr>(new_class(py, "NotReady", bases, doc)?.unbind())
-    })?;
-    m.add("VsinvError", base)?;
-    m.add("NotReady", not_ready.bind(py))?;
-    m.add("InvalidInput", invalid.bind(py))?;
-    m.add("DegenerateGeometry", degenerate.bind(py))?;
-    Ok(())
+    for spec in &CLASSES {
+        let lock = cell(spec.name).ok_or_else(|| PyRuntimeError::new_err(format!("no cell for {}", spec.name)))?;
+        let class = lock.get_or_try_init(py, || Ok::<_, PyErr>(make_class(py, spec)?.unbind()))?;
+        m.add(spec.name, class.bind(py))?;
+    }
+    register_tables(m)
 }
 
 /// The value of one attribute.
@@ -332,7 +449,7 @@ pub(crate) fn reraise(cause: &PyErr, msg: String, argument: Option<&str>) -> PyE
         let ours = VSINV_ERROR.get(py).is_some_and(|base| value.is_instance(base.bind(py)).unwrap_or(false));
         let mut err = PyError::invalid(msg);
         if ours {
-            for (name, _) in ATTRIBUTES {
+            for (name, _, _) in ATTRIBUTES {
                 if let Ok(v) = value.getattr(*name)
                     && !v.is_none()
                 {

@@ -9,9 +9,13 @@ use pyo3::prelude::*;
 use super::image_arg::read_image;
 use crate::vision::grey::ChannelOrder;
 
-/// The grey image of `image`: `(height, width, 3)` or `(height, width, 4)` (alpha ignored)
-/// uint8 whose colour channels are in `order` (`"rgb"`, the default when None, or `"bgr"`);
-/// a grey `(height, width)` or `(height, width, 1)` array is returned as a copy.
+/// The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or a (height, width, 4) one
+/// with alpha last (ignored), whose colour channels are in `order` (None: `"rgb"`), by Rec. 601 luma in integer
+/// arithmetic (OpenCV's COLOR_RGB2GRAY, COLOR_BGR2GRAY, COLOR_RGBA2GRAY, COLOR_BGRA2GRAY to the bit), vectorised
+/// (AVX2 when the processor has it), in Rust with the GIL released; a non-contiguous array is copied once, a grey
+/// (height, width) or (height, width, 1) array is returned as a copy. Another shape or dtype raises InvalidInput,
+/// another order InvalidInput naming `order`. (Every function that takes an image reads colour itself, in OpenCV's
+/// BGR order.)
 #[pyfunction]
 #[pyo3(signature = (image, order = None))]
 pub fn to_grey<'py>(

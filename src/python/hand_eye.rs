@@ -50,14 +50,16 @@ impl PyHandEyeCalibration {
         let r = &self.inner.residuals;
         mat(py, r.len(), 2, r.iter().flat_map(|p| [p.rotation_deg, p.translation_m]).collect())
     }
-    /// (m, 2) int64: the stations (i, j) of each residual row.
+    /// (m, 2): the stations (i, j), i < j, of each residual row.
     #[getter]
     fn pairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let r = &self.inner.residuals;
         let flat: Vec<i64> = r.iter().flat_map(|p| [p.first as i64, p.second as i64]).collect();
         PyArray1::from_vec(py, flat).reshape([r.len(), 2])
     }
-    /// The spread of the rotation axes of the gripper motions, degrees (0: all parallel).
+    /// The spread of the rotation axes of the gripper motions, degrees: 2 atan(sqrt(l2/l1)) of the eigenvalues of
+    /// the mean u u^T of their unit axes (the angle between the axes for two motions; 0 when all are parallel, 90
+    /// for axes spread evenly).
     #[getter]
     fn axis_spread_deg(&self) -> f64 {
         self.inner.axis_spread.spread_deg
@@ -67,12 +69,13 @@ impl PyHandEyeCalibration {
     fn axis_eigenvalues<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec1(py, &self.inner.axis_spread.eigenvalues)
     }
-    /// The number of gripper motions rotating by 0.1 degree or more.
+    /// The number of gripper motions that rotate by 0.1 degree or more.
     #[getter]
     fn rotating_motions(&self) -> usize {
         self.inner.axis_spread.rotating_motions
     }
-    /// The number of motions (pairs of stations) the method used.
+    /// The number of motions the method used (Tsai-Lenz leaves out those rotating outside 17.3-116.4 degrees, as
+    /// OpenCV does).
     #[getter]
     fn motions_used(&self) -> usize {
         self.inner.motions_used
@@ -123,7 +126,7 @@ pub struct PyHandEyeAgreement {
 
 #[pymethods]
 impl PyHandEyeAgreement {
-    /// {method: HandEyeCalibration} of the methods that succeeded.
+    /// {method: calibration} of the methods that succeeded ('tsai', 'park', 'daniilidis').
     #[getter]
     fn calibrations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);

@@ -12,9 +12,9 @@ use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
 use super::shared::Shared;
-use super::tags::{decimation_arg, family_arg};
 use super::vision::polarity_arg;
-use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTargetKind};
+use crate::vision::targets::{self, ArgKind, ArgValue, TARGETS, TargetArg, TargetArgs, TargetSpec};
 use crate::vision::tracker::TrackerConfig;
 
 /// The `tracker` dictionary over the default tracker settings; an unknown key is refused by
@@ -46,62 +46,65 @@ fn tracker_config(tracker: Option<&Bound<'_, PyDict>>) -> PyResult<TrackerConfig
     Ok(config)
 }
 
-/// `(n, 2)` approximate pixels, or None.
-fn points_arg(obj: Option<&Bound<'_, PyAny>>, what: &str) -> PyResult<Option<Vec<[f64; 2]>>> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else { return Ok(None) };
+/// `(n, 2)` approximate pixels.
+fn points_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[f64; 2]>> {
     let a = f64_array(obj, what, &[None, Some(2)])?;
-    Ok(Some(points2(&a)?.to_vec()))
+    Ok(points2(&a)?.to_vec())
 }
 
-/// The target of `target="dots"` from its keyword arguments.
-fn dots_target(
-    reference_points: Option<&Bound<'_, PyAny>>,
-    first_points: Option<&Bound<'_, PyAny>>,
-    tracker: Option<&Bound<'_, PyDict>>,
-) -> PyResult<ImageTarget> {
-    let reference_points = points_arg(reference_points, "reference_points")?.ok_or_else(|| {
-        let reason =
-            "reference_points: target \"dots\" needs the dots' approximate pixels (n, 2) in the reference image";
-        invalid_argument("reference_points", reason.into())
-    })?;
-    let first_points = points_arg(first_points, "first_points")?;
-    Ok(ImageTarget::Dots { reference_points, first_points, tracker: tracker_config(tracker)? })
-}
-
-/// The target of `target="tags"` from its keyword arguments.
-fn tags_target(family: &str, tag_ids: Option<&Bound<'_, PyAny>>, decimation: Option<i64>) -> PyResult<ImageTarget> {
-    let family = family_arg(family)?;
-    let decimation = decimation_arg(decimation)?;
-    let ids = match tag_ids.filter(|t| !t.is_none()) {
-        None => None,
-        Some(t) => {
-            let ids: Vec<u32> = t.extract().map_err(|_| {
-                invalid_argument("tag_ids", "tag_ids: expected a sequence of tag ids (non-negative integers)".into())
-            })?;
-            if ids.is_empty() {
-                return Err(invalid_argument(
-                    "tag_ids",
-                    "tag_ids: empty (None: every tag in the reference image)".into(),
-                ));
-            }
-            Some(ids)
+/// A target's argument as its kind says (`vsinv._core.TARGETS`); None is unset.
+fn target_arg(arg: &TargetArg, value: &Bound<'_, PyAny>) -> PyResult<ArgValue> {
+    let name = arg.name;
+    let bad = |what: &str| invalid_argument(name, format!("{name}: expected {what}"));
+    Ok(match arg.kind {
+        ArgKind::Points => ArgValue::Points(points_arg(value, name)?),
+        ArgKind::Choice(_) => ArgValue::Name(value.extract().map_err(|_| bad("a string"))?),
+        ArgKind::Ids => {
+            ArgValue::Ids(value.extract().map_err(|_| bad("a sequence of tag ids (non-negative integers)"))?)
         }
-    };
-    Ok(ImageTarget::Tags { family, ids, decimation })
+        ArgKind::Count { .. } => ArgValue::Count(value.extract().map_err(|_| bad("an integer"))?),
+        ArgKind::Tracker => ArgValue::Tracker(tracker_config(Some(value.cast().map_err(|_| bad("a dict"))?))?),
+    })
 }
 
-/// Keyword arguments given that the target does not take, refused by name.
-fn refuse_foreign(target: &str, given: &[(&str, bool)]) -> PyResult<()> {
-    match given.iter().find(|(_, g)| *g) {
-        Some((name, _)) => Err(invalid_argument(name, format!("{name}: not an argument of target {target:?}"))),
-        None => Ok(()),
+/// Splits the keyword arguments into the target's (each converted by its kind) and the servo
+/// session's; an argument of another target is refused by name.
+fn split_options<'py>(
+    py: Python<'py>,
+    spec: &TargetSpec,
+    options: Option<&Bound<'py, PyDict>>,
+) -> PyResult<(TargetArgs, Bound<'py, PyDict>)> {
+    let (mut args, servo) = (TargetArgs::default(), PyDict::new(py));
+    for (key, value) in options.map(|o| o.iter()).into_iter().flatten() {
+        let name: String = key.extract()?;
+        let of_target = |t: &TargetSpec| t.args.iter().find(|a| a.name == name);
+        match (of_target(spec), TARGETS.iter().find_map(of_target)) {
+            (_, None) => servo.set_item(key, value)?,
+            _ if value.is_none() => {}
+            (Some(arg), _) => args.0.push((arg.name, target_arg(arg, &value)?)),
+            (None, Some(_)) => {
+                let target = spec.name;
+                return Err(invalid_argument(&name, format!("{name}: not an argument of target {target:?}")));
+            }
+        }
     }
+    Ok((args, servo))
 }
 
-/// The pipeline from image to twist: finds the target in the reference image (taken with any
-/// camera), then each `step(image)` detects or tracks it, matches the points by identity,
-/// undistorts them with K_hat and `distortion`, and steps the servo session. Keyword
-/// arguments after the target's are the `Servo` session's (law, depths, gain, stop, ...).
+/// The target named `target` (`vsinv._core.TARGETS`) from its arguments; an error of the
+/// target's names the argument.
+fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageTargetKind>> {
+    (spec.image)(args).map_err(|e| match e {
+        crate::Error::InvalidParameter { name, reason } => invalid_argument(name, format!("{name}: {reason}")),
+        other => other.into(),
+    })
+}
+
+/// The pipeline from image to twist: finds the target in the reference image (taken with any camera: no K* needed),
+/// then each `step(image)` detects or tracks it, matches the points by identity, undistorts them with `K_hat` and
+/// `distortion` and steps a `Servo` session. `target` is a name of `vsinv._core.TARGETS`, whose entry lists the
+/// keyword arguments it takes; the other keyword arguments are the `Servo` session's (law, depths, gain, stop,
+/// ...).
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "ImageServo", module = "vsinv._core", frozen)]
@@ -113,54 +116,27 @@ pub(super) struct PyImageServo {
 impl PyImageServo {
     #[new]
     #[allow(non_snake_case, clippy::too_many_arguments)]
-    #[pyo3(signature = (reference_image, target, K_hat, *, reference_points = None, first_points = None, tracker = None, family = "tag36h11", tag_ids = None, decimation = None, distortion = None, reference_K = None, reference_distortion = None, **servo))]
+    #[pyo3(signature = (reference_image, target, K_hat, *, distortion = None, reference_K = None, reference_distortion = None, **options))]
     fn new(
         py: Python<'_>,
         reference_image: &Bound<'_, PyAny>,
         target: &str,
         K_hat: &Bound<'_, PyAny>,
-        reference_points: Option<&Bound<'_, PyAny>>,
-        first_points: Option<&Bound<'_, PyAny>>,
-        tracker: Option<&Bound<'_, PyDict>>,
-        family: &str,
-        tag_ids: Option<&Bound<'_, PyAny>>,
-        decimation: Option<i64>,
         distortion: Option<&Bound<'_, PyAny>>,
         reference_K: Option<&Bound<'_, PyAny>>,
         reference_distortion: Option<&Bound<'_, PyAny>>,
-        servo: Option<&Bound<'_, PyDict>>,
+        options: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let reference_image = image_arg(reference_image, "reference_image")?;
         let image = reference_image.buffer("reference_image")?;
-        let given = |o: Option<&Bound<'_, PyAny>>| o.is_some_and(|o| !o.is_none());
-        let target = match target {
-            "dots" => {
-                let tag_args = [
-                    ("tag_ids", given(tag_ids)),
-                    ("family", family != "tag36h11"),
-                    ("decimation", decimation.is_some()),
-                ];
-                refuse_foreign(target, &tag_args)?;
-                dots_target(reference_points, first_points, tracker)?
-            }
-            "tags" => {
-                let dot_args = [
-                    ("reference_points", given(reference_points)),
-                    ("first_points", given(first_points)),
-                    ("tracker", tracker.is_some()),
-                ];
-                refuse_foreign(target, &dot_args)?;
-                tags_target(family, tag_ids, decimation)?
-            }
-            other => {
-                return Err(invalid_argument(
-                    "target",
-                    format!("target: expected \"dots\" or \"tags\", got {other:?}"),
-                ));
-            }
-        };
+        let spec = targets::target(target).ok_or_else(|| {
+            let names = targets::target_names().iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+            invalid_argument("target", format!("target: expected one of {names}, got {target:?}"))
+        })?;
+        let (target_args, servo) = split_options(py, spec, options)?;
+        let target = image_target(spec, &target_args)?;
         let k_hat = intrinsics(K_hat, "K_hat")?;
-        let options = ServoOptions::from_kwargs(servo)?;
+        let options = ServoOptions::from_kwargs(Some(&servo))?;
         // Real cameras: the stall rule is on unless `stop` says otherwise (issue 27).
         let stall_unset = !options.stop_sets("stall");
         let (mut servo_config, reference_depths, depths) = options.session(k_hat)?;
@@ -183,7 +159,7 @@ impl PyImageServo {
             (None, None) => None,
         };
         let config = ImageServoConfig { servo: servo_config, reference_lens, reference_depths };
-        let inner = py.detach(|| ImageServo::new(&image, &target, config, depths))?;
+        let inner = py.detach(|| ImageServo::new(&image, &*target, config, depths))?;
         Ok(Self { inner: Shared::new(inner, "ImageServo") })
     }
 
@@ -223,7 +199,7 @@ impl PyImageServo {
     fn iterations(&self, py: Python<'_>) -> PyResult<usize> {
         Ok(self.inner.lock(py)?.servo().iterations())
     }
-    /// The basis in use (three point indices).
+    /// The basis in use (it changes when a basis point is not visible).
     #[getter]
     fn basis(&self, py: Python<'_>) -> PyResult<(usize, usize, usize)> {
         let [a, b, c] = self.inner.lock(py)?.servo().basis();
@@ -239,9 +215,10 @@ impl PyImageServo {
     fn pixel_sigma(&self, py: Python<'_>) -> PyResult<Option<f64>> {
         Ok(self.inner.lock(py)?.servo().pixel_sigma())
     }
-    /// What the frames say about the pose, as `Servo.certainty()`: pixel_sigma,
-    /// reference_pixel_sigma (pixels), translation_sigma, translation_bound (metres),
-    /// rotation_sigma, rotation_bound (radians); None when it cannot be computed.
+    /// What the frames say about the pose, as `Servo.certainty()` (pixel_sigma, reference_pixel_sigma,
+    /// translation_sigma, translation_bound in metres, rotation_sigma, rotation_bound in radians: the accuracy
+    /// ceiling, floor_pixel_sigma: the measured disagreement between reference and frame detections, pixels); None
+    /// when it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         super::servo::certainty_dict(py, self.inner.lock(py)?.servo())
     }

@@ -15,7 +15,8 @@ const MIN_JACOBIAN_POINTS: usize = 4;
 
 type PixelsPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>);
 
-/// The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array.
+/// The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array; Q is built from the three
+/// `basis` points, so q does not depend on the intrinsics.
 #[pyfunction]
 #[pyo3(signature = (pixels, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, basis=(0, 1, 2))")]
 fn invariant_points<'py>(
@@ -30,7 +31,8 @@ fn invariant_points<'py>(
     mat(py, q.len(), 3, q.into_flattened())
 }
 
-/// The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths.
+/// The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths: the motion of the non-basis
+/// invariant points per unit of (vx, vy, vz, wx, wy).
 #[pyfunction]
 #[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
 #[allow(non_snake_case)]
@@ -51,7 +53,7 @@ fn invariant_jacobian<'py>(
     from_matrix(py, &j)
 }
 
-/// The factors (Phi (3(n-3), 3), Psi (3(n-3), 2)) of sec. 4.1: J = [Phi K, Psi F(K)].
+/// The factors (Phi (3(n-3), 3), Psi (3(n-3), 2)) of sec. 4.1, with J = [Phi K, Psi F(K)].
 #[pyfunction]
 #[pyo3(signature = (pixels, depths, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, basis=(0, 1, 2))")]
 fn jacobian_factors<'py>(
@@ -105,7 +107,8 @@ fn rz_coefficients<'py>(
     Ok((coef_a, vec1(py, c.as_slice())))
 }
 
-/// sigma_5/sigma_1 of the depth-balanced invariant Jacobian (degenerate-structure measure).
+/// sigma_5/sigma_1 of the depth-balanced invariant Jacobian: near 0 for a degenerate structure (a planar object,
+/// equal depths), where the law cannot tell motions apart.
 #[pyfunction]
 #[pyo3(signature = (pixels, depths, K, basis = BasisArg::Fixed([0, 1, 2])), text_signature = "(pixels, depths, K, basis=(0, 1, 2))")]
 #[allow(non_snake_case)]

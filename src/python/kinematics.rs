@@ -50,7 +50,7 @@ struct PyIkSolution {
 
 #[pymethods]
 impl PyIkSolution {
-    /// Joint positions, base to end-effector, within the joint limits.
+    /// Joint positions (rad; m for prismatic joints), base to end-effector.
     #[getter]
     fn joints<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         vec1(py, &self.inner.joints)
@@ -90,8 +90,9 @@ impl PyIkSolution {
     }
 }
 
-/// The 4x4 pose of the built-in `arm`'s end-effector in its base frame at `joints`, within
-/// the joint limits.
+/// The 4x4 pose of the end-effector of the built-in `arm` ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
+/// base frame (its URDF root link: `base_link`, `panda_link0`) at `joints` (rad), one value per joint within the
+/// joint limits (InvalidInput naming the first joint outside).
 #[pyfunction]
 fn fk<'py>(
     py: Python<'py>,
@@ -108,8 +109,13 @@ fn fk<'py>(
     from_matrix(py, &model.fk(&q)?.to_homogeneous())
 }
 
-/// Joints within the limits of the built-in `arm` that put its end-effector at `pose` (4x4,
-/// base frame), by damped least squares from `seed` and then spread seeds.
+/// Joints within the limits of the built-in `arm` ('ur5', 'panda') that put its end-effector at `pose`: a 4x4
+/// float64 rigid motion of the end-effector frame ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
+/// frame (the URDF root link), as :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011)
+/// projected on the joint limits, from `seed` (one value per joint; default the middle of the limits), then from up
+/// to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A redundant arm (the Panda) returns one of its
+/// solutions. Raises InvalidInput (kind 'unreachable', argument 'pose', `residual` the best position residual) when
+/// no seed reaches the pose.
 #[pyfunction]
 #[pyo3(signature = (arm, pose, seed = None))]
 fn ik(

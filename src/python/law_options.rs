@@ -39,8 +39,8 @@ fn option_dict<'py>(py: Python<'py>, o: &OptionSpec) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
-/// Checks a value of the law option `name` as `Servo` would: `InvalidInput` naming the option
-/// (or its part, `adaptive_gain.at_infinity`) for a value of another kind or out of range.
+/// Checks a value of the law option `name` as `Servo` would: `InvalidInput` naming the option (or its part,
+/// `adaptive_gain.at_infinity`) for a value of another kind or out of its range.
 #[pyfunction]
 fn check_law_option(name: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
     let spec =

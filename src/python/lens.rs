@@ -104,8 +104,8 @@ pub fn distort_points<'py>(
     run_points(py, points2(&a)?, |px| distort(px, &k, &d))
 }
 
-/// Undistorts pixels (n, 2) by Newton's method: the inverse of `distort_points`, to `tol`
-/// pixels within `max_iter` iterations.
+/// Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol` pixels within `max_iter`
+/// iterations.
 #[pyfunction]
 #[pyo3(signature = (pixels, K, distortion, tol = DEFAULT_UNDISTORT_TOL, max_iter = DEFAULT_UNDISTORT_MAX_ITER), text_signature = "(pixels, K, distortion, tol=1e-10, max_iter=50)")]
 #[allow(non_snake_case)]

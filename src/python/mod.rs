@@ -29,6 +29,7 @@ mod sim;
 mod stability;
 mod tag_tracker;
 mod tags;
+mod targets;
 mod uncertainty;
 mod values;
 mod vision;
@@ -55,6 +56,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     grey::register(m)?;
     compressed::register(m)?;
     image_servo::register(m)?;
+    targets::register(m)?;
     tags::register(m)?;
     tag_tracker::register(m)?;
     se3::register(m)?;

@@ -61,9 +61,10 @@ pub fn thetau_from_pose<'py>(
     Ok((vec1(py, pose.translation.vector.as_slice()), vec1(py, &se3::thetau_from_pose(&pose))))
 }
 
-/// The theta-u vectors (radians, theta in [0, pi]) of rotation matrices `(n, 3, 3)`, shape
-/// `(n, 3)`: OpenCV's Rodrigues vector of each. Each matrix must be finite and a rotation
-/// (orthonormal with determinant +1 within 1e-6); the error names the matrix.
+/// The theta-u vectors (rad, theta in [0, pi]) of rotation matrices `(n, 3, 3)`, shape `(n, 3)` (OpenCV's Rodrigues
+/// vectors); `InvalidInput` naming the matrix for one with a non-finite entry or that is not a rotation
+/// (orthonormal, det +1, within 1e-6). Each matrix must be finite and a rotation (orthonormal with determinant +1
+/// within 1e-6); the error names the matrix.
 #[pyfunction]
 pub fn thetau_from_rotations<'py>(
     py: Python<'py>,

@@ -322,10 +322,11 @@ impl PyServo {
     fn pixel_sigma(&self) -> Option<f64> {
         self.inner.pixel_sigma()
     }
-    /// What the images say about the pose: at the image rule, from the averaged images;
-    /// otherwise from the last image. A dict of pixel_sigma, reference_pixel_sigma (pixels),
-    /// translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound (radians);
-    /// None when it cannot be computed.
+    /// What the images say about the pose (pixel_sigma, reference_pixel_sigma, translation_sigma, translation_bound
+    /// in metres, rotation_sigma, rotation_bound in radians, floor_pixel_sigma in pixels: the disagreement floor,
+    /// None with the stall rule off); None when it cannot be computed. A dict of pixel_sigma, reference_pixel_sigma
+    /// (pixels), translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound (radians); None when
+    /// it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         certainty_dict(py, &self.inner)
     }
@@ -358,7 +359,7 @@ pub(super) fn certainty_dict<'py>(py: Python<'py>, servo: &Servo) -> PyResult<Op
     Ok(Some(d))
 }
 
-/// What one step returns.
+/// What one `Servo.step` returns.
 #[pyclass(name = "ServoStep", module = "vsinv._core", frozen, subclass)]
 pub(super) struct PyServoStep {
     twist: [f64; 6],

@@ -170,7 +170,8 @@ pub struct PyRunResult {
     scenario: Py<PyScenario>,
     /// The recorded arrays in the order of `COLUMNS` (None where the run does not record one).
     columns: Vec<Option<Py<PyAny>>>,
-    /// An arm's joint names and position and velocity limits (a dict); None for other robots.
+    /// An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity` (per second); None for the
+    /// other robots.
     #[pyo3(get)]
     joint_limits: Option<Py<PyDict>>,
 }
@@ -200,8 +201,9 @@ impl PyRunResult {
     }
 }
 
-/// The recorded columns as dicts: name, unit, shape (axis lengths, or `"N"` rows, `"n"` points,
-/// `"n_joints"` joints), dtype, recorded (`"always"`, `"vision"` or `"arm"`), description.
+/// The recorded columns (each a `RunResult` attribute and an `.npz` entry): name, unit (SI, `px`, `1`
+/// dimensionless, `bool`), shape (axis lengths, or `"N"` rows, `"n"` points, `"n_joints"` joints), dtype, which
+/// runs record it, description.
 #[pyfunction]
 pub fn recorded_columns(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     COLUMNS
@@ -232,8 +234,8 @@ pub fn recorded_columns(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         .collect()
 }
 
-/// The summary's numbers as dicts: name, unit, legacy (the older name in millimetres, degrees
-/// or with a unit suffix, also in the summary; None), description.
+/// The numbers of `RunResult.summary` (SI, `px`, `1`): name, unit, the older name in millimetres / degrees / with a
+/// unit suffix that the summary also has, description.
 #[pyfunction]
 pub fn summary_fields(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     SUMMARY_FIELDS

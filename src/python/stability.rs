@@ -99,8 +99,8 @@ fn k_schedule(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<Matrix3<f64>>, bool)> {
     Ok((ks, single))
 }
 
-/// Props. 1-2 for true intrinsics K (one camera or a schedule), an estimate K_hat (any
-/// signs: a 3x3 upper-triangular matrix or Intrinsics), depth scale kappa and gain lambda.
+/// Props. 1-2 for the true intrinsics `K` (one camera, or a schedule of cameras), an estimate `K_hat` (a 3x3
+/// upper-triangular matrix or Intrinsics), the depth scale `kappa` and the gain.
 #[pyfunction]
 #[pyo3(signature = (K, K_hat, kappa = 1.0, gain = 1.0), text_signature = "(K, K_hat, kappa=1.0, gain=1.0)")]
 #[allow(non_snake_case)]
@@ -120,8 +120,8 @@ fn check_stability(
     Ok(PyStabilityReport { inner, single })
 }
 
-/// Prop. 3 bound psi/phi = 2 max_b / (gain sigma) (eq. 20); InvalidInput for gain <= 0,
-/// sigma <= 0 (Prop. 2 fails: no bound), max_b < 0 or a bound that overflows.
+/// The bound psi/phi = 2 max_b / (gain sigma) of Prop. 3 (eq. 20) on ||eps|| while ||b(t)|| <= max_b;
+/// `InvalidInput` for gain <= 0, sigma <= 0 (Prop. 2 fails: no bound), max_b < 0 or a bound that overflows.
 #[pyfunction]
 fn tracking_bound(gain: f64, sigma: f64, max_b: f64) -> PyResult<f64> {
     Ok(crate::core::stability::tracking_bound(gain, sigma, max_b)?)

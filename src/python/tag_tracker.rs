@@ -14,12 +14,12 @@ use crate::vision::tags::TagDecoder;
 // The signature's default, written as a literal for Python's introspection.
 const _: () = assert!(DEFAULT_REFRESH == 15);
 
-/// AprilTags of `family` through a sequence of frames: after a frame, each tag is followed from
-/// its last corners (its edges measured again there and its bits read, no quad search), else
-/// searched in a crop around them, and the whole frame is read when one is not found there,
-/// when the size changes, and every `refresh` frames (0: only then) to pick up tags coming
-/// into view. A tracked frame gives what `detect_tags` gives on it, for the tags tracked.
-/// `follow=False` skips the following (the quad search in each crop every frame).
+/// AprilTags of `family` through a sequence of frames: after a frame, each tag is followed from its last corners
+/// (its edges measured again near them, its bits read there, accepted only as the same id: no quad search), else
+/// searched in a crop around its last corners (a margin of a quarter of its side plus twice its last motion), and
+/// the whole frame is read when one is not found there, when the size changes, and every `refresh` frames (0: only
+/// then) to pick up tags coming into view. A tracked frame gives what `detect_tags` gives on it, for the tags
+/// tracked. `follow=False` skips the following (the quad search in each crop every frame).
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "TagTracker", module = "vsinv._core", frozen)]
@@ -43,8 +43,8 @@ impl PyTagTracker {
         Ok(Self { inner: Shared::new(detector.with_refresh(refresh).with_following(follow), "TagTracker") })
     }
 
-    /// The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their
-    /// `stopped_early` says whether a quad search of this frame stopped early.
+    /// The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their `stopped_early` says
+    /// whether a quad search of this frame (whole or in a crop) stopped early, as `detect_tags`'s.
     fn track(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<PyTags> {
         let image = image_arg(image, "image")?;
         let buffer = image.buffer("image")?;
@@ -66,8 +66,9 @@ impl PyTagTracker {
         Ok(self.inner.lock(py)?.read_whole())
     }
 
-    /// How each tag of the last frame was read, in the order of its ids: "edges" (followed from
-    /// its last corners, no quad search), "crop" (quad search in a crop around them) or "whole".
+    /// How each tag of the last frame was read, in the order of its ids: "edges" (followed from its last corners,
+    /// its edges measured again and its bits read there, no quad search), "crop" (the quad search in a crop around
+    /// them) or "whole" (the quad search in the whole frame).
     #[getter]
     fn reads(&self, py: Python<'_>) -> PyResult<Vec<&'static str>> {
         Ok(self.inner.lock(py)?.reads().iter().map(|r| r.name()).collect())

@@ -42,14 +42,15 @@ fn detect<C: Pixels>(image: &GreyBuffer<C>, family: TagFamily, decimation: Optio
     })
 }
 
-/// Tags found in an image, sorted by id.
+/// AprilTags found in an image, sorted by id.
 #[pyclass(name = "Tags", module = "vsinv._core", frozen)]
 pub struct PyTags {
     /// Tag ids, `(m,)` int64.
     #[pyo3(get)]
     ids: Py<PyArray1<i64>>,
-    /// Corners `(u, v)` of each tag's black square, `(m, 4, 2)` float64: top-left, top-right,
-    /// bottom-right, bottom-left as OpenCV's aruco module orders them.
+    /// Corners (u, v) of each tag's black square, (m, 4, 2): top-left, top-right, bottom-right, bottom-left as
+    /// OpenCV's aruco module orders them (clockwise in the image), pixel (u, v) centred at integer coordinates
+    /// (OpenCV's convention).
     #[pyo3(get)]
     corners: Py<PyArray3<f64>>,
     /// Whether the search stopped early: the frame was too cluttered to be searched whole
@@ -105,16 +106,14 @@ pub(super) fn decimation_arg(decimation: Option<i64>) -> PyResult<Option<u32>> {
     })
 }
 
-/// The AprilTags of `family` in an image (grey, or BGR/BGRA converted), sorted by id: their ids and
-/// the four corners of each black square in OpenCV's order (top-left, top-right,
-/// bottom-right, bottom-left of the marker as OpenCV's aruco module draws it, clockwise in
-/// the image) and pixel convention (pixel `(u, v)` centred at integer coordinates). An empty
-/// image raises `InvalidInput`; an image without tags gives an empty result. Quads are
-/// searched in the image shrunk by `decimation` (1..=8; `None`: chosen per image, 1 below
-/// 960 pixels on the shorter side, 2 at 1920 x 1080) and on coarser levels; corners are
-/// measured at full size. The image is at most 2^28 pixels (65536 a side), and the decimation
-/// must leave at most about 2^22 pixels to search (the detector's memory, some 70 bytes a
-/// searched pixel; `None` chooses one that does).
+/// The AprilTags of `family` in an image (grey, or BGR/BGRA converted to grey), sorted by id, with the corners of
+/// each black square in OpenCV's aruco order and pixel convention (the same numbers as cv2.aruco.ArucoDetector with
+/// DICT_APRILTAG_36h11, within noise), measured on the square's outer edges; a tag whose edges do not support its
+/// corners is left out. An empty image raises `InvalidInput`; an image without tags gives an empty result. Quads
+/// are searched in the image shrunk by `decimation` (1..=8; `None`: chosen per image, 1 below 960 pixels on the
+/// shorter side, 2 at 1920 x 1080) and on coarser levels; corners are measured at full size. The image is at most
+/// 2^28 pixels (65536 a side), and the decimation must leave at most about 2^22 pixels to search (the detector's
+/// memory, some 70 bytes a searched pixel; `None` chooses one that does).
 #[pyfunction]
 #[pyo3(signature = (image, family = "tag36h11", decimation = None))]
 pub fn detect_tags(

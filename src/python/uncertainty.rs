@@ -133,8 +133,8 @@ impl PyPixelNoiseMeter {
     fn new(#[pyo3(from_py_with = super::args::capacity)] capacity: usize) -> PyResult<Self> {
         Ok(Self { inner: PixelNoiseMeter::new(capacity)? })
     }
-    /// Adds an image's pixels (n, 2); `visible` (n,) bool marks the points found. Another
-    /// number of points than before starts the measurement again.
+    /// Adds an image's pixels (n, 2); another number of points starts the measurement again. Another number of
+    /// points than before starts the measurement again.
     #[pyo3(signature = (pixels, visible = None))]
     fn push(&mut self, pixels: &Bound<'_, PyAny>, visible: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
         let a = pixels_arg(pixels, "pixels")?;

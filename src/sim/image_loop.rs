@@ -12,14 +12,11 @@ use crate::core::distortion::Distortion;
 use crate::error::{Error, Result};
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
-use crate::vision::detector::dot_tracking::DotTracking;
-use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::image::view_of;
-use crate::vision::render::{CameraView, Disc, RenderConfig, Renderer};
-use crate::vision::target::dots::Dots;
+use crate::vision::render::{CameraView, RenderConfig, Renderer};
 use crate::vision::target::{Target, TargetPoint};
-use crate::vision::tracker::TrackerConfig;
+use crate::vision::targets::{self, SceneObject, SceneVision};
 
 /// The image size of a camera, which vision needs.
 pub(crate) fn pixel_size(image: Option<ImageSize>, key: &'static str) -> Result<(u32, u32)> {
@@ -27,58 +24,15 @@ pub(crate) fn pixel_size(image: Option<ImageSize>, key: &'static str) -> Result<
     Ok((s.width.ceil() as u32, s.height.ceil() as u32))
 }
 
-/// The dots of a scene: discs of `radius` at its points, with its normals (default: facing
-/// the reference camera).
-pub(crate) fn scene_discs(scene: &Scene, radius: f64) -> Result<Vec<Disc>> {
-    let points = scene.points().iter();
-    match scene.normals() {
-        Some(normals) => points.zip(normals).map(|(&p, &n)| Disc::new(p, n, radius)).collect(),
-        None => points.map(|&p| Disc::facing_reference(p, radius)).collect(),
-    }
+/// What the scene's object holds, for the targets' builders.
+pub(crate) fn scene_object(scene: &Scene) -> SceneObject<'_> {
+    SceneObject { points: scene.points(), normals: scene.normals(), tags: scene.tags() }
 }
 
-/// The kinds of target a scenario can show.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum TargetKind {
-    /// A white disc per point ([`Dots`]), found by the dot tracker.
-    Dots,
-    /// A rig of AprilTags ([`TagRig`](crate::vision::TagRig), `[[object.tags]]`), found by the tag detector: four
-    /// corners a tag, by identity.
-    Tags,
-}
-
-impl TargetKind {
-    /// The kind a scene shows: tags when it has a tag rig, else dots.
-    pub(crate) fn of(scene: &Scene) -> Self {
-        if scene.tags().is_some() { TargetKind::Tags } else { TargetKind::Dots }
-    }
-}
-
-/// What a scenario's camera looks at and what finds it in its images.
-pub(crate) struct SceneVision {
-    pub(crate) target: Box<dyn Target>,
-    pub(crate) detector: Box<dyn Detector>,
-}
-
-/// The target of a scene and a fresh detector for it: the one place a target type is picked.
+/// The target of a scene and a fresh detector for it: the entry of [`TARGETS`](crate::vision::TARGETS)
+/// that shows the scene's object.
 pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<SceneVision> {
-    match TargetKind::of(scene) {
-        TargetKind::Dots => Ok(SceneVision {
-            target: Box::new(Dots::new(scene_discs(scene, config.dot_radius)?)),
-            detector: Box::new(DotTracking::new(TrackerConfig {
-                polarity: config.polarity,
-                ..TrackerConfig::default()
-            })),
-        }),
-        TargetKind::Tags => {
-            let tags = scene
-                .tags()
-                .cloned()
-                .ok_or(Error::InvalidParameter { name: "object.tags", reason: "the scene has no tag rig".into() })?;
-            let detector = Box::new(TagDetector::new(tags.family()));
-            Ok(SceneVision { target: Box::new(tags), detector })
-        }
-    }
+    targets::scene_vision(&scene_object(scene), config)
 }
 
 /// What tracking gives the run, per point.
@@ -214,7 +168,11 @@ mod tests {
 
     use super::*;
     use crate::vision::GreyView;
-    use crate::vision::render::Canvas;
+    use crate::vision::detector::dot_tracking::DotTracking;
+    use crate::vision::render::{Canvas, Disc};
+    use crate::vision::target::dots::Dots;
+    use crate::vision::targets::scene_discs;
+    use crate::vision::tracker::TrackerConfig;
 
     fn scene() -> Scene {
         Scene::new(vec![[-0.03, -0.02, 0.5], [0.03, -0.02, 0.5], [0.03, 0.02, 0.5], [-0.03, 0.02, 0.5]], vec![])
@@ -278,7 +236,8 @@ mod tests {
         let config = RenderConfig::default();
         let calls = Arc::new(Mutex::new((0, 0)));
         let detector = Box::new(Scripted { expected: Vec::new(), calls: Arc::clone(&calls) });
-        let vision = SceneVision { target: Box::new(Dots::new(scene_discs(&scene(), 0.004).unwrap())), detector };
+        let vision =
+            SceneVision { target: Box::new(Dots::new(scene_discs(&scene_object(&scene()), 0.004).unwrap())), detector };
         let (pixels, visible, detection, images) =
             run(ImageLoop::with(Renderer::new(config).unwrap(), vision, (320, 240)), 3);
         let obs = camera().2;
@@ -309,7 +268,7 @@ mod tests {
 
     #[test]
     fn the_loop_renders_any_target_for_the_dot_tracker() {
-        let discs: Vec<Disc> = scene_discs(&scene(), 0.008).unwrap();
+        let discs: Vec<Disc> = scene_discs(&scene_object(&scene()), 0.008).unwrap();
         let ids = [30, 20, 10, 0];
         let points = ids.iter().zip(&discs).map(|(&id, d)| TargetPoint { id, position: d.center.into() }).collect();
         let target = Box::new(Renamed(points, Dots::new(discs)));

@@ -44,7 +44,38 @@ pub enum ImageTarget {
     },
 }
 
-impl ImageTarget {
+/// What the pipeline needs of a target on real images: a detector, the hints it starts with in
+/// the reference image and in the first frame, and which reference points to keep. A target
+/// type implements it next to its [`Target`](crate::vision::Target) (its entry of
+/// [`TARGETS`](crate::vision::TARGETS) builds it from the arguments); [`ImageTarget`] implements
+/// it for dots and tags.
+pub trait ImageTargetKind: Send + Sync + std::fmt::Debug {
+    /// A detector of this target, not started: for the reference image, or for the frames
+    /// (`frames`).
+    fn detector(&self, frames: bool) -> Result<Box<dyn Detector>>;
+
+    /// The hints for the reference image (none: the detector needs no help).
+    fn reference_hints(&self) -> Vec<Expected> {
+        Vec::new()
+    }
+
+    /// The hints for the first frame, given the reference points found.
+    fn first_hints(&self, _reference: &[Detection]) -> Vec<Expected> {
+        Vec::new()
+    }
+
+    /// The reference points the target keeps (default: all found).
+    fn select(&self, found: Vec<Detection>) -> Result<Vec<Detection>> {
+        Ok(found)
+    }
+
+    /// Checks the target's own values before the reference image is searched.
+    fn validate(&self) -> Result<()> {
+        Ok(())
+    }
+}
+
+impl ImageTargetKind for ImageTarget {
     /// A detector of this target, not started (an error for a decimation out of range). In
     /// the reference image every dot must start; in the frames (`frames`), a dot that cannot
     /// start is not visible.
@@ -154,7 +185,7 @@ impl ImageServo {
     /// the session servoing to it.
     pub fn new<C: Pixels>(
         reference: &GreyBuffer<C>,
-        target: &ImageTarget,
+        target: &dyn ImageTargetKind,
         config: ImageServoConfig,
         depths: ServoDepths,
     ) -> Result<Self> {

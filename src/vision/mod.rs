@@ -8,6 +8,7 @@
 //! | colour (RGB, BGR, RGBA, BGRA) frames to grey by Rec. 601 luma | [`grey`] |
 //! | compressed frames (PNG, JPEG bytes) to grey | [`compressed`] |
 //! | what is drawn: the [`Target`] trait | [`target`] |
+//! | the targets, declared once: [`TARGETS`] (name, detector, arguments, scenario keys, builders) | [`targets`] |
 //! | white discs ([`Dots`]) | [`target::dots`] |
 //! | a rig of AprilTags of any [`TagFamily`] ([`TagRig`]) | [`target::tags`] |
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
@@ -30,20 +31,10 @@
 //!
 //! # Adding a target type
 //!
-//! A new target (an AprilTag, say) touches:
-//!
-//! 1. one new file, `src/vision/target/<name>.rs` (declared in `target.rs`), with a type
-//!    implementing [`Target`]: its points with identities in the object frame, and `draw`
-//!    with the [`Canvas`] primitives (a primitive the canvas lacks, such as a filled polygon,
-//!    is one method in `render/canvas.rs` and one `Shape` implementation next to
-//!    `render/conic.rs`);
-//! 2. one match arm in `scene_vision` (`src/sim/image_loop.rs`), where a scenario's target is
-//!    picked together with the detector that finds it; the image loop, the views and the
-//!    Python `render` functions go through that function and need no change.
-//!
-//! If no existing detector finds the new target, its detector is one more file,
-//! `src/vision/detector/<name>.rs`, implementing [`Detector`] and reporting the target's
-//! point identities.
+//! The targets are declared once, in [`TARGETS`] ([`targets`]): each entry names the target,
+//! its detector, its arguments and scenario keys, and builds it for the simulator and for real
+//! images; every layer (the image loop, `ImageServo`, Python, the CLI, the ROS parameters)
+//! reads the table. The files a new target or detector touches are listed in [`targets`].
 
 pub mod background;
 pub mod centroid;
@@ -60,6 +51,7 @@ pub mod row_scan;
 pub mod runs;
 pub mod tags;
 pub mod target;
+pub mod targets;
 pub mod tile_stats;
 pub mod tracker;
 
@@ -68,7 +60,7 @@ pub use self::detector::tags::TagDetector;
 pub use self::detector::{Detection, Detector, Expected};
 pub use self::dots::{DetectConfig, Dot, detect_dots};
 pub use self::image::{GreyBuffer, GreyImage, GreyView, load_image, load_png, save_png, view_of};
-pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget};
+pub use self::image_servo::{ImageServo, ImageServoConfig, ImageTarget, ImageTargetKind};
 pub use self::polarity::Polarity;
 pub use self::render::{CameraView, Canvas, Disc, Polygon, RenderConfig, Rendered, Renderer};
 pub use self::tags::{
@@ -77,4 +69,5 @@ pub use self::tags::{
 pub use self::target::dots::Dots;
 pub use self::target::tags::{RigTag, TagRig};
 pub use self::target::{Target, TargetPoint};
+pub use self::targets::{TARGETS, TargetSpec};
 pub use self::tracker::{DotTracker, TrackResult, TrackerConfig};

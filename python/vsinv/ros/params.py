@@ -15,13 +15,16 @@ import difflib
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal, Mapping, Optional, Sequence, cast
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, cast
 
 import numpy as np
 import numpy.typing as npt
 
-from .._core import LAW_OPTIONS, Distortion, Intrinsics, InvalidInput, check_law_option, load_calibration
+from .._core import LAW_OPTIONS, TARGETS, Distortion, Intrinsics, InvalidInput, check_law_option, load_calibration
 from .conversions import hand_eye_matrix, intrinsics_from_numbers
+
+if TYPE_CHECKING:
+    from .._core import _TargetName
 
 __all__ = ["PARAMETERS", "Parameter", "BridgeConfig", "parse_parameters", "parameter_help"]
 
@@ -55,6 +58,55 @@ def _law_parameters() -> tuple[Parameter, ...]:
     return tuple(out)
 
 
+#: The ROS type of each kind of target argument (points: a flat list, or ``NAME_file``).
+_ROS_TARGET_KINDS = {"points": "floats", "choice": "str", "ids": "ints", "count": "int"}
+
+#: The dot tracker's settings (a target argument of kind "tracker"), one parameter each.
+_TRACKER_PARAMETERS = (
+    ("search_radius", "float", "the tracker's search radius, pixels"),
+    ("max_search_radius", "float", "the largest search radius, pixels"),
+    ("min_area", "int", "the smallest dot, pixels"),
+    ("max_area_ratio", "float", "the largest area change between frames"),
+    ("polarity", "str", "light, dark or auto"),
+)
+
+
+def _arg_parameters(target: str, a: dict[str, Any]) -> tuple[Parameter, ...]:
+    """The parameters of one target argument of ``vsinv.TARGETS`` (same name; ``NAME_file`` too
+    for points; ``NAME.KEY`` per setting of the tracker)."""
+    scope, name, kind = f"{target}: ", a["name"], a["kind"]
+    if kind == "tracker":
+        return tuple(Parameter(f"{name}.{k}", t, None, scope + doc) for k, t, doc in _TRACKER_PARAMETERS)
+    doc = scope + a["doc"]
+    if kind == "count":
+        doc += f", {a['min']}..={a['max']}"
+    if kind == "points":
+        flat = Parameter(name, "floats", None, doc + ", flat [u0, v0, u1, v1, ...]")
+        return flat, Parameter(f"{name}_file", "str", None, f"{scope}the same as a CSV file with u, v columns")
+    return (Parameter(name, _ROS_TARGET_KINDS[kind], a["default"], doc),)
+
+
+def _target_parameters() -> tuple[Parameter, ...]:
+    """The target (``vsinv.TARGETS``, declared once in the vision layer) and each target's
+    arguments as parameters of the same names."""
+    names = tuple(t["name"] for t in TARGETS)
+    what = "; ".join(f"{t['name']}: {t['doc']}" for t in TARGETS)
+    out = [Parameter("target", "str", "tags", f"what to servo on ({what})", names)]
+    for t in TARGETS:
+        for a in t["args"]:
+            out.extend(_arg_parameters(t["name"], a))
+    return tuple(out)
+
+
+def _target_of(parameter: str) -> Optional[dict[str, Any]]:
+    """The argument of a target a parameter gives (None: not a target's)."""
+    for t in TARGETS:
+        for a in t["args"]:
+            if parameter == a["name"] or parameter == f"{a['name']}_file" or parameter.startswith(f"{a['name']}."):
+                return {"target": t["name"], **a}
+    return None
+
+
 _P = Parameter
 #: Every parameter the node reads, in the order ``vsinv-ros --help`` lists them.
 PARAMETERS: tuple[Parameter, ...] = (
@@ -63,19 +115,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("reference_calibration", "str", None, "the reference camera's calibration file (ROS/OpenCV YAML), to undistort its points"),
     _P("reference_K", "floats", None, "the reference camera's intrinsics [fx, fy, u0, v0] or 3x3 row-major (instead of reference_calibration)"),
     _P("reference_distortion", "floats", None, "the reference camera's distortion (OpenCV order k1, k2, p1, p2[, k3...]); needs reference_K"),
-    _P("target", "str", "tags", "what to servo on: AprilTags by identity, or dots tracked from approximate pixels", ("tags", "dots")),
-    _P("family", "str", "tag36h11", "tags: the AprilTag family"),
-    _P("tag_ids", "ints", None, "tags: the tags to servo on (unset: every tag decoded in the reference image)"),
-    _P("decimation", "int", None, "tags: the quad search's decimation, 1..=8 (unset: the detector's default)"),
-    _P("reference_points", "floats", None, "dots: approximate pixels in the reference image, flat [u0, v0, u1, v1, ...]"),
-    _P("reference_points_file", "str", None, "dots: the same as a CSV file with u, v columns"),
-    _P("first_points", "floats", None, "dots: approximate pixels in the first frame, flat (unset: near the reference ones)"),
-    _P("first_points_file", "str", None, "dots: the same as a CSV file with u, v columns"),
-    _P("tracker.search_radius", "float", None, "dots: the tracker's search radius, pixels"),
-    _P("tracker.max_search_radius", "float", None, "dots: the largest search radius, pixels"),
-    _P("tracker.min_area", "int", None, "dots: the smallest dot, pixels"),
-    _P("tracker.max_area_ratio", "float", None, "dots: the largest area change between frames"),
-    _P("tracker.polarity", "str", None, "dots: light, dark or auto"),
+    *_target_parameters(),
     # the servo camera
     _P("K_hat", "floats", None, "the servo camera's intrinsics [fx, fy, u0, v0] or 3x3 row-major (unset: from CameraInfo)"),
     _P("distortion", "floats", None, "the servo camera's distortion with K_hat (OpenCV order); unset: none"),
@@ -144,7 +184,7 @@ class BridgeConfig:
     override, the output frame and hand-eye transform, the topics and the watchdog."""
 
     reference_image: npt.NDArray[np.uint8]
-    target: Literal["dots", "tags"]
+    target: _TargetName
     servo_options: dict[str, Any]
     K_hat: Optional[Intrinsics] = None
     distortion: Optional[Distortion] = None
@@ -273,32 +313,29 @@ def _lens(given: dict[str, Any], k_name: str, d_name: str, file_name: str) -> tu
 
 
 def _target_options(given: dict[str, Any], explicit: dict[str, Any], target: str) -> dict[str, Any]:
-    """ImageServo's target arguments: the dots' pixels and tracker, or the tags' family and ids
-    (another target's, given explicitly, refused)."""
-    options: dict[str, Any] = {}
-    dot_names: tuple[str, ...] = ("reference_points", "reference_points_file", "first_points", "first_points_file")
-    dot_names += tuple(p.name for p in PARAMETERS if p.name.startswith("tracker."))
-    foreign = ("family", "tag_ids", "decimation") if target == "dots" else dot_names
-    for name in foreign:
-        if name in explicit:
+    """ImageServo's arguments of the target (``vsinv.TARGETS``), each from its parameters by its
+    kind (another target's, given explicitly, refused)."""
+    for name in explicit:
+        arg = _target_of(name)
+        if arg is not None and arg["target"] != target:
             raise _refuse(name, f"not a parameter of target {target!r}")
-    if target == "tags":
-        options["family"] = given["family"]
-        if "tag_ids" in given:
-            options["tag_ids"] = list(given["tag_ids"])
-        if "decimation" in given:
-            options["decimation"] = given["decimation"]
-        return options
-    reference = _points(given, "reference_points")
-    if reference is None:
-        raise _refuse("reference_points", "target 'dots' needs the dots' approximate pixels in the reference image")
-    options["reference_points"] = reference
-    first = _points(given, "first_points")
-    if first is not None:
-        options["first_points"] = first
-    tracker = {k[len("tracker."):]: v for k, v in given.items() if k.startswith("tracker.")}
-    if tracker:
-        options["tracker"] = tracker
+    options: dict[str, Any] = {}
+    spec = next(t for t in TARGETS if t["name"] == target)
+    for a in spec["args"]:
+        name, kind = a["name"], a["kind"]
+        value: Any
+        if kind == "points":
+            value = _points(given, name)
+        elif kind == "tracker":
+            value = {k[len(name) + 1:]: v for k, v in given.items() if k.startswith(f"{name}.")} or None
+        elif kind == "ids":
+            value = list(given[name]) if name in given else None
+        else:
+            value = given.get(name)
+        if value is None and a["required"]:
+            raise _refuse(name, f"target {target!r} needs {a['doc']}")
+        if value is not None:
+            options[name] = value
     return options
 
 
@@ -407,7 +444,7 @@ def parse_parameters(values: Mapping[str, Any]) -> BridgeConfig:
         reference = load_image(path)
     except InvalidInput as e:
         raise _refuse("reference_image", str(e)) from None
-    target = cast(Literal["dots", "tags"], given["target"])
+    target = cast("_TargetName", given["target"])
     options = {**_target_options(given, explicit, target), **_servo_options(given)}
     ref_k, ref_d = _lens(given, "reference_K", "reference_distortion", "reference_calibration")
     if ref_k is not None:
