@@ -255,7 +255,7 @@ class InvariantController:
         K_hat: _IntrinsicsLike,
         gain: float = 1.0,
         gain_rz: float = 1.0,
-        basis: _Basis = (0, 1, 2),
+        basis: _Basis = "auto",
         feedforward: bool = True,
         min_structure_ratio: float = 0.001,
         rz_task: Literal["angle", "tau21"] = "angle",
@@ -263,9 +263,9 @@ class InvariantController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> InvariantController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
-    def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with only the points flagged in `visible`, a bool array (n,)."""
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
+        """One step: the twist (6,) in the camera frame; `visible` a bool array (n,) of the
+        points found (None: all)."""
     def set_k_hat(self, K_hat: _IntrinsicsLike) -> None:
         """Replaces the estimated intrinsics (e.g. a zoom read-out); the next step uses them."""
     def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None: ...
@@ -323,9 +323,9 @@ class IbvsController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> IbvsController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array: ...
-    def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with only the points flagged in `visible`, a bool array (n,)."""
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
+        """One step: the twist (6,) in the camera frame; `visible` a bool array (n,) of the
+        points found (None: all)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -384,7 +384,7 @@ class Servo:
         dt: float = 0.04,
     ) -> Servo: ...
     def step(
-        self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None, depths: _ArrayLike | None = None
+        self, pixels: _ArrayLike, depths: _ArrayLike | None = None, visible: npt.ArrayLike | None = None
     ) -> ServoStep:
         """One step: the twist to send (zero when stopping), the verdict and the telemetry.
         After a stop, every later step returns that stop again (zero twist)."""
@@ -614,7 +614,6 @@ class _Column(TypedDict):
 class _SummaryField(TypedDict):
     name: str
     unit: str
-    legacy: str | None
     description: str
 
 def recorded_columns() -> list[_Column]:
@@ -623,8 +622,7 @@ def recorded_columns() -> list[_Column]:
     points, ``"n_joints"`` joints), dtype, which runs record it, description."""
 
 def summary_fields() -> list[_SummaryField]:
-    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, the older name in
-    millimetres / degrees / with a unit suffix that the summary also has, description."""
+    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, description."""
 
 _PlotKind = Literal[
     "image_trajectories", "errors", "task_functions", "velocities", "pose_errors", "path3d", "joints", "joint_velocities"
@@ -699,7 +697,7 @@ def run_batch(
     """Runs the scenarios in parallel (GIL released, recording off); one table row per run.
 
     ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
-    as runs finish (``done`` increasing to ``total``); ``vsinv.run_batch`` draws a tqdm bar
+    as runs finish (``done`` increasing to ``total``); ``vsinv.sim.run_batch`` draws a tqdm bar
     instead for None, True or False. Ctrl-C or an exception of ``progress`` stops the batch
     and is raised. Works in a process forked after earlier batches (the pools are rebuilt).
     """
