@@ -123,7 +123,7 @@ def view(points: np.ndarray, camera_pose: np.ndarray, k):
     """Pixels and depths of points (in F*) seen from a camera at camera_pose (camera in F*)."""
     inv = np.linalg.inv(camera_pose)
     cam = points @ inv[:3, :3].T + inv[:3, 3]
-    return vsinv.project(cam, k)
+    return vsinv.geometry.project(cam, k)
 
 
 def lens(f: float) -> "vsinv.Intrinsics":
