@@ -1,5 +1,6 @@
 """One Python API per level (issue 29, item 3): the session at the top of ``vsinv``, and below
-it the levels ``laws``, ``vision``, ``sim``, ``calibration``, ``kinematics``, ``geometry``;
+it the levels ``laws``, ``vision``, ``sim``, ``calibration``, ``kinematics``, ``geometry``,
+``errors``;
 every public name of ``vsinv._core`` in exactly one of them (or the session), one step order
 ``step(pixels, depths, visible=None)`` and one default basis ``"auto"``."""
 
@@ -17,7 +18,7 @@ import pytest
 import vsinv
 from vsinv import _core
 
-LEVELS = ("laws", "vision", "sim", "calibration", "kinematics", "geometry")
+LEVELS = ("laws", "vision", "sim", "calibration", "kinematics", "geometry", "errors")
 STUB = Path(vsinv.__file__).with_name("_core.pyi")
 
 # The session level: what an application that servoes needs, and nothing else.
@@ -40,7 +41,13 @@ SESSION = {
     "NotReady",
 }
 # Re-exported at the top from their level: the main job (a simulated session) and frame sources.
-FROM_A_LEVEL = {"run_scenario": "sim", "load_scenario": "sim", "RunResult": "sim", "frames": "vision"}
+FROM_A_LEVEL = {
+    "run_scenario": "sim",
+    "load_scenario": "sim",
+    "RunResult": "sim",
+    "frames": "vision",
+    **{name: "errors" for name in ("VsinvError", "InvalidInput", "DegenerateGeometry", "NotReady")},
+}
 
 
 def levels() -> dict[str, types.ModuleType]:

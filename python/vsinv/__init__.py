@@ -12,26 +12,17 @@ images, :func:`replay` of recorded frames, :func:`run_scenario` of a simulated o
 :mod:`vsinv.laws` (the controllers, invariants, stability), :mod:`vsinv.vision` (detectors,
 trackers, rendering, images, distortion), :mod:`vsinv.sim` (scenarios, batches, sweeps),
 :mod:`vsinv.calibration` (hand-eye, calibration files, reference depths),
-:mod:`vsinv.kinematics` (the arms) and :mod:`vsinv.geometry` (SE(3), projection). Each name
+:mod:`vsinv.kinematics` (the arms), :mod:`vsinv.geometry` (SE(3), projection) and
+:mod:`vsinv.errors` (the exceptions and their tables). Each name
 lives in one of them; the top level re-exports the few a session needs.
 """
 
 import logging
 
-from . import calibration, geometry, kinematics, laws, sim, vision
+from . import calibration, errors, geometry, kinematics, laws, sim, vision
 from . import plots, sweep  # helpers of RunResult and vsinv.sim (importable, not the API's levels)
-from ._core import (
-    DegenerateGeometry,
-    ImageServo,
-    ImageStep,
-    Intrinsics,
-    InvalidInput,
-    NotReady,
-    Servo,
-    ServoStep,
-    VsinvError,
-    __version__,
-)
+from ._core import ImageServo, ImageStep, Intrinsics, Servo, ServoStep, __version__
+from .errors import DegenerateGeometry, InvalidInput, NotReady, VsinvError
 from .replaying import ReplayResult, replay
 from .sim import RunResult, load_scenario, run_scenario
 from .vision import frames
@@ -68,4 +59,5 @@ __all__ = [
     "calibration",
     "kinematics",
     "geometry",
+    "errors",
 ]

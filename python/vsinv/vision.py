@@ -3,6 +3,7 @@ simulated camera, image files and grey conversion, lens distortion, and the pixe
 
 from ._core import (
     TAG_FAMILIES,
+    TARGETS,
     Distortion,
     DotTracker,
     Dots,
@@ -24,6 +25,7 @@ from .sources import frames
 
 __all__ = [
     "TAG_FAMILIES",
+    "TARGETS",
     "Distortion",
     "DotTracker",
     "Dots",
