@@ -52,7 +52,7 @@ AREAS = {
         "test_robustness_se3.py", "test_robustness_threads.py", "test_robustness_vision.py",
     ],
     "package": [
-        "test_areas.py", "test_binding_boundary.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
+        "test_api_levels.py", "test_areas.py", "test_binding_boundary.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
     ],
 }
 AREA_OF = {name: area for area, names in AREAS.items() for name in names}

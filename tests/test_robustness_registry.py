@@ -12,6 +12,11 @@ import re
 import sys
 import types
 
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
 import vsinv
 import vsinv.sweep
 from robustness_harness import REGISTRY, covers
@@ -33,7 +38,7 @@ for _name in AREAS:
     importlib.import_module(_name)
 
 # The levels below the session (issue 29, item 3).
-LEVELS = ("laws", "vision", "sim", "calibration", "kinematics", "geometry")
+LEVELS = ("laws", "vision", "sim", "calibration", "kinematics", "geometry", "errors")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -47,6 +52,24 @@ def test_exception_classes_and_version() -> None:
         e = cls("msg")
         assert str(e) == "msg" and isinstance(e, Exception)
     assert isinstance(vsinv.__version__, str) and re.fullmatch(r"\d+\.\d+\.\d+.*", vsinv.__version__)
+
+
+@covers("TARGETS", "ERROR_CLASSES", "ERROR_KINDS", "ERROR_ATTRIBUTES")
+@settings(max_examples=60, deadline=None)
+@given(st.text(max_size=24))
+def test_the_tables_describe_what_the_package_raises(name: str) -> None:
+    """Any target name outside ``vsinv.vision.TARGETS`` is refused by ``ImageServo`` with an
+    error that the error tables describe: its class, its kind and every attribute."""
+    if name in {t["name"] for t in vsinv.vision.TARGETS}:
+        return
+    image = np.zeros((48, 64), np.uint8)
+    with pytest.raises(vsinv.InvalidInput) as err:
+        vsinv.ImageServo(image, name, vsinv.Intrinsics(600.0, 600.0, 32.0, 24.0), law="none", depths=0.5)
+    e = err.value
+    assert e.argument == "target" and str(e).startswith("target: expected one of")
+    assert type(e).__name__ in {c["name"] for c in vsinv.errors.ERROR_CLASSES}
+    assert (e.kind, "InvalidInput") in {(k["kind"], k["class"]) for k in vsinv.errors.ERROR_KINDS}
+    assert all(hasattr(e, a["name"]) for a in vsinv.errors.ERROR_ATTRIBUTES)
 
 
 def public_members(cls: type) -> list[str]:

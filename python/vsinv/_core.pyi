@@ -447,9 +447,10 @@ class Servo:
     def step(
         self, pixels: _ArrayLike, depths: _ArrayLike | None = None, visible: npt.ArrayLike | None = None
     ) -> ServoStep:
-        """One step from the current pixels (n, 2): `visible` a bool array (n,) of the points found (None:
-        all), `depths` (n,) with `depths="per_step"`. After a stop, every later step returns that stop
-        again (zero twist)."""
+        """One step from the current pixels (n, 2): `depths` (n,) with `depths="per_step"` (None
+        otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a ServoStep:
+        the twist to send (zero when stopping), the verdict and the telemetry. After a stop, every
+        later step returns that stop again (zero twist)."""
     @property
     def iterations(self) -> int:
         """Control steps applied."""
@@ -812,8 +813,7 @@ def run_batch(
     scenario: status (str), iterations, the summary fields final_translation_error,
     final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
     observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where not
-    measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2, within_tolerance,
-    message (str).
+    measured), prop1, prop2, within_tolerance, message (str).
 
     ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
     as runs finish (``done`` increasing to ``total``); ``vsinv.sim.run_batch`` draws a tqdm bar

@@ -234,7 +234,7 @@ pub fn recorded_columns(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         .collect()
 }
 
-/// The summary's numbers as dicts: name, unit, description.
+/// The numbers of `RunResult.summary` (SI, `px`, `1`): name, unit, description.
 #[pyfunction]
 pub fn summary_fields(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     SUMMARY_FIELDS
