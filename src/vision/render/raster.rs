@@ -45,7 +45,13 @@ pub(super) trait Shape {
     {
         let mut out = vec![0.0f32; patch.w * patch.h];
         for (index, (u, v)) in patch.pixels().enumerate() {
-            out[index] = warp.local(u, v).map_or(0.0, |local| pixel_coverage(self, &local));
+            out[index] = match warp {
+                // Without a lens the pixel is its ideal point: no Jacobian to build per pixel.
+                Warp::Pinhole => pixel_coverage(self, [u, v], None),
+                Warp::Lens { .. } => {
+                    warp.local(u, v).map_or(0.0, |local| pixel_coverage(self, local.ideal, Some(&local)))
+                }
+            };
         }
         out
     }
@@ -115,16 +121,28 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
 
 /// Exact inside and outside (first-order distance to the boundary beyond 1.5 pixels),
 /// supersampled near the boundary.
-fn pixel_coverage(shape: &impl Shape, local: &Local) -> f32 {
-    let [u, v] = local.ideal;
-    let gradient = local.jacobian.transpose() * shape.gradient(u, v);
-    let distance = shape.value(u, v) / gradient.norm().max(1e-300);
-    if distance < -1.5 {
+///
+/// The distance `value / |gradient|` is compared with 1.5 as `value^2 > 2.25 |gradient|^2`
+/// with the value's sign, without the square root and the division that every pixel of the
+/// patch would otherwise wait for (the patch's whole time, at the renderer's sizes).
+/// `local`: the pixel's place in the ideal image, None for the identity (no lens) at `ideal`.
+fn pixel_coverage(shape: &impl Shape, ideal: [f64; 2], local: Option<&Local>) -> f32 {
+    let [u, v] = ideal;
+    let gradient = match local {
+        Some(local) => local.jacobian.transpose() * shape.gradient(u, v),
+        None => shape.gradient(u, v),
+    };
+    let value = shape.value(u, v);
+    let far = value * value > 2.25 * gradient.norm_squared();
+    if far && value < 0.0 {
         1.0
-    } else if distance > 1.5 {
+    } else if far && value > 0.0 {
         0.0
     } else {
-        supersampled(shape, local)
+        match local {
+            Some(local) => supersampled(shape, local),
+            None => supersampled(shape, &Local { ideal, jacobian: nalgebra::Matrix2::identity() }),
+        }
     }
 }
 
@@ -141,16 +159,72 @@ fn supersampled(shape: &impl Shape, local: &Local) -> f32 {
 fn counted(shape: &impl Shape, local: &Local) -> f32 {
     let step = 1.0 / SUBSAMPLES as f64;
     let (j, [u, v]) = (&local.jacobian, local.ideal);
-    let mut inside = 0usize;
-    for a in 0..SUBSAMPLES {
-        let dv = (a as f64 + 0.5) * step - 0.5;
-        for b in 0..SUBSAMPLES {
-            let du = (b as f64 + 0.5) * step - 0.5;
-            let (uu, vv) = (u + j[(0, 0)] * du + j[(0, 1)] * dv, v + j[(1, 0)] * du + j[(1, 1)] * dv);
-            inside += usize::from(shape.value(uu, vv) <= 0.0);
-        }
-    }
+    // Sample (du, dv) of the pixel, inside the shape or not.
+    let sample = |du: f64, dv: f64| {
+        let (uu, vv) = (u + j[(0, 0)] * du + j[(0, 1)] * dv, v + j[(1, 0)] * du + j[(1, 1)] * dv);
+        usize::from(shape.value(uu, vv) <= 0.0)
+    };
+    let offset = |k: usize| (k as f64 + 0.5) * step - 0.5;
+    let inside: usize = match RowQuadratics::of(shape, local) {
+        Some(rows) => (0..SUBSAMPLES).map(|a| rows.count_row(offset(a), &offset, &sample)).sum(),
+        None => (0..SUBSAMPLES)
+            .flat_map(|a| (0..SUBSAMPLES).map(move |b| (offset(b), offset(a))))
+            .map(|(du, dv)| sample(du, dv))
+            .sum(),
+    };
     inside as f32 / (SUBSAMPLES * SUBSAMPLES) as f32
+}
+
+/// A quadratic shape along the rows of a pixel's samples: on the row at `dv`, the sample at
+/// `du` is `p(dv) + du d` with `d = J (1, 0)`, where the implicit function is exactly
+/// `value(p) + du gradient(p) . d + du^2 d^T A d` (the second-order part `A` of
+/// [`Shape::second_order`]). Evaluated by Horner's rule, it decides every sample farther than
+/// the rounding margin of [`one_side`] from the boundary; the few within it are evaluated as
+/// [`counted`] evaluates every sample, so the count is the same, at a fraction of the cost.
+struct RowQuadratics<'a, S: Shape> {
+    shape: &'a S,
+    local: &'a Local,
+    /// `d^T A d`.
+    curvature: f64,
+    margin: f64,
+}
+
+impl<'a, S: Shape> RowQuadratics<'a, S> {
+    /// None for a shape that is not a quadratic, or where the margin is not finite.
+    fn of(shape: &'a S, local: &'a Local) -> Option<Self> {
+        let (j, [u, v]) = (&local.jacobian, local.ideal);
+        let (du, dv) = (0.5 * (j[(0, 0)].abs() + j[(0, 1)].abs()), 0.5 * (j[(1, 0)].abs() + j[(1, 1)].abs()));
+        let margin = 1e-9 * shape.quadratic_scale(u.abs() + du + 1.0, v.abs() + dv + 1.0)?;
+        let [a, b, c] = shape.second_order();
+        let d = [j[(0, 0)], j[(1, 0)]];
+        let curvature = a * d[0] * d[0] + 2.0 * b * d[0] * d[1] + c * d[1] * d[1];
+        (margin.is_finite() && curvature.is_finite()).then_some(Self { shape, local, curvature, margin })
+    }
+
+    /// The samples of the row at `dv` inside the shape (`offset(b)`: the `du` of sample `b`).
+    fn count_row(&self, dv: f64, offset: &impl Fn(usize) -> f64, sample: &impl Fn(f64, f64) -> usize) -> usize {
+        let (j, [u, v]) = (&self.local.jacobian, self.local.ideal);
+        let (pu, pv) = (u + j[(0, 1)] * dv, v + j[(1, 1)] * dv);
+        let value = self.shape.value(pu, pv);
+        let g = self.shape.gradient(pu, pv);
+        let slope = g.x * j[(0, 0)] + g.y * j[(1, 0)];
+        if !(value.is_finite() && slope.is_finite()) {
+            return (0..SUBSAMPLES).map(|b| sample(offset(b), dv)).sum();
+        }
+        (0..SUBSAMPLES)
+            .map(|b| {
+                let du = offset(b);
+                let q = value + du * (slope + du * self.curvature);
+                if q < -self.margin {
+                    1
+                } else if q > self.margin {
+                    0
+                } else {
+                    sample(du, dv)
+                }
+            })
+            .sum()
+    }
 }
 
 /// For a quadratic shape, 1 when every sample of the pixel is certainly inside, 0 when every
@@ -206,16 +280,32 @@ fn blur(values: &mut [f32], patch: &Patch, kernel: &[f32]) {
         (&kernel[lo + r - x..=hi + r - x], lo..=hi)
     };
     for (row, out) in values.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
-        for (x, o) in out.iter_mut().enumerate() {
+        for (x, o) in out.iter_mut().enumerate().filter(|(x, _)| *x < r || *x + r >= w) {
             let (k, range) = taps(x, w);
             *o = k.iter().zip(&row[range]).map(|(a, b)| a * b).sum();
+        }
+        // Every tap inside the row: tap by tap over the outputs (vectorised), each output
+        // summing its taps in the same order as above.
+        if w > 2 * r {
+            accumulate(&mut out[r..w - r], kernel, |t| &row[t..t + w - 2 * r]);
         }
     }
     for j in 0..h {
         let (k, range) = taps(j, h);
-        let out = &mut values[j * w..(j + 1) * w];
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = k.iter().zip(range.clone()).map(|(a, y)| a * tmp[y * w + i]).sum();
+        let lo = *range.start();
+        accumulate(&mut values[j * w..(j + 1) * w], k, |t| &tmp[(lo + t) * w..(lo + t + 1) * w]);
+    }
+}
+
+/// `out[i] = sum over t of kernel[t] * input(t)[i]`, the terms added in the order of `t`
+/// (the kernel and the grey levels are not negative, so the sum starts at the first term).
+fn accumulate<'a>(out: &mut [f32], kernel: &[f32], input: impl Fn(usize) -> &'a [f32]) {
+    for (t, &k) in kernel.iter().enumerate() {
+        let line = input(t);
+        if t == 0 {
+            out.iter_mut().zip(line).for_each(|(o, &b)| *o = k * b);
+        } else {
+            out.iter_mut().zip(line).for_each(|(o, &b)| *o += k * b);
         }
     }
 }
@@ -255,6 +345,20 @@ mod tests {
         super::paint(image, &HalfPlane, &Warp::Pinhole, paint)
     }
 
+    /// The share of the pixel's samples inside the shape, each evaluated.
+    fn every_sample(shape: &impl Shape, local: &Local) -> f32 {
+        let (j, [u, v], n) = (&local.jacobian, local.ideal, SUBSAMPLES);
+        let offset = |k: usize| (k as f64 + 0.5) / n as f64 - 0.5;
+        let inside: usize = (0..n * n)
+            .map(|k| (offset(k % n), offset(k / n)))
+            .map(|(du, dv)| (u + j[(0, 0)] * du + j[(0, 1)] * dv, v + j[(1, 0)] * du + j[(1, 1)] * dv))
+            .map(|(uu, vv)| usize::from(shape.value(uu, vv) <= 0.0))
+            .sum();
+        inside as f32 / (n * n) as f32
+    }
+
+    /// The shortcuts (a pixel on one side, the rows' quadratics) give the count of every
+    /// sample evaluated, exactly, on ellipses of any size, scale and orientation.
     #[test]
     fn the_one_side_shortcut_gives_the_count_of_the_samples() {
         use crate::vision::render::conic::ImageEllipse;
@@ -283,7 +387,8 @@ mod tests {
             for _ in 0..200 {
                 let ideal = [cx + reach * (2.0 * uniform() - 1.0), cy + reach * (2.0 * uniform() - 1.0)];
                 let local = Local { ideal, jacobian };
-                let full = counted(&ellipse, &local);
+                let full = every_sample(&ellipse, &local);
+                assert_eq!(counted(&ellipse, &local), full, "{ideal:?}");
                 assert_eq!(supersampled(&ellipse, &local), full, "{ideal:?}");
                 pixels += 1;
                 shortcuts += usize::from(one_side(&ellipse, &local, 0.5 - 0.5 / SUBSAMPLES as f64).is_some());
@@ -291,6 +396,22 @@ mod tests {
         }
         // The shortcut is taken (it is what saves the time).
         assert!(shortcuts > pixels / 2, "{shortcuts} of {pixels}");
+    }
+
+    /// Samples exactly on the boundary (a circle through samples of the pixel) are inside, as
+    /// when each sample is evaluated: the rows' quadratics leave them to the exact evaluation.
+    #[test]
+    fn samples_on_the_boundary_are_counted_as_each_sample_evaluated() {
+        use crate::vision::render::conic::ImageEllipse;
+        use nalgebra::{Matrix2, Matrix3};
+        // (u - 10)^2 + (v - 10)^2 = 10 / 256: through the samples at (+-3/16, +-1/16) and
+        // (+-1/16, +-3/16) of pixel (10, 10).
+        let conic = Matrix3::new(1.0, 0.0, -10.0, 0.0, 1.0, -10.0, -10.0, -10.0, 200.0 - 10.0 / 256.0);
+        let ellipse = ImageEllipse { conic, bbox: [0.0; 4] };
+        let local = Local { ideal: [10.0, 10.0], jacobian: Matrix2::identity() };
+        assert_eq!(counted(&ellipse, &local), every_sample(&ellipse, &local));
+        // The 4 samples at (+-1/16, +-1/16) and the 8 on the boundary.
+        assert_eq!(counted(&ellipse, &local), 12.0 / 64.0);
     }
 
     #[test]
