@@ -2,10 +2,10 @@
 
 For n = 6, 12, 50, 200 points this script measures, in one process:
 
-(a) ``vsinv.InvariantController(ref_pixels, K_hat).step(pixels, depths)``: the invariant
+(a) ``vsinv.laws.InvariantController(ref_pixels, K_hat).step(pixels, depths)``: the invariant
     five-dof law (eqs. 14, 17) plus the rz law (eq. 24) of Malis, INRIA RR-4309, computed
     by the Rust core;
-(b) ``vsinv.IbvsController(ref_pixels, K_hat).step(pixels, depths)``: classic pixel-space
+(b) ``vsinv.laws.IbvsController(ref_pixels, K_hat).step(pixels, depths)``: classic pixel-space
     IBVS with the interaction matrix at the current points;
 (c) a plain NumPy implementation of the same invariant law, written below
     (:class:`NumpyInvariantController`), vectorised over the points and using
@@ -90,14 +90,14 @@ class Scene:
 
 def make_scene(n: int) -> Scene:
     obj = object_points(n)
-    reference, _ = vsinv.project(obj, vsinv.Intrinsics(*K_REFERENCE))
+    reference, _ = vsinv.geometry.project(obj, vsinv.Intrinsics(*K_REFERENCE))
     # Camera in F*: rotation R, centre t; camera coordinates are R^T (X - t).
     r = rotation(np.array([0.3, -0.5, 1.0]), 0.3)
     t = np.array([0.05, -0.03, -0.08])
     cam = (obj - t) @ r
     k = vsinv.Intrinsics(*K_CURRENT)
-    pixels, depths = vsinv.project(np.ascontiguousarray(cam), k)
-    return Scene(reference, pixels, depths, vsinv.choose_basis(reference), k.matrix)
+    pixels, depths = vsinv.geometry.project(np.ascontiguousarray(cam), k)
+    return Scene(reference, pixels, depths, vsinv.laws.choose_basis(reference), k.matrix)
 
 
 # --------------------------------------------------------------------------- NumPy law
@@ -141,7 +141,7 @@ class NumpyInvariantController:
         """The twist (vx, vy, vz, wx, wy, wz) of eqs. (17) and (24).
 
         ``visible`` (optional, (n,) bool) drops hidden non-basis points from s and J, as
-        vsinv's ``step_visible`` does; the basis points must be visible.
+        vsinv's ``step(pixels, depths, visible)`` does; the basis points must be visible.
         """
         n = len(pixels)
         others, s_star = self.others, self.s_star
@@ -204,10 +204,10 @@ def run(repeat: int) -> list[Row]:
     for n in SIZES:
         s = make_scene(n)
         # The NumPy reference implements the paper's rz law, eq. (24): the same task here.
-        inv = vsinv.InvariantController(
+        inv = vsinv.laws.InvariantController(
             s.reference, s.k_hat, gain=GAIN, gain_rz=GAIN_RZ, basis=s.basis, rz_task="tau21"
         )
-        ibvs = vsinv.IbvsController(s.reference, s.k_hat)
+        ibvs = vsinv.laws.IbvsController(s.reference, s.k_hat)
         ref_np = NumpyInvariantController(s.reference, s.k_hat, s.basis, gain=GAIN, gain_rz=GAIN_RZ)
         pixels, depths = np.ascontiguousarray(s.pixels, dtype=np.float64), np.ascontiguousarray(s.depths)
 

@@ -8,7 +8,7 @@ How to run (from the repository root, with the package installed, e.g. ``make in
 
 ``make bench`` runs it after the criterion benchmarks. The script measures:
 
-(i)   one control step for n = 12 points: ``vsinv.InvariantController.step()`` called from
+(i)   one control step for n = 12 points: ``vsinv.laws.InvariantController.step()`` called from
       Python against the NumPy implementation of the same law (``NumpyInvariantController``
       of ``benches/bench_step.py``, ``np.linalg.pinv`` as in eq. 14), on the synthetic scene
       of ``benches/bench_step.py`` / ``benches/vsinv.rs``;
@@ -26,7 +26,7 @@ How to run (from the repository root, with the package installed, e.g. ``make in
       in its run summary. Before timing, the script CHECKS that both loops take the same
       number of iterations (within 1) and end at the same final pose error (within 1e-6 m),
       and exits with an error otherwise;
-(iii) a batch: ``vsinv.run_batch`` of 1000 ``lens-12-6`` runs (one ``Scenario`` object
+(iii) a batch: ``vsinv.sim.run_batch`` of 1000 ``lens-12-6`` runs (one ``Scenario`` object
       repeated; conversion to configurations and the thread pool included) on 1 and 2
       threads, in runs per second.
 
@@ -200,7 +200,7 @@ def pose_errors(pose: np.ndarray) -> tuple[float, float]:
 
 def part_step(repeat: int) -> dict:
     s = make_scene(12)
-    ctl = vsinv.InvariantController(s.reference, s.k_hat, gain=GAIN, gain_rz=GAIN_RZ, basis=s.basis, rz_task="tau21")
+    ctl = vsinv.laws.InvariantController(s.reference, s.k_hat, gain=GAIN, gain_rz=GAIN_RZ, basis=s.basis, rz_task="tau21")
     ref = NumpyInvariantController(s.reference, s.k_hat, s.basis, gain=GAIN, gain_rz=GAIN_RZ)
     pixels, depths = np.ascontiguousarray(s.pixels, dtype=np.float64), np.ascontiguousarray(s.depths)
     check_same_twist(12, ref.step(pixels, depths), ctl.step(pixels, depths))
@@ -226,10 +226,10 @@ def part_run(repeat: int) -> dict:
     status, iterations, pose = numpy_run(cfg)
     t_err, r_err = pose_errors(pose)
     d_iter = abs(iterations - summary["iterations"])
-    d_pose = abs(t_err - summary["final_translation_error_mm"] * 1e-3)
+    d_pose = abs(t_err - summary["final_translation_error"])
     print(
         f"check {SCENARIO}: vsinv {summary['status']} after {summary['iterations']} iterations, "
-        f"{summary['final_translation_error_mm']:.6f} mm / {summary['final_rotation_error_deg']:.6f} deg; "
+        f"{summary['final_translation_error'] * 1e3:.6f} mm / {np.degrees(summary['final_rotation_error']):.6f} deg; "
         f"NumPy {status} after {iterations}, {t_err * 1e3:.6f} mm / {math.degrees(r_err):.6f} deg"
     )
     if status != summary["status"] or d_iter > 1 or not d_pose <= 1e-6:
@@ -250,10 +250,10 @@ def part_run(repeat: int) -> dict:
 def part_batch(repeat: int) -> dict:
     scenario = vsinv.load_scenario(SCENARIO)
     scenarios = [scenario] * BATCH_RUNS
-    out = vsinv.run_batch(scenarios, threads=1)
+    out = vsinv.sim.run_batch(scenarios, threads=1)
     if not (out["status"] == "converged").all():
         raise SystemExit(f"batch: not every {SCENARIO} run converged: {set(out['status'])}")
-    seconds = {t: timed(lambda t=t: vsinv.run_batch(scenarios, threads=t), repeat) for t in (1, 2)}
+    seconds = {t: timed(lambda t=t: vsinv.sim.run_batch(scenarios, threads=t), repeat) for t in (1, 2)}
     return {"runs": BATCH_RUNS, **{f"runs_per_s_{t}_threads": BATCH_RUNS / s for t, s in seconds.items()}}
 
 

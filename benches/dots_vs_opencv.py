@@ -23,14 +23,14 @@ Agreement first, on every frame, before any timing (a mismatch exits with status
 
 - real frames: every dot that OpenCV's ``SimpleBlobDetector`` (tuned per size: area from 40 px
   at the camera's scale, circularity 0.8, convexity 0.95, inertia 0.4) finds is a dot of
-  ``vsinv.detect_dots`` (within 3 % of the frame's scale), and every one of the frame's true dots
+  ``vsinv.vision.detect_dots`` (within 3 % of the frame's scale), and every one of the frame's true dots
   (the blobs at the camera's own size, mapped to the frame) is found;
 - rendered frames: every drawn disc is found within 0.2 px, as is OpenCV's grey-moment
   centroid of the Otsu blob under it.
 
 Timed, on the same array (the minimum of ``repeats`` calls after a warm-up call):
 
-(a) ``vsinv.detect_dots(image)`` with its defaults (``polarity="dark"`` for grid36);
+(a) ``vsinv.vision.detect_dots(image)`` with its defaults (``polarity="dark"`` for grid36);
 (b) OpenCV, Otsu's threshold (``THRESH_OTSU``, ``THRESH_BINARY_INV`` for dark dots) and
     ``connectedComponentsWithStats`` (8-connected): the least any detector does, with neither
     a local threshold nor subpixel centroids;
@@ -185,7 +185,7 @@ def frames() -> list[tuple[str, np.ndarray, bool, np.ndarray | None, tuple[int, 
 
 def agreement(name: str, image: np.ndarray, dark: bool, truth: np.ndarray, native: tuple[int, int]) -> bool:
     h, w = image.shape
-    ours = np.asarray(vsinv.detect_dots(image, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
+    ours = np.asarray(vsinv.vision.detect_dots(image, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
     label = f"{name:8s} {w:4d}x{h:<4d}"
     if name == "rendered":
         theirs = grey_moment_centroids(image, dark)
@@ -207,7 +207,7 @@ def agreement(name: str, image: np.ndarray, dark: bool, truth: np.ndarray, nativ
 
 def speed(name: str, image: np.ndarray, dark: bool, repeats: int) -> None:
     polarity = "dark" if dark else "light"
-    ours = minimum_time(lambda: vsinv.detect_dots(image, polarity=polarity), repeats)
+    ours = minimum_time(lambda: vsinv.vision.detect_dots(image, polarity=polarity), repeats)
     cv = minimum_time(lambda: otsu_components(image, dark), repeats)
     one = read_pass(image, repeats)
     h, w = image.shape

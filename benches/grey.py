@@ -1,4 +1,4 @@
-"""``vsinv.to_grey`` against OpenCV's ``cv2.cvtColor``, same images, same run, on one core.
+"""``vsinv.vision.to_grey`` against OpenCV's ``cv2.cvtColor``, same images, same run, on one core.
 
 How to run (from the repository root, with the package and ``opencv-python-headless``
 installed)::
@@ -58,7 +58,7 @@ def main() -> None:
     for w, h in sizes:
         for name, (channels, order, code) in layouts.items():
             frame = rng.integers(0, 256, (h, w, channels), dtype=np.uint8)
-            mine = lambda f: vsinv.to_grey(f, order=order)  # noqa: E731
+            mine = lambda f: vsinv.vision.to_grey(f, order=order)  # noqa: E731
             theirs = lambda f: cv2.cvtColor(f, code)  # noqa: E731
             if not np.array_equal(mine(frame), theirs(frame)):
                 raise SystemExit(f"{w}x{h} {name}: to_grey differs from cvtColor")

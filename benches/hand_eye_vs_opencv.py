@@ -61,7 +61,7 @@ def cell(method: str, noise: tuple[float, float], trials: int, n: int, seed: int
         g, c, x = stations(rng, n, noise)
         cv_args = (list(g[:, :3, :3]), list(g[:, :3, 3].copy()), list(c[:, :3, :3]), list(c[:, :3, 3].copy()))
         t0 = time.perf_counter()
-        cal = vsinv.calibrate_hand_eye(g, c, method=method)
+        cal = vsinv.calibration.calibrate_hand_eye(g, c, method=method)
         t1 = time.perf_counter()
         r, t = cv2.calibrateHandEye(*cv_args, method=cv_method)
         t2 = time.perf_counter()
@@ -90,7 +90,7 @@ def agreement(n: int, seed: int) -> str | None:
         r, t = cv2.calibrateHandEye(*cv_args, method=getattr(cv2, METHODS[method]))
         m = np.eye(4)
         m[:3, :3], m[:3, 3] = r, t.ravel()
-        for who, found in (("vsinv", vsinv.calibrate_hand_eye(g, c, method=method).matrix), ("OpenCV", m)):
+        for who, found in (("vsinv", vsinv.calibration.calibrate_hand_eye(g, c, method=method).matrix), ("OpenCV", m)):
             rot_deg, tr_mm = in_mm(errors(found, x))
             if not (rot_deg < 1e-6 and tr_mm < 1e-6):
                 return f"{who} {method} on noise-free stations: {rot_deg:.3g} deg, {tr_mm:.3g} mm from the true mount"

@@ -100,13 +100,13 @@ def squares():
     return img
 def timed(img, family):
     import time
-    t = time.perf_counter(); r = vsinv.detect_tags(img, family); return f"{len(r)} tags in {time.perf_counter() - t:.2f} s, stopped_early={r.stopped_early}"
+    t = time.perf_counter(); r = vsinv.vision.detect_tags(img, family); return f"{len(r)} tags in {time.perf_counter() - t:.2f} s, stopped_early={r.stopped_early}"
 """
 THREADS = """
 import threading
 sc = vsinv.load_scenario("vision-12-6")
-ref, ref_px, _ = vsinv.render_view(sc, reference=True)
-start, start_px, _ = vsinv.render_view(sc)
+ref, ref_px, _ = vsinv.vision.render_view(sc, reference=True)
+start, start_px, _ = vsinv.vision.render_view(sc)
 k = vsinv.Intrinsics(648.0, 570.0, 427.0, 304.0)
 z = [0.60, 0.66, 0.56, 0.63, 0.54, 0.65, 0.62, 0.57, 0.64, 0.55, 0.61, 0.66]
 servo = vsinv.ImageServo(ref, "dots", k, reference_points=ref_px, first_points=start_px, reference_depths=z, stop={"max_iterations": 10**6})
@@ -131,10 +131,10 @@ def cases(folder: Path) -> dict[str, str]:
     toml = "object.points = [" + "[0.1, 0.2, 1.0]," * 2_000_000 + "]\n"
     (folder / "points2e6.toml").write_text(toml)
     c = {
-        "1 detect_tags 16000^2 stripes PNG, decimation=1": "img = vsinv.load_image('stripes16000.png'); result = vsinv.detect_tags(img, decimation=1)",
-        "1 detect_tags 16000^2 stripes PNG, default": "img = vsinv.load_image('stripes16000.png'); result = vsinv.detect_tags(img)",
-        "1 detect_tags 40000^2 zero-stride view": HUGE + "result = vsinv.detect_tags(big)",
-        "1 detect_tags 14000^2 noise, default": "img = np.random.default_rng(0).integers(0, 256, (14000, 14000), dtype=np.uint8); result = vsinv.detect_tags(img)",
+        "1 detect_tags 16000^2 stripes PNG, decimation=1": "img = vsinv.vision.load_image('stripes16000.png'); result = vsinv.vision.detect_tags(img, decimation=1)",
+        "1 detect_tags 16000^2 stripes PNG, default": "img = vsinv.vision.load_image('stripes16000.png'); result = vsinv.vision.detect_tags(img)",
+        "1 detect_tags 40000^2 zero-stride view": HUGE + "result = vsinv.vision.detect_tags(big)",
+        "1 detect_tags 14000^2 noise, default": "img = np.random.default_rng(0).integers(0, 256, (14000, 14000), dtype=np.uint8); result = vsinv.vision.detect_tags(img)",
         "2 URDF 20,000 levels, load_scenario": ARM + "d['robot']['urdf'] = 'deep20000.urdf'; result = vsinv.load_scenario(d)",
         "2 URDF 200,000 levels, load_scenario": ARM + "d['robot']['urdf'] = 'deep200000.urdf'; result = vsinv.load_scenario(d)",
         "3 max_iterations=1e7, recording on, rule never met": (
@@ -142,41 +142,41 @@ def cases(folder: Path) -> dict[str, str]:
             "d['stop'].update(max_iterations=10_000_000, pixel_error=1e-9, invariant_error=1e-12, tau21=1e-12)\n"
             "d['noise'].update(pixel_sigma=1.0); r = vsinv.run_scenario(d); result = r.summary['status']"
         ),
-        "4 iCCP bomb (500 MB profile), load_image": "result = vsinv.load_image('iccp500M.png').shape",
+        "4 iCCP bomb (500 MB profile), load_image": "result = vsinv.vision.load_image('iccp500M.png').shape",
         "5 ImageServo shared by 8 threads, 800 calls": THREADS,
         "6 vision scenario, 20000x20000 camera": "d = vsinv.load_scenario('vision-12-6').to_dict(); d['camera'].update(width=20000, height=20000); result = vsinv.run_scenario(d).summary['status']",
         "6 tag rig with a 1e-9 m tag": "d = vsinv.load_scenario('tags-12-6').to_dict()\nfor t in d['object']['tags']: t['size'] = 1e-9\nresult = vsinv.run_scenario(d).summary['status']",
         "7 1e6 object points, 3 iterations": POINTS + "d = vsinv.load_scenario('lens-12-6').to_dict(); d['object']['points'] = pts(1_000_000); d['stop']['max_iterations'] = 3; result = vsinv.run_scenario(d).summary['status']",
         "7 1e5 points, vision scenario": POINTS + "d = vsinv.load_scenario('vision-12-6').to_dict(); d['object']['points'] = pts(100_000); result = vsinv.run_scenario(d).summary['status']",
-        "7 TOML string, 2e6 points, missing field": "result = vsinv.Scenario.from_toml(open('points2e6.toml').read())",
+        "7 TOML string, 2e6 points, missing field": "result = vsinv.sim.Scenario.from_toml(open('points2e6.toml').read())",
         "7 run_batch of 1e5 one-iteration scenarios": (
             "d = vsinv.load_scenario('lens-12-6').to_dict(); d['stop']['max_iterations'] = 1\n"
-            "t = vsinv.run_batch([d] * 100_000, progress=False); result = f\"{len(t['status'])} rows\""
+            "t = vsinv.sim.run_batch([d] * 100_000, progress=False); result = f\"{len(t['status'])} rows\""
         ),
-        "7 detect_dots 40000^2": HUGE + "result = vsinv.detect_dots(big)",
-        "7 DotTracker 40000^2": HUGE + "result = vsinv.DotTracker(big, np.array([[20000.0, 20000.0]]))",
-        "7 DotTracker 16000^2 blank": LARGE + "result = vsinv.DotTracker(img, np.array([[8000.0, 8000.0]]))",
-        "7 DotTracker 16000^2 blank, polarity auto": LARGE + "result = vsinv.DotTracker(img, np.array([[8000.0, 8000.0]]), polarity='auto')",
-        "7 DotTracker 16000^2 blank, 50 clicks": LARGE + "result = vsinv.DotTracker(img, np.full((50, 2), 4000.0) + np.arange(50)[:, None] * 150)",
-        "7 detect_dots 16000^2 blank": LARGE + "result = vsinv.detect_dots(img)",
+        "7 detect_dots 40000^2": HUGE + "result = vsinv.vision.detect_dots(big)",
+        "7 DotTracker 40000^2": HUGE + "result = vsinv.vision.DotTracker(big, np.array([[20000.0, 20000.0]]))",
+        "7 DotTracker 16000^2 blank": LARGE + "result = vsinv.vision.DotTracker(img, np.array([[8000.0, 8000.0]]))",
+        "7 DotTracker 16000^2 blank, polarity auto": LARGE + "result = vsinv.vision.DotTracker(img, np.array([[8000.0, 8000.0]]), polarity='auto')",
+        "7 DotTracker 16000^2 blank, 50 clicks": LARGE + "result = vsinv.vision.DotTracker(img, np.full((50, 2), 4000.0) + np.arange(50)[:, None] * 150)",
+        "7 detect_dots 16000^2 blank": LARGE + "result = vsinv.vision.detect_dots(img)",
         "7 detect_tags cluttered: 7,973 tag16h5 tags": CLUTTER + "result = timed(field('tag16h5', 12, 4, 30), 'tag16h5')",
         "7 detect_tags cluttered: 2,205 tag36h11 tags": CLUTTER + "result = timed(field('tag36h11', 24, 6, 587), 'tag36h11')",
         "7 detect_tags cluttered: 4,700 dark squares": CLUTTER + "result = timed(squares(), 'tag36h11')",
-        "s fk with a joint of 1e300": "result = vsinv.fk('ur5', [1e300, -1.2, 1.0, -0.5, 1.4, 0.3])",
+        "s fk with a joint of 1e300": "result = vsinv.kinematics.fk('ur5', [1e300, -1.2, 1.0, -0.5, 1.4, 0.3])",
         "s a verdict is final": (
-            "sc = vsinv.load_scenario('lens-12-12'); _, ref, _ = vsinv.render_view(sc, reference=True)\n"
+            "sc = vsinv.load_scenario('lens-12-12'); _, ref, _ = vsinv.vision.render_view(sc, reference=True)\n"
             "z = np.array(sc.to_dict()['object']['points'])[:, 2]\n"
             "s = vsinv.Servo(ref, vsinv.Intrinsics(1200.0, 1200.0, 416.0, 312.0), reference_depths=z)\n"
             "v = [s.step(ref + np.random.default_rng(i).normal(0, 1e-3, ref.shape)).verdict for i in range(60)]\n"
             "result = sorted(set(v[v.index('converged'):]))"
         ),
         "s blank first frame, ImageServo.step": (
-            "sc = vsinv.load_scenario('vision-12-6'); ref, ref_px, _ = vsinv.render_view(sc, reference=True); start, start_px, _ = vsinv.render_view(sc)\n"
+            "sc = vsinv.load_scenario('vision-12-6'); ref, ref_px, _ = vsinv.vision.render_view(sc, reference=True); start, start_px, _ = vsinv.vision.render_view(sc)\n"
             "s = vsinv.ImageServo(ref, 'dots', vsinv.Intrinsics(648.0, 570.0, 427.0, 304.0), reference_points=ref_px, first_points=start_px, reference_depths=[0.6] * 12)\n"
             "result = s.step(np.zeros_like(start)).verdict"
         ),
         "s NumPy scalars in a scenario dict": "d = vsinv.load_scenario('lens-12-6').to_dict(); d['control']['gain'] = np.float32(1); d['stop']['max_iterations'] = np.int64(5); result = vsinv.run_scenario(d).summary['status']",
-        "s undistort_points tol=0": "dist = vsinv.Distortion([-0.3, 0.1, 0.0, 0.0]); result = vsinv.undistort_points(np.array([[100.0, 50.0]]), vsinv.Intrinsics(800.0, 800.0, 320.0, 240.0), dist, tol=0.0, max_iter=10**9)",
+        "s undistort_points tol=0": "dist = vsinv.vision.Distortion([-0.3, 0.1, 0.0, 0.0]); result = vsinv.vision.undistort_points(np.array([[100.0, 50.0]]), vsinv.Intrinsics(800.0, 800.0, 320.0, 240.0), dist, tol=0.0, max_iter=10**9)",
     }
     return c
 

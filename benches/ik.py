@@ -2,10 +2,10 @@
 
 For each arm (``ur5``, ``panda``), ``--n`` (default 1000) random joint vectors ``q`` uniform
 within the limits (NumPy PCG64, seed 20) give reachable poses ``fk(q)``; each pose is solved
-by ``vsinv.ik(arm, pose)`` without a seed (the solver starts from the middle of the limits,
+by ``vsinv.kinematics.ik(arm, pose)`` without a seed (the solver starts from the middle of the limits,
 then its spread seeds: never from the true ``q``). A solve succeeds when it returns joints
 within the limits whose pose is within 1e-9 m and 1e-9 rad of the target (checked with
-``vsinv.fk``). Time per solve: the wall time of the whole loop over the poses divided by
+``vsinv.kinematics.fk``). Time per solve: the wall time of the whole loop over the poses divided by
 their number (one process, one thread, the Python call included).
 
 The peer, when roboticstoolbox-python is installed: its ``ikine_LM`` (Levenberg-Marquardt,
@@ -44,12 +44,12 @@ LIMITS = {
 
 def pose_gap(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
     d = np.linalg.inv(a) @ b
-    return float(np.linalg.norm(d[:3, 3])), float(np.linalg.norm(vsinv.thetau_from_pose(d)[1]))
+    return float(np.linalg.norm(d[:3, 3])), float(np.linalg.norm(vsinv.geometry.thetau_from_pose(d)[1]))
 
 
 def poses(arm: str, n: int, rng: np.random.Generator) -> list[np.ndarray]:
     lo, hi = LIMITS[arm]
-    return [vsinv.fk(arm, rng.uniform(lo, hi)) for _ in range(n)]
+    return [vsinv.kinematics.fk(arm, rng.uniform(lo, hi)) for _ in range(n)]
 
 
 def bench_vsinv(arm: str, targets: list[np.ndarray]) -> dict:
@@ -58,7 +58,7 @@ def bench_vsinv(arm: str, targets: list[np.ndarray]) -> dict:
     out = []
     for pose in targets:
         try:
-            out.append(vsinv.ik(arm, pose))
+            out.append(vsinv.kinematics.ik(arm, pose))
         except vsinv.InvalidInput:
             out.append(None)
     elapsed = time.perf_counter() - t0
@@ -66,7 +66,7 @@ def bench_vsinv(arm: str, targets: list[np.ndarray]) -> dict:
     for pose, s in zip(targets, out):
         if s is None:
             continue
-        dt, dr = pose_gap(vsinv.fk(arm, s.joints), pose)
+        dt, dr = pose_gap(vsinv.kinematics.fk(arm, s.joints), pose)
         inside = bool(np.all(s.joints >= lo) and np.all(s.joints <= hi))
         if dt < 1e-9 and dr < 1e-9 and inside:
             ok += 1
@@ -131,7 +131,7 @@ def main() -> None:
             row["rtb_ikine_LM_tight"] = bench_rtb(arm, targets, tol=1e-20)
         results["arms"][arm] = row
         v = row["vsinv"]
-        line = (f"{arm:6s} vsinv.ik: {100 * v['success_rate']:.1f} % solved, {v['ms_per_solve']:.3f} ms/solve, "
+        line = (f"{arm:6s} vsinv.kinematics.ik: {100 * v['success_rate']:.1f} % solved, {v['ms_per_solve']:.3f} ms/solve, "
                 f"worst residual {v['worst_position_residual_m']:.1e} m, first seed {100 * v['solved_from_first_seed']:.0f} %, "
                 f"max seed {v['max_seed']}")
         r = row.get("rtb_ikine_LM")

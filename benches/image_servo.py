@@ -23,14 +23,14 @@ FRAMES = 60
 REPEATS = 7
 
 
-def frames_of(name: str) -> tuple[vsinv.Scenario, np.ndarray, np.ndarray, list[np.ndarray]]:
+def frames_of(name: str) -> tuple[vsinv.sim.Scenario, np.ndarray, np.ndarray, list[np.ndarray]]:
     """The scenario, its reference image and true pixels, and FRAMES images along its run."""
     scenario = vsinv.load_scenario(name)
     d = scenario.to_dict()
     d["stop"]["max_iterations"] = FRAMES
     poses = vsinv.run_scenario(d).pose
-    ref, ref_px, _ = vsinv.render_view(scenario, reference=True)
-    images = [vsinv.render_view(scenario, pose=p)[0] for p in poses[:FRAMES]]
+    ref, ref_px, _ = vsinv.vision.render_view(scenario, reference=True)
+    images = [vsinv.vision.render_view(scenario, pose=p)[0] for p in poses[:FRAMES]]
     return scenario, ref, ref_px, images
 
 
@@ -60,16 +60,16 @@ def main() -> None:
         return pipeline.step
 
     rows.append(("ImageServo, tags (3 tags, 12 corners)", per_frame(tags_step(), images)))
-    rows.append(("  detect_tags alone", per_frame(vsinv.detect_tags, images)))
+    rows.append(("  detect_tags alone", per_frame(vsinv.vision.detect_tags, images)))
     _, ref_d, ref_px, images_d = frames_of("vision-12-6")
-    start_px = vsinv.render_view(vsinv.load_scenario("vision-12-6"))[1]
+    start_px = vsinv.vision.render_view(vsinv.load_scenario("vision-12-6"))[1]
 
     def dots_step() -> Callable[[np.ndarray], Any]:
         pipeline = vsinv.ImageServo(ref_d, "dots", k_hat, reference_points=ref_px, first_points=start_px, **session)
         return pipeline.step
 
     rows.append(("ImageServo, dots (12 tracked)", per_frame(dots_step(), images_d)))
-    tracker = vsinv.DotTracker(images_d[0], start_px)
+    tracker = vsinv.vision.DotTracker(images_d[0], start_px)
     rows.append(("  DotTracker.track alone", per_frame(tracker.track, images_d)))
     print(f"one ImageServo iteration at 832 x 624, render excluded ({FRAMES} frames, median of {REPEATS})")
     for name, seconds in rows:

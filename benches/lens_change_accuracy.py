@@ -4,7 +4,7 @@ invariant points of the two detections agree. How far is that from the pose?
 
 (i) ViSP's AprilTag benchmark pair (Debian's visp-images-data, read in place): the same scene
     at 640x480 (the reference) and 1920x1080 (the servo camera). Per family vsinv decodes, the
-    corners of the tags found in both images (vsinv.detect_tags, decimation 1 or 2, whichever
+    corners of the tags found in both images (vsinv.vision.detect_tags, decimation 1 or 2, whichever
     finds more), the invariant error |s - s*| between them, and the pose offset it implies
     (J^+ (s - s*) of the invariant law, with the tag depths from the benchmark's cMo_*.txt and
     each image's K fitted to cMo and the 640x480 ground-truth corners).
@@ -38,7 +38,7 @@ def implied_offset(ref_px: np.ndarray, px: np.ndarray, K: vsinv.Intrinsics, dept
     J^+ (s - s*) it implies at the current detections."""
     servo = vsinv.Servo(ref_px, K, law="invariant", rz_task="tau21", depths=float(np.median(depths)))  # for its basis
     servo.step(px)
-    law = vsinv.InvariantController(ref_px, K, basis=servo.basis, rz_task="tau21")
+    law = vsinv.laws.InvariantController(ref_px, K, basis=servo.basis, rz_task="tau21")
     law.step(px, depths)
     offset = law.pose_uncertainty(px, depths, pixel_sigma=1e-9).offset
     return law.invariant_error, 1e3 * float(np.linalg.norm(offset[:3])), float(np.degrees(np.linalg.norm(offset[3:])))
@@ -70,10 +70,10 @@ def tag_depth(folder: Path, tag: int) -> float:
 
 
 def detect(path: Path, family: str) -> dict[int, np.ndarray]:
-    image = vsinv.load_image(path)
+    image = vsinv.vision.load_image(path)
     best: dict[int, np.ndarray] = {}
     for decimation in (1, 2):
-        tags = vsinv.detect_tags(image, family, decimation=decimation)  # type: ignore[arg-type]
+        tags = vsinv.vision.detect_tags(image, family, decimation=decimation)  # type: ignore[arg-type]
         if len(tags) > len(best):
             best = {int(i): c for i, c in zip(tags.ids, tags.corners)}
     return best

@@ -66,20 +66,20 @@ def scenario(points: int, lenses: str, sigma: float, seed: int) -> dict[str, Any
 
 
 def run_case(points: int, lenses: str, sigma: float, seeds: int) -> dict[str, np.ndarray]:
-    return vsinv.run_batch([scenario(points, lenses, sigma, seed) for seed in range(seeds)])
+    return vsinv.sim.run_batch([scenario(points, lenses, sigma, seed) for seed in range(seeds)])
 
 
 def wrong_reports(t: dict[str, np.ndarray]) -> int:
     """Runs reported converged whose real pose is farther from the goal than the tolerance."""
     converged = t["status"] == "converged"
-    far = (t["final_translation_error_mm"] > TOLERANCE_MM) | (t["final_rotation_error_deg"] > TOLERANCE_DEG)
+    far = (t["final_translation_error"] * 1e3 > TOLERANCE_MM) | (np.degrees(t["final_rotation_error"]) > TOLERANCE_DEG)
     return int((converged & far).sum())
 
 
 def row(points: int, lenses: str, sigma: float, t: dict[str, np.ndarray]) -> str:
     status = t["status"]
     converged, settled = int((status == "converged").sum()), int((status == "settled").sum())
-    mm, bound = t["final_translation_error_mm"], t["translation_uncertainty_mm"]
+    mm, bound = t["final_translation_error"] * 1e3, t["translation_uncertainty"] * 1e3
     measured = np.isfinite(bound)
     ratio = mm[measured] / bound[measured]
     cells = [

@@ -27,7 +27,7 @@ image_transport's format string ``bgr8; jpeg compressed bgr8``) on
 ``/camera/image_raw/compressed``; the bridge decodes it in Rust for every image.
 
 Then the time from each kind of unusable image to the zero twist is in tests/test_ros_loop.py
-(``-s`` prints it). Colour to grey: ``vsinv.to_grey`` and ``cv2.cvtColor(COLOR_BGR2GRAY)``,
+(``-s`` prints it). Colour to grey: ``vsinv.vision.to_grey`` and ``cv2.cvtColor(COLOR_BGR2GRAY)``,
 the best of 7 rounds of 20 calls on the same random bgr8 image, and their ratio.
 """
 
@@ -66,7 +66,7 @@ def grey_table(rounds: int = 7) -> list[dict[str, Any]]:
     for w, h in SIZES:
         bgr = np.random.default_rng(0).integers(0, 256, (h, w, 3), dtype=np.uint8)
         times = {}
-        for name, f in (("vsinv", lambda: vsinv.to_grey(bgr, order="bgr")), ("opencv", lambda: cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))):
+        for name, f in (("vsinv", lambda: vsinv.vision.to_grey(bgr, order="bgr")), ("opencv", lambda: cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))):
             f()
             samples = []
             for _ in range(rounds):
@@ -95,7 +95,7 @@ def bridge_parameters(folder: Path, width: int, height: int) -> dict[str, Any]:
 def image_of(width: int, height: int) -> np.ndarray:
     d = vsinv.load_scenario(SCENARIO).to_dict()
     d["camera"].update(width=float(width), height=float(height), u0=width / 2.0, v0=height / 2.0)
-    return vsinv.render(vsinv.Scenario.from_dict(d))
+    return vsinv.vision.render(vsinv.sim.Scenario.from_dict(d))
 
 
 def jpeg_of(grey: np.ndarray) -> bytes:
@@ -224,7 +224,7 @@ def main() -> None:
     os.environ.update({k: env[k] for k in ("ROS_AUTOMATIC_DISCOVERY_RANGE", "ROS_LOCALHOST_ONLY", "ROS_DOMAIN_ID")})
     rclpy.init()
     results: dict[str, Any] = {"to_grey": grey_table(), "ros": []}
-    print("colour to grey (bgr8), ms: size, vsinv.to_grey, cv2.cvtColor, ratio")
+    print("colour to grey (bgr8), ms: size, vsinv.vision.to_grey, cv2.cvtColor, ratio")
     for r in results["to_grey"]:
         print(f"  {r['size']:<10} {r['vsinv_ms']:7.3f} {r['opencv_ms']:7.3f} {r['ratio']:6.2f}")
     print("image -> twist over ROS 2 (ms): size encoding mode: median, p99, twists/s")

@@ -1,7 +1,7 @@
 """Soak test: many simulated runs and controller steps in one process, resident memory printed
 at intervals, and a check that it stays flat after warm-up.
 
-- ``runs``: ``vsinv.run_batch`` of the built-in ``lens-12-6`` in chunks of 5,000 (100,000 by
+- ``runs``: ``vsinv.sim.run_batch`` of the built-in ``lens-12-6`` in chunks of 5,000 (100,000 by
   default), plus ``vsinv.run_scenario`` with recording on every chunk (the NumPy arrays it
   returns are dropped), so that both the batch path and the recorded path are soaked.
 - ``steps``: ``InvariantController.step`` and ``IbvsController.step`` alternately on one
@@ -76,7 +76,7 @@ def soak_runs(total: int, chunk: int = 5000) -> float:
     done = 0
     while done < total:
         n = min(chunk, total - done)
-        table = vsinv.run_batch([scenario] * n)
+        table = vsinv.sim.run_batch([scenario] * n)
         if not (table["status"] == "converged").all():
             raise SystemExit("soak: a lens-12-6 run did not converge")
         vsinv.run_scenario(scenario)  # recorded: arrays handed to NumPy, then dropped
@@ -88,22 +88,22 @@ def soak_runs(total: int, chunk: int = 5000) -> float:
 def scene() -> tuple[np.ndarray, np.ndarray, np.ndarray, vsinv.Intrinsics]:
     grid = np.array([[x, y, 0.6 + 0.05 * np.sin(3 * x + 5 * y)] for x in (-0.15, -0.05, 0.05, 0.15) for y in (-0.1, 0.0, 0.1)])
     k_star, k = vsinv.Intrinsics(1200.0, 1200.0, 416.0, 312.0), vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0)
-    reference, z_star = vsinv.project(grid, k_star)
+    reference, z_star = vsinv.geometry.project(grid, k_star)
     moved = grid + np.array([0.03, -0.02, 0.05])
-    current, _ = vsinv.project(moved, k)
+    current, _ = vsinv.geometry.project(moved, k)
     return reference, current, z_star, k
 
 
 def soak_steps(total: int, every: int = 100_000) -> float:
     reference, current, z_star, k = scene()
     monitor = Monitor("steps")
-    invariant = vsinv.InvariantController(reference, k, basis="auto")
-    ibvs = vsinv.IbvsController(reference, k)
+    invariant = vsinv.laws.InvariantController(reference, k, basis="auto")
+    ibvs = vsinv.laws.IbvsController(reference, k)
     for i in range(1, total + 1):
         (invariant if i % 2 else ibvs).step(current, z_star)
         if i % 10_000 == 0:
-            invariant = vsinv.InvariantController(reference, k, basis="auto")
-            ibvs = vsinv.IbvsController(reference, k)
+            invariant = vsinv.laws.InvariantController(reference, k, basis="auto")
+            ibvs = vsinv.laws.IbvsController(reference, k)
         if i % every == 0:
             monitor.mark(i)
     return monitor.growth()

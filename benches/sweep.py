@@ -8,7 +8,7 @@ How to run (from the repository root, with the package installed)::
 
 The sweep is the one of the performance page: ``lens-12-6`` with ``focal_error`` on a grid
 and ``roll_deg`` drawn uniformly (``--runs`` runs in all). Its peer is
-``vsinv.run_batch`` of the very scenarios the sweep runs (``vsinv.sweep.build_scenarios``,
+``vsinv.sim.run_batch`` of the very scenarios the sweep runs (``vsinv.sweep.build_scenarios``,
 written as JSON texts before the clock starts): the same Rust runs without the sweep's own
 work (planning each run's scenario in Python and writing it as JSON, overlapped with the
 previous chunk's runs). Before timing, the script checks that both give the same table
@@ -54,8 +54,8 @@ def check(runs: int) -> list[str]:
     """The sweep's table equals run_batch's on the same scenarios; returns their JSON texts."""
     draws = runs // GRID
     texts = [json.dumps(d) for d in build_scenarios(BASE, vary(), draws=draws, seed=1)]
-    sweep = vsinv.run_sweep(BASE, vary(), draws=draws, seed=1, threads=2, progress=False).columns
-    batch = vsinv.run_batch(texts, threads=2, progress=False)
+    sweep = vsinv.sim.run_sweep(BASE, vary(), draws=draws, seed=1, threads=2, progress=False).columns
+    batch = vsinv.sim.run_batch(texts, threads=2, progress=False)
     for key in ("status", "iterations", "final_translation_error", "final_rotation_error"):
         a, b = np.asarray(sweep[key]), np.asarray(batch[key])
         if a.shape != b.shape or not (a == b).all():
@@ -85,9 +85,9 @@ def main(argv: list[str] | None = None) -> int:
     draws = runs // GRID
     calls = {
         f"{what} {threads}": (
-            (lambda t=threads: vsinv.run_batch(texts, threads=t, progress=False))
+            (lambda t=threads: vsinv.sim.run_batch(texts, threads=t, progress=False))
             if what == "batch"
-            else (lambda t=threads: vsinv.run_sweep(BASE, vary(), draws=draws, seed=1, threads=t, progress=False))
+            else (lambda t=threads: vsinv.sim.run_sweep(BASE, vary(), draws=draws, seed=1, threads=t, progress=False))
         )
         for threads in (1, 2)
         for what in ("batch", "sweep")

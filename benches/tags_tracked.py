@@ -1,5 +1,5 @@
 """AprilTags (tag36h11) through a sequence: time per frame of the whole-frame detection
-(``vsinv.detect_tags``), of the tracked frames (``vsinv.TagTracker``: each tag followed from its
+(``vsinv.vision.detect_tags``), of the tracked frames (``vsinv.vision.TagTracker``: each tag followed from its
 last corners, its edges measured again and its bits read there with no quad search, "edges") and
 of the quad search in a crop around each tag (``TagTracker(follow=False)``, "crop"), when nothing
 moved and under small motion, beside OpenCV's aruco detector on the same frames, in the same run.
@@ -86,7 +86,7 @@ class Row:
 class Checked:
     """A tracker run through frames, and how its tracked frames compare with ``detect_tags``."""
 
-    tracker: vsinv.TagTracker
+    tracker: vsinv.vision.TagTracker
     worst: float  # largest distance of a tracked corner from the whole frame's, pixels
     odd: int  # tags found in one but not the other, over the frames
     edges: int  # tags of the tracked frames followed by their edges
@@ -95,10 +95,10 @@ class Checked:
 
 def checked_tracker(frames: list[np.ndarray], decimation: int, follow: bool = True) -> Checked:
     """A tracker run twice through ``frames``, every frame after the first tracked."""
-    tracker = vsinv.TagTracker(decimation=decimation, refresh=0, follow=follow)
+    tracker = vsinv.vision.TagTracker(decimation=decimation, refresh=0, follow=follow)
     worst, odd, edges, reads = 0.0, 0, 0, 0
     for k, frame in enumerate(frames + frames):
-        got, whole = tracker.track(frame), vsinv.detect_tags(frame, decimation=decimation)
+        got, whole = tracker.track(frame), vsinv.vision.detect_tags(frame, decimation=decimation)
         assert tracker.read_whole == (k == 0), f"frame {k} read whole"
         if k > 0:
             edges += tracker.reads.count("edges")
@@ -126,7 +126,7 @@ def measure(rounds: int) -> list[Row]:
             cycles = [itertools.cycle(frames) for _ in range(2)]
             t = timed_min_of_medians(
                 {
-                    "whole": lambda: vsinv.detect_tags(image, decimation=decimation),
+                    "whole": lambda: vsinv.vision.detect_tags(image, decimation=decimation),
                     "still": lambda: still.tracker.track(image),
                     "moving": lambda: moving.tracker.track(next(cycles[0])),
                     "crop_still": lambda: crop_still.tracker.track(image),
@@ -142,7 +142,7 @@ def measure(rounds: int) -> list[Row]:
                 Row(
                     image=f"benchmark {size}",
                     decimation=decimation,
-                    tags=len(vsinv.detect_tags(image, decimation=decimation)),
+                    tags=len(vsinv.vision.detect_tags(image, decimation=decimation)),
                     whole_ms=t["whole"] * 1e3,
                     still_ms=t["still"] * 1e3,
                     moving_ms=t["moving"] * 1e3,

@@ -21,7 +21,7 @@ are ViSP's public AprilTag images (read from the package's folder, never copied)
 
 ViSP's corner files follow the AprilTag library (pixel centres at +0.5, another corner order);
 they are converted to OpenCV's order and convention as in ``tests/test_tags.py``, in which
-``vsinv.detect_tags`` reports its corners. OpenCV's detector is
+``vsinv.vision.detect_tags`` reports its corners. OpenCV's detector is
 ``cv2.aruco.ArucoDetector(DICT_APRILTAG_36h11)`` with subpixel corner refinement
 (``CORNER_REFINE_SUBPIX``, whose corners are in OpenCV's convention; ``CORNER_REFINE_APRILTAG``
 is shown too: its corners are half a pixel off OpenCV's own convention, in the AprilTag
@@ -127,7 +127,7 @@ def opencv_tags(detector: cv2.aruco.ArucoDetector, image: np.ndarray, shift: flo
 
 
 def vsinv_tags(image: np.ndarray, decimation: int) -> dict[int, np.ndarray]:
-    tags = vsinv.detect_tags(image, decimation=decimation)
+    tags = vsinv.vision.detect_tags(image, decimation=decimation)
     return {int(i): c for i, c in zip(tags.ids, tags.corners)}
 
 
@@ -180,7 +180,7 @@ def measure(rounds: int) -> list[Row]:
             raise SystemExit(f"MISMATCH on {name}: vsinv found {mine.found} of {mine.of} tags, corners up to {mine.max_px:.3f} px off")
         t = timed_min_of_medians(
             {
-                "vsinv": lambda: vsinv.detect_tags(image, decimation=decimation),
+                "vsinv": lambda: vsinv.vision.detect_tags(image, decimation=decimation),
                 "opencv": lambda: subpix.detectMarkers(image),
                 "opencv_apriltag": lambda: april.detectMarkers(image),
             },

@@ -42,10 +42,10 @@ def rust(quick: bool) -> tuple[float | None, int | None]:
 
 
 def python_loop(passes: int) -> tuple[float, int]:
-    frames = [vsinv.load_image(p) for p in sorted(MIRE2.glob("image.*.pgm"))]
+    frames = [vsinv.vision.load_image(p) for p in sorted(MIRE2.glob("image.*.pgm"))]
     best = float("inf")
     for _ in range(passes):
-        tracker = vsinv.DotTracker(frames[0], CLICKS)
+        tracker = vsinv.vision.DotTracker(frames[0], CLICKS)
         lost = 0
         t0 = time.perf_counter()
         for frame in frames[1:]:

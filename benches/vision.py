@@ -9,15 +9,15 @@ installed)::
 
 ``make bench`` runs it after the criterion benchmarks. The images are the 832 x 624 views of
 the built-in scenarios ``vision-12-6`` (6 mm servo lens: small dots) and ``vision-12-12``
-(12 mm lens) rendered by ``vsinv.render_view`` along their own closed-loop runs (the run's
+(12 mm lens) rendered by ``vsinv.vision.render_view`` along their own closed-loop runs (the run's
 recorded pose and time at a few iterations, so each image carries the sensor noise of the
 simulator's image at that iteration); ``render_view`` also returns the true projections of
 the dots' centres, the reference of every accuracy figure. On each image the script times:
 
-(a) ``vsinv.detect_dots(image)``: the full frame: local threshold (per tile, above the
+(a) ``vsinv.vision.detect_dots(image)``: the full frame: local threshold (per tile, above the
     background around), 8-connected components, shape filters, intensity-weighted subpixel
     centroids;
-(b) ``vsinv.DotTracker(image, truth).track(image)``: the 12 dots searched in a 40 x 40 px
+(b) ``vsinv.vision.DotTracker(image, truth).track(image)``: the 12 dots searched in a 40 x 40 px
     window each around their predicted positions, in steady state (the tracker is started on
     the image from the true projections, as the simulator starts it from the projected
     points, and has tracked it once);
@@ -160,13 +160,13 @@ def measure(scenario: str, rounds: int) -> list[Row]:
     last = len(run.time) - 1
     rows = []
     for i in sorted({*(i for i in ITERATIONS if i < last), last}):
-        image, truth, visible = vsinv.render_view(scenario, pose=run.pose[i], time=float(run.time[i]))
+        image, truth, visible = vsinv.vision.render_view(scenario, pose=run.pose[i], time=float(run.time[i]))
         assert image.shape == (624, 832) and image.dtype == np.uint8
         truth = truth[visible]
-        tracker = vsinv.DotTracker(image, truth)
+        tracker = vsinv.vision.DotTracker(image, truth)
         tracker.track(image)  # steady state: it has seen this image once
         pixels, found = tracker.track(image)
-        detected = detection_accuracy(vsinv.detect_dots(image).centroids, truth)
+        detected = detection_accuracy(vsinv.vision.detect_dots(image).centroids, truth)
         tracked = tracking_accuracy(pixels, found, truth)
         # Before timing: every dot detected and tracked, none extra, within 0.5 px of its true
         # projection (measured: 0.13 px at most).
@@ -175,7 +175,7 @@ def measure(scenario: str, rounds: int) -> list[Row]:
             raise SystemExit(f"MISMATCH on {scenario} iteration {i}: detect_dots {detected}, DotTracker {tracked} ({n} dots)")
         t = timed_min_of_medians(
             {
-                "detect": lambda: vsinv.detect_dots(image),
+                "detect": lambda: vsinv.vision.detect_dots(image),
                 "track": lambda: tracker.track(image),
                 "opencv": lambda: opencv_dots(image),
             },

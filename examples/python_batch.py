@@ -20,7 +20,7 @@ def main() -> int:
         d = vsinv.load_scenario(base).to_dict()
         d["estimate"]["fku"] = d["estimate"]["fkv"] = 600.0 * (1 + e)
         scenarios.append(d)
-    table = vsinv.run_batch(scenarios)
+    table = vsinv.sim.run_batch(scenarios)
     print("focal error | status    | iterations | final error (mm)")
     for e, status, it, err in zip(errors, table["status"], table["iterations"], table["final_translation_error"]):
         print(f"{e:+10.0%} | {status:9} | {it:10d} | {err * 1e3:.3f}")

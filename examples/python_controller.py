@@ -37,7 +37,7 @@ def exp_twist(twist: np.ndarray) -> np.ndarray:
 def view(points: np.ndarray, pose: np.ndarray, k: vsinv.Intrinsics) -> tuple[np.ndarray, np.ndarray]:
     """Pixels and depths of `points` (in F*) for a camera at `pose` (camera frame in F*)."""
     rot, centre = pose[:3, :3], pose[:3, 3]
-    return vsinv.project((points - centre) @ rot, k)
+    return vsinv.geometry.project((points - centre) @ rot, k)
 
 
 def main() -> int:
@@ -46,8 +46,8 @@ def main() -> int:
     k_star = vsinv.Intrinsics(1200, 1200, 384, 288)  # the lens of the reference image
     k = vsinv.Intrinsics(600, 600, 384, 288)  # the servo lens
     k_hat = vsinv.Intrinsics(650, 570, 395, 280)  # a rough estimate of it
-    reference, z_star = vsinv.project(points, k_star)
-    ctl = vsinv.InvariantController(reference, k_hat, basis="auto")
+    reference, z_star = vsinv.geometry.project(points, k_star)
+    ctl = vsinv.laws.InvariantController(reference, k_hat, basis="auto")
 
     pose = exp_twist(np.array([0.08, -0.06, -0.1, 0.1, -0.15, 0.9]))  # about 140 mm, 53 degrees away
     dt, iterations = 0.04, 0

@@ -19,7 +19,7 @@ import vsinv
 def view(points: np.ndarray, pose: np.ndarray, k: vsinv.Intrinsics) -> tuple[np.ndarray, np.ndarray]:
     """Pixels and depths of `points` (in F*) for a camera at `pose` (camera frame in F*)."""
     rot, centre = pose[:3, :3], pose[:3, 3]
-    return vsinv.project((points - centre) @ rot, k)
+    return vsinv.geometry.project((points - centre) @ rot, k)
 
 
 def main() -> int:
@@ -35,13 +35,13 @@ def main() -> int:
     stop = {"window": 10, "invariant_error": 1e-3, "tau21": 1e-3}
     servo = vsinv.Servo(reference, k_hat, "invariant", reference_depths=z_star, stop=stop)
 
-    pose = vsinv.exp_twist([0.08, -0.06, -0.1, 0.1, -0.15, 0.9])  # about 140 mm, 53 degrees away
+    pose = vsinv.geometry.exp_twist([0.08, -0.06, -0.1, 0.1, -0.15, 0.9])  # about 140 mm, 53 degrees away
     while True:
         pixels, _ = view(points, pose, k)
         step = servo.step(pixels + rng.normal(0.0, 0.03, pixels.shape))
         if not step.running:
             break
-        pose = pose @ vsinv.exp_twist(step.twist * 0.04)  # the robot moves for one period
+        pose = pose @ vsinv.geometry.exp_twist(step.twist * 0.04)  # the robot moves for one period
     t, r = np.linalg.norm(pose[:3, 3]), np.degrees(np.arccos(np.clip((np.trace(pose[:3, :3]) - 1) / 2, -1, 1)))
     print(f"servo session: {step.verdict} after {servo.iterations} iterations ({step.reason})")
     print(f"  final error {t * 1e3:.3f} mm, {r:.4f} deg")

@@ -18,7 +18,7 @@ import vsinv
 
 
 def main(out_dir: Path) -> int:
-    res = vsinv.run_sweep(
+    res = vsinv.sim.run_sweep(
         "lens-12-6",
         {"focal_error": np.linspace(-0.5, 1.0, 4), "roll_deg": vsinv.sweep.Uniform(-60, 0)},
         draws=5,

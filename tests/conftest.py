@@ -52,7 +52,7 @@ AREAS = {
         "test_robustness_se3.py", "test_robustness_threads.py", "test_robustness_vision.py",
     ],
     "package": [
-        "test_areas.py", "test_binding_boundary.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
+        "test_api_levels.py", "test_areas.py", "test_binding_boundary.py", "test_logging.py", "test_rust_version.py", "test_source_shape.py", "test_wheels.py",
     ],
 }
 AREA_OF = {name: area for area, names in AREAS.items() for name in names}
@@ -123,7 +123,7 @@ def view(points: np.ndarray, camera_pose: np.ndarray, k):
     """Pixels and depths of points (in F*) seen from a camera at camera_pose (camera in F*)."""
     inv = np.linalg.inv(camera_pose)
     cam = points @ inv[:3, :3].T + inv[:3, 3]
-    return vsinv.project(cam, k)
+    return vsinv.geometry.project(cam, k)
 
 
 def lens(f: float) -> "vsinv.Intrinsics":

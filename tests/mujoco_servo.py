@@ -72,7 +72,7 @@ def start_poses(world: mw.BoxWorld, lens: Lens, count: int, seed: int = 27) -> l
         t *= rng.uniform(0.04, 0.08) / np.linalg.norm(t)
         w = rng.normal(size=3)
         w *= np.radians(rng.uniform(8.0, 20.0)) / np.linalg.norm(w)
-        pose = REFERENCE_POSE @ vsinv.pose_from_position_thetau(t, w)
+        pose = REFERENCE_POSE @ vsinv.geometry.pose_from_position_thetau(t, w)
         px, z = mw.project(pose, K, points)
         margin = 25.0
         if (z > 0.1).all() and (px[:, 0] > margin).all() and (px[:, 0] < world.width - 1 - margin).all() and (
@@ -103,7 +103,7 @@ def pipeline(world: mw.BoxWorld, lens: Lens, law: str, start: np.ndarray, sessio
 def tag_reference_depths(world: mw.BoxWorld, reference: np.ndarray, K_ref: tuple[float, float, float, float]) -> tuple[np.ndarray, np.ndarray]:
     """Identities 4 t + c of the tag corners decoded in the reference image and their true depths
     (each decoded corner matched to the nearest projected corner of its tag)."""
-    tags = vsinv.detect_tags(reference)
+    tags = vsinv.vision.detect_tags(reference)
     truth = world.tag_corners()
     ids, depths = [], []
     for tag_id, corners in zip(tags.ids, tags.corners):
@@ -126,7 +126,7 @@ def run(world: mw.BoxWorld, lens: Lens, law: str, start: np.ndarray, index: int,
         claimed |= step.verdict == "converged"
         if not step.running:
             break
-        pose = pose @ vsinv.exp_twist(step.twist, dt)
+        pose = pose @ vsinv.geometry.exp_twist(step.twist, dt)
         mm, deg = mw.pose_error(pose, REFERENCE_POSE)
         if within is None and mm < 1.0 and deg < 0.2:
             within = servo.iterations

@@ -179,7 +179,7 @@ def spun_rig(make: Callable[..., Any], config: dict[str, Any]) -> Iterator[tuple
     """A rig (`make(first image, K)`, the config's scenario rendered at its start pose) spun by
     its own executor; both shut down after."""
     scenario = vsinv.load_scenario(config["scenario"])
-    rig = make(vsinv.render(scenario, pose=np.asarray(config["start_pose"], dtype=float)), config["K"])
+    rig = make(vsinv.vision.render(scenario, pose=np.asarray(config["start_pose"], dtype=float)), config["K"])
     ex = SingleThreadedExecutor()
     ex.add_node(rig)
     try:

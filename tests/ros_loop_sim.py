@@ -39,7 +39,7 @@ import vsinv
 
 def pose_to_msg(pose: np.ndarray, msg: PoseStamped) -> None:
     """A 4x4 pose into a PoseStamped (the quaternion from vsinv's theta-u)."""
-    position, thetau = vsinv.thetau_from_pose(pose)
+    position, thetau = vsinv.geometry.thetau_from_pose(pose)
     theta = float(np.linalg.norm(thetau))
     axis = thetau / theta if theta > 0 else np.zeros(3)
     q = np.append(axis * math.sin(theta / 2), math.cos(theta / 2))
@@ -53,7 +53,7 @@ def pose_from_msg(msg: PoseStamped) -> np.ndarray:
     xyz, w = np.array([o.x, o.y, o.z]), o.w
     s = float(np.linalg.norm(xyz))
     thetau = xyz / s * 2 * math.atan2(s, w) if s > 0 else np.zeros(3)
-    return vsinv.pose_from_position_thetau([p.x, p.y, p.z], thetau)
+    return vsinv.geometry.pose_from_position_thetau([p.x, p.y, p.z], thetau)
 
 
 def compress(grey: np.ndarray, how: str) -> CompressedImage:
@@ -72,7 +72,7 @@ def compress(grey: np.ndarray, how: str) -> CompressedImage:
 
 
 class SimCamera(Node):
-    def __init__(self, scenario: vsinv.Scenario, K: list[float], start_pose: np.ndarray, encoding: str = "mono8") -> None:
+    def __init__(self, scenario: vsinv.sim.Scenario, K: list[float], start_pose: np.ndarray, encoding: str = "mono8") -> None:
         super().__init__("sim_camera")
         self.scenario, self.K, self.encoding = scenario, K, encoding
         if encoding in ("png", "jpeg"):  # image_transport's compressed topic
@@ -88,7 +88,7 @@ class SimCamera(Node):
         self.render(start_pose)
 
     def render(self, pose: np.ndarray) -> None:
-        grey = vsinv.render(self.scenario, pose=pose)
+        grey = vsinv.vision.render(self.scenario, pose=pose)
         h, w = grey.shape
         if self.encoding in ("png", "jpeg"):
             self.image = compress(grey, self.encoding)
@@ -143,7 +143,7 @@ class SimRobot(Node):
         if not any(twist):
             return  # a stop: nothing moves, no new image is asked for
         self.latencies.append(now - self.camera.sent_at)
-        self.ee = self.ee @ vsinv.exp_twist(twist, self.dt)
+        self.ee = self.ee @ vsinv.geometry.exp_twist(twist, self.dt)
         out = PoseStamped()
         out.header.stamp = msg.header.stamp
         out.header.frame_id = "world"
@@ -197,7 +197,7 @@ def converge(executor: SingleThreadedExecutor, camera: SimCamera, robot: SimRobo
     elapsed = time.monotonic() - t0
     status = dict(sup.status)
     spin_until(executor, lambda: False, time.monotonic() + 0.3)  # the stop's zero twist
-    position, thetau = vsinv.thetau_from_pose(robot.camera_pose())
+    position, thetau = vsinv.geometry.thetau_from_pose(robot.camera_pose())
     lat = np.array(robot.latencies)
     twists = len(robot.received) - n0
     out.update(
@@ -244,7 +244,7 @@ def watchdog(executor: SingleThreadedExecutor, camera: SimCamera, robot: SimRobo
     return out
 
 
-def sized_scenario(name: str, size: list[int] | None) -> vsinv.Scenario:
+def sized_scenario(name: str, size: list[int] | None) -> vsinv.sim.Scenario:
     """The scenario, its servo camera's image ``size`` (width, height) with the principal point
     at the centre (the same lens on a larger sensor), or as it is."""
     scenario = vsinv.load_scenario(name)
@@ -252,7 +252,7 @@ def sized_scenario(name: str, size: list[int] | None) -> vsinv.Scenario:
         return scenario
     d = scenario.to_dict()
     d["camera"].update(width=float(size[0]), height=float(size[1]), u0=size[0] / 2.0, v0=size[1] / 2.0)
-    return vsinv.Scenario.from_dict(d)
+    return vsinv.sim.Scenario.from_dict(d)
 
 
 def run(config: dict[str, Any]) -> dict[str, Any]:

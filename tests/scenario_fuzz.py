@@ -129,10 +129,10 @@ def outcome(d: dict[str, Any], path: Path) -> tuple[str, str]:
     s = result.summary
     if s["status"] not in STATUSES:
         return "FAIL", f"unknown status {s['status']!r}"
-    finite = all(math.isfinite(s[k]) for k in ("final_translation_error_mm", "final_rotation_error_deg"))
+    finite = all(math.isfinite(s[k]) for k in ("final_translation_error", "final_rotation_error"))
     if not finite:
         return "FAIL", f"non-finite pose error with status {s['status']}"
-    if s["status"] == "converged" and not all(math.isfinite(s[k]) for k in ("final_invariant_error", "final_image_error_px")):
+    if s["status"] == "converged" and not all(math.isfinite(s[k]) for k in ("final_invariant_error", "final_image_error")):
         return "FAIL", "converged with a non-finite error"
     return "ok", s["status"]
 
@@ -162,7 +162,7 @@ def main() -> int:
     parser.add_argument("--scenario", action="append", default=[], help="fuzz this built-in (repeatable)")
     args = parser.parse_args()
     signal.signal(signal.SIGALRM, on_alarm)
-    names = args.scenario or (QUICK if args.quick else [n for n, _ in vsinv.list_scenarios()])
+    names = args.scenario or (QUICK if args.quick else [n for n, _ in vsinv.sim.list_scenarios()])
     failures: list[str] = []
     total: Counter[str] = Counter()
     start = time.perf_counter()

@@ -2,7 +2,7 @@
 shared by tests/test_tags_robustness.py and benches/tags_robustness.py.
 
 The images are read from Debian's visp-images-data (GPL: never copied here). Every corner
-here is in OpenCV's order and pixel convention (as `vsinv.detect_tags` reports them): ViSP's
+here is in OpenCV's order and pixel convention (as `vsinv.vision.detect_tags` reports them): ViSP's
 corner files and pupil-apriltags follow the AprilTag library (corners bottom-left,
 bottom-right, top-right, top-left of the AprilTag layout, pixel centres at +0.5), converted as
 in tests/test_tags.py. A degradation that moves the pixels (rotation, resizing) moves the
@@ -265,7 +265,7 @@ def vsinv_detector(family: str) -> Callable[[np.ndarray], Corners]:
     import vsinv
 
     def detect(image: np.ndarray) -> Corners:
-        tags = vsinv.detect_tags(image, family=family)
+        tags = vsinv.vision.detect_tags(image, family=family)
         return {int(i): c for i, c in zip(tags.ids, tags.corners)}
 
     return detect

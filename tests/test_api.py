@@ -25,7 +25,7 @@ def test_intrinsics_round_trip_and_matrix():
 def test_project_matches_pinhole():
     k = vsinv.Intrinsics(800.0, 750.0, 320.0, 240.0, skew=1.45)
     pts = np.array([[0.1, -0.05, 0.7], [0.0, 0.0, 1.0], [-0.2, 0.3, 2.0]])
-    px, z = vsinv.project(pts, k)
+    px, z = vsinv.geometry.project(pts, k)
     h = (k.matrix @ (pts / pts[:, 2:]).T).T
     np.testing.assert_allclose(px, h[:, :2])
     np.testing.assert_allclose(z, pts[:, 2])
@@ -41,12 +41,12 @@ def test_invariant_points_ignore_intrinsics_and_roll(fku, fkv, u0, v0, skew, rz)
     base = pose((0.03, -0.02, 0.05), (0.1, 0.2, 0.0))
     px1, _ = view(obj, base, lens(1200.0))
     px2, _ = view(obj, base @ pose(thetau=(0.0, 0.0, rz)), vsinv.Intrinsics(fku, fkv, u0, v0, skew))
-    np.testing.assert_allclose(vsinv.invariant_points(px1), vsinv.invariant_points(px2), atol=1e-9)
+    np.testing.assert_allclose(vsinv.laws.invariant_points(px1), vsinv.laws.invariant_points(px2), atol=1e-9)
 
 
 def test_invariant_points_against_numpy(scene):
     px = scene["cur"]
-    q = vsinv.invariant_points(px, basis=(0, 3, 8))
+    q = vsinv.laws.invariant_points(px, basis=(0, 3, 8))
     qmat = np.vstack([px[[0, 3, 8]].T, np.ones(3)])
     expected = np.linalg.solve(qmat, np.vstack([px.T, np.ones(len(px))])).T
     np.testing.assert_allclose(q, expected, atol=1e-12)
@@ -57,13 +57,13 @@ def test_jacobian_against_finite_differences(scene):
     obj, k = scene["object"], vsinv.Intrinsics(700.0, 650.0, 400.0, 250.0, skew=1.5)
     start = pose((0.05, -0.03, -0.08), (0.1, -0.2, 0.3))
     px, z = view(obj, start, k)
-    j = vsinv.invariant_jacobian(px, z, k)
+    j = vsinv.laws.invariant_jacobian(px, z, k)
     assert j.shape == (27, 5)
     others = [i for i in range(12) if i not in (0, 1, 2)]
 
     def s_at(m):
         p, _ = view(obj, m, k)
-        return vsinv.invariant_points(p)[others].ravel()
+        return vsinv.laws.invariant_points(p)[others].ravel()
 
     h = 1e-6
     for col in range(5):
@@ -78,12 +78,12 @@ def test_jacobian_against_finite_differences(scene):
 
 def test_invariant_step_against_numpy_pseudo_inverse(scene):
     k_hat = vsinv.Intrinsics(650.0, 570.0, 395.0, 280.0)
-    ctl = vsinv.InvariantController(scene["ref"], k_hat, gain=0.7, gain_rz=1.3)
+    ctl = vsinv.laws.InvariantController(scene["ref"], k_hat, gain=0.7, gain_rz=1.3, basis=(0, 1, 2))
     twist = ctl.step(scene["cur"], scene["z_star"])
     assert twist.shape == (6,) and twist.dtype == np.float64
-    j = vsinv.invariant_jacobian(scene["cur"], scene["z_star"], k_hat)
-    s = vsinv.invariant_points(scene["cur"])[3:].ravel()
-    s_star = vsinv.invariant_points(scene["ref"])[3:].ravel()
+    j = vsinv.laws.invariant_jacobian(scene["cur"], scene["z_star"], k_hat)
+    s = vsinv.laws.invariant_points(scene["cur"])[3:].ravel()
+    s_star = vsinv.laws.invariant_points(scene["ref"])[3:].ravel()
     eps = np.linalg.pinv(j) @ (s - s_star)
     np.testing.assert_allclose(ctl.eps, eps, rtol=1e-8, atol=1e-12)
     np.testing.assert_allclose(twist[:5], -0.7 * eps, rtol=1e-8, atol=1e-12)
@@ -101,14 +101,14 @@ def test_invariant_step_against_numpy_pseudo_inverse(scene):
 def test_controller_is_zero_at_the_goal_with_another_lens(scene):
     obj = scene["object"]
     cur, z = view(obj, np.eye(4), scene["k"])
-    ctl = vsinv.InvariantController(scene["ref"], scene["k"], basis="auto")
+    ctl = vsinv.laws.InvariantController(scene["ref"], scene["k"], basis="auto")
     np.testing.assert_allclose(ctl.step(cur, z), np.zeros(6), atol=1e-9)
     assert ctl.converged()
 
 
 def test_ibvs_against_numpy(scene):
     k = scene["k"]
-    ctl = vsinv.IbvsController(scene["ref"], k, gain=0.5)
+    ctl = vsinv.laws.IbvsController(scene["ref"], k, gain=0.5)
     tw = ctl.step(scene["cur"], scene["z"])
     km = k.matrix
     rows = []
@@ -123,7 +123,7 @@ def test_ibvs_against_numpy(scene):
 
 
 def test_inputs_are_read_in_place_and_other_dtypes_converted(scene):
-    ctl = vsinv.InvariantController(scene["ref"], scene["k"])
+    ctl = vsinv.laws.InvariantController(scene["ref"], scene["k"])
     a = ctl.step(scene["cur"], scene["z"])
     f32 = ctl.step(scene["cur"].astype(np.float32), scene["z"].astype(np.float32))
     np.testing.assert_allclose(a, f32, rtol=1e-3)
@@ -136,37 +136,37 @@ def test_inputs_are_read_in_place_and_other_dtypes_converted(scene):
 
 def test_check_stability_report():
     k = lens(1200.0)
-    r = vsinv.check_stability(k, vsinv.Intrinsics(600.0, 1800.0, 300.0, 200.0))
+    r = vsinv.laws.check_stability(k, vsinv.Intrinsics(600.0, 1800.0, 300.0, 200.0))
     assert r.prop1 and r.prop2 and r.sigma > 0
     assert r.eigenvalues.shape == (5,) and np.iscomplexobj(r.eigenvalues)
     np.testing.assert_allclose(sorted(r.eigenvalues.real), sorted([2.0, 1 / 1.5, 1.0, 1.5, 0.5]))
     neg = np.array([[-600.0, 0, 300], [0, 1800, 200], [0, 0, 1]])
-    r = vsinv.check_stability(k.matrix, neg)
+    r = vsinv.laws.check_stability(k.matrix, neg)
     assert not r.prop1 and not r.prop2 and (r.eigenvalues.real < 0).any()
     assert repr(r).startswith("StabilityReport(prop1=False, prop2=False, sigma=")  # Python's bools
     sched = np.stack([lens(f).matrix for f in (2250.0, 1900.0, 1550.0)])
-    r = vsinv.check_stability(sched, lens(1500.0), kappa=0.8, gain=2.0)
+    r = vsinv.laws.check_stability(sched, lens(1500.0), kappa=0.8, gain=2.0)
     assert r.eigenvalues.shape == (3, 5) and r.prop2
-    assert r.tracking_bound(0.1) == pytest.approx(vsinv.tracking_bound(2.0, r.sigma, 0.1))
-    assert vsinv.tracking_bound(2.0, 0.5, 0.1) == pytest.approx(0.2)
+    assert r.tracking_bound(0.1) == pytest.approx(vsinv.laws.tracking_bound(2.0, r.sigma, 0.1))
+    assert vsinv.laws.tracking_bound(2.0, 0.5, 0.1) == pytest.approx(0.2)
 
 
 def test_interaction_matrix_and_factors(scene):
     k = vsinv.Intrinsics(700.0, 650.0, 400.0, 250.0, skew=1.5)
     px, z = scene["cur"], scene["z"]
-    ls = vsinv.interaction_matrix(px, z, k)
+    ls = vsinv.laws.interaction_matrix(px, z, k)
     assert ls.shape == (12, 2, 6)
     km = k.matrix
     x, y, _ = np.linalg.solve(km, [px[4, 0], px[4, 1], 1.0])
     zz = z[4]
     lx = np.array([[-1 / zz, 0, x / zz, x * y, -(1 + x * x), y], [0, -1 / zz, y / zz, 1 + y * y, -x * y, -x]])
     np.testing.assert_allclose(ls[4], km[:2, :2] @ lx, rtol=1e-10)
-    phi, psi = vsinv.jacobian_factors(px, z)
+    phi, psi = vsinv.laws.jacobian_factors(px, z)
     assert phi.shape == (27, 3) and psi.shape == (27, 2)
     s, c = np.sin(k.skew), np.cos(k.skew)
     f = np.array([[s / k.fkv, -c / k.fkv], [0.0, 1.0 / k.fku]])
     j = np.hstack([phi @ km, psi @ f])
-    np.testing.assert_allclose(j, vsinv.invariant_jacobian(px, z, k), rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(j, vsinv.laws.invariant_jacobian(px, z, k), rtol=1e-8, atol=1e-12)
 
 
 def test_rz_coefficients_drive_eps_z(scene):
@@ -174,7 +174,7 @@ def test_rz_coefficients_drive_eps_z(scene):
     obj, k = scene["object"], scene["k"]
     start = pose((0.05, -0.03, -0.08), (0.1, -0.2, 0.3))
     px, z = view(obj, start, k)
-    a, c = vsinv.rz_coefficients(px, z, scene["ref"], k)
+    a, c = vsinv.laws.rz_coefficients(px, z, scene["ref"], k)
     ref = scene["ref"]
 
     def eps_z(m):

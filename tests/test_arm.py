@@ -12,9 +12,9 @@ def test_arm_builtins_converge_within_limits(name, dof):
     r = vsinv.run_scenario(name)
     s = r.summary
     assert s["status"] == "converged", s["message"]
-    assert s["final_translation_error_mm"] < 1.0 and s["final_rotation_error_deg"] < 0.1
+    assert s["final_translation_error"] < 1e-3 and np.degrees(s["final_rotation_error"]) < 0.1
     assert 0.0 < s["min_manipulability"] < 1.0
-    assert s["peak_linear_speed_m_s"] <= 0.25 + 1e-12 and s["peak_angular_speed_deg_s"] <= 60.0 + 1e-9
+    assert s["peak_linear_speed"] <= 0.25 + 1e-12 and np.degrees(s["peak_angular_speed"]) <= 60.0 + 1e-9
     rows = s["iterations"] + 1
     assert r.joints.shape == (rows, dof) and r.joint_velocities.shape == (rows, dof)
     limits = r.joint_limits

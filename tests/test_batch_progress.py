@@ -13,7 +13,7 @@ import vsinv
 
 def test_the_callable_sees_increasing_counts_up_to_the_total_on_the_calling_thread() -> None:
     calls: list[tuple[int, int, int]] = []
-    table = vsinv.run_batch(
+    table = vsinv.sim.run_batch(
         ["lens-12-6"] * 7, threads=2, progress=lambda done, total: calls.append((done, total, threading.get_ident()))
     )
     assert list(table["status"]) == ["converged"] * 7
@@ -26,8 +26,8 @@ def test_the_callable_sees_increasing_counts_up_to_the_total_on_the_calling_thre
 
 def test_results_do_not_depend_on_the_progress_report() -> None:
     batch = ["lens-12-6", "noise-12-6", "planar"]
-    quiet = vsinv.run_batch(batch, progress=False)
-    reported = vsinv.run_batch(batch, progress=lambda done, total: None)
+    quiet = vsinv.sim.run_batch(batch, progress=False)
+    reported = vsinv.sim.run_batch(batch, progress=lambda done, total: None)
     assert quiet.keys() == reported.keys()
     for name, column in quiet.items():
         np.testing.assert_array_equal(column, reported[name], err_msg=name)  # NaN equals NaN here
@@ -35,17 +35,17 @@ def test_results_do_not_depend_on_the_progress_report() -> None:
 
 def test_progress_true_draws_a_tqdm_bar_on_stderr(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("tqdm")
-    vsinv.run_batch(["lens-12-6"] * 3, progress=True)
+    vsinv.sim.run_batch(["lens-12-6"] * 3, progress=True)
     err = capsys.readouterr().err
     assert "batch" in err and "3/3" in err
-    vsinv.run_batch(["lens-12-6"] * 3, progress=False)
-    vsinv.run_batch(["lens-12-6"] * 3)  # None: stderr is not a terminal under pytest
+    vsinv.sim.run_batch(["lens-12-6"] * 3, progress=False)
+    vsinv.sim.run_batch(["lens-12-6"] * 3)  # None: stderr is not a terminal under pytest
     assert capsys.readouterr().err == ""
 
 
 def test_a_bad_progress_is_a_type_error_naming_it() -> None:
     with pytest.raises(TypeError, match=r"progress: expected None, True, False or a callable progress\(done, total\)"):
-        vsinv.run_batch(["lens-12-6"], progress="yes")  # type: ignore[arg-type]
+        vsinv.sim.run_batch(["lens-12-6"], progress="yes")  # type: ignore[arg-type]
 
 
 def test_an_exception_in_progress_stops_the_batch_and_is_raised() -> None:
@@ -56,15 +56,15 @@ def test_an_exception_in_progress_stops_the_batch_and_is_raised() -> None:
         raise RuntimeError("stop here")
 
     with pytest.raises(RuntimeError, match="^stop here$"):
-        vsinv.run_batch(["noise-12-6"] * 64, threads=1, progress=stop)
+        vsinv.sim.run_batch(["noise-12-6"] * 64, threads=1, progress=stop)
     assert len(calls) == 1
     # The pool is still usable afterwards.
-    assert list(vsinv.run_batch(["lens-12-6"], progress=False)["status"]) == ["converged"]
+    assert list(vsinv.sim.run_batch(["lens-12-6"], progress=False)["status"]) == ["converged"]
 
 
 def test_a_sweep_passes_no_bar_to_its_chunks(capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("tqdm")
-    vsinv.run_sweep("lens-12-6", {"focal_error": [0.0, 0.5]}, progress=True)
+    vsinv.sim.run_sweep("lens-12-6", {"focal_error": [0.0, 0.5]}, progress=True)
     err = capsys.readouterr().err
     assert "sweep lens-12-6" in err and "batch" not in err
 
@@ -80,7 +80,7 @@ def test_ctrl_c_stops_a_long_batch() -> None:
         "threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT)).start()\n"
         "t = time.perf_counter()\n"
         "try:\n"
-        "    vsinv.run_batch(['noise-12-6'] * 20000, threads=1, progress=False)\n"
+        "    vsinv.sim.run_batch(['noise-12-6'] * 20000, threads=1, progress=False)\n"
         "    print('finished')\n"
         "except KeyboardInterrupt:\n"
         "    print('interrupted after %.1f s' % (time.perf_counter() - t))\n"

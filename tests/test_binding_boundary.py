@@ -70,26 +70,26 @@ def test_floats_cross_exactly_both_ways() -> None:
     points = d["object"]["points"]
     for i, x in enumerate(EXTREMES):
         points[i][1] = x
-    back = vsinv.Scenario.from_dict(d).to_dict()["object"]["points"]
+    back = vsinv.sim.Scenario.from_dict(d).to_dict()["object"]["points"]
     for i, x in enumerate(EXTREMES):
         got = back[i][1]
         assert type(got) is float and got == x and math.copysign(1.0, got) == math.copysign(1.0, x), (x, got)
     # A scenario's own dictionary comes back equal, key order included.
-    once = vsinv.Scenario.from_dict(d).to_dict()
-    twice = vsinv.Scenario.from_dict(once).to_dict()
+    once = vsinv.sim.Scenario.from_dict(d).to_dict()
+    twice = vsinv.sim.Scenario.from_dict(once).to_dict()
     assert twice == once and list(twice) == list(once) and list(once)[:2] == ["name", "description"]
-    assert list(once["control"]) == list(vsinv.Scenario.from_dict(once).to_dict()["control"])
+    assert list(once["control"]) == list(vsinv.sim.Scenario.from_dict(once).to_dict()["control"])
 
 
 def test_integers_cross_as_integers_and_big_ones_as_the_nearest_float() -> None:
     d = _scenario()
     d["stop"]["max_iterations"] = np.int64(7)
-    assert vsinv.Scenario.from_dict(d).to_dict()["stop"]["max_iterations"] == 7
+    assert vsinv.sim.Scenario.from_dict(d).to_dict()["stop"]["max_iterations"] == 7
     d["control"]["gain"] = 2**70 + 1  # beyond 64 bits: the nearest f64, as JSON text read it
-    assert vsinv.Scenario.from_dict(d).to_dict()["control"]["gain"] == float(2**70)
+    assert vsinv.sim.Scenario.from_dict(d).to_dict()["control"]["gain"] == float(2**70)
     d["control"]["gain"] = 10**400
     with pytest.raises(vsinv.InvalidInput, match="control.gain: number out of range") as e:
-        vsinv.Scenario.from_dict(d)
+        vsinv.sim.Scenario.from_dict(d)
     assert e.value.key == "control.gain"
 
 
@@ -102,7 +102,7 @@ def test_non_finite_numbers_are_refused_naming_the_key(bad: Any) -> None:
     assert e.value.key == "object.points[2][1]" and e.value.kind == "scenario"
     # In a batch, the key is named as the batch's validation names it (the item's index first).
     with pytest.raises(vsinv.InvalidInput, match=r"scenario: \[1\]\.object\.points\[2\]\[1\]: expected a finite") as e:
-        vsinv.run_batch([_scenario(), d], progress=False)
+        vsinv.sim.run_batch([_scenario(), d], progress=False)
     assert e.value.key == "[1].object.points[2][1]"
 
 
@@ -142,7 +142,7 @@ def test_numpy_values_and_tuples_cross_as_lists_and_numbers() -> None:
     d["start"]["position"] = np.array([0.2, -0.15, -0.15], dtype=np.float32)
     d["noise"]["on_reference"] = np.bool_(False)
     d["object"]["points"] = tuple(tuple(p) for p in d["object"]["points"])
-    s = vsinv.Scenario.from_dict(d).to_dict()
+    s = vsinv.sim.Scenario.from_dict(d).to_dict()
     assert s["start"]["position"] == [float(np.float32(0.2)), float(np.float32(-0.15)), float(np.float32(-0.15))]
     assert s["noise"]["on_reference"] is False and isinstance(s["object"]["points"][0], list)
 
@@ -157,24 +157,24 @@ def test_thetau_from_rotations_is_opencvs_rodrigues() -> None:
     angles = np.concatenate([np.linspace(0.0, np.pi - 1e-6, 38), [1e-9, 2.9]])
     vectors = axes / np.linalg.norm(axes, axis=1, keepdims=True) * angles[:, None]
     rotations = np.array([cv2.Rodrigues(v)[0] for v in vectors])
-    np.testing.assert_allclose(vsinv.thetau_from_rotations(rotations), vectors, atol=1e-9)
+    np.testing.assert_allclose(vsinv.geometry.thetau_from_rotations(rotations), vectors, atol=1e-9)
     # Rodrigues back: the rotation of a theta-u vector is pose_from_position_thetau's block.
     for v, r in zip(vectors, rotations):
-        np.testing.assert_allclose(vsinv.pose_from_position_thetau(np.zeros(3), v)[:3, :3], r, atol=1e-12)
+        np.testing.assert_allclose(vsinv.geometry.pose_from_position_thetau(np.zeros(3), v)[:3, :3], r, atol=1e-12)
 
 
 def test_thetau_from_rotations_refusals_name_the_matrix() -> None:
     r = np.stack([np.eye(3), np.eye(3)])
     r[1, 0, 2] = np.nan
     with pytest.raises(vsinv.InvalidInput, match=r"rotations\[1\]: non-finite value at row 0, column 2") as e:
-        vsinv.thetau_from_rotations(r)
+        vsinv.geometry.thetau_from_rotations(r)
     assert (e.value.index, e.value.row, e.value.column) == (1, 0, 2)
     with pytest.raises(vsinv.InvalidInput, match=r"rotations\[1\]: not a rotation matrix") as e:
-        vsinv.thetau_from_rotations(np.stack([np.eye(3), 2.0 * np.eye(3)]))
+        vsinv.geometry.thetau_from_rotations(np.stack([np.eye(3), 2.0 * np.eye(3)]))
     assert e.value.index == 1
     with pytest.raises(vsinv.InvalidInput, match="rotations: expected shape"):
-        vsinv.thetau_from_rotations(np.eye(3))
-    assert vsinv.thetau_from_rotations(np.empty((0, 3, 3))).shape == (0, 3)
+        vsinv.geometry.thetau_from_rotations(np.eye(3))
+    assert vsinv.geometry.thetau_from_rotations(np.empty((0, 3, 3))).shape == (0, 3)
 
 
 def test_plots_theta_u_leaves_unrecorded_poses_nan() -> None:
@@ -191,17 +191,17 @@ def test_twist_adjoint_moves_points_as_finite_differences_say() -> None:
     twist Ad xi must give: v + w x q for q = X p."""
     rng = np.random.default_rng(5)
     for _ in range(10):
-        x = vsinv.pose_from_position_thetau(rng.normal(size=3), rng.normal(size=3))
+        x = vsinv.geometry.pose_from_position_thetau(rng.normal(size=3), rng.normal(size=3))
         xi = rng.normal(size=6)
-        ad = vsinv.twist_adjoint(x)
+        ad = vsinv.geometry.twist_adjoint(x)
         assert ad.shape == (6, 6)
         v, w = (ad @ xi)[:3], (ad @ xi)[3:]
         p = np.append(rng.normal(size=3), 1.0)
         h = 1e-6
-        fd = ((x @ vsinv.exp_twist(xi, h) @ p) - (x @ vsinv.exp_twist(xi, -h) @ p))[:3] / (2 * h)
+        fd = ((x @ vsinv.geometry.exp_twist(xi, h) @ p) - (x @ vsinv.geometry.exp_twist(xi, -h) @ p))[:3] / (2 * h)
         q = (x @ p)[:3]
         np.testing.assert_allclose(v + np.cross(w, q), fd, atol=1e-8)
     with pytest.raises(vsinv.InvalidInput, match="pose: non-finite value at row 0, column 0"):
-        vsinv.twist_adjoint(np.full((4, 4), np.nan))
+        vsinv.geometry.twist_adjoint(np.full((4, 4), np.nan))
     with pytest.raises(vsinv.InvalidInput, match="pose"):
-        vsinv.twist_adjoint(np.full((4, 4), 1e300))  # t x R overflows
+        vsinv.geometry.twist_adjoint(np.full((4, 4), 1e300))  # t x R overflows

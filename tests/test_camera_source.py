@@ -68,7 +68,7 @@ def fake_cv2(monkeypatch: pytest.MonkeyPatch, **capture: Any) -> types.ModuleTyp
     cv2 = types.ModuleType("cv2")
     cv2.VideoCapture = lambda device: FakeCapture(device, **capture)  # type: ignore[attr-defined]
     cv2.COLOR_BGR2GRAY = 6  # type: ignore[attr-defined]
-    cv2.cvtColor = lambda frame, code: vsinv.to_grey(frame, "bgr")  # type: ignore[attr-defined]
+    cv2.cvtColor = lambda frame, code: vsinv.vision.to_grey(frame, "bgr")  # type: ignore[attr-defined]
     monkeypatch.setitem(sys.modules, "cv2", cv2)
     return cv2
 

@@ -90,10 +90,10 @@ def test_invariance_follows_a_lens_change_with_clicks_in_both_images(capsys, tmp
     assert run_cli(capsys, "render", "vision-12-6", "--out", tmp_path)[0] == 0
     images = []
     for k, t in enumerate((0.0, 0.04, 0.08)):
-        image, pixels, visible = vsinv.render_view("vision-12-6", pose=np.eye(4), time=t)
+        image, pixels, visible = vsinv.vision.render_view("vision-12-6", pose=np.eye(4), time=t)
         images.append(tmp_path / f"lens-{k}.png")
-        vsinv.save_image(image, images[-1])
-    truth = vsinv.render_view("vision-12-6", pose=np.eye(4))[1]
+        vsinv.vision.save_image(image, images[-1])
+    truth = vsinv.vision.render_view("vision-12-6", pose=np.eye(4))[1]
     clicks = _shifted_clicks(truth, visible, tmp_path / "clicks.csv", seed=1)
     ref = ("invariance", tmp_path / "reference.png", *images, "--points", tmp_path / "reference.csv")
     # Searched near the 12 mm positions, no dot is found (even in a window of 200 px).
@@ -125,7 +125,7 @@ def test_invariance_tracks_the_issue_pair_with_clicks_in_both_images(capsys, tmp
     assert "max image error 379.24 px over 12 of 12 dot images; max invariant error 1.46e-01 over 12 of 12" in out
     assert min(float(line.split()[1]) for line in out.splitlines()[2:14]) == 82.85
     # Clicks 3 px off.
-    _, pixels, visible = vsinv.render_view("vision-12-6")
+    _, pixels, visible = vsinv.vision.render_view("vision-12-6")
     clicks = _shifted_clicks(pixels, visible, tmp_path / "clicks.csv", seed=2)
     code, out, err = run_cli(
         capsys, "invariance", tmp_path / "reference.png", tmp_path / "start.png", "--points", tmp_path / "reference.csv",
@@ -213,9 +213,9 @@ def test_render_writes_true_dot_positions(capsys, tmp_path: Path) -> None:
     code, _, _ = run_cli(capsys, "render", "vision-12-6", "--out", tmp_path)
     assert code == 0
     assert not (tmp_path / "image-1.png").exists()  # a moving camera: reference and start only
-    image = vsinv.load_image(tmp_path / "start.png")
-    _, pixels, _ = vsinv.render_view("vision-12-6")
-    assert np.array_equal(image, vsinv.render("vision-12-6"))
+    image = vsinv.vision.load_image(tmp_path / "start.png")
+    _, pixels, _ = vsinv.vision.render_view("vision-12-6")
+    assert np.array_equal(image, vsinv.vision.render("vision-12-6"))
     from vsinv.images import read_points
 
     assert np.allclose(read_points(tmp_path / "start.csv"), pixels, atol=1e-6)

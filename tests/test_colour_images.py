@@ -40,10 +40,10 @@ def _layouts(bgr: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     }
 
 
-DOTS = vsinv.render("vision-12-6", reference=True)
-DOTS_FRAME, DOTS_PX, _ = vsinv.render_view("vision-12-6", pose=np.eye(4))
-TAGS = vsinv.render("tags-12-6", reference=True)
-TAGS_FRAME = vsinv.render("tags-12-6")
+DOTS = vsinv.vision.render("vision-12-6", reference=True)
+DOTS_FRAME, DOTS_PX, _ = vsinv.vision.render_view("vision-12-6", pose=np.eye(4))
+TAGS = vsinv.vision.render("tags-12-6", reference=True)
+TAGS_FRAME = vsinv.vision.render("tags-12-6")
 
 
 def _same(a: Any, b: Any) -> None:
@@ -55,22 +55,22 @@ def _same(a: Any, b: Any) -> None:
 
 
 def _dots(image: np.ndarray) -> Any:
-    d = vsinv.detect_dots(image)
+    d = vsinv.vision.detect_dots(image)
     return d.centroids, d.areas, d.bboxes
 
 
 def _tags(image: np.ndarray) -> Any:
-    t = vsinv.detect_tags(image)
+    t = vsinv.vision.detect_tags(image)
     return np.asarray(t.ids), np.asarray(t.corners)
 
 
 FUNCTIONS: dict[str, tuple[np.ndarray, Callable[[np.ndarray], Any]]] = {
     "detect_dots": (DOTS, _dots),
-    "DotTracker": (DOTS, lambda im: vsinv.DotTracker(im, vsinv.detect_dots(DOTS).centroids).positions),
-    "DotTracker.track": (DOTS_FRAME, lambda im: vsinv.DotTracker(DOTS_FRAME, DOTS_PX).track(im)),
+    "DotTracker": (DOTS, lambda im: vsinv.vision.DotTracker(im, vsinv.vision.detect_dots(DOTS).centroids).positions),
+    "DotTracker.track": (DOTS_FRAME, lambda im: vsinv.vision.DotTracker(DOTS_FRAME, DOTS_PX).track(im)),
     "detect_tags": (TAGS, _tags),
-    "TagTracker.track": (TAGS_FRAME, lambda im: (lambda t: (np.asarray(t.ids), np.asarray(t.corners)))(vsinv.TagTracker().track(im))),
-    "to_grey": (DOTS, lambda im: vsinv.to_grey(im, "bgr") if im.ndim == 3 else vsinv.to_grey(im)),
+    "TagTracker.track": (TAGS_FRAME, lambda im: (lambda t: (np.asarray(t.ids), np.asarray(t.corners)))(vsinv.vision.TagTracker().track(im))),
+    "to_grey": (DOTS, lambda im: vsinv.vision.to_grey(im, "bgr") if im.ndim == 3 else vsinv.vision.to_grey(im)),
 }
 
 
@@ -104,8 +104,8 @@ def test_one_channel_and_grey_layouts_are_read_as_grey(tmp_path: Path) -> None:
     for image in (DOTS[:, :, None], np.asfortranarray(DOTS), np.repeat(DOTS, 2, axis=1)[:, ::2]):
         _same(_dots(image), _dots(DOTS))
     colour = _as_bgr(DOTS)
-    vsinv.save_image(colour, tmp_path / "colour.png")
-    np.testing.assert_array_equal(vsinv.load_image(tmp_path / "colour.png"), cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY))
+    vsinv.vision.save_image(colour, tmp_path / "colour.png")
+    np.testing.assert_array_equal(vsinv.vision.load_image(tmp_path / "colour.png"), cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY))
 
 
 @pytest.mark.parametrize("bad", [np.zeros((10, 10, 2), np.uint8), np.zeros((10, 10, 5), np.uint8),
@@ -113,9 +113,9 @@ def test_one_channel_and_grey_layouts_are_read_as_grey(tmp_path: Path) -> None:
 def test_other_shapes_are_refused_naming_the_argument_and_the_shape(bad: np.ndarray) -> None:
     shape = rf"shape \({', '.join(str(s) for s in bad.shape)},?\)"
     with pytest.raises(vsinv.InvalidInput, match=rf"^image: expected a uint8 NumPy array: grey .* got dtype \w+ with {shape}"):
-        vsinv.detect_dots(bad)
+        vsinv.vision.detect_dots(bad)
     with pytest.raises(vsinv.InvalidInput, match=rf"^reference_image: expected a uint8 NumPy array.*{shape}"):
         vsinv.ImageServo(bad, "tags", np.diag([600.0, 600.0, 1.0]))
     with pytest.raises(vsinv.InvalidInput, match=rf"^image: .*{shape}") as e:
-        vsinv.TagTracker().track(bad)
+        vsinv.vision.TagTracker().track(bad)
     assert (e.value.kind, e.value.argument) == ("invalid_image", "image")

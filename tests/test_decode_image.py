@@ -1,4 +1,4 @@
-"""``vsinv.decode_image`` (the compressed frames of the ROS bridge's ``image_transport:
+"""``vsinv.vision.decode_image`` (the compressed frames of the ROS bridge's ``image_transport:
 compressed``) against OpenCV's decoder (``cv2.imdecode``, libpng and libjpeg-turbo), on a
 rendered scene, random images of odd sizes and, when installed, ViSP's Klimt photograph (read
 from visp-images-data, never copied): PNG to the bit, JPEG within what two IDCTs allow; the
@@ -24,7 +24,7 @@ KLIMT = Path("/usr/share/visp-images-data/ViSP-images/Klimt/Klimt.png")
 def images() -> list[np.ndarray]:
     """Grey and colour (BGR) test images: a rendering, smooth random fields of odd sizes, Klimt."""
     rng = np.random.default_rng(7)
-    out = [vsinv.render(vsinv.load_scenario("vision-12-6"))]
+    out = [vsinv.vision.render(vsinv.load_scenario("vision-12-6"))]
     for h, w in ((97, 131), (480, 641), (33, 17)):
         field = cv2.GaussianBlur(rng.uniform(0, 255, (h, w, 3)), (0, 0), 3) + rng.normal(0, 8, (h, w, 3))
         colour = np.clip(field, 0, 255).astype(np.uint8)
@@ -48,7 +48,7 @@ def test_png_is_opencvs_to_the_bit() -> None:
     same weights but truncating instead of rounding: at most one level below, never above."""
     for image in images():
         data = encode(image, ".png")
-        mine = vsinv.decode_image(data, "png")
+        mine = vsinv.vision.decode_image(data, "png")
         expected = image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
         np.testing.assert_array_equal(mine, expected)
         libpng = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE).astype(int)
@@ -68,7 +68,7 @@ def test_jpeg_matches_opencv_within_the_idct_differences() -> None:
     for image in images():
         for quality in (75, 95):
             data = encode(image, ".jpg", cv2.IMWRITE_JPEG_QUALITY, quality)
-            mine = vsinv.decode_image(data, "jpeg").astype(int)
+            mine = vsinv.vision.decode_image(data, "jpeg").astype(int)
             theirs = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
             if image.ndim == 2:
                 theirs = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_GRAYSCALE)
@@ -86,7 +86,7 @@ def test_every_buffer_type_is_read() -> None:
     grey = images()[0]
     data = encode(grey, ".png")
     for buffer in (data, bytearray(data), memoryview(data), array.array("B", data), np.frombuffer(data, np.uint8)):
-        np.testing.assert_array_equal(vsinv.decode_image(buffer), grey)
+        np.testing.assert_array_equal(vsinv.vision.decode_image(buffer), grey)
 
 
 def png_declaring(width: int, height: int) -> bytes:
@@ -119,12 +119,12 @@ def test_bad_data_is_refused(data: object, fmt: str | None, words: str) -> None:
     payload = made[data] if isinstance(data, str) else data
     t0 = time.perf_counter()
     with pytest.raises(vsinv.InvalidInput, match=words):
-        vsinv.decode_image(payload, fmt)
+        vsinv.vision.decode_image(payload, fmt)
     assert time.perf_counter() - t0 < 0.5  # refused from the header, nothing decoded
 
 
 def test_bad_arguments_are_refused_by_name() -> None:
     with pytest.raises(vsinv.InvalidInput, match="format"):
-        vsinv.decode_image(b"\x89PNG", "gif")  # type: ignore[arg-type]
+        vsinv.vision.decode_image(b"\x89PNG", "gif")  # type: ignore[arg-type]
     with pytest.raises(vsinv.InvalidInput, match="expected bytes"):
-        vsinv.decode_image([1, 2, 3])  # type: ignore[arg-type]
+        vsinv.vision.decode_image([1, 2, 3])  # type: ignore[arg-type]

@@ -94,14 +94,14 @@ def test_against_opencv(model):
         k, d, points = lens_case(rng, model)
         ideal = (k @ (points / points[:, 2:]).T).T[:, :2]
         distorted_cv = project_cv(points, k, d)
-        distorted = vsinv.distort_points(ideal, k, d)
+        distorted = vsinv.vision.distort_points(ideal, k, d)
         err_distort = max(err_distort, np.abs(distorted - distorted_cv).max())
 
         undist_cv = undistort_cv(distorted_cv, k, d)
-        undist = vsinv.undistort_points(distorted_cv, k, d)
+        undist = vsinv.vision.undistort_points(distorted_cv, k, d)
         err_undistort = max(err_undistort, np.abs(undist - undist_cv).max())
 
-        back = vsinv.undistort_points(distorted, k, d)
+        back = vsinv.vision.undistort_points(distorted, k, d)
         err_round = max(err_round, np.abs(back - ideal).max())
         n_points += len(points)
     print(
@@ -115,33 +115,33 @@ def test_against_opencv(model):
 
 
 def test_distortion_object_and_models():
-    d = vsinv.Distortion([-0.3, 0.1, 0.001, -0.002])
+    d = vsinv.vision.Distortion([-0.3, 0.1, 0.001, -0.002])
     assert d.model == "plumb_bob"
     np.testing.assert_array_equal(d.coefficients, [-0.3, 0.1, 0.001, -0.002, 0.0])
-    r = vsinv.Distortion(np.arange(8) * 0.01)
+    r = vsinv.vision.Distortion(np.arange(8) * 0.01)
     assert r.model == "rational_polynomial" and r.coefficients.shape == (8,)
-    assert vsinv.Distortion([0.0] * 5, model="plumb_bob") == vsinv.Distortion([0.0] * 4)
+    assert vsinv.vision.Distortion([0.0] * 5, model="plumb_bob") == vsinv.vision.Distortion([0.0] * 4)
     for bad in ([0.1, 0.2, 0.0], [0.0] * 6, [0.0] * 12, [0.0] * 14):
         with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `distortion coefficients`: expected 4 or 5 \(plumb_bob"):
-            vsinv.Distortion(bad)
+            vsinv.vision.Distortion(bad)
     with pytest.raises(vsinv.InvalidInput, match="distortion coefficients: non-finite value at index 1"):
-        vsinv.Distortion([0.1, math.nan, 0.0, 0.0, 0.0])
+        vsinv.vision.Distortion([0.1, math.nan, 0.0, 0.0, 0.0])
     with pytest.raises(vsinv.InvalidInput, match="unknown distortion model"):
-        vsinv.Distortion([0.0] * 5, model="equidistant")
+        vsinv.vision.Distortion([0.0] * 5, model="equidistant")
     with pytest.raises(vsinv.InvalidInput, match="rational_polynomial model takes 8"):
-        vsinv.Distortion([0.0] * 5, model="rational_polynomial")
+        vsinv.vision.Distortion([0.0] * 5, model="rational_polynomial")
     k = vsinv.Intrinsics(800.0, 800.0, 320.0, 240.0)
     px = np.array([[100.0, 50.0], [600.0, 400.0]])
     # A Distortion, a list, a (1, 5) array as OpenCV returns them: the same.
-    a = vsinv.distort_points(px, k, d)
-    np.testing.assert_array_equal(a, vsinv.distort_points(px, k, [-0.3, 0.1, 0.001, -0.002]))
-    np.testing.assert_array_equal(a, vsinv.distort_points(px, k.matrix, np.array([[-0.3, 0.1, 0.001, -0.002, 0.0]])))
-    np.testing.assert_array_equal(vsinv.distort_points(px, k, [0.0] * 5), px)
-    assert vsinv.distort_points(np.zeros((0, 2)), k, d).shape == (0, 2)
+    a = vsinv.vision.distort_points(px, k, d)
+    np.testing.assert_array_equal(a, vsinv.vision.distort_points(px, k, [-0.3, 0.1, 0.001, -0.002]))
+    np.testing.assert_array_equal(a, vsinv.vision.distort_points(px, k.matrix, np.array([[-0.3, 0.1, 0.001, -0.002, 0.0]])))
+    np.testing.assert_array_equal(vsinv.vision.distort_points(px, k, [0.0] * 5), px)
+    assert vsinv.vision.distort_points(np.zeros((0, 2)), k, d).shape == (0, 2)
     with pytest.raises(vsinv.InvalidInput, match="pixels: non-finite value at row 0, column 1"):
-        vsinv.distort_points([[1.0, math.nan]], k, d)
+        vsinv.vision.distort_points([[1.0, math.nan]], k, d)
     with pytest.raises(vsinv.InvalidInput, match="invalid parameter `max_iter`: must be >= 1"):
-        vsinv.undistort_points(px, k, d, max_iter=0)
+        vsinv.vision.undistort_points(px, k, d, max_iter=0)
 
 
 def test_skew_against_opencv_in_normalised_coordinates():
@@ -157,17 +157,17 @@ def test_skew_against_opencv_in_normalised_coordinates():
         ideal = (km @ np.hstack([m, np.ones((200, 1))]).T).T[:, :2]
         md = project_cv(np.hstack([m, np.ones((200, 1))]), np.eye(3), d)
         expected = (km @ np.hstack([md, np.ones((200, 1))]).T).T[:, :2]
-        distorted = vsinv.distort_points(ideal, k, d)
+        distorted = vsinv.vision.distort_points(ideal, k, d)
         np.testing.assert_allclose(distorted, expected, atol=1e-8, rtol=0)
-        np.testing.assert_allclose(vsinv.undistort_points(distorted, k, d), ideal, atol=1e-9, rtol=0)
+        np.testing.assert_allclose(vsinv.vision.undistort_points(distorted, k, d), ideal, atol=1e-9, rtol=0)
 
 
 def test_large_arrays_round_trip():
     k = vsinv.Intrinsics(700.0, 700.0, 640.0, 480.0)
-    d = vsinv.Distortion([-0.38, 0.16, 0.0005, -0.0005, -0.02])
+    d = vsinv.vision.Distortion([-0.38, 0.16, 0.0005, -0.0005, -0.02])
     rng = np.random.default_rng(3)
     px = np.column_stack([rng.uniform(0, 1280, 100_000), rng.uniform(0, 960, 100_000)])
-    back = vsinv.undistort_points(vsinv.distort_points(px, k, d), k, d)
+    back = vsinv.vision.undistort_points(vsinv.vision.distort_points(px, k, d), k, d)
     assert np.abs(back - px).max() <= 1e-9
 
 
@@ -178,13 +178,13 @@ def test_fold_raises_naming_the_point():
     d = [-0.4, 0.0, 0.0, 0.0]
     px = np.array([[320.0, 240.0], [320.0 + 0.5 * 500, 240.0], [320.0 + 0.7 * 500, 240.0], [320.0, 240.0]])
     with pytest.raises(vsinv.InvalidInput, match=r"point 2: the model folds"):
-        vsinv.undistort_points(px, k, d)
+        vsinv.vision.undistort_points(px, k, d)
     with pytest.raises(vsinv.InvalidInput, match=r"point 0: did not converge in 1 iterations"):
-        vsinv.undistort_points([[600.0, 400.0]], k, d, tol=1e-12, max_iter=1)
+        vsinv.vision.undistort_points([[600.0, 400.0]], k, d, tol=1e-12, max_iter=1)
     # The distortion of a point beyond the fold is defined (as OpenCV computes it), but it
     # undistorts to the point on the lens's side, not back.
     outer = np.array([[320.0 + 1.2 * 500, 240.0]])
-    back = vsinv.undistort_points(vsinv.distort_points(outer, k, d), k, d)
+    back = vsinv.vision.undistort_points(vsinv.vision.distort_points(outer, k, d), k, d)
     assert back[0, 0] < 320.0 + 0.913 * 500
 
 
@@ -206,7 +206,7 @@ EXPECTED = {
 }
 
 
-def check(cal: vsinv.Calibration, expected) -> None:
+def check(cal: vsinv.calibration.Calibration, expected) -> None:
     (fx, fy, cx, cy), model, coeffs, size = expected
     k = cal.intrinsics
     assert (k.fku, k.fkv, k.u0, k.v0) == (fx, fy, cx, cy)
@@ -218,7 +218,7 @@ def check(cal: vsinv.Calibration, expected) -> None:
 
 @pytest.mark.parametrize("name", sorted(EXPECTED))
 def test_calibration_files_load(name):
-    cal = vsinv.load_calibration(FIXTURES / name)
+    cal = vsinv.calibration.load_calibration(FIXTURES / name)
     check(cal, EXPECTED[name])
     # What OpenCV reads from the same file, for its own files.
     if name.startswith("opencv"):
@@ -229,7 +229,7 @@ def test_calibration_files_load(name):
     # The loaded lens works with the functions.
     px = np.array([[100.0, 120.0]])
     np.testing.assert_allclose(
-        vsinv.undistort_points(vsinv.distort_points(px, cal.intrinsics, cal.distortion), cal.intrinsics, cal.distortion),
+        vsinv.vision.undistort_points(vsinv.vision.distort_points(px, cal.intrinsics, cal.distortion), cal.intrinsics, cal.distortion),
         px,
         atol=1e-9,
     )
@@ -241,10 +241,10 @@ def test_opencv4_header_and_dist_coeffs(tmp_path):
     assert text.startswith("%YAML 1.2")
     path = tmp_path / "cv4.yaml"
     path.write_text(text.replace("%YAML 1.2", "%YAML:1.0", 1).replace("distortion_coefficients", "dist_coeffs"))
-    check(vsinv.load_calibration(str(path)), EXPECTED["opencv.yaml"])
+    check(vsinv.calibration.load_calibration(str(path)), EXPECTED["opencv.yaml"])
     xml = tmp_path / "cv.xml"
     xml.write_text((FIXTURES / "opencv.xml").read_text().replace("distortion_coefficients", "dist_coeffs"))
-    check(vsinv.load_calibration(xml), EXPECTED["opencv.xml"])
+    check(vsinv.calibration.load_calibration(xml), EXPECTED["opencv.xml"])
 
 
 ROS = (FIXTURES / "ros_plumb_bob.yaml").read_text() if (FIXTURES / "ros_plumb_bob.yaml").exists() else ""
@@ -284,7 +284,7 @@ def test_malformed_calibration_files(tmp_path, suffix, old, new, field, reason):
     path.write_text(text.replace(old, new, 1))
     prefix = f"calibration file {path}: {field + ': ' if field else ''}"
     with pytest.raises(vsinv.InvalidInput) as info:
-        vsinv.load_calibration(path)
+        vsinv.calibration.load_calibration(path)
     message = str(info.value)
     assert message.startswith(prefix), message
     assert reason in message, message
@@ -293,4 +293,4 @@ def test_malformed_calibration_files(tmp_path, suffix, old, new, field, reason):
 
 def test_missing_file():
     with pytest.raises(vsinv.InvalidInput, match="calibration file /nonexistent/cal.yaml: cannot read"):
-        vsinv.load_calibration("/nonexistent/cal.yaml")
+        vsinv.calibration.load_calibration("/nonexistent/cal.yaml")

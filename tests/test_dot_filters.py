@@ -24,18 +24,18 @@ def _scene() -> np.ndarray:
     return image
 
 
-def _columns(dots: vsinv.Dots) -> list[int]:
+def _columns(dots: vsinv.vision.Dots) -> list[int]:
     return sorted(int(round(u)) for u in dots.centroids[:, 0])
 
 
 def test_fill_ratio_and_contrast_reject_what_is_not_a_dot() -> None:
     image = _scene()
-    assert _columns(vsinv.detect_dots(image)) == [20]
-    assert _columns(vsinv.detect_dots(image, threshold=40)) == [20]
-    assert _columns(vsinv.detect_dots(image, threshold=40, min_fill=0.0)) == [20, 60, 100]
-    assert _columns(vsinv.detect_dots(image, threshold=40, min_contrast=5)) == [20, 140]
+    assert _columns(vsinv.vision.detect_dots(image)) == [20]
+    assert _columns(vsinv.vision.detect_dots(image, threshold=40)) == [20]
+    assert _columns(vsinv.vision.detect_dots(image, threshold=40, min_fill=0.0)) == [20, 60, 100]
+    assert _columns(vsinv.vision.detect_dots(image, threshold=40, min_contrast=5)) == [20, 140]
     # Dark dots: the same, on the negative.
-    assert _columns(vsinv.detect_dots(255 - image, polarity="dark")) == [20]
+    assert _columns(vsinv.vision.detect_dots(255 - image, polarity="dark")) == [20]
 
 
 @pytest.mark.parametrize("reach", [9, 39])
@@ -51,9 +51,9 @@ def test_a_dot_in_texture_fails_the_ring_check(reach: int) -> None:
     ring = (np.abs(u - 40) <= reach) & (np.abs(v - 40) <= reach) & (np.hypot(u - 40, v - 40) >= 7)
     textured[ring] += rng.choice([-30.0, 30.0], size=ring.sum())
     plain, busy = image.astype(np.uint8), textured.astype(np.uint8)
-    assert len(vsinv.detect_dots(plain)) == 1
-    assert len(vsinv.detect_dots(busy, threshold=120)) == (1 if reach < 12 else 0)
-    assert len(vsinv.detect_dots(busy, threshold=120, max_ring_residual=np.inf)) == 1
+    assert len(vsinv.vision.detect_dots(plain)) == 1
+    assert len(vsinv.vision.detect_dots(busy, threshold=120)) == (1 if reach < 12 else 0)
+    assert len(vsinv.vision.detect_dots(busy, threshold=120, max_ring_residual=np.inf)) == 1
 
 
 def test_a_small_speck_in_a_textured_patch_fails_the_ring_check() -> None:
@@ -63,7 +63,7 @@ def test_a_small_speck_in_a_textured_patch_fails_the_ring_check() -> None:
     image = np.where(np.hypot(u - 40, v - 40) < 4, 200.0, 40.0)  # 49 px
     ring = (np.abs(u - 40) <= 7) & (np.abs(v - 40) <= 7) & (np.hypot(u - 40, v - 40) >= 5)
     image[ring] += rng.choice([-30.0, 30.0], size=ring.sum())
-    assert len(vsinv.detect_dots(image.astype(np.uint8), threshold=120)) == 0
+    assert len(vsinv.vision.detect_dots(image.astype(np.uint8), threshold=120)) == 0
 
 
 def test_dots_under_a_strong_lighting_gradient_are_all_found_at_their_centres() -> None:
@@ -80,7 +80,7 @@ def test_dots_under_a_strong_lighting_gradient_are_all_found_at_their_centres() 
                 cover += (np.hypot(u + du - cu, v + dv - cv) < 7) / 64
         image += 60 * cover
     image = np.round(image).astype(np.uint8)
-    dots = vsinv.detect_dots(image)
+    dots = vsinv.vision.detect_dots(image)
     assert len(dots) == len(centres)
     errors = [np.min(np.hypot(*(dots.centroids - c).T)) for c in centres]
     assert max(errors) < 0.05, errors
@@ -100,5 +100,5 @@ def test_dots_under_a_strong_lighting_gradient_are_all_found_at_their_centres() 
 )
 def test_bad_filter_values_name_the_argument(kwargs: dict[str, float], name: str) -> None:
     with pytest.raises(vsinv.InvalidInput) as info:
-        vsinv.detect_dots(_scene(), **kwargs)
+        vsinv.vision.detect_dots(_scene(), **kwargs)
     assert name in str(info.value)

@@ -70,7 +70,7 @@ def test_every_dot_of_the_resized_frame_is_found(camera_frame, size):
     (h0, w0), (w, h) = native.shape, size
     s = np.array([w / w0, h / h0])
     frame = cv2.resize(native, size, interpolation=cv2.INTER_LINEAR)
-    ours = np.asarray(vsinv.detect_dots(frame, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
+    ours = np.asarray(vsinv.vision.detect_dots(frame, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
     assert len(ours) > 0, f"{name} at {size}: no dot"
     tolerance = 3.0 * s.max()
     # The camera's dots, mapped to the resized frame (cv2.resize's pixel-centre mapping).
@@ -89,7 +89,7 @@ def test_every_dot_of_the_resized_frame_is_found(camera_frame, size):
 
 def centroid_errors(frame: np.ndarray, dark: bool, mapped: np.ndarray, windows: np.ndarray) -> np.ndarray:
     """The distance from each true dot's vsinv centroid to OpenCV's component centroid."""
-    ours = np.asarray(vsinv.detect_dots(frame, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
+    ours = np.asarray(vsinv.vision.detect_dots(frame, polarity="dark" if dark else "light").centroids).reshape(-1, 2)
     _, index = nearest(ours, mapped)
     return np.array([np.hypot(*(ours[i] - otsu_centroid(frame, dark, c, half))) for c, half, i in zip(mapped, windows, index)])
 

@@ -98,7 +98,7 @@ def test_each_kind_the_bindings_name_is_in_the_table_with_its_class():
 @pytest.mark.parametrize(
     ("call", "kind"),
     [
-        (lambda: vsinv.project(np.full((3, 3), np.nan), _core.Intrinsics(500, 500, 320, 240)), "non_finite_point"),
+        (lambda: vsinv.geometry.project(np.full((3, 3), np.nan), _core.Intrinsics(500, 500, 320, 240)), "non_finite_point"),
         (lambda: _core.ImageServo(np.zeros((8, 8), np.uint8), "rings", _core.Intrinsics(500, 500, 4, 4)), "invalid_argument"),
         (lambda: vsinv.load_scenario({"name": "x"}), "scenario"),
     ],

@@ -72,19 +72,19 @@ def test_the_readme_sweep_on_a_process_pool_after_earlier_sweeps_and_batches() -
         import vsinv
 
         scenario_a, scenario_b = "lens-12-6", "planar"
-        table = vsinv.run_batch([scenario_a, scenario_b], threads=2)
-        table = vsinv.run_batch([scenario_a, scenario_b])          # the pool of all cores too
-        res = vsinv.run_sweep("lens-12-6", {"focal_error": np.linspace(-0.9, 3.0, 4),
+        table = vsinv.sim.run_batch([scenario_a, scenario_b], threads=2)
+        table = vsinv.sim.run_batch([scenario_a, scenario_b])          # the pool of all cores too
+        res = vsinv.sim.run_sweep("lens-12-6", {"focal_error": np.linspace(-0.9, 3.0, 4),
                                             "roll_deg": vsinv.sweep.Uniform(-120, 120)}, draws=2, seed=1)
         res.summary_by("focal_error")
-        res = vsinv.run_sweep("noise-12-6", {"noise.pixel_sigma": [0.25, 0.5, 1.0]}, repeats=20,
+        res = vsinv.sim.run_sweep("noise-12-6", {"noise.pixel_sigma": [0.25, 0.5, 1.0]}, repeats=20,
                               executor=concurrent.futures.ProcessPoolExecutor(2))
         print("readme", len(res.columns["status"]))
         fork = multiprocessing.get_context("fork")   # explicit: the default start method may change
         with concurrent.futures.ProcessPoolExecutor(2, mp_context=fork) as pool:
-            res = vsinv.run_sweep("noise-12-6", {"noise.pixel_sigma": [0.25, 0.5]}, repeats=4, executor=pool)
+            res = vsinv.sim.run_sweep("noise-12-6", {"noise.pixel_sigma": [0.25, 0.5]}, repeats=4, executor=pool)
             print("fork", len(res.columns["status"]), sorted(set(res.columns["status"].tolist())))
-            table = pool.submit(vsinv.run_batch, ["lens-12-6"] * 3).result()
+            table = pool.submit(vsinv.sim.run_batch, ["lens-12-6"] * 3).result()
             print("batch in a worker", table["status"].tolist())
         """
     )
@@ -107,11 +107,11 @@ def test_fork_after_dot_detection_on_a_large_image() -> None:
         for k in range(48):
             cu, cv = 200 + (k % 8) * 470, 200 + (k // 8) * 480
             image[(u - cu) ** 2 + (v - cv) ** 2 <= 30 ** 2] = 220
-        parent = vsinv.detect_dots(image)
+        parent = vsinv.vision.detect_dots(image)
         assert len(parent) == 48, len(parent)
         pid = os.fork()
         if pid == 0:
-            child = vsinv.detect_dots(image)
+            child = vsinv.vision.detect_dots(image)
             same = np.array_equal(child.centroids, parent.centroids)
             os._exit(0 if same else 3)
         wait_for(pid)
@@ -128,15 +128,15 @@ def test_fork_while_another_thread_runs_a_batch() -> None:
         import os, threading, time
         import vsinv
 
-        vsinv.run_batch(["lens-12-6"] * 2)
+        vsinv.sim.run_batch(["lens-12-6"] * 2)
         result = {}
-        worker = threading.Thread(target=lambda: result.update(vsinv.run_batch(["noise-12-6"] * 40, threads=2)))
+        worker = threading.Thread(target=lambda: result.update(vsinv.sim.run_batch(["noise-12-6"] * 40, threads=2)))
         worker.start()
         codes = []
         for _ in range(5):
             pid = os.fork()
             if pid == 0:
-                table = vsinv.run_batch(["lens-12-6"] * 2, threads=2)
+                table = vsinv.sim.run_batch(["lens-12-6"] * 2, threads=2)
                 os._exit(0 if list(table["status"]) == ["converged"] * 2 else 3)
             for _ in range(1200):
                 done, status = os.waitpid(pid, os.WNOHANG)
@@ -170,11 +170,11 @@ def test_fork_after_tag_detection() -> None:
         for k, tag in enumerate((0, 5, 9)):
             marker = cv2.aruco.generateImageMarker(dictionary, tag, 240, borderBits=1)
             image[300:540, 100 + 500 * k : 340 + 500 * k] = np.where(marker > 0, 220, 30)
-        parent = vsinv.detect_tags(image)
+        parent = vsinv.vision.detect_tags(image)
         assert sorted(parent.ids.tolist()) == [0, 5, 9], parent.ids
         pid = os.fork()
         if pid == 0:
-            child = vsinv.detect_tags(image)
+            child = vsinv.vision.detect_tags(image)
             os._exit(0 if np.array_equal(child.corners, parent.corners) else 3)
         wait_for(pid)
         """

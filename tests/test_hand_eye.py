@@ -47,7 +47,7 @@ def opencv(g: np.ndarray, c: np.ndarray, method: str) -> np.ndarray:
 @pytest.mark.parametrize("seed", range(5))
 def test_exact_poses_agree_with_opencv(method: str, seed: int) -> None:
     g, c, x = stations(np.random.default_rng(seed), 12)
-    ours = vsinv.calibrate_hand_eye(g, c, method=method)
+    ours = vsinv.calibration.calibrate_hand_eye(g, c, method=method)
     theirs = opencv(g, c, method)
     assert ours.method == method
     assert np.abs(ours.matrix - theirs).max() < 1e-9
@@ -64,7 +64,7 @@ def test_noisy_poses_within_the_noise_beside_opencv(method: str, noise: tuple[fl
     ours_err, theirs_err = [], []
     for _ in range(20):
         g, c, x = stations(rng, 15, noise)
-        ours = vsinv.calibrate_hand_eye(g, c, method=method)
+        ours = vsinv.calibration.calibrate_hand_eye(g, c, method=method)
         theirs = opencv(g, c, method)
         # The same method on the same numbers: the two agree far below the noise.
         assert np.abs(ours.matrix - theirs).max() < 1e-9
@@ -85,12 +85,12 @@ def test_noisy_poses_within_the_noise_beside_opencv(method: str, noise: tuple[fl
 
 def test_compare_methods_and_diagnostics() -> None:
     g, c, x = stations(np.random.default_rng(3), 10, (0.2, 0.001))
-    agreement = vsinv.compare_hand_eye_methods(g, c)
+    agreement = vsinv.calibration.compare_hand_eye_methods(g, c)
     assert set(agreement.calibrations) == {"tsai", "park", "daniilidis"} and agreement.failures == {}
     assert 0 < agreement.max_rotation_deg < 0.5 and 0 < agreement.max_translation_m < 0.01
     for name, cal in agreement.calibrations.items():
         assert cal.method == name
-        np.testing.assert_array_equal(cal.matrix, vsinv.calibrate_hand_eye(g, c, method=name).matrix)
+        np.testing.assert_array_equal(cal.matrix, vsinv.calibration.calibrate_hand_eye(g, c, method=name).matrix)
     cal = agreement.calibrations["park"]
     assert 20 < cal.axis_spread_deg <= 90
     assert cal.axis_eigenvalues.shape == (3,) and abs(cal.axis_eigenvalues.sum() - 1) < 1e-12
@@ -103,7 +103,7 @@ def test_degenerate_motions_are_refused() -> None:
     rng = np.random.default_rng(4)
     g, c, x = stations(rng, 6)
     with pytest.raises(vsinv.DegenerateGeometry, match="at least 3 poses") as info:
-        vsinv.calibrate_hand_eye(g[:2], c[:2])
+        vsinv.calibration.calibrate_hand_eye(g[:2], c[:2])
     assert info.value.kind == "degenerate_motion" and info.value.count == 2
     # Rotations about one axis only (any translations).
     axis = np.array([0.2, -0.3, 0.9]) / np.linalg.norm([0.2, -0.3, 0.9])
@@ -111,7 +111,7 @@ def test_degenerate_motions_are_refused() -> None:
     g1 = np.array([rigid(axis * a, rng.uniform(-0.2, 0.2, 3)) for a in np.linspace(0, 1.2, 6)])
     c1 = np.array([np.linalg.inv(gi @ x) @ target_in_base for gi in g1])
     with pytest.raises(vsinv.DegenerateGeometry, match=r"the rotation axes of the gripper motions are \(nearly\) parallel: spread 0\.000 degrees < 1 degree"):
-        vsinv.calibrate_hand_eye(g1, c1, method="park")
+        vsinv.calibration.calibrate_hand_eye(g1, c1, method="park")
     with pytest.raises(vsinv.InvalidInput, match="invalid parameter `method`: unknown hand-eye method \"horaud\": expected 'tsai', 'park' or 'daniilidis'") as bad_method:
-        vsinv.calibrate_hand_eye(g, c, method="horaud")
+        vsinv.calibration.calibrate_hand_eye(g, c, method="horaud")
     assert bad_method.value.argument == "method"

@@ -171,13 +171,13 @@ def scenario_toml(camera: str) -> str:
 
 def test_calibration_files(folder: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("VSINV_TEST_SECRET", MARKER)  # /proc/self/environ of the subprocess holds it
-    cases = {f: f"vsinv.load_calibration({f!r})" for f in HOSTILE}
+    cases = {f: f"vsinv.calibration.load_calibration({f!r})" for f in HOSTILE}
     check(run_cases(cases, folder))
 
 
 def test_image_and_csv_files(folder: Path) -> None:
     (folder / "bomb.png").write_bytes(_png_header(1 << 30, 1 << 30))
-    cases = {f"png {f}": f"vsinv.load_image({f!r})" for f in HOSTILE + ["bomb.png"]}
+    cases = {f"png {f}": f"vsinv.vision.load_image({f!r})" for f in HOSTILE + ["bomb.png"]}
     cases.update({f"csv {f}": f"import vsinv.images; vsinv.images.read_points({f!r})" for f in HOSTILE})
     check(run_cases(cases, folder))
 
@@ -287,7 +287,7 @@ def test_cli_invariance_points(folder: Path) -> None:
     import vsinv
 
     ref = folder / "ref.png"
-    vsinv.save_image(np.zeros((32, 32), dtype=np.uint8), ref)
+    vsinv.vision.save_image(np.zeros((32, 32), dtype=np.uint8), ref)
     cases, named = {}, {}
     for points in ["garbage.bin", "utf16.yaml", "latin1.yaml", "fifo", "/dev/zero", "huge.bin", "."]:
         cases[points] = CLI_CASE.format(args=["invariance", os.fspath(ref), os.fspath(ref), "--points", points])
@@ -307,9 +307,9 @@ def test_image_size_is_optional(tmp_path: Path, monkeypatch: pytest.MonkeyPatch)
 
     no_size = ROS_YAML.replace("image_width: 640\nimage_height: 480\n", "")
     (tmp_path / "nosize.yaml").write_text(no_size)
-    cal = vsinv.load_calibration(tmp_path / "nosize.yaml")
+    cal = vsinv.calibration.load_calibration(tmp_path / "nosize.yaml")
     assert cal.image_size is None and cal.intrinsics.fku == 800.0
-    assert vsinv.load_calibration(_write(tmp_path, ROS_YAML)).image_size == (640, 480)
+    assert vsinv.calibration.load_calibration(_write(tmp_path, ROS_YAML)).image_size == (640, 480)
     # A camera that needs the size says so by key.
     monkeypatch.chdir(tmp_path)
     d = vsinv.load_scenario("vision-12-6").to_dict()

@@ -116,19 +116,19 @@ def ancillary_bomb_png(kind: bytes, inflated: int) -> bytes:
 HUGE = "big = np.broadcast_to(np.uint8(0), (40000, 40000))\n"
 K = "K = np.array([[800.0, 0, 320], [0, 800, 240], [0, 0, 1]])\n"
 HUGE_CALLS = {
-    "detect_tags": ("vsinv.detect_tags(big)", "image"),
-    "detect_tags_decimated": ("vsinv.detect_tags(big, decimation=8)", "image"),
-    "detect_dots": ("vsinv.detect_dots(big)", "image"),
-    "DotTracker": ("vsinv.DotTracker(big, np.array([[10.0, 10.0]]))", "image"),
+    "detect_tags": ("vsinv.vision.detect_tags(big)", "image"),
+    "detect_tags_decimated": ("vsinv.vision.detect_tags(big, decimation=8)", "image"),
+    "detect_dots": ("vsinv.vision.detect_dots(big)", "image"),
+    "DotTracker": ("vsinv.vision.DotTracker(big, np.array([[10.0, 10.0]]))", "image"),
     "DotTracker.track": (
         "img = np.zeros((64, 64), np.uint8); img[28:36, 28:36] = 255\n"
-        "vsinv.DotTracker(img, np.array([[31.5, 31.5]])).track(big)",
+        "vsinv.vision.DotTracker(img, np.array([[31.5, 31.5]])).track(big)",
         "image",
     ),
-    "TagTracker.track": ("vsinv.TagTracker().track(big)", "image"),
+    "TagTracker.track": ("vsinv.vision.TagTracker().track(big)", "image"),
     "ImageServo": ("vsinv.ImageServo(big, 'tags', K)", "reference_image"),
-    "save_image": ("vsinv.save_image(big, 'never.png')", "image"),
-    "a long side": ("vsinv.detect_tags(np.broadcast_to(np.uint8(0), (1, 70000)))", "image"),
+    "save_image": ("vsinv.vision.save_image(big, 'never.png')", "image"),
+    "a long side": ("vsinv.vision.detect_tags(np.broadcast_to(np.uint8(0), (1, 70000)))", "image"),
 }
 
 
@@ -144,7 +144,7 @@ def test_an_array_too_large_is_refused_before_allocating(name: str, tmp_path: Pa
 def test_the_dot_detector_refuses_more_than_its_bound() -> None:
     # Accepted as an image (under 2^28 pixels), but over 2^26 for detect_dots, which takes
     # about 16 bytes a pixel (4 GB and 25 s at 2^28): refused before it reads the image.
-    row = run("vsinv.detect_dots(np.broadcast_to(np.uint8(7), (8193, 8192)))", over=512 << 20)
+    row = run("vsinv.vision.detect_dots(np.broadcast_to(np.uint8(7), (8193, 8192)))", over=512 << 20)
     refused(row, "image", "too large for the dot detector", "67108864")
     assert row["s"] < 1.0, row
 
@@ -155,7 +155,7 @@ def test_a_large_png_at_decimation_1_is_refused_not_an_abort(tmp_path: Path) -> 
     path = tmp_path / "stripes.png"
     path.write_bytes(stripes_png(16000))
     assert path.stat().st_size < 400_000
-    row = run(f"img = vsinv.load_image({str(path)!r})\nvsinv.detect_tags(img, decimation=1)", over=1 << 30)
+    row = run(f"img = vsinv.vision.load_image({str(path)!r})\nvsinv.vision.detect_tags(img, decimation=1)", over=1 << 30)
     refused(row, "decimation", "use decimation >= 8")
 
 
@@ -165,7 +165,7 @@ def test_the_largest_images_are_searched_within_the_bound(tmp_path: Path) -> Non
     path = tmp_path / "stripes.png"
     path.write_bytes(stripes_png(16000))
     for decimation in ("None", "8"):
-        code = f"img = vsinv.load_image({str(path)!r})\nassert len(vsinv.detect_tags(img, decimation={decimation})) == 0"
+        code = f"img = vsinv.vision.load_image({str(path)!r})\nassert len(vsinv.vision.detect_tags(img, decimation={decimation})) == 0"
         row = run(code, over=3 << 30)
         assert row["kind"] == "returned", row
         assert row["peak"] < 3.0 * 16000**2, f"{row['peak'] / 16000**2:.2f} x the image"
@@ -189,7 +189,7 @@ MEASURE = (
 def test_tag_detector_memory_is_a_bounded_multiple(w: int, h: int, decimation: int | None, bound: float) -> None:
     code = (
         NOISE.format(w=w, h=h) + MEASURE
-        + f"vsinv.detect_tags(img, decimation={decimation})\n"
+        + f"vsinv.vision.detect_tags(img, decimation={decimation})\n"
         + "used = kb('VmHWM') - before\n"
         + f"assert used <= {bound} * img.size, f'{{used / img.size:.1f}} x the image'\n"
     )
@@ -209,7 +209,7 @@ def test_a_compressed_ancillary_chunk_is_not_inflated(kind: bytes, tmp_path: Pat
     path = tmp_path / "bomb.png"
     path.write_bytes(ancillary_bomb_png(kind, 256 << 20))
     assert path.stat().st_size < 400_000
-    code = f"img = vsinv.load_image({str(path)!r})\nassert (img == np.arange(256).reshape(16, 16)).all()"
+    code = f"img = vsinv.vision.load_image({str(path)!r})\nassert (img == np.arange(256).reshape(16, 16)).all()"
     row = run(code, over=192 << 20)
     assert row["kind"] == "returned", row
     assert row["s"] < 1.0 and row["peak"] < 32 << 20, row

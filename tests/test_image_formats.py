@@ -1,4 +1,4 @@
-"""Image files other than PNG: PGM/PPM (binary and ASCII) and JPEG, read by `vsinv.load_image`
+"""Image files other than PNG: PGM/PPM (binary and ASCII) and JPEG, read by `vsinv.vision.load_image`
 and compared with what OpenCV wrote; broken files are refused naming the file."""
 
 from pathlib import Path
@@ -28,18 +28,18 @@ def test_pgm_round_trip_is_exact(tmp_path: Path) -> None:
     path = tmp_path / "a.pgm"
     assert cv2.imwrite(str(path), image)
     assert path.read_bytes()[:2] == b"P5"
-    assert np.array_equal(vsinv.load_image(path), image)
+    assert np.array_equal(vsinv.vision.load_image(path), image)
 
 
 def test_ascii_pgm_and_ppm(tmp_path: Path) -> None:
     image = _grey(2, (3, 4))
     text = "P2\n# a comment\n4 3\n255\n" + "\n".join(" ".join(str(v) for v in row) for row in image) + "\n"
     (tmp_path / "a.pgm").write_text(text)
-    assert np.array_equal(vsinv.load_image(tmp_path / "a.pgm"), image)
+    assert np.array_equal(vsinv.vision.load_image(tmp_path / "a.pgm"), image)
     rgb = np.stack([image, image, image], axis=-1)
     text = "P3\n4 3\n255\n" + "\n".join(" ".join(str(v) for v in row.ravel()) for row in rgb) + "\n"
     (tmp_path / "a.ppm").write_text(text)
-    assert np.array_equal(vsinv.load_image(tmp_path / "a.ppm"), image)
+    assert np.array_equal(vsinv.vision.load_image(tmp_path / "a.ppm"), image)
 
 
 def test_ppm_is_converted_with_rec_601_luma(tmp_path: Path) -> None:
@@ -47,7 +47,7 @@ def test_ppm_is_converted_with_rec_601_luma(tmp_path: Path) -> None:
     path = tmp_path / "a.ppm"
     assert cv2.imwrite(str(path), bgr)
     assert path.read_bytes()[:2] == b"P6"
-    grey = vsinv.load_image(path)
+    grey = vsinv.vision.load_image(path)
     # OpenCV's BGR -> grey: 0.299 R + 0.587 G + 0.114 B in fixed point, the same as ours.
     assert np.array_equal(grey, cv2.cvtColor(bgr, cv2.COLOR_BGR2GRAY))
     rgb = bgr[..., ::-1].astype(float)
@@ -59,7 +59,7 @@ def test_jpeg_grey_and_colour(tmp_path: Path) -> None:
     image = _grey()
     path = tmp_path / "a.jpg"
     assert cv2.imwrite(str(path), image, [cv2.IMWRITE_JPEG_QUALITY, 95])
-    ours = vsinv.load_image(path).astype(int)
+    ours = vsinv.vision.load_image(path).astype(int)
     theirs = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE).astype(int)
     assert ours.shape == image.shape
     assert np.abs(ours - theirs).max() <= 2  # two IDCTs, both exact to a level or two
@@ -67,14 +67,14 @@ def test_jpeg_grey_and_colour(tmp_path: Path) -> None:
     bgr = _colour()
     path = tmp_path / "c.jpeg"
     assert cv2.imwrite(str(path), bgr, [cv2.IMWRITE_JPEG_QUALITY, 95])
-    ours = vsinv.load_image(path).astype(int)
+    ours = vsinv.vision.load_image(path).astype(int)
     theirs = cv2.cvtColor(cv2.imread(str(path), cv2.IMREAD_COLOR), cv2.COLOR_BGR2GRAY).astype(int)
     assert np.abs(ours - theirs).max() <= 3
 
 
 def _refused(path: Path) -> str:
     with pytest.raises(vsinv.InvalidInput) as info:
-        vsinv.load_image(path)
+        vsinv.vision.load_image(path)
     message = str(info.value)
     assert str(path) in message
     return message

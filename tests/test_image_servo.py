@@ -36,33 +36,33 @@ SESSION: dict[str, Any] = {
 
 
 @pytest.fixture(scope="module")
-def scenario() -> vsinv.Scenario:
+def scenario() -> vsinv.sim.Scenario:
     return vsinv.load_scenario(SCENARIO)
 
 
 def start_pose() -> np.ndarray:
-    return vsinv.pose_from_position_thetau(START_POSITION, np.radians(START_ROTATION_DEG))
+    return vsinv.geometry.pose_from_position_thetau(START_POSITION, np.radians(START_ROTATION_DEG))
 
 
 def pose_error(pose: np.ndarray) -> tuple[float, float]:
     """How far `pose` is from the goal (the identity): millimetres and degrees."""
-    position, thetau = vsinv.thetau_from_pose(pose)
+    position, thetau = vsinv.geometry.thetau_from_pose(pose)
     return 1e3 * float(np.linalg.norm(position)), float(np.degrees(np.linalg.norm(thetau)))
 
 
-def views(scenario: vsinv.Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def views(scenario: vsinv.sim.Scenario) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The reference image and its true pixels, the start image and its true pixels."""
-    ref, ref_px, _ = vsinv.render_view(scenario, reference=True)
-    start, start_px, _ = vsinv.render_view(scenario)
+    ref, ref_px, _ = vsinv.vision.render_view(scenario, reference=True)
+    start, start_px, _ = vsinv.vision.render_view(scenario)
     return ref, ref_px, start, start_px
 
 
-def test_the_start_pose_is_the_scenarios(scenario: vsinv.Scenario) -> None:
+def test_the_start_pose_is_the_scenarios(scenario: vsinv.sim.Scenario) -> None:
     _, _, start, _ = views(scenario)
-    assert np.array_equal(vsinv.render_view(scenario, pose=start_pose())[0], start)
+    assert np.array_equal(vsinv.vision.render_view(scenario, pose=start_pose())[0], start)
 
 
-def test_lens_change_closes_through_images(scenario: vsinv.Scenario) -> None:
+def test_lens_change_closes_through_images(scenario: vsinv.sim.Scenario) -> None:
     """Reference image from the 12 mm lens, frames from the 6 mm lens (sec. 5.2): the twists,
     integrated, bring the camera to the reference pose; every dot found in every frame."""
     ref, ref_px, start, start_px = views(scenario)
@@ -73,8 +73,8 @@ def test_lens_change_closes_through_images(scenario: vsinv.Scenario) -> None:
         lost += int((~step.found).sum())
         if not step.running:
             break
-        pose = pose @ vsinv.exp_twist(step.twist, 0.01)
-        image = vsinv.render_view(scenario, pose=pose)[0]
+        pose = pose @ vsinv.geometry.exp_twist(step.twist, 0.01)
+        image = vsinv.vision.render_view(scenario, pose=pose)[0]
     error_mm, error_deg = pose_error(pose)
     print(f"{step.verdict} after {pipeline.iterations} iterations: {error_mm:.3f} mm, {error_deg:.4f} deg; {lost} lost")
     assert step.verdict == "converged", step.reason
@@ -82,12 +82,12 @@ def test_lens_change_closes_through_images(scenario: vsinv.Scenario) -> None:
     assert error_mm < 2.0 and error_deg < 0.2
 
 
-def test_first_twist_is_the_sessions_on_the_same_detections(scenario: vsinv.Scenario) -> None:
+def test_first_twist_is_the_sessions_on_the_same_detections(scenario: vsinv.sim.Scenario) -> None:
     ref, ref_px, start, start_px = views(scenario)
     pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px + 2.0, first_points=start_px - 2.0, **SESSION)
     step = pipeline.step(start)
-    reference = vsinv.DotTracker(ref, ref_px + 2.0)
-    tracker = vsinv.DotTracker(start, start_px - 2.0)
+    reference = vsinv.vision.DotTracker(ref, ref_px + 2.0)
+    tracker = vsinv.vision.DotTracker(start, start_px - 2.0)
     np.testing.assert_array_equal(pipeline.reference_pixels, reference.positions)
     np.testing.assert_array_equal(step.pixels, tracker.positions)
     assert step.found.all() and step.found.dtype == np.bool_
@@ -100,7 +100,7 @@ def test_first_twist_is_the_sessions_on_the_same_detections(scenario: vsinv.Scen
     assert pipeline.basis == servo.basis and pipeline.iterations == 1
 
 
-def test_a_dot_missing_from_a_frame_is_not_visible(scenario: vsinv.Scenario) -> None:
+def test_a_dot_missing_from_a_frame_is_not_visible(scenario: vsinv.sim.Scenario) -> None:
     ref, ref_px, start, start_px = views(scenario)
     pipeline = vsinv.ImageServo(ref, "dots", K_HAT, reference_points=ref_px, first_points=start_px, **SESSION)
     before = pipeline.step(start).pixels
@@ -116,7 +116,7 @@ def test_a_dot_missing_from_a_frame_is_not_visible(scenario: vsinv.Scenario) -> 
     np.testing.assert_array_equal(step.pixels[5], before[5])  # its last known pixel, never a wrong one
 
 
-def test_bad_arguments_are_refused_by_name(scenario: vsinv.Scenario) -> None:
+def test_bad_arguments_are_refused_by_name(scenario: vsinv.sim.Scenario) -> None:
     ref, ref_px, _, _ = views(scenario)
     cases: list[tuple[dict[str, Any], str]] = [
         ({"target": "circles"}, "target"),
@@ -154,7 +154,7 @@ def test_frame_sources(tmp_path: Path) -> None:
     folder = tmp_path / "frames"
     folder.mkdir()
     for k in (2, 0, 1):
-        vsinv.save_image(stack[k], folder / f"img-{k}.png")
+        vsinv.vision.save_image(stack[k], folder / f"img-{k}.png")
     (folder / "notes.txt").write_text("not an image")
     got = list(vsinv.frames(folder))
     assert [n for n, _ in got] == ["img-0.png", "img-1.png", "img-2.png"]
@@ -202,15 +202,15 @@ def _write_depths(path: Path) -> Path:
     return path
 
 
-def test_replay_command_prints_what_the_servo_would_command(scenario: vsinv.Scenario, tmp_path: Path) -> None:
+def test_replay_command_prints_what_the_servo_would_command(scenario: vsinv.sim.Scenario, tmp_path: Path) -> None:
     views_dir, frames_dir, out = tmp_path / "views", tmp_path / "frames", tmp_path / "out"
     from vsinv.images import write_scenario_images
 
     write_scenario_images(scenario, views_dir)
     frames_dir.mkdir()
-    start = vsinv.load_image(views_dir / "start.png")
+    start = vsinv.vision.load_image(views_dir / "start.png")
     for k in range(3):
-        vsinv.save_image(start, frames_dir / f"{k:03d}.png")
+        vsinv.vision.save_image(start, frames_dir / f"{k:03d}.png")
     depths = _write_depths(tmp_path / "depths.csv")
     cmd = [
         sys.executable, "-m", "vsinv", "replay", str(views_dir / "reference.png"), str(frames_dir),
@@ -227,7 +227,7 @@ def test_replay_command_prints_what_the_servo_would_command(scenario: vsinv.Scen
     ref_px = vsinv.images.read_points(views_dir / "reference.csv")
     start_px = vsinv.images.read_points(views_dir / "start.csv")
     pipeline = vsinv.ImageServo(
-        vsinv.load_image(views_dir / "reference.png"), "dots", K_HAT, reference_points=ref_px, first_points=start_px, **session
+        vsinv.vision.load_image(views_dir / "reference.png"), "dots", K_HAT, reference_points=ref_px, first_points=start_px, **session
     )
     twist = pipeline.step(start).twist
     printed = [float(rows[0][c]) for c in ("vx", "vy", "vz", "wx", "wy", "wz")]
@@ -284,12 +284,12 @@ def test_tags_match_by_identity_across_images() -> None:
 
 def test_replay_follows_tags(tmp_path: Path) -> None:
     cv2 = pytest.importorskip("cv2")
-    vsinv.save_image(_tag_canvas(cv2, [(1, 60, 60, 120), (2, 300, 80, 120), (3, 180, 280, 120)]), tmp_path / "ref.png")
+    vsinv.vision.save_image(_tag_canvas(cv2, [(1, 60, 60, 120), (2, 300, 80, 120), (3, 180, 280, 120)]), tmp_path / "ref.png")
     frames = tmp_path / "frames"
     frames.mkdir()
     for k in range(3):
         image = _tag_canvas(cv2, [(1, 60 + 5 * k, 60, 110), (2, 300 + 5 * k, 80, 110), (3, 180 + 5 * k, 280, 110)])
-        vsinv.save_image(image, frames / f"{k}.png")
+        vsinv.vision.save_image(image, frames / f"{k}.png")
     cmd = [sys.executable, "-m", "vsinv", "replay", str(tmp_path / "ref.png"), str(frames), "--target", "tags",
            "--K-hat", "600,600,320,240", "--law", "ibvs", "--depth", "0.5", "--tag-ids", "1,2,3"]
     done = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
@@ -297,7 +297,7 @@ def test_replay_follows_tags(tmp_path: Path) -> None:
     assert "3 frames, 12 points; 0 point-frames not found" in done.stdout
 
 
-def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsinv.Scenario) -> None:
+def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsinv.sim.Scenario) -> None:
     """Issue 27, item 2: a first-frame hint outside the image is not an error (that dot is
     not visible), and a basis dot painted over from the 20th frame on, for good, makes the
     session switch to a basis of visible dots and go on: the run converges."""
@@ -309,7 +309,7 @@ def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsin
     for _ in range(3000):
         if pipeline.iterations >= 20:
             hidden = pipeline.basis[0] if hidden < 0 else hidden
-            u, v = np.rint(vsinv.render_view(scenario, pose=pose)[1][hidden]).astype(int)
+            u, v = np.rint(vsinv.vision.render_view(scenario, pose=pose)[1][hidden]).astype(int)
             image = image.copy()
             image[max(v - 12, 0) : v + 13, max(u - 12, 0) : u + 13] = 30
         step = pipeline.step(image)
@@ -317,8 +317,8 @@ def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsin
         switches.append(step.telemetry["basis_switches"])
         if not step.running:
             break
-        pose = pose @ vsinv.exp_twist(step.twist, 0.01)
-        image = vsinv.render_view(scenario, pose=pose)[0]
+        pose = pose @ vsinv.geometry.exp_twist(step.twist, 0.01)
+        image = vsinv.vision.render_view(scenario, pose=pose)[0]
     error_mm, error_deg = pose_error(pose)
     print(f"{step.verdict} after {pipeline.iterations}: {error_mm:.3f} mm, {error_deg:.4f} deg; basis {pipeline.basis}, switches {switches[-1]}")
     assert step.verdict == "converged", step.reason
@@ -327,7 +327,7 @@ def test_a_basis_dot_hidden_for_good_and_a_hint_outside_the_image(scenario: vsin
     assert error_mm < 2.0 and error_deg < 0.2
 
 
-def test_the_stall_rule_ends_a_lens_change_on_real_detections(scenario: vsinv.Scenario) -> None:
+def test_the_stall_rule_ends_a_lens_change_on_real_detections(scenario: vsinv.sim.Scenario) -> None:
     """Issue 27, item 3: with the default invariant threshold (1e-4), which two lenses'
     detections of one pose never meet, ImageServo (stall rule on by default) still ends the
     run, and the accuracy it reports (the bound, with the measured disagreement floor) holds
@@ -344,9 +344,9 @@ def test_the_stall_rule_ends_a_lens_change_on_real_detections(scenario: vsinv.Sc
             step = pipeline.step(image)
             if not step.running:
                 break
-            pose = pose @ vsinv.exp_twist(step.twist, 0.01)
-            image = vsinv.render_view(scenario, pose=pose)[0]
-        position, thetau = vsinv.thetau_from_pose(pose)
+            pose = pose @ vsinv.geometry.exp_twist(step.twist, 0.01)
+            image = vsinv.vision.render_view(scenario, pose=pose)[0]
+        position, thetau = vsinv.geometry.thetau_from_pose(pose)
         results[stall] = (step, pipeline.certainty(), np.linalg.norm(position), np.linalg.norm(thetau), pipeline.iterations)
     step, c, t, r, iterations = results[True]
     assert c is not None

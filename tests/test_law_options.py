@@ -110,12 +110,12 @@ def test_the_stub_declares_every_option(o):
     for cls, law in (("InvariantController", "invariant"), ("IbvsController", "ibvs")):
         if law in o["laws"]:
             _check_declared(cls, o, unset_only=False)
-            runtime = inspect.signature(getattr(vsinv, cls)).parameters[o["name"]].default
+            runtime = inspect.signature(getattr(vsinv.laws, cls)).parameters[o["name"]].default
             assert runtime == o["default"] or (runtime is None and o["default"] is None), (cls, runtime)
 
 
 def _reference() -> tuple[np.ndarray, np.ndarray]:
-    return vsinv.project(POINTS, vsinv.Intrinsics(1200, 1200, 384, 288))
+    return vsinv.geometry.project(POINTS, vsinv.Intrinsics(1200, 1200, 384, 288))
 
 
 @pytest.mark.parametrize(("o", "law"), PAIRS, ids=IDS)
@@ -146,17 +146,17 @@ def test_scenario_keys_take_the_range(o, law):
     d = vsinv.load_scenario("lens-12-6").to_dict()
     key = o["scenario_key"]
     d["control"] = {"law": law, "dt": 0.04, key: _scenario_value(o, valid(o))}
-    vsinv.Scenario.from_dict(d)
+    vsinv.sim.Scenario.from_dict(d)
     d["control"][key] = _scenario_value(o, invalid(o))
     with pytest.raises(vsinv.InvalidInput) as err:
-        vsinv.Scenario.from_dict(d)
+        vsinv.sim.Scenario.from_dict(d)
     assert err.value.key.startswith(f"control.{key}"), err.value
 
 
 @pytest.fixture(scope="module")
 def reference_image(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("ros") / "reference.png"
-    vsinv.save_image(np.full((48, 64), 128, np.uint8), path)
+    vsinv.vision.save_image(np.full((48, 64), 128, np.uint8), path)
     return path
 
 

@@ -24,8 +24,8 @@ def test_the_logger_is_quiet_by_default() -> None:
         "import logging, vsinv\n"
         "logging.getLogger('vsinv').setLevel(logging.DEBUG)\n"  # enabled, but no handler configured
         "vsinv.run_scenario('lens-12-6', record=False)\n"
-        "vsinv.run_batch(['lens-12-6'])\n"
-        "vsinv.run_sweep('lens-12-6', {'focal_error': [0.0]})\n"
+        "vsinv.sim.run_batch(['lens-12-6'])\n"
+        "vsinv.sim.run_sweep('lens-12-6', {'focal_error': [0.0]})\n"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
@@ -49,7 +49,7 @@ def test_info_hides_the_details(caplog: pytest.LogCaptureFixture) -> None:
 
 def test_run_batch_logs_its_start_and_end(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.INFO, logger="vsinv")
-    vsinv.run_batch(["lens-12-6", "lens-12-6"], threads=2)
+    vsinv.sim.run_batch(["lens-12-6", "lens-12-6"], threads=2)
     assert messages(caplog, logging.INFO)[0] == "run_batch: 2 scenarios on 2 threads"
     assert messages(caplog, logging.INFO)[-1].startswith("run_batch: 2 runs in ")
     assert messages(caplog, logging.INFO)[-1].endswith(": 2 converged, 0 errors")
@@ -57,7 +57,7 @@ def test_run_batch_logs_its_start_and_end(caplog: pytest.LogCaptureFixture) -> N
 
 def test_run_sweep_logs_its_start_end_and_chunks(caplog: pytest.LogCaptureFixture) -> None:
     caplog.set_level(logging.DEBUG, logger="vsinv")
-    vsinv.run_sweep("lens-12-6", {"focal_error": [0.0, 0.5, 1.0]}, chunk_size=2)
+    vsinv.sim.run_sweep("lens-12-6", {"focal_error": [0.0, 0.5, 1.0]}, chunk_size=2)
     sweep = [m for m in messages(caplog, logging.INFO) if m.startswith("run_sweep")]
     assert sweep[0] == "run_sweep lens-12-6: 3 runs in chunks of 2 on this process"
     assert sweep[-1].startswith("run_sweep lens-12-6: 3 runs in ") and sweep[-1].endswith(": 3 converged")
@@ -67,8 +67,8 @@ def test_run_sweep_logs_its_start_end_and_chunks(caplog: pytest.LogCaptureFixtur
 
 def test_replay_logs_its_start_end_and_frames(caplog: pytest.LogCaptureFixture) -> None:
     scenario = vsinv.load_scenario("vision-12-12").to_dict()
-    ref, ref_px, _ = vsinv.render_view(scenario, reference=True)
-    image, px, _ = vsinv.render_view(scenario)
+    ref, ref_px, _ = vsinv.vision.render_view(scenario, reference=True)
+    image, px, _ = vsinv.vision.render_view(scenario)
     caplog.set_level(logging.DEBUG, logger="vsinv")
     vsinv.replay(ref, [image, image], np.diag([600.0, 600.0, 1.0]), "dots", reference_points=ref_px,
                  first_points=px, law="ibvs", depths=0.6)

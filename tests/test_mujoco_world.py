@@ -96,11 +96,11 @@ def test_mujoco_camera_sees_what_vsinvs_pinhole_predicts() -> None:
 
 def test_mujoco_camera_frame_is_vsinvs_turned_about_x() -> None:
     """MuJoCo's own camera frame (cam_xmat after kinematics) for a vsinv pose: x the same, y and z
-    opposite; and a twist integrated with vsinv.exp_twist moves MuJoCo's camera along vsinv's axes."""
+    opposite; and a twist integrated with vsinv.geometry.exp_twist moves MuJoCo's camera along vsinv's axes."""
     model, data, renderer = _spheres_world(np.zeros((1, 3)), 64, 48)
     rng = np.random.default_rng(5)
     for _ in range(5):
-        pose = vsinv.pose_from_position_thetau(rng.normal(size=3), rng.uniform(-2, 2, size=3))
+        pose = vsinv.geometry.pose_from_position_thetau(rng.normal(size=3), rng.uniform(-2, 2, size=3))
         mw.render_grey(model, data, renderer, pose, 50.0)
         R = data.cam_xmat[0].reshape(3, 3).copy()
         np.testing.assert_allclose(R[:, 0], pose[:3, 0], atol=1e-9)
@@ -111,11 +111,11 @@ def test_mujoco_camera_frame_is_vsinvs_turned_about_x() -> None:
         for axis, mj_dir in ((0, R[:, 0]), (1, -R[:, 1]), (2, -R[:, 2])):
             twist = np.zeros(6)
             twist[axis] = 0.1
-            moved = pose @ vsinv.exp_twist(twist, 1.0)
+            moved = pose @ vsinv.geometry.exp_twist(twist, 1.0)
             mw.render_grey(model, data, renderer, moved, 50.0)
             np.testing.assert_allclose(data.cam_xpos[0] - pose[:3, 3], 0.1 * mj_dir, atol=1e-9)
         # wz turns the camera about its optical axis: right (x) goes to down (y)
-        moved = pose @ vsinv.exp_twist([0, 0, 0, 0, 0, np.pi / 2], 1.0)
+        moved = pose @ vsinv.geometry.exp_twist([0, 0, 0, 0, 0, np.pi / 2], 1.0)
         mw.render_grey(model, data, renderer, moved, 50.0)
         np.testing.assert_allclose(data.cam_xmat[0].reshape(3, 3)[:, 0], -R[:, 1], atol=1e-9)
     renderer.close()
@@ -168,14 +168,14 @@ def test_detect_dots_and_the_tracker_find_shaded_spheres_and_lit_discs(light, sp
     truth, depth = mw.project(pose, K, centres)
     radius = np.array([r for _, r in mw.LIT_SPHERES]) * K[0] / depth[: len(mw.LIT_SPHERES)]
     spheres = slice(0, len(mw.LIT_SPHERES))
-    found = vsinv.detect_dots(image).centroids
+    found = vsinv.vision.detect_dots(image).centroids
     assert len(found) == len(centres), found
     gap = np.linalg.norm(found[None, :, :] - truth[:, None, :], axis=2).min(axis=1)
     assert (gap[spheres] < 0.35 * radius).all(), gap[spheres] / radius
     assert (gap[len(mw.LIT_SPHERES) :] < 0.3).all(), gap
-    tracker = vsinv.DotTracker(image, truth)
+    tracker = vsinv.vision.DotTracker(image, truth)
     for step in range(1, 6):
-        moved = pose @ vsinv.pose_from_position_thetau([0.002 * step, -0.001 * step, 0.0], [0.0, 0.002 * step, 0.0])
+        moved = pose @ vsinv.geometry.pose_from_position_thetau([0.002 * step, -0.001 * step, 0.0], [0.0, 0.002 * step, 0.0])
         pixels, ok = tracker.track(mw.render_grey(model, data, renderer, moved, fovy))
         want, _ = mw.project(moved, K, centres)
         assert ok.all(), step

@@ -18,9 +18,9 @@ def images():
 
 def test_plane_parallax_reproduces_current_points(images):
     _, ref, _, cur, _ = images
-    est = vsinv.estimate_plane_parallax(cur, ref, basis=(0, 3, 5))
-    q = vsinv.invariant_points(cur, basis=(0, 3, 5))
-    q_star = vsinv.invariant_points(ref, basis=(0, 3, 5))
+    est = vsinv.calibration.estimate_plane_parallax(cur, ref, basis=(0, 3, 5))
+    q = vsinv.laws.invariant_points(cur, basis=(0, 3, 5))
+    q_star = vsinv.laws.invariant_points(ref, basis=(0, 3, 5))
     others = [i for i in range(12) if i not in (0, 3, 5)]
     pred = est.gamma * (q_star[others] + est.mu_e)
     pred /= pred.sum(axis=1, keepdims=True)
@@ -28,20 +28,20 @@ def test_plane_parallax_reproduces_current_points(images):
     assert est.gamma[2] == 1.0 and (est.gamma > 0).all() and est.residual < 1e-9
     assert np.linalg.norm(est.epipole) == pytest.approx(1.0)
     # seven points: the minimal method
-    est7 = vsinv.estimate_plane_parallax(cur[:7], ref[:7], basis=(0, 3, 5))
+    est7 = vsinv.calibration.estimate_plane_parallax(cur[:7], ref[:7], basis=(0, 3, 5))
     assert est7.candidates in (1, 3) and est7.residual < 1e-9
 
 
 def test_path_starts_at_current_image_and_ends_at_reference(images):
     _, ref, _, cur, _ = images
-    path = vsinv.InvariantPath(cur, ref, duration=20.0)
+    path = vsinv.laws.InvariantPath(cur, ref, duration=20.0)
     q0, r0 = path.sample(0.0)
-    np.testing.assert_allclose(q0, vsinv.invariant_points(cur)[3:], atol=1e-9)
+    np.testing.assert_allclose(q0, vsinv.laws.invariant_points(cur)[3:], atol=1e-9)
     qt, rt = path.sample(20.0)
-    np.testing.assert_allclose(qt, vsinv.invariant_points(ref)[3:], atol=1e-12)
+    np.testing.assert_allclose(qt, vsinv.laws.invariant_points(ref)[3:], atol=1e-12)
     assert not rt.any() and r0.any()
     # the controller accepts the samples as a moving reference
-    ctl = vsinv.InvariantController(ref, lens(1200.0))
+    ctl = vsinv.laws.InvariantController(ref, lens(1200.0))
     ctl.set_reference(*path.sample(5.0))
 
 
@@ -53,11 +53,11 @@ def test_depths_up_to_scale(images):
     second[:3, 3] += [0.1, -0.02, 0.05]
     p1, z1 = view(obj, first, k_bar)
     p2, _ = view(obj, second, k_bar)
-    depths, epipole, residual = vsinv.depths_from_translation(p1, p2)
+    depths, epipole, residual = vsinv.calibration.depths_from_translation(p1, p2)
     ratio = depths / z1
     np.testing.assert_allclose(ratio, ratio[0], rtol=1e-9)
     assert residual < 1e-9 and depths.mean() == pytest.approx(1.0)
-    est = vsinv.ResectionDepths(p1, depths, ref, reference_mean_depth=z_star.mean())
+    est = vsinv.calibration.ResectionDepths(p1, depths, ref, reference_mean_depth=z_star.mean())
     at_ref = est.estimate(ref)
     np.testing.assert_allclose(at_ref, z_star, rtol=1e-9)  # the true mean depth gives kappa = 1
     now = est.estimate(cur, visible=[i != 4 for i in range(12)])
@@ -74,24 +74,24 @@ def test_bad_inputs():
     pref, _ = view(planar, np.eye(4), lens(1200.0))
     pcur, _ = view(planar, pose((0.05, 0.0, -0.1), (0.0, 0.1, 0.2)), lens(1200.0))
     with pytest.raises(vsinv.DegenerateGeometry):
-        vsinv.estimate_plane_parallax(pcur, pref, basis=(0, 3, 8))
+        vsinv.calibration.estimate_plane_parallax(pcur, pref, basis=(0, 3, 8))
     with pytest.raises(vsinv.DegenerateGeometry, match=r"too few points: 7 needed \(plane \+ parallax needs four non-basis points \(seven in all\)\)"):
-        vsinv.estimate_plane_parallax(ref[:6], ref[:6])
+        vsinv.calibration.estimate_plane_parallax(ref[:6], ref[:6])
     with pytest.raises(vsinv.InvalidInput):
-        vsinv.estimate_plane_parallax(ref, ref[:8])
+        vsinv.calibration.estimate_plane_parallax(ref, ref[:8])
     with pytest.raises(vsinv.InvalidInput):
-        vsinv.InvariantPath(view(obj, pose((0.05, 0.0, -0.1)), lens(900.0))[0], ref, duration=0.0)
+        vsinv.laws.InvariantPath(view(obj, pose((0.05, 0.0, -0.1)), lens(900.0))[0], ref, duration=0.0)
     with pytest.raises(vsinv.DegenerateGeometry):
-        vsinv.depths_from_translation(ref, ref)
+        vsinv.calibration.depths_from_translation(ref, ref)
     with pytest.raises(vsinv.InvalidInput):
-        vsinv.ResectionDepths(ref, np.ones(12), ref, reference_mean_depth=-1.0)
+        vsinv.calibration.ResectionDepths(ref, np.ones(12), ref, reference_mean_depth=-1.0)
     with pytest.raises(vsinv.DegenerateGeometry, match=r"point 0 is at or behind the camera \(depth -1\)"):
-        vsinv.ResectionDepths(ref, -np.ones(12), ref)
+        vsinv.calibration.ResectionDepths(ref, -np.ones(12), ref)
 
 
 def test_path_scenarios_report_prop3():
     s = vsinv.run_scenario("path-500-feedforward").summary
     assert s["status"] == "converged"
     assert s["observed_max_eps"] <= s["tracking_bound"]
-    assert s["path_duration_s"] == pytest.approx(20.0)
+    assert s["path_duration"] == pytest.approx(20.0)
     assert vsinv.run_scenario("lens-12-6").summary["tracking_bound"] is None

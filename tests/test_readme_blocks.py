@@ -88,7 +88,7 @@ class Entry:
 
 
 CALIBRATION_CHECK = """
-assert np.allclose(vsinv.distort_points(ideal, K, [k1, k2, p1, p2, k3]), distorted, atol=1e-9)
+assert np.allclose(vsinv.vision.distort_points(ideal, K, [k1, k2, p1, p2, k3]), distorted, atol=1e-9)
 assert np.allclose(ideal, pixels, atol=1e-6) and not np.allclose(distorted, pixels, atol=1.0)
 """
 
@@ -126,7 +126,7 @@ assert f"{{s['translation_uncertainty'] * 1e3:.1f}}" == m.group(4), s["translati
 
 RENDER_CHECK = """
 assert found.all() and pixels.shape == (12, 2), found
-assert (vsinv.load_image("view.png") == image).all()
+assert (vsinv.vision.load_image("view.png") == image).all()
 """
 
 
@@ -136,7 +136,7 @@ assert len(sent) == 3 and step.found.all(), (len(sent), step.found)
 
 
 TAGS_SERVO_CHECK = """
-step = pipeline.step(vsinv.render("tags-12-6"))
+step = pipeline.step(vsinv.vision.render("tags-12-6"))
 assert step.found.sum() == 12, step.found
 """
 
@@ -145,7 +145,7 @@ assert step.found.sum() == 12, step.found
 # camera was resected from dots found in a rendered image and the model moved to its own frame.
 REFERENCE_DEPTHS_CHECK = """
 _rc = vsinv.load_scenario("vision-12-6").to_dict()["reference_camera"]
-_, _z = vsinv.project(points, vsinv.Intrinsics(_rc["fku"], _rc["fkv"], _rc["u0"], _rc["v0"]))
+_, _z = vsinv.geometry.project(points, vsinv.Intrinsics(_rc["fku"], _rc["fkv"], _rc["u0"], _rc["v0"]))
 assert z_star.shape == (12,) and np.allclose(z_star, _z, rtol=0.01), (z_star, _z)
 print("largest error", np.abs(z_star / _z - 1).max())
 """
@@ -227,19 +227,19 @@ BLOCKS: list[Entry] = [
     Entry("python", "# The paper's lens change (sec. 5.2)", RUN, output="converged after 212 steps, 0.09 mm from the reference pose"),
     Entry("sh", "python3 -m venv --system-site-packages .venv", NOT_RUN, "needs a ROS 2 installation, a camera "
           "driver and MoveIt Servo; tests/test_ros_loop.py runs the node over ROS 2 topics with simulated ones"),
-    Entry("python", "ctl = vsinv.InvariantController(", RUN, check="assert twist.shape == (6,) and report.prop1, report"),
+    Entry("python", "ctl = vsinv.laws.InvariantController(", RUN, check="assert twist.shape == (6,) and report.prop1, report"),
     Entry("python", "try:\n    vsinv.run_scenario(d)", RUN, check="print('no exception escaped')", output="fix the gain:"),
-    Entry("python", "cal = vsinv.load_calibration", RUN, check=CALIBRATION_CHECK),
-    Entry("python", "cal = vsinv.calibrate_hand_eye", RUN, check=HAND_EYE_CHECK),
+    Entry("python", "cal = vsinv.calibration.load_calibration", RUN, check=CALIBRATION_CHECK),
+    Entry("python", "cal = vsinv.calibration.calibrate_hand_eye", RUN, check=HAND_EYE_CHECK),
     Entry("sh", "vsinv list", RUN, check=check_exit_only),
     Entry("python", "result = vsinv.run_scenario", RUN, check=SIMULATOR_CHECK),
     Entry("toml", 'name = "my-run"', RUN, "loaded and run: the outcome stated under the block"),
-    Entry("python", "ref = vsinv.render(\"vision-12-6\", reference=True)", RUN, check=RENDER_CHECK),
+    Entry("python", "ref = vsinv.vision.render(\"vision-12-6\", reference=True)", RUN, check=RENDER_CHECK),
     Entry("sh", "vsinv render vision-zoom", RUN, check=check_zoom_invariance),
     Entry("sh", "vsinv render vision-12-6 --out lens/", RUN, check=check_lens_invariance),
-    Entry("python", 'image = vsinv.load_image("/usr/share/visp-images-data', RUN, needs_visp=True,
+    Entry("python", 'image = vsinv.vision.load_image("/usr/share/visp-images-data', RUN, needs_visp=True,
           check="assert len(dots.centroids) == 36, len(dots.centroids)"),
-    Entry("python", "tags = vsinv.detect_tags", RUN, needs_visp=True,
+    Entry("python", "tags = vsinv.vision.detect_tags", RUN, needs_visp=True,
           check="assert tags.ids[0] == 8 and tags.ids[1] == 9 and tags.ids[-1] == 19, tags.ids\n"
           "assert tags.corners[0].shape == (4, 2)"),
     Entry("python", "pipeline = vsinv.ImageServo(reference_image, \"dots\"", RUN, check=IMAGE_SERVO_CHECK),
@@ -249,7 +249,7 @@ BLOCKS: list[Entry] = [
           "vsinv.frames(0) through a stand-in VideoCapture and OpenCV's own reading a video file"),
     Entry("python", "# The object's model, in its own frame", RUN, check=REFERENCE_DEPTHS_CHECK),
     Entry("sh", "VISP=/usr/share/visp-images-data/ViSP-images", RUN, needs_visp=True, check=check_mire2_replay),
-    Entry("python", "table = vsinv.run_batch(", RUN, check=BATCH_CHECK),
+    Entry("python", "table = vsinv.sim.run_batch(", RUN, check=BATCH_CHECK),
     Entry("sh", "vsinv sweep lens-12-6", RUN, check=check_sweeps),
     Entry("python", "import logging", RUN, output=LOGGING_OUTPUT),
     Entry("python", 'stop={"window": 10})', RUN, check=SERVO_CHECK),
@@ -264,7 +264,7 @@ BLOCKS: list[Entry] = [
           "tests/test_ros_loop.py runs the same command against a simulated camera and robot"),
     Entry("python", "q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]", RUN,
           check="assert solution.position_residual < 1e-10 and solution.rotation_residual < 1e-10\n"
-          "assert np.allclose(vsinv.fk('ur5', solution.joints), pose, atol=1e-9)\n"
+          "assert np.allclose(vsinv.kinematics.fk('ur5', solution.joints), pose, atol=1e-9)\n"
           "assert list(sweep['status']) == ['converged'] * 3, list(sweep['status'])"),
     Entry("toml", "[dependencies]", RUN, "a Cargo manifest: parsed, its version checked against Cargo.toml "
           "(not built: the crate is not on crates.io yet)"),
@@ -388,7 +388,7 @@ def check_full_scenario(block: Block) -> None:
     m = re.search(r"This scenario, as written, ends `(\w+)` after (\d+) iterations, ([\d.]+) mm and "
                   r"([\d.]+) degrees from the goal", after)
     assert m, "the README no longer states the outcome of its scenario block"
-    result = vsinv.run_scenario(vsinv.Scenario.from_toml(block.code))
+    result = vsinv.run_scenario(vsinv.sim.Scenario.from_toml(block.code))
     s = result.summary
     assert s["status"] == m.group(1), s["message"]
     assert s["iterations"] == int(m.group(2)), s["iterations"]

@@ -47,7 +47,7 @@ def _grid36(visp: Path) -> list[Path]:
 def test_grid36_images_load_as_opencv_reads_them(visp: Path) -> None:
     cv2 = pytest.importorskip("cv2")
     for path in _grid36(visp):
-        assert np.array_equal(vsinv.load_image(path), cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)), path.name
+        assert np.array_equal(vsinv.vision.load_image(path), cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)), path.name
 
 
 def _homography(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
@@ -88,14 +88,14 @@ def _grid_rms(dots: np.ndarray) -> float:
 
 def test_grid36_gives_36_dark_dots_on_a_homography_with_default_settings(visp: Path) -> None:
     for path in _grid36(visp):
-        image = vsinv.load_image(path)
-        dots = vsinv.detect_dots(image, polarity="dark")
+        image = vsinv.vision.load_image(path)
+        dots = vsinv.vision.detect_dots(image, polarity="dark")
         assert len(dots) == 36, f"{path.name}: {len(dots)} dots"
         rms = _grid_rms(dots.centroids)
         print(f"{path.name}: 36 dots, homography RMS {rms:.3f} px")
         assert rms <= 0.35, f"{path.name}: RMS {rms:.3f} px"
         # "auto" sees dark dots on the paper.
-        assert np.array_equal(vsinv.detect_dots(image, polarity="auto").centroids, dots.centroids), path.name
+        assert np.array_equal(vsinv.vision.detect_dots(image, polarity="auto").centroids, dots.centroids), path.name
 
 
 def _mire2(visp: Path) -> list[Path]:
@@ -117,12 +117,12 @@ def test_mire2_gives_its_five_dots_in_every_frame_with_default_settings(visp: Pa
     # head at the right of the scene is one too: a bright bulb of about 1,300 px shaded by the
     # room's light, in 326 frames (the blobs of 500 px or more).
     frames = _mire2(visp)
-    first = vsinv.detect_dots(vsinv.load_image(frames[0]), min_area=50, min_fill=0.97)
+    first = vsinv.vision.detect_dots(vsinv.vision.load_image(frames[0]), min_area=50, min_fill=0.97)
     assert len(first) == 5, f"{frames[0].name}: {len(first)}"
     previous = first.centroids
     extra_blobs, bulbs = 0, 0
     for path in frames:
-        dots = vsinv.detect_dots(vsinv.load_image(path))
+        dots = vsinv.vision.detect_dots(vsinv.vision.load_image(path))
         distances = np.linalg.norm(dots.centroids[None, :, :] - previous[:, None, :], axis=2)
         nearest = distances.argmin(axis=1)
         assert (distances.min(axis=1) < 30).all(), f"{path.name}: a dot is lost ({distances.min(axis=1)})"
@@ -145,8 +145,8 @@ def test_mire2_centroids_agree_with_opencv_moments(visp: Path) -> None:
     cv2 = pytest.importorskip("cv2")
     distances = []
     for path in _mire2(visp)[::10]:
-        image = vsinv.load_image(path)
-        dots = vsinv.detect_dots(image, min_area=40)
+        image = vsinv.vision.load_image(path)
+        dots = vsinv.vision.detect_dots(image, min_area=40)
         _, binary = cv2.threshold(image, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
         _, labels = cv2.connectedComponents(binary, connectivity=8)
         for (u, v), (u0, v0, u1, v1) in zip(dots.centroids, dots.bboxes):
@@ -241,16 +241,16 @@ def test_mire2_is_tracked_through_all_frames_without_loss_or_swap(visp: Path) ->
     cv2 = pytest.importorskip("cv2")
     frames = _mire2(visp)
     assert len(frames) == MIRE2_FRAMES
-    first = vsinv.load_image(frames[0])
+    first = vsinv.vision.load_image(frames[0])
     blobs, sizes = _dot_like_blobs(cv2, first)
     assert len(blobs) == 5, blobs
     # Approximate clicks: each blob's centroid moved by 2 to 3 px, as a hand would place them.
     offsets = np.array([[2.0, -2.0], [-2.5, 1.5], [3.0, 2.0], [-2.0, -3.0], [1.5, 2.5]])
-    tracker = vsinv.DotTracker(first, blobs + offsets)
+    tracker = vsinv.vision.DotTracker(first, blobs + offsets)
     reference = [_OpenCvDot(cv2, first, b, size) for b, size in zip(blobs, sizes)]
     lost, swapped, errors, binary_gaps = 0, 0, [], []
     for path in frames[1:]:
-        image = vsinv.load_image(path)
+        image = vsinv.vision.load_image(path)
         pixels, found = tracker.track(image)
         for dot in reference:
             dot.update(image)
@@ -279,7 +279,7 @@ def test_mire2_replays_through_the_image_pipeline(visp: Path, tmp_path: Path, ca
     commands nothing on the reference frame itself."""
     cv2 = pytest.importorskip("cv2")
     frames = _mire2(visp)
-    first = vsinv.load_image(frames[0])
+    first = vsinv.vision.load_image(frames[0])
     blobs, _ = _dot_like_blobs(cv2, first)
     clicks = blobs + np.array([[2.0, -2.0], [-2.5, 1.5], [3.0, 2.0], [-2.0, -3.0], [1.5, 2.5]])
     points = tmp_path / "clicks.csv"
@@ -308,9 +308,9 @@ def test_mire2_replays_through_the_image_pipeline(visp: Path, tmp_path: Path, ca
     K_hat = np.array([[600.0, 0.0, 192.0], [0.0, 600.0, 144.0], [0.0, 0.0, 1.0]])
     result = vsinv.replay(frames[0], visp / "mire-2", K_hat, reference_points=clicks,
                           first_points=clicks, law="ibvs", depths=0.5)
-    tracker = vsinv.DotTracker(first, clicks)
+    tracker = vsinv.vision.DotTracker(first, clicks)
     np.testing.assert_array_equal(result.pixels[0], tracker.positions)
-    alone = [tracker.positions.copy()] + [tracker.track(vsinv.load_image(p))[0].copy() for p in frames[1:]]
+    alone = [tracker.positions.copy()] + [tracker.track(vsinv.vision.load_image(p))[0].copy() for p in frames[1:]]
     np.testing.assert_array_equal(result.pixels, np.array(alone))
     assert result.found.all()
 
@@ -348,7 +348,7 @@ def test_mire2_through_the_ros_bridge_session(visp: Path) -> None:
     from vsinv.ros.session import BridgeSession
 
     frames = _mire2(visp)
-    first = vsinv.load_image(frames[0])
+    first = vsinv.vision.load_image(frames[0])
     blobs, _ = _dot_like_blobs(cv2, first)
     clicks = blobs + np.array([[2.0, -2.0], [-2.5, 1.5], [3.0, 2.0], [-2.0, -3.0], [1.5, 2.5]])
     flat = [float(x) for x in clicks.ravel()]
@@ -358,9 +358,9 @@ def test_mire2_through_the_ros_bridge_session(visp: Path) -> None:
         "stop.pixel_error": 1e-9, "stop.max_iterations": 10 * MIRE2_FRAMES,  # keep running through the frames
     }))
     assert session.start(0.0) == (True, "running")
-    tracker = vsinv.DotTracker(first, clicks)
+    tracker = vsinv.vision.DotTracker(first, clicks)
     for i, path in enumerate(frames):
-        grey = vsinv.load_image(path)
+        grey = vsinv.vision.load_image(path)
         h, w = grey.shape
         msg = SimpleNamespace(encoding="rgb8", height=h, width=w, step=3 * w, data=np.repeat(grey[:, :, None], 3, 2).tobytes())
         out = session.frame(image_to_grey(msg), 0.04 * i)

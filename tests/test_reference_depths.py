@@ -1,5 +1,5 @@
 """The reference depths of a photo taken with another camera (issue 29, item 5):
-`vsinv.reference_depths(model, pixels, K=None)` from the object's model in its own frame and the
+`vsinv.calibration.reference_depths(model, pixels, K=None)` from the object's model in its own frame and the
 points' pixels in the photo, against the ground truth of the renderer (the points' depths in
 the reference camera's frame) and of a direct projection.
 """
@@ -16,7 +16,7 @@ import vsinv
 
 def _rigid(points: np.ndarray, seed: int) -> np.ndarray:
     """The points in another frame of the object: a rotation and a translation (any model frame)."""
-    pose = vsinv.pose_from_position_thetau(np.random.default_rng(seed).normal(0, 0.3, 3), [0.4, -0.9, 1.3])
+    pose = vsinv.geometry.pose_from_position_thetau(np.random.default_rng(seed).normal(0, 0.3, 3), [0.4, -0.9, 1.3])
     return points @ pose[:3, :3].T + pose[:3, 3]
 
 
@@ -31,48 +31,48 @@ def _truth(d: dict[str, Any]) -> tuple[Any, np.ndarray, np.ndarray]:
     """The reference camera K*, and the object's true pixels and depths in the reference view."""
     rc = d["reference_camera"]
     k = vsinv.Intrinsics(rc["fku"], rc["fkv"], rc["u0"], rc["v0"])
-    px, z = vsinv.project(np.array(d["object"]["points"]), k)
+    px, z = vsinv.geometry.project(np.array(d["object"]["points"]), k)
     return k, px, z
 
 
 def _measured(d: dict[str, Any], truth_px: np.ndarray) -> np.ndarray:
     """The dots' pixels measured in the rendered reference photo, from clicks 2 px off."""
-    photo, shown, visible = vsinv.render_view(d, reference=True)
+    photo, shown, visible = vsinv.vision.render_view(d, reference=True)
     assert visible.all()
     np.testing.assert_allclose(shown, truth_px, atol=1e-9)
     clicks = truth_px + np.random.default_rng(3).normal(0.0, 2.0, truth_px.shape)
-    return vsinv.DotTracker(photo, clicks).positions
+    return vsinv.vision.DotTracker(photo, clicks).positions
 
 
 def test_an_object_in_relief_from_a_rendered_photo_needs_no_intrinsics() -> None:
     d = _scenario()
     k, px, z = _truth(d)
     model = _rigid(np.array(d["object"]["points"]), 1)
-    got = vsinv.reference_depths(model, _measured(d, px))
+    got = vsinv.calibration.reference_depths(model, _measured(d, px))
     err = np.abs(got / z - 1)
     print(f"vision-12-6 reference photo: depths within {100 * err.max():.3f} % of the truth (mean {1e3 * z.mean():.1f} mm)")
     assert err.max() < 0.005
     # With exact pixels, exact depths (the intrinsics are not used, given or not).
-    np.testing.assert_allclose(vsinv.reference_depths(model, px), z, rtol=1e-9)
-    np.testing.assert_allclose(vsinv.reference_depths(model, px, K=k), z, rtol=1e-9)
+    np.testing.assert_allclose(vsinv.calibration.reference_depths(model, px), z, rtol=1e-9)
+    np.testing.assert_allclose(vsinv.calibration.reference_depths(model, px, K=k), z, rtol=1e-9)
 
 
 def test_a_planar_target_from_a_rendered_photo_needs_k() -> None:
     # Eight dots on a tilted plane 0.5-0.7 m away (a printed target; a scenario takes 6 or more).
     grid = np.array([[-0.1, -0.08], [0.0, -0.08], [0.1, -0.08], [0.1, 0.0], [0.1, 0.08], [0.0, 0.08], [-0.1, 0.08],
                      [-0.05, 0.02]])
-    tilt = vsinv.pose_from_position_thetau([0.0, 0.0, 0.6], [0.3, -0.2, 0.1])
+    tilt = vsinv.geometry.pose_from_position_thetau([0.0, 0.0, 0.6], [0.3, -0.2, 0.1])
     plane = np.column_stack([grid, np.zeros(len(grid)), np.ones(len(grid))]) @ tilt.T
     d = _scenario(plane[:, :3])
     k, px, z = _truth(d)
     model = np.column_stack([grid, np.zeros(len(grid))])  # the target's own frame: z = 0 on the paper
     measured = _measured(d, px)
-    got = vsinv.reference_depths(model, measured, K=k)
+    got = vsinv.calibration.reference_depths(model, measured, K=k)
     print(f"planar target: depths within {100 * np.abs(got / z - 1).max():.3f} % of the truth")
     np.testing.assert_allclose(got, z, rtol=0.005)
-    np.testing.assert_allclose(vsinv.reference_depths(_rigid(model, 2), px, K=k.matrix), z, rtol=1e-9)
+    np.testing.assert_allclose(vsinv.calibration.reference_depths(_rigid(model, 2), px, K=k.matrix), z, rtol=1e-9)
     with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `K`: object_points are on one plane") as e:
-        vsinv.reference_depths(model, measured)
+        vsinv.calibration.reference_depths(model, measured)
     assert e.value.argument == "K"
 
 
@@ -80,12 +80,12 @@ def test_depths_feed_the_image_pipeline_as_the_true_ones_do() -> None:
     """The estimated depths give the twist the true ones give, to the estimate's accuracy."""
     d = _scenario()
     k, px, z = _truth(d)
-    est = vsinv.reference_depths(_rigid(np.array(d["object"]["points"]), 4), _measured(d, px))
+    est = vsinv.calibration.reference_depths(_rigid(np.array(d["object"]["points"]), 4), _measured(d, px))
     c = d["camera"]
     K_hat = vsinv.Intrinsics(c["fku"], c["fkv"], c["u0"], c["v0"]).matrix
-    frame = vsinv.render(d)
-    _, first, _ = vsinv.render_view(d)
-    twists = [vsinv.ImageServo(vsinv.render(d, reference=True), "dots", K_hat, reference_points=px,
+    frame = vsinv.vision.render(d)
+    _, first, _ = vsinv.vision.render_view(d)
+    twists = [vsinv.ImageServo(vsinv.vision.render(d, reference=True), "dots", K_hat, reference_points=px,
                                first_points=first, reference_depths=depths).step(frame).twist for depths in (z, est)]
     np.testing.assert_allclose(twists[1], twists[0], rtol=0.02, atol=1e-4 * np.abs(twists[0]).max())
 
@@ -95,13 +95,13 @@ def test_bad_inputs_are_refused_by_name() -> None:
     k, px, z = _truth(d)
     model = np.array(d["object"]["points"])
     with pytest.raises(vsinv.DegenerateGeometry, match=r"too few points: 6 needed \(a resection") as e:
-        vsinv.reference_depths(model[:5], px[:5])
+        vsinv.calibration.reference_depths(model[:5], px[:5])
     assert (e.value.needed, e.value.count) == (6, 5)
     with pytest.raises(vsinv.InvalidInput, match=r"reference_pixels"):
-        vsinv.reference_depths(model, px[:11])
+        vsinv.calibration.reference_depths(model, px[:11])
     with pytest.raises(vsinv.InvalidInput, match=r"object_points"):
-        vsinv.reference_depths(model[:, :2], px)
+        vsinv.calibration.reference_depths(model[:, :2], px)
     bad = model.copy()
     bad[3, 1] = np.nan
     with pytest.raises(vsinv.InvalidInput, match=r"object_points"):
-        vsinv.reference_depths(bad, px)
+        vsinv.calibration.reference_depths(bad, px)

@@ -63,7 +63,7 @@ DIST8 = np.array([0.1, -0.05, 0.001, -0.002, 0.01, 0.05, -0.01, 0.002])
 def dist_variants() -> st.SearchStrategy[V]:
     bad_lengths = [V(np.zeros(3), INVALID, "3 coefficients"), V(np.zeros(6), INVALID, "6"), V(np.zeros(14), INVALID, "14")]
     return st.one_of(
-        st.just(V(vsinv.Distortion(DIST), SAME, "Distortion")),
+        st.just(V(vsinv.vision.Distortion(DIST), SAME, "Distortion")),
         arrays(DIST, overrides={"lead_axis": SAME, "extra_axis": SAME, "fewer": ANY, "empty": INVALID, "bool": ANY},
                skip=("object_float",)),
         st.sampled_from(bad_lengths),
@@ -74,22 +74,22 @@ def dist_variants() -> st.SearchStrategy[V]:
 @fuzz_settings(120)
 @given(st.data())
 def test_distortion(data: Any) -> None:
-    ref = vsinv.Distortion(DIST)
+    ref = vsinv.vision.Distortion(DIST)
     coeff = data.draw(st.sampled_from([DIST, DIST8, DIST[:4]]))
     model = data.draw(st.sampled_from([None, "plumb_bob", "rational_polynomial", "fisheye", "", 3]))
     strategies = {"coefficients": arrays(coeff, overrides={"lead_axis": ANY, "extra_axis": ANY, "empty": INVALID,
                                                             "fewer": ANY, "bool": ANY, "object_float": INVALID})}
     mexpect = TYPE if model == 3 else (ANY if model in (None, "plumb_bob", "rational_polynomial") else INVALID)
-    name, v, out = fuzz(data, vsinv.Distortion, {"coefficients": coeff, "model": None}, strategies, api="Distortion",
+    name, v, out = fuzz(data, vsinv.vision.Distortion, {"coefficients": coeff, "model": None}, strategies, api="Distortion",
                         names={"coefficients": ("coefficients",)})
-    out2 = call(vsinv.Distortion, coeff, model, _api="Distortion", _expect=mexpect, _names=("model",))
+    out2 = call(vsinv.vision.Distortion, coeff, model, _api="Distortion", _expect=mexpect, _names=("model",))
     for d in (out, out2):
         if returned(d):
             m = call(getattr, d, "model", _api="Distortion.model")
             c = call(getattr, d, "coefficients", _api="Distortion.coefficients")
             assert m in ("plumb_bob", "rational_polynomial") and c.shape == ((5,) if m == "plumb_bob" else (8,))
-            assert d == vsinv.Distortion(c, m)
-    assert ref == vsinv.Distortion(DIST.tolist())
+            assert d == vsinv.vision.Distortion(c, m)
+    assert ref == vsinv.vision.Distortion(DIST.tolist())
 
 
 def cv_distort(px: np.ndarray, k: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -104,8 +104,8 @@ def cv_distort(px: np.ndarray, k: np.ndarray, d: np.ndarray) -> np.ndarray:
 def test_distort_undistort(data: Any) -> None:
     px = CUR_PX * 0.5 + 100.0  # inside the calibrated field
     which = data.draw(st.sampled_from(["distort_points", "undistort_points"]))
-    fn = getattr(vsinv, which)
-    args: dict[str, Any] = {"pixels": px, "K": K, "distortion": vsinv.Distortion(DIST)}
+    fn = getattr(vsinv.vision, which)
+    args: dict[str, Any] = {"pixels": px, "K": K, "distortion": vsinv.vision.Distortion(DIST)}
     strategies: dict[str, Any] = {"pixels": arrays(px, overrides={"lead_axis": INVALID}), "K": k_variants(),
                                   "distortion": dist_variants()}
     if which == "undistort_points":
@@ -115,7 +115,7 @@ def test_distort_undistort(data: Any) -> None:
     if which == "distort_points":
         np.testing.assert_allclose(ref, cv_distort(px, K.matrix, DIST), rtol=1e-9, atol=1e-6)
     else:
-        np.testing.assert_allclose(vsinv.distort_points(ref, K, DIST), px, atol=1e-6)
+        np.testing.assert_allclose(vsinv.vision.distort_points(ref, K, DIST), px, atol=1e-6)
     fuzz(data, fn, args, strategies, names={"distortion": ("distortion", "coefficients")}, ref=ref, rtol=1e-12,
          check=lambda out: out.shape[1:] == (2,) or pytest.fail(str(out.shape)))
 
@@ -128,12 +128,12 @@ def test_distortion_round_trip_against_opencv(pts: list[tuple[float, float]], co
     px = np.array(pts)
     k = vsinv.Intrinsics(800.0, 790.0, 320.0, 240.0)
     d = np.array(coeffs) * np.array([1.0, 1.0, 0.05, 0.05, 1.0])
-    dist = call(vsinv.distort_points, px, k, d, _names=("point", "distortion"))
+    dist = call(vsinv.vision.distort_points, px, k, d, _names=("point", "distortion"))
     if not returned(dist):
         assert "point" in str(dist)
         return
     np.testing.assert_allclose(dist, cv_distort(px, k.matrix, d), rtol=1e-9, atol=1e-6)
-    back = call(vsinv.undistort_points, dist, k, d, _names=("point", "distortion"))
+    back = call(vsinv.vision.undistort_points, dist, k, d, _names=("point", "distortion"))
     if returned(back):
         np.testing.assert_allclose(back, px, atol=1e-6)
 
@@ -149,15 +149,15 @@ def test_load_calibration(tmp_path_factory: Any, data: Any) -> None:
     path = tmp_path_factory.mktemp("cal") / src.name
     path.write_text(text, encoding="utf-8", errors="surrogateescape")
     as_type = data.draw(st.sampled_from([str, Path]))
-    out = call(vsinv.load_calibration, as_type(path), _expect=RETURN if kind == "same" else ANY,
+    out = call(vsinv.calibration.load_calibration, as_type(path), _expect=RETURN if kind == "same" else ANY,
                _names=(src.name, "calibration"))
     if returned(out):
-        assert isinstance(out, vsinv.Calibration)
+        assert isinstance(out, vsinv.calibration.Calibration)
         k = call(getattr, out, "intrinsics", _api="Calibration.intrinsics")
         d = call(getattr, out, "distortion", _api="Calibration.distortion")
         w, h = call(getattr, out, "image_size", _api="Calibration.image_size")
-        assert isinstance(k, vsinv.Intrinsics) and isinstance(d, vsinv.Distortion)
+        assert isinstance(k, vsinv.Intrinsics) and isinstance(d, vsinv.vision.Distortion)
         assert w > 0 and h > 0 and k.fku > 0 and k.fkv > 0
     for bad, expect in [(tmp_path_factory.getbasetemp(), ANY), ("/nonexistent/cal.yaml", RAISE), (None, TYPE), (3, TYPE),
                         ("", RAISE)]:
-        call(vsinv.load_calibration, bad, _expect=expect, _names=("calibration", "path", str(bad)))
+        call(vsinv.calibration.load_calibration, bad, _expect=expect, _names=("calibration", "path", str(bad)))

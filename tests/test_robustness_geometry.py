@@ -33,7 +33,7 @@ def manual_project(points: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.nd
 @fuzz_settings(120)
 @given(st.data())
 def test_project(data: Any) -> None:
-    ref = vsinv.project(OBJ, K)
+    ref = vsinv.geometry.project(OBJ, K)
     np.testing.assert_allclose(ref[0], manual_project(OBJ, K.matrix)[0], rtol=1e-14)
 
     def check(out: Any) -> None:
@@ -42,7 +42,7 @@ def test_project(data: Any) -> None:
         assert px.shape == (len(z), 2) and z.ndim == 1
         assert (z > 0).all()
 
-    name, v, out = fuzz(data, vsinv.project, {"points": OBJ, "K": K},
+    name, v, out = fuzz(data, vsinv.geometry.project, {"points": OBJ, "K": K},
                         {"points": arrays(OBJ, overrides={"negative": RAISE}), "K": k_variants()}, ref=ref, check=check)
     if returned(out) and name == "points" and v.expect != SAME:
         pts = np.asarray(v.value, dtype=float)
@@ -58,7 +58,7 @@ def test_project(data: Any) -> None:
 def test_project_against_numpy_and_opencv(pts: list[tuple[float, float, float]], fu: float, fv: float, u0: float, v0: float) -> None:
     k = vsinv.Intrinsics(fu, fv, u0, v0)
     p = np.array(pts, dtype=float).reshape(-1, 3)
-    out = call(vsinv.project, p, k, _names=("point", "behind"))
+    out = call(vsinv.geometry.project, p, k, _names=("point", "behind"))
     if (p[:, 2] <= 1e-9).any():
         # A point at or behind the camera, or (checked first if it comes first) one so close
         # to the camera plane that its pixel overflows.
@@ -76,14 +76,14 @@ def test_project_against_numpy_and_opencv(pts: list[tuple[float, float, float]],
 @fuzz_settings(100)
 @given(st.data())
 def test_invariant_points(data: Any) -> None:
-    ref = vsinv.invariant_points(CUR_PX)
+    ref = vsinv.laws.invariant_points(CUR_PX)
     np.testing.assert_allclose(ref, manual_invariants(CUR_PX, (0, 1, 2)), atol=1e-10)
 
     def check(q: np.ndarray) -> None:
         assert q.dtype == np.float64 and q.ndim == 2 and q.shape[1] == 3
         np.testing.assert_allclose(q.sum(axis=1), 1.0, atol=1e-6)
 
-    name, v, out = fuzz(data, vsinv.invariant_points, {"pixels": CUR_PX, "basis": (0, 1, 2)},
+    name, v, out = fuzz(data, vsinv.laws.invariant_points, {"pixels": CUR_PX, "basis": (0, 1, 2)},
                         {"pixels": pixel_variants(CUR_PX), "basis": basis_variants(N)}, ref=ref, rtol=1e-12, check=check)
     if returned(out) and name == "basis" and not isinstance(v.value, str):
         b = tuple(int(i) for i in v.value)
@@ -104,9 +104,9 @@ def interaction_numpy(px: np.ndarray, z: np.ndarray, k: np.ndarray) -> np.ndarra
 @fuzz_settings(100)
 @given(st.data())
 def test_interaction_matrix(data: Any) -> None:
-    ref = vsinv.interaction_matrix(CUR_PX, CUR_Z, K)
+    ref = vsinv.laws.interaction_matrix(CUR_PX, CUR_Z, K)
     np.testing.assert_allclose(ref, interaction_numpy(CUR_PX, CUR_Z, K.matrix), rtol=1e-9, atol=1e-9)
-    fuzz(data, vsinv.interaction_matrix, {"pixels": CUR_PX, "depths": CUR_Z, "K": K},
+    fuzz(data, vsinv.laws.interaction_matrix, {"pixels": CUR_PX, "depths": CUR_Z, "K": K},
          {"pixels": pixel_variants(CUR_PX, ANY, overrides={"zero": ANY, "empty": ANY, "bool": ANY}),
           "depths": depth_variants(CUR_Z), "K": k_variants()},
          ref=ref, check=lambda L: L.shape[1:] == (2, 6) or pytest.fail(f"shape {L.shape}"))
@@ -117,7 +117,7 @@ def test_interaction_matrix(data: Any) -> None:
 @given(st.data())
 def test_jacobians(data: Any) -> None:
     which = data.draw(st.sampled_from(["invariant_jacobian", "jacobian_factors", "structure_ratio"]))
-    fn = getattr(vsinv, which)
+    fn = getattr(vsinv.laws, which)
     args: dict[str, Any] = {"pixels": CUR_PX, "depths": CUR_Z, "basis": (0, 1, 2)}
     strategies = {"pixels": pixel_variants(CUR_PX), "depths": depth_variants(CUR_Z), "basis": basis_variants(N)}
     if which != "jacobian_factors":
@@ -135,7 +135,7 @@ def test_jacobians(data: Any) -> None:
 
     fuzz(data, fn, args, strategies, ref=ref, rtol=1e-12, check=check)
     if which == "invariant_jacobian":  # J = [Phi K, Psi F(K)]: the first three columns
-        phi, _ = vsinv.jacobian_factors(CUR_PX, CUR_Z)
+        phi, _ = vsinv.laws.jacobian_factors(CUR_PX, CUR_Z)
         np.testing.assert_allclose(ref[:, :3], phi @ K.matrix, rtol=1e-9, atol=1e-9)
 
 
@@ -144,13 +144,13 @@ def test_jacobians(data: Any) -> None:
 @given(st.data())
 def test_rz_coefficients(data: Any) -> None:
     args = {"pixels": CUR_PX, "depths": CUR_Z, "reference_pixels": REF_PX, "K": K, "basis": (0, 1, 2)}
-    ref = vsinv.rz_coefficients(**args)
+    ref = vsinv.laws.rz_coefficients(**args)
 
     def check(out: Any) -> None:
         a, c = out
         assert isinstance(a, float) and c.shape == (5,)
 
-    fuzz(data, vsinv.rz_coefficients, args,
+    fuzz(data, vsinv.laws.rz_coefficients, args,
          {"pixels": pixel_variants(CUR_PX, ANY, overrides={"zero": ANY, "bool": ANY}), "depths": depth_variants(CUR_Z),
           "reference_pixels": pixel_variants(REF_PX),
           "K": k_variants(), "basis": basis_variants(N)}, ref=ref, rtol=1e-12, check=check)
@@ -160,12 +160,12 @@ def test_rz_coefficients(data: Any) -> None:
 @fuzz_settings(80)
 @given(st.data())
 def test_choose_basis(data: Any) -> None:
-    ref = vsinv.choose_basis(REF_PX)
+    ref = vsinv.laws.choose_basis(REF_PX)
 
     def check(b: tuple[int, int, int]) -> None:
         assert isinstance(b, tuple) and len(b) == 3 and list(b) == sorted(set(b))
 
-    name, v, out = fuzz(data, vsinv.choose_basis, {"pixels": REF_PX}, {"pixels": pixel_variants(REF_PX, ANY)}, ref=ref, check=check)
+    name, v, out = fuzz(data, vsinv.laws.choose_basis, {"pixels": REF_PX}, {"pixels": pixel_variants(REF_PX, ANY)}, ref=ref, check=check)
     if returned(out):
         px = np.asarray(v.value, dtype=float)
         assert max(out) < len(px)
@@ -182,8 +182,8 @@ def test_choose_basis(data: Any) -> None:
 @given(st.lists(st.tuples(st.floats(-1e4, 1e4), st.floats(-1e4, 1e4)), min_size=0, max_size=9))
 def test_arbitrary_pixel_clouds(pts: list[tuple[float, float]]) -> None:
     px = np.array(pts, dtype=float).reshape(-1, 2)
-    call(vsinv.choose_basis, px, _names=("pixels", "points", "collinear"))
-    out = call(vsinv.invariant_points, px, basis="auto", _names=("pixels", "points", "collinear", "basis"))
+    call(vsinv.laws.choose_basis, px, _names=("pixels", "points", "collinear"))
+    out = call(vsinv.laws.invariant_points, px, basis="auto", _names=("pixels", "points", "collinear", "basis"))
     if returned(out):
-        b = vsinv.choose_basis(px)
+        b = vsinv.laws.choose_basis(px)
         np.testing.assert_allclose(out, manual_invariants(px, b), rtol=1e-6, atol=1e-6)

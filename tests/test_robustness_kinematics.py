@@ -25,10 +25,10 @@ NOT_RIGID = {"zero": INVALID, "negative": INVALID, "fewer": INVALID, "empty": IN
 
 def check_solution(target: np.ndarray) -> Any:
     def check(out: Any) -> None:
-        assert isinstance(out, vsinv.IkSolution)
+        assert isinstance(out, vsinv.kinematics.IkSolution)
         q = out.joints
         assert q.shape == (6,) and np.all(np.abs(q) <= 2 * np.pi)
-        d = np.linalg.inv(call(vsinv.fk, "ur5", q)) @ target
+        d = np.linalg.inv(call(vsinv.kinematics.fk, "ur5", q)) @ target
         assert np.linalg.norm(d[:3, 3]) < 1e-9 and out.position_residual <= 1e-10
         assert out.rotation_residual <= 1e-10 and out.iterations >= 0 and out.seed >= 0
     return check
@@ -39,15 +39,15 @@ def check_solution(target: np.ndarray) -> Any:
 @fuzz_settings(120)
 @given(st.data())
 def test_ik(data: Any) -> None:
-    pose = vsinv.fk("ur5", Q)
+    pose = vsinv.kinematics.fk("ur5", Q)
     args: dict[str, Any] = {"arm": "ur5", "pose": pose, "seed": SEED}
     strategies = {
         "arm": ARMS,
         "pose": arrays(pose, overrides=NOT_RIGID),
         "seed": arrays(SEED, overrides={"none": ANY, "flat": ANY}),
     }
-    ref = vsinv.ik("ur5", pose, SEED)
-    name, v, out = fuzz(data, vsinv.ik, args, strategies, ref=ref, digest=lambda s: s.joints, rtol=1e-12)
+    ref = vsinv.kinematics.ik("ur5", pose, SEED)
+    name, v, out = fuzz(data, vsinv.kinematics.ik, args, strategies, ref=ref, digest=lambda s: s.joints, rtol=1e-12)
     if returned(out):
         check_solution(np.asarray(v.value, dtype=float) if name == "pose" else pose)(out)
 
@@ -58,7 +58,7 @@ def test_ik(data: Any) -> None:
 def test_fk(data: Any) -> None:
     args: dict[str, Any] = {"arm": "ur5", "joints": Q}
     strategies = {"arm": ARMS, "joints": arrays(Q)}
-    name, v, out = fuzz(data, vsinv.fk, args, strategies, ref=vsinv.fk("ur5", Q), rtol=1e-12)
+    name, v, out = fuzz(data, vsinv.kinematics.fk, args, strategies, ref=vsinv.kinematics.fk("ur5", Q), rtol=1e-12)
     if returned(out):
         assert out.shape == (4, 4)
         np.testing.assert_allclose(out[:3, :3] @ out[:3, :3].T, np.eye(3), atol=1e-9)
@@ -69,7 +69,7 @@ def test_fk(data: Any) -> None:
 @given(st.lists(st.floats(-3, 3), min_size=3, max_size=3), st.lists(st.floats(-3, 3), min_size=3, max_size=3))
 def test_ik_returns_or_refuses_any_pose(position: list[float], thetau: list[float]) -> None:
     """Any rigid motion: reached within 1e-9, or refused as unreachable naming the pose."""
-    pose = vsinv.pose_from_position_thetau(position, thetau)
-    out = call(vsinv.ik, "ur5", pose)
+    pose = vsinv.geometry.pose_from_position_thetau(position, thetau)
+    out = call(vsinv.kinematics.ik, "ur5", pose)
     if returned(out):
         check_solution(pose)(out)

@@ -97,7 +97,7 @@ def test_scenario_text_is_held_to_the_file_limit() -> None:
     text = "object.points = [" + "[0.1, 0.2, 1.0]," * 1_200_000 + "]\n"
     assert len(text) > 16 << 20
     with pytest.raises(vsinv.InvalidInput, match="bytes of text, more than the limit of 16777216"):
-        vsinv.Scenario.from_toml(text)
+        vsinv.sim.Scenario.from_toml(text)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -106,18 +106,18 @@ def test_scenario_text_is_held_to_the_file_limit() -> None:
 
 def test_fk_refuses_joints_outside_the_limits() -> None:
     q = [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]
-    vsinv.fk("ur5", q)
+    vsinv.kinematics.fk("ur5", q)
     for bad in (1e300, -1e300, 7.0):
         with pytest.raises(vsinv.InvalidInput, match="joints: shoulder_pan_joint = .* is outside its limits") as e:
-            vsinv.fk("ur5", [bad] + q[1:])
+            vsinv.kinematics.fk("ur5", [bad] + q[1:])
         assert e.value.argument == "joints"
 
 
 def test_a_verdict_is_final() -> None:
     """A step after a stop returns that stop (it returned `settled` after `converged`)."""
     sc = vsinv.load_scenario("lens-12-12")
-    _, ref_px, _ = vsinv.render_view(sc, reference=True)
-    _, start_px, _ = vsinv.render_view(sc)
+    _, ref_px, _ = vsinv.vision.render_view(sc, reference=True)
+    _, start_px, _ = vsinv.vision.render_view(sc)
     z = np.array(vsinv.load_scenario("lens-12-12").to_dict()["object"]["points"])[:, 2]
     k = vsinv.Intrinsics(1200.0, 1200.0, 416.0, 312.0)
     servo = vsinv.Servo(ref_px, k, reference_depths=z)
@@ -137,8 +137,8 @@ def test_a_verdict_is_final() -> None:
 
 def test_a_blank_first_frame_is_a_lost_target() -> None:
     sc = vsinv.load_scenario("vision-12-6")
-    ref, ref_px, _ = vsinv.render_view(sc, reference=True)
-    start, start_px, _ = vsinv.render_view(sc)
+    ref, ref_px, _ = vsinv.vision.render_view(sc, reference=True)
+    start, start_px, _ = vsinv.vision.render_view(sc)
     z = [0.60, 0.66, 0.56, 0.63, 0.54, 0.65, 0.62, 0.57, 0.64, 0.55, 0.61, 0.66]
     k = vsinv.Intrinsics(648.0, 570.0, 427.0, 304.0)
     for blank in (np.zeros_like(start), np.full_like(start, 255)):
@@ -193,7 +193,7 @@ def test_object_points_are_bounded() -> None:
     assert e.value.key == "object.points" and time.perf_counter() - t < 1.0
     # As text, 1.2 million points are more than a scenario may hold, refused before parsing.
     with pytest.raises(vsinv.InvalidInput, match="more than the limit of 16777216 bytes"):
-        vsinv.Scenario.from_toml("object.points = [" + "[0.1, 0.2, 1.0]," * 1_200_000 + "]\n")
+        vsinv.sim.Scenario.from_toml("object.points = [" + "[0.1, 0.2, 1.0]," * 1_200_000 + "]\n")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -265,17 +265,17 @@ def test_a_cluttered_frame_is_searched_within_a_bound_and_says_so(wall: str) -> 
         "dark squares": ("tag36h11", dark_squares),
     }[wall]
     image = image()
-    found = vsinv.detect_tags(image, family)
+    found = vsinv.vision.detect_tags(image, family)
     assert found.stopped_early and "stopped early" in repr(found)
     assert set(found.ids.tolist()) <= set(range(30))
     ordinary = few_tags()
-    plain = vsinv.detect_tags(ordinary)
+    plain = vsinv.vision.detect_tags(ordinary)
     assert not plain.stopped_early and plain.ids.tolist() == list(range(6))
-    cluttered = best_time(lambda: vsinv.detect_tags(image, family))
-    reference = best_time(lambda: vsinv.detect_tags(ordinary))
+    cluttered = best_time(lambda: vsinv.vision.detect_tags(image, family))
+    reference = best_time(lambda: vsinv.vision.detect_tags(ordinary))
     assert cluttered < 2.5 * reference + 0.05, (cluttered, reference)
     # The tracker says so too.
-    tracker = vsinv.TagTracker(family)
+    tracker = vsinv.vision.TagTracker(family)
     assert tracker.track(image).stopped_early
     assert not tracker.track(ordinary).stopped_early
     # And ImageServo's step, for its telemetry: a frame of dark squares alone, searched in part,
@@ -298,14 +298,14 @@ def test_the_dot_trackers_start_search_is_bounded() -> None:
     clicks = np.column_stack([np.linspace(1000, 15000, 50), np.full(50, 8000.0)])
     t = time.perf_counter()
     with pytest.raises(vsinv.InvalidInput, match="at most 134217728 pixels"):
-        vsinv.DotTracker(blank, clicks)
+        vsinv.vision.DotTracker(blank, clicks)
     with pytest.raises(vsinv.InvalidInput, match=r'invalid parameter `polarity`: "auto" reads the whole image') as e:
-        vsinv.DotTracker(blank, clicks[:1], polarity="auto")
+        vsinv.vision.DotTracker(blank, clicks[:1], polarity="auto")
     assert "67108864" in str(e.value)
     assert time.perf_counter() - t < 20.0
     # Within the bound a dot is still found far out (its window grown from 20 px).
     blank[7990:8010, 7990:8010] = 255
-    tracker = vsinv.DotTracker(blank, [[7999.5, 7999.5]])
+    tracker = vsinv.vision.DotTracker(blank, [[7999.5, 7999.5]])
     np.testing.assert_allclose(tracker.positions, [[7999.5, 7999.5]], atol=1e-9)
 
 
@@ -325,7 +325,7 @@ def test_a_large_batch_does_not_keep_every_configuration() -> None:
         with open("/proc/self/clear_refs", "w") as f:
             f.write("5")
         base = status("VmRSS")
-        t = vsinv.run_batch(batch, progress=False)
+        t = vsinv.sim.run_batch(batch, progress=False)
         print(json.dumps({"rows": len(t["status"]), "statuses": sorted(set(t["status"].tolist())),
                           "peak": status("VmHWM") - base}))
     """)
@@ -339,4 +339,4 @@ def test_a_large_batch_does_not_keep_every_configuration() -> None:
     bad = json.loads(json.dumps(d))
     bad["control"]["gain"] = -1.0
     with pytest.raises(vsinv.InvalidInput, match=r"scenario: \[2\]\.control\.gain: must be finite and > 0"):
-        vsinv.run_batch([d, d, bad, d], progress=False)
+        vsinv.sim.run_batch([d, d, bad, d], progress=False)

@@ -10,6 +10,12 @@ from __future__ import annotations
 import importlib
 import re
 import sys
+import types
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import vsinv
 import vsinv.sweep
@@ -31,6 +37,9 @@ AREAS = (
 for _name in AREAS:
     importlib.import_module(_name)
 
+# The levels below the session (issue 29, item 3).
+LEVELS = ("laws", "vision", "sim", "calibration", "kinematics", "geometry", "errors")
+
 
 # ---------------------------------------------------------------------------------------------
 # exceptions, version, and the registry itself
@@ -45,6 +54,24 @@ def test_exception_classes_and_version() -> None:
     assert isinstance(vsinv.__version__, str) and re.fullmatch(r"\d+\.\d+\.\d+.*", vsinv.__version__)
 
 
+@covers("TARGETS", "ERROR_CLASSES", "ERROR_KINDS", "ERROR_ATTRIBUTES")
+@settings(max_examples=60, deadline=None)
+@given(st.text(max_size=24))
+def test_the_tables_describe_what_the_package_raises(name: str) -> None:
+    """Any target name outside ``vsinv.vision.TARGETS`` is refused by ``ImageServo`` with an
+    error that the error tables describe: its class, its kind and every attribute."""
+    if name in {t["name"] for t in vsinv.vision.TARGETS}:
+        return
+    image = np.zeros((48, 64), np.uint8)
+    with pytest.raises(vsinv.InvalidInput) as err:
+        vsinv.ImageServo(image, name, vsinv.Intrinsics(600.0, 600.0, 32.0, 24.0), law="none", depths=0.5)
+    e = err.value
+    assert e.argument == "target" and str(e).startswith("target: expected one of")
+    assert type(e).__name__ in {c["name"] for c in vsinv.errors.ERROR_CLASSES}
+    assert (e.kind, "InvalidInput") in {(k["kind"], k["class"]) for k in vsinv.errors.ERROR_KINDS}
+    assert all(hasattr(e, a["name"]) for a in vsinv.errors.ERROR_ATTRIBUTES)
+
+
 def public_members(cls: type) -> list[str]:
     out = []
     for name in dir(cls):
@@ -57,11 +84,22 @@ def public_members(cls: type) -> list[str]:
     return out
 
 
+def public_names() -> dict[str, object]:
+    """The public names: the top level's (but its submodules) and every level's, as name -> object."""
+    out = {n: getattr(vsinv, n) for n in vsinv.__all__ if not isinstance(getattr(vsinv, n), types.ModuleType)}
+    for level in LEVELS:
+        module = importlib.import_module(f"vsinv.{level}")
+        out.update({n: getattr(module, n) for n in module.__all__})
+    return out
+
+
 def test_every_public_name_has_a_robustness_test() -> None:
-    """New API cannot slip through: every name of vsinv.__all__ and vsinv.sweep.__all__, and
-    every public method and property of the public classes, is covered by a test above."""
-    names = set(vsinv.__all__) | {f"sweep.{n}" for n in vsinv.sweep.__all__}
-    classes = [getattr(vsinv, n) for n in vsinv.__all__ if isinstance(getattr(vsinv, n), type)]
+    """New API cannot slip through: every name of vsinv.__all__, of its levels' __all__ and of
+    vsinv.sweep.__all__, and every public method and property of the public classes, is covered
+    by a test above."""
+    public = public_names()
+    names = set(public) | {f"sweep.{n}" for n in vsinv.sweep.__all__}
+    classes = [obj for obj in public.values() if isinstance(obj, type)]
     for cls in classes:
         if issubclass(cls, BaseException) or cls.__module__.startswith("vsinv.sweep"):
             continue

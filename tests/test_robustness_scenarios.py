@@ -31,7 +31,7 @@ from robustness_harness import (
 
 BASE = vsinv.load_scenario("lens-12-12").to_dict()
 BASE["stop"]["max_iterations"] = 4
-BUILTINS = [n for n, _ in vsinv.list_scenarios()]
+BUILTINS = [n for n, _ in vsinv.sim.list_scenarios()]
 MUTANTS = [None, math.nan, -1, 0, 1e300, -1e300, "abc", "", [], {}, True, [1.0, 2.0], {"x": 1}, 2**70]
 
 
@@ -80,20 +80,20 @@ def scenario_names(path: Optional[tuple[Any, ...]]) -> tuple[str, ...]:
 @fuzz_settings(200)
 @given(st.data())
 def test_scenarios(data: Any) -> None:
-    names = call(vsinv.list_scenarios, _expect=RETURN)
+    names = call(vsinv.sim.list_scenarios, _expect=RETURN)
     assert names and all(isinstance(n, str) and isinstance(t, str) for n, t in names)
     d, path = data.draw(mutated_scenario(BASE), label="mutation")
     # which names may the message give: the mutated key's segments (the last one, usually)
-    s = call(vsinv.Scenario.from_dict, d, _api="Scenario.from_dict", _names=scenario_names(path),
+    s = call(vsinv.sim.Scenario.from_dict, d, _api="Scenario.from_dict", _names=scenario_names(path),
              _expect=RETURN if path is None else ANY)
     how = data.draw(st.sampled_from(["dict", "toml", "load", "file", "name"]))
     if how == "toml" and returned(s):
         text = call(s.to_toml, _api="Scenario.to_toml", _expect=RETURN)
-        back = call(vsinv.Scenario.from_toml, text, _api="Scenario.from_toml", _expect=RETURN)
+        back = call(vsinv.sim.Scenario.from_toml, text, _api="Scenario.from_toml", _expect=RETURN)
         assert back.to_dict() == s.to_dict()
         # and mutated TOML text
         _, bad = data.draw(mutated_text(text), label="toml mutation")
-        call(vsinv.Scenario.from_toml, bad, _api="Scenario.from_toml", _names=("scenario",))
+        call(vsinv.sim.Scenario.from_toml, bad, _api="Scenario.from_toml", _names=("scenario",))
     elif how == "load":
         call(vsinv.load_scenario, d, _names=scenario_names(path), _expect=RETURN if path is None else ANY)
     elif how == "file":
@@ -107,18 +107,18 @@ def test_scenarios(data: Any) -> None:
         call(vsinv.load_scenario, n, _expect=RETURN if n in BUILTINS else INVALID, _names=(repr(n)[1:-1] or "scenario", "scenario"))
     for bad, expect in ((None, INVALID), (3, INVALID), ([], INVALID), ({}, INVALID), (b"abc", INVALID)):
         call(vsinv.load_scenario, bad, _expect=expect, _names=("scenario",))
-    call(vsinv.Scenario.from_toml, 3, _api="Scenario.from_toml", _expect=TYPE, _names=("text",))
-    call(vsinv.Scenario.from_dict, "abc", _api="Scenario.from_dict", _expect=ANY, _names=("scenario",))
+    call(vsinv.sim.Scenario.from_toml, 3, _api="Scenario.from_toml", _expect=TYPE, _names=("text",))
+    call(vsinv.sim.Scenario.from_dict, "abc", _api="Scenario.from_dict", _expect=ANY, _names=("scenario",))
     if returned(s):
         assert isinstance(call(getattr, s, "name", _api="Scenario.name"), str)
         assert isinstance(call(getattr, s, "description", _api="Scenario.description"), str)
         dd = call(s.to_dict, _api="Scenario.to_dict", _finite=False)
-        again = vsinv.Scenario.from_dict(dd).to_dict()
+        again = vsinv.sim.Scenario.from_dict(dd).to_dict()
         assert again == dd, [(k, dd[k], again.get(k)) for k in dd if dd[k] != again.get(k)]
 
 
 # The columns every run records, from their declaration.
-RUN_ARRAYS = tuple(c["name"] for c in vsinv.recorded_columns() if c["recorded"] == "always")
+RUN_ARRAYS = tuple(c["name"] for c in vsinv.sim.recorded_columns() if c["recorded"] == "always")
 
 
 @covers("run_scenario", "RunResult", "RunResult.summary", "RunResult.scenario", "RunResult.arrays", "RunResult.time",
@@ -147,7 +147,7 @@ def test_run_scenario(data: Any) -> None:
     assert s["status"] in ("converged", "max_iterations", "lost_features", "diverged", "degenerate", "rz_trap", "joint_limit",
                            "singular", "settled", "observed", "error"), s["status"]
     assert 0 <= s["iterations"] <= 4
-    assert isinstance(call(getattr, r, "scenario", _api="RunResult.scenario"), vsinv.Scenario)
+    assert isinstance(call(getattr, r, "scenario", _api="RunResult.scenario"), vsinv.sim.Scenario)
     arrs = call(getattr, r, "arrays", _api="RunResult.arrays", _finite=False)
     rows = len(r.time)
     for name in RUN_ARRAYS:
@@ -171,9 +171,9 @@ def test_run_result_schema_and_plot(kind: Any, ax: Any) -> None:
     import matplotlib.pyplot as plt
 
     run = lens_run()
-    columns = call(vsinv.recorded_columns, _finite=False)
+    columns = call(vsinv.sim.recorded_columns, _finite=False)
     assert tuple(columns) == call(getattr, vsinv.RunResult, "columns", _api="RunResult.columns", _finite=False)
-    assert {f["name"] for f in call(vsinv.summary_fields, _finite=False)} <= set(run.summary)
+    assert {f["name"] for f in call(vsinv.sim.summary_fields, _finite=False)} <= set(run.summary)
     fig, axes = plt.subplots(1, 3)
     where = {"axes": axes[0], "two": [axes[0], axes[1]], "three": list(axes)}.get(ax, ax) if isinstance(ax, str) else ax
     if not isinstance(kind, str):
@@ -208,7 +208,7 @@ def test_run_batch(data: Any) -> None:
         elif kind == "json":
             batch.append(json.dumps(BASE))
         elif kind == "scenario":
-            batch.append(vsinv.Scenario.from_dict(BASE))
+            batch.append(vsinv.sim.Scenario.from_dict(BASE))
         elif kind == "mutant":
             batch.append(data.draw(mutated_scenario(BASE, keep_stop=True))[0])
         else:
@@ -221,15 +221,15 @@ def test_run_batch(data: Any) -> None:
         names = (*names, f"scenario {bad_index}")  # either may be reported first
     counts: list[int] = []
     progress = data.draw(st.sampled_from([None, False, lambda done, total: counts.append(done)]), label="progress")
-    out = call(vsinv.run_batch, batch, threads=threads.value, progress=progress, _expect=expect, _names=names, _finite=False)
+    out = call(vsinv.sim.run_batch, batch, threads=threads.value, progress=progress, _expect=expect, _names=names, _finite=False)
     if returned(out):
         assert all(len(c) == len(batch) for c in out.values())
         assert counts == sorted(set(counts)) and counts[-1:] == ([len(batch)] if callable(progress) and batch else [])
         ok = out["status"] != "error"
-        for k in ("final_translation_error_mm", "final_rotation_error_deg"):
+        for k in ("final_translation_error", "final_rotation_error"):
             assert np.isfinite(out[k][ok]).all()
-    call(vsinv.run_batch, 3, _expect=TYPE, _names=("scenarios", "iterable"))
-    call(vsinv.run_batch, [], progress="yes", _expect=TYPE, _names=("progress",))
+    call(vsinv.sim.run_batch, 3, _expect=TYPE, _names=("scenarios", "iterable"))
+    call(vsinv.sim.run_batch, [], progress="yes", _expect=TYPE, _names=("progress",))
 
 
 # The sweep's table converts to pandas and writes parquet with pyarrow when they are installed:
@@ -252,13 +252,13 @@ SWEEP_BASE["stop"]["max_iterations"] = 3
 @fuzz_settings(40)
 @given(data=st.data())
 def test_run_sweep(tmp_path_factory: Any, data: Any) -> None:
-    good_vary = [{"control.gain": [0.5, 1.0]}, {"focal_error": 0.1}, {"roll_deg": vsinv.Uniform(-10, 10)},
-                 {"noise.pixel_sigma": vsinv.LogUniform(0.01, 0.1), "control.gain": [1.0]}, {"start.position.2": [-0.1]},
-                 {"lens_ratio": vsinv.Choice([0.5, 1.0])}, {}]
+    good_vary = [{"control.gain": [0.5, 1.0]}, {"focal_error": 0.1}, {"roll_deg": vsinv.sim.Uniform(-10, 10)},
+                 {"noise.pixel_sigma": vsinv.sim.LogUniform(0.01, 0.1), "control.gain": [1.0]}, {"start.position.2": [-0.1]},
+                 {"lens_ratio": vsinv.sim.Choice([0.5, 1.0])}, {}]
     bad_vary = [{"nope": [1]}, {"control.gain": []}, {"control.gain": "abc"}, {"control.gain": [-1.0]},
                 {"control.gain": [math.nan]}, {"focal_error": [math.inf]}, {"start.position.7": [1.0]}, {"": [1]},
                 {"control..gain": [1]}, {"roll_deg": ["a"]}, {3: [1]}, [("control.gain", [1.0])], None,
-                {"stop.max_iterations": [10**9]}, {"control.gain": {"a": 1}}, {"control.gain": vsinv.Uniform(-1, 1)}]
+                {"stop.max_iterations": [10**9]}, {"control.gain": {"a": 1}}, {"control.gain": vsinv.sim.Uniform(-1, 1)}]
     vary = data.draw(choices(good_vary, bad_vary), label="vary")
     kw: dict[str, Any] = {}
     random = isinstance(vary.value, dict) and any(isinstance(x, vsinv.sweep.Distribution) for x in vary.value.values())
@@ -286,7 +286,7 @@ def test_run_sweep(tmp_path_factory: Any, data: Any) -> None:
                 names = ("draws",)
             if extra == "repeats" and bad == 2**70:
                 kw[extra] = 2**70
-    res = call(vsinv.run_sweep, base, vary.value, progress=False, **kw, _expect=expect, _names=names, _finite=False)
+    res = call(vsinv.sim.run_sweep, base, vary.value, progress=False, **kw, _expect=expect, _names=names, _finite=False)
     if not returned(res):
         return
     n = len(res)
@@ -313,8 +313,8 @@ def test_run_sweep(tmp_path_factory: Any, data: Any) -> None:
 @fuzz_settings(150)
 @given(st.data())
 def test_distributions(data: Any) -> None:
-    cls = data.draw(st.sampled_from([vsinv.Uniform, vsinv.LogUniform, vsinv.Choice]))
-    if cls is vsinv.Choice:
+    cls = data.draw(st.sampled_from([vsinv.sim.Uniform, vsinv.sim.LogUniform, vsinv.sim.Choice]))
+    if cls is vsinv.sim.Choice:
         values = data.draw(st.sampled_from([[1.0, 2.0], (1,), np.array([0.5, 1.5]), ["a", "b"], [], None, 3, "ab", [[1, 2], [3]]]))
         expect = INVALID if (isinstance(values, (list, str)) and len(values) != 2) or values is None or isinstance(values, int) else ANY
         d = call(cls, values, _api=cls.__name__, _expect=expect, _names=("Choice", "values"), _finite=False)
@@ -328,9 +328,9 @@ def test_distributions(data: Any) -> None:
     if returned(d):
         assert isinstance(d, vsinv.sweep.Distribution)
         rng = np.random.default_rng(0)
-        s = call(d.sample, rng, 5, _api=f"{cls.__name__}.sample", _finite=cls is not vsinv.Choice)
+        s = call(d.sample, rng, 5, _api=f"{cls.__name__}.sample", _finite=cls is not vsinv.sim.Choice)
         b = call(d.bounds, _api=f"{cls.__name__}.bounds", _finite=False)
-        if returned(s) and cls is not vsinv.Choice:
+        if returned(s) and cls is not vsinv.sim.Choice:
             lo_, hi_ = b
             assert len(s) == 5 and ((s >= lo_) & (s <= hi_)).all()
 

@@ -30,7 +30,7 @@ def test_se3_round_trips(data: Any) -> None:
     which = data.draw(st.sampled_from(["exp_twist", "pose_from_position_thetau", "thetau_from_pose"]))
     twist = np.array([0.1, -0.2, 0.05, 0.3, -0.1, 0.2])
     position, thetau = np.array([0.2, -0.1, 0.5]), np.array([0.3, -0.4, 1.2])
-    p0 = vsinv.pose_from_position_thetau(position, thetau)
+    p0 = vsinv.geometry.pose_from_position_thetau(position, thetau)
     if which == "exp_twist":
         args: dict[str, Any] = {"twist": twist, "dt": 0.5}
         strategies = {"twist": arrays(twist, overrides={"flat": SAME}), "dt": floats(0.5)}
@@ -47,7 +47,7 @@ def test_se3_round_trips(data: Any) -> None:
                                                                   "empty": INVALID, "flat": INVALID, "huge": INVALID,
                                                                   "bool": INVALID, "tiny": INVALID, "float32": ANY}),
                                         st.sampled_from([V(bad_rot, INVALID, "scaled rotation"), V(bad_row, INVALID, "last row")]))}
-    fn = getattr(vsinv, which)
+    fn = getattr(vsinv.geometry, which)
     ref = fn(**args)
     name, v, out = fuzz(data, fn, args, strategies, ref=ref, rtol=1e-12)
     if not returned(out):
@@ -67,7 +67,7 @@ def test_se3_round_trips(data: Any) -> None:
         if np.linalg.norm(tu) < 1e6:
             np.testing.assert_allclose(out[:3, :3], rodrigues(tu), atol=1e-9)
         if 1e-6 < np.linalg.norm(tu) < math.pi - 1e-6 and np.abs(pos).max() < 1e100:
-            p, t = vsinv.thetau_from_pose(out)
+            p, t = vsinv.geometry.thetau_from_pose(out)
             np.testing.assert_allclose(t, tu, atol=1e-9)
     else:
         p, t = out
@@ -79,11 +79,11 @@ def test_se3_round_trips(data: Any) -> None:
 @given(st.lists(st.floats(-3, 3), min_size=6, max_size=6), st.floats(-2, 2))
 def test_exp_twist_composes(tw: list[float], dt: float) -> None:
     t = np.array(tw)
-    a = call(vsinv.exp_twist, t, dt)
-    b = call(vsinv.exp_twist, t, -dt)
+    a = call(vsinv.geometry.exp_twist, t, dt)
+    b = call(vsinv.geometry.exp_twist, t, -dt)
     np.testing.assert_allclose(a @ b, np.eye(4), atol=1e-9)
-    p, tu = call(vsinv.thetau_from_pose, a)
-    back = call(vsinv.pose_from_position_thetau, p, tu)
+    p, tu = call(vsinv.geometry.thetau_from_pose, a)
+    back = call(vsinv.geometry.pose_from_position_thetau, p, tu)
     np.testing.assert_allclose(back, a, atol=1e-9)
 
 
@@ -93,7 +93,7 @@ def test_exp_twist_composes(tw: list[float], dt: float) -> None:
 def test_rotation_helpers(data: Any) -> None:
     which = data.draw(st.sampled_from(["thetau_from_rotations", "twist_adjoint"]))
     thetau = np.array([0.3, -0.4, 1.2])
-    p0 = vsinv.pose_from_position_thetau(np.array([0.2, -0.1, 0.5]), thetau)
+    p0 = vsinv.geometry.pose_from_position_thetau(np.array([0.2, -0.1, 0.5]), thetau)
     if which == "thetau_from_rotations":
         rotations = np.stack([p0[:3, :3], np.eye(3)])
         args: dict[str, Any] = {"rotations": rotations}
@@ -101,7 +101,7 @@ def test_rotation_helpers(data: Any) -> None:
     else:
         args = {"pose": p0}
         strategies = {"pose": arrays(p0)}
-    fn = getattr(vsinv, which)
+    fn = getattr(vsinv.geometry, which)
     ref = fn(**args)
     name, v, out = fuzz(data, fn, args, strategies, ref=ref, rtol=1e-12)
     if not returned(out):
@@ -156,13 +156,13 @@ def pose_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
 
 
 def hand_eye_digest(out: Any) -> Any:
-    if isinstance(out, vsinv.HandEyeAgreement):
+    if isinstance(out, vsinv.calibration.HandEyeAgreement):
         return {k: hand_eye_digest(v) for k, v in out.calibrations.items()}
     return (out.matrix, out.residuals, out.pairs, out.axis_spread_deg, out.method)
 
 
 def check_hand_eye(out: Any) -> None:
-    cals = list(out.calibrations.values()) if isinstance(out, vsinv.HandEyeAgreement) else [out]
+    cals = list(out.calibrations.values()) if isinstance(out, vsinv.calibration.HandEyeAgreement) else [out]
     for cal in cals:
         m = cal.matrix
         assert m.shape == (4, 4) and np.allclose(m[3], [0, 0, 0, 1])
@@ -170,7 +170,7 @@ def check_hand_eye(out: Any) -> None:
         assert cal.residuals.shape == cal.pairs.shape and np.isfinite(cal.residuals).all()
         assert 0.0 <= cal.axis_spread_deg <= 90.0 and cal.rms_rotation_deg >= 0 and cal.max_translation_m >= 0
         assert cal.rotating_motions >= 1 and cal.motions_used >= 1 and repr(cal)
-    if isinstance(out, vsinv.HandEyeAgreement):
+    if isinstance(out, vsinv.calibration.HandEyeAgreement):
         assert out.max_rotation_deg >= 0 and out.max_translation_m >= 0 and isinstance(out.failures, dict)
         assert repr(out)
 
@@ -194,7 +194,7 @@ def test_hand_eye_inputs(data: Any) -> None:
         args["method"] = "park"
         strategies["method"] = choices(["tsai", "park", "daniilidis", "Park_Martin", "TSAI"],
                                        ["horaud", "", 3, 1.5, b"tsai", ["tsai"]])
-    fn = getattr(vsinv, which)
+    fn = getattr(vsinv.calibration, which)
     ref = fn(**args)
     fuzz(data, fn, args, strategies, ref=ref, digest=hand_eye_digest, check=check_hand_eye)
 
@@ -204,14 +204,14 @@ def test_hand_eye_refusals_name_argument_and_pose() -> None:
     g, c = hand_eye_stations()
     bad = c.copy()
     bad[4, 1, 3] = np.nan
-    err = call(vsinv.calibrate_hand_eye, g, bad, _expect=INVALID, _names=("target_poses",))
+    err = call(vsinv.calibration.calibrate_hand_eye, g, bad, _expect=INVALID, _names=("target_poses",))
     assert err.kind == "invalid_pose" and err.argument == "target_poses" and err.index == 4
     assert "row 1, column 3" in str(err)
     g1, c1 = hand_eye_stations(one_axis=True)
-    err = call(vsinv.calibrate_hand_eye, g1, c1)
+    err = call(vsinv.calibration.calibrate_hand_eye, g1, c1)
     assert isinstance(err, vsinv.DegenerateGeometry) and err.kind == "degenerate_motion" and err.count == 6
-    err = call(vsinv.calibrate_hand_eye, g[:2], c[:2])
+    err = call(vsinv.calibration.calibrate_hand_eye, g[:2], c[:2])
     assert isinstance(err, vsinv.DegenerateGeometry) and "at least 3 poses" in str(err)
     still = np.array([np.eye(4)] * 4)
-    err = call(vsinv.compare_hand_eye_methods, still, still)
+    err = call(vsinv.calibration.compare_hand_eye_methods, still, still)
     assert isinstance(err, vsinv.DegenerateGeometry) and "no gripper motion rotates" in str(err)

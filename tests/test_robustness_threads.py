@@ -63,8 +63,8 @@ def works(call: Callable[[], Any], **kw: Any) -> None:
 @pytest.fixture(scope="module")
 def scene() -> dict[str, Any]:
     sc = vsinv.load_scenario("vision-12-6")
-    ref, ref_px, _ = vsinv.render_view(sc, reference=True)
-    start, start_px, _ = vsinv.render_view(sc)
+    ref, ref_px, _ = vsinv.vision.render_view(sc, reference=True)
+    start, start_px, _ = vsinv.vision.render_view(sc)
     # The scenario's object (F*, metres): the reference depths zeta* are its z coordinates
     # (test_image_servo.py); the start depths roughly the same.
     ref_z = start_z = np.array([0.60, 0.66, 0.56, 0.63, 0.54, 0.65, 0.62, 0.57, 0.64, 0.55, 0.61, 0.66])
@@ -94,10 +94,10 @@ def test_image_servo_steps_from_threads(scene: dict[str, Any]) -> None:
 
 
 def test_tag_tracker_from_threads(scene: dict[str, Any]) -> None:
-    sc = vsinv.load_scenario("vision-tags-12-6") if "vision-tags-12-6" in dict(vsinv.list_scenarios()) else None
-    image = vsinv.render_view(sc)[0] if sc is not None else scene["start"]
-    tracker = vsinv.TagTracker(refresh=3)
-    expected = vsinv.detect_tags(image).ids.tolist()
+    sc = vsinv.load_scenario("vision-tags-12-6") if "vision-tags-12-6" in dict(vsinv.sim.list_scenarios()) else None
+    image = vsinv.vision.render_view(sc)[0] if sc is not None else scene["start"]
+    tracker = vsinv.vision.TagTracker(refresh=3)
+    expected = vsinv.vision.detect_tags(image).ids.tolist()
 
     def track() -> None:
         assert tracker.track(image).ids.tolist() == expected
@@ -109,7 +109,7 @@ def test_tag_tracker_from_threads(scene: dict[str, Any]) -> None:
 
 
 def test_dot_tracker_from_threads(scene: dict[str, Any]) -> None:
-    tracker = vsinv.DotTracker(scene["start"], scene["start_px"])
+    tracker = vsinv.vision.DotTracker(scene["start"], scene["start_px"])
     n = len(scene["start_px"])
 
     def track() -> None:
@@ -125,13 +125,13 @@ def test_servo_and_controllers_from_threads(scene: dict[str, Any]) -> None:
                         stop={"max_iterations": 1_000_000})
     works(lambda: (servo.step(scene["start_px"]), servo.certainty(), servo.basis))
     assert servo.iterations == THREADS * CALLS
-    inv = vsinv.InvariantController(scene["ref_px"], scene["k"])
+    inv = vsinv.laws.InvariantController(scene["ref_px"], scene["k"])
     works(lambda: (inv.step(scene["start_px"], scene["start_z"]), inv.pose_uncertainty(scene["start_px"], scene["start_z"], pixel_sigma=0.5)))
-    ibvs = vsinv.IbvsController(scene["ref_px"], scene["k"])
+    ibvs = vsinv.laws.IbvsController(scene["ref_px"], scene["k"])
     works(lambda: (ibvs.step(scene["start_px"], scene["start_z"]), ibvs.pixel_error))
-    meter = vsinv.PixelNoiseMeter(capacity=50)
+    meter = vsinv.vision.PixelNoiseMeter(capacity=50)
     works(lambda: (meter.push(scene["start_px"]), meter.sigma))
-    resection = vsinv.ResectionDepths(scene["start_px"], scene["start_z"], scene["ref_px"])
+    resection = vsinv.calibration.ResectionDepths(scene["start_px"], scene["start_z"], scene["ref_px"])
     works(lambda: resection.estimate(scene["start_px"]))
 
 
@@ -140,11 +140,11 @@ def test_results_from_threads(scene: dict[str, Any], tmp_path: Any) -> None:
     px, ref = scene["start_px"], scene["ref_px"]
     k = scene["k"]
     run = vsinv.run_scenario("lens-12-6")
-    path = vsinv.InvariantPath(px, ref, duration=2.0)
+    path = vsinv.laws.InvariantPath(px, ref, duration=2.0)
     rng = np.random.default_rng(1)
-    g = np.array([vsinv.pose_from_position_thetau(rng.normal(size=3) * 0.1, rng.normal(size=3) * 0.5) for _ in range(6)])
-    x = vsinv.pose_from_position_thetau([0.01, 0.02, 0.1], [0.1, 0.2, 0.3])
-    target = vsinv.pose_from_position_thetau([0.5, 0.0, 0.0], [0.0, 0.0, 0.0])
+    g = np.array([vsinv.geometry.pose_from_position_thetau(rng.normal(size=3) * 0.1, rng.normal(size=3) * 0.5) for _ in range(6)])
+    x = vsinv.geometry.pose_from_position_thetau([0.01, 0.02, 0.1], [0.1, 0.2, 0.3])
+    target = vsinv.geometry.pose_from_position_thetau([0.5, 0.0, 0.0], [0.0, 0.0, 0.0])
     c = np.array([np.linalg.inv(gi @ x) @ target for gi in g])
     servo = vsinv.Servo(ref, k, reference_depths=scene["ref_z"])
     image_step = vsinv.ImageServo(scene["ref"], "dots", k, reference_points=ref, first_points=px,
@@ -154,24 +154,24 @@ def test_results_from_threads(scene: dict[str, Any], tmp_path: Any) -> None:
                     "  data: [800.0, 0, 320.0, 0, 800.0, 240.0, 0, 0, 1]\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n"
                     "  data: [0, 0, 0, 0, 0]\n")
     calls: dict[str, Callable[[], Any]] = {
-        "Calibration": (lambda cal: lambda: (cal.intrinsics, cal.distortion, cal.image_size))(vsinv.load_calibration(yaml)),
+        "Calibration": (lambda cal: lambda: (cal.intrinsics, cal.distortion, cal.image_size))(vsinv.calibration.load_calibration(yaml)),
         "Intrinsics": lambda: (k.matrix, repr(k)),
-        "StabilityReport": lambda: vsinv.check_stability(k, k).tracking_bound(0.1),
+        "StabilityReport": lambda: vsinv.laws.check_stability(k, k).tracking_bound(0.1),
         "ServoStep": (lambda s: lambda: (s.twist, s.verdict, s.telemetry))(servo.step(px)),
         "ImageStep": lambda: (image_step.found, image_step.pixels, image_step.stopped_early, image_step.telemetry),
         "PoseUncertainty": (lambda u: lambda: (u.covariance, u.translation_bound()))(
-            vsinv.InvariantController(ref, k).pose_uncertainty(px, scene["start_z"], pixel_sigma=0.5)),
+            vsinv.laws.InvariantController(ref, k).pose_uncertainty(px, scene["start_z"], pixel_sigma=0.5)),
         "PlaneParallax": (lambda p: lambda: (p.gamma, p.epipole))(path.plane_parallax),
         "InvariantPath": lambda: path.sample(1.0),
         "Scenario": lambda: (scene["scenario"].to_dict(), scene["scenario"].name),
         "RunResult": lambda: (run.summary, run.arrays, run.pose),
-        "Dots": (lambda d: lambda: (d.centroids, d.areas))(vsinv.detect_dots(scene["start"])),
-        "Tags": (lambda t: lambda: (t.ids, t.corners, t.family))(vsinv.detect_tags(scene["start"])),
+        "Dots": (lambda d: lambda: (d.centroids, d.areas))(vsinv.vision.detect_dots(scene["start"])),
+        "Tags": (lambda t: lambda: (t.ids, t.corners, t.family))(vsinv.vision.detect_tags(scene["start"])),
         "IkSolution": (lambda s: lambda: (s.joints, s.position_residual))(
-            vsinv.ik("ur5", vsinv.fk("ur5", [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]))),
-        "Distortion": (lambda d: lambda: (d.coefficients, d.model))(vsinv.Distortion([0.1, 0.01, 0, 0, 0], "plumb_bob")),
-        "HandEyeCalibration": (lambda h: lambda: (h.matrix, h.residuals))(vsinv.calibrate_hand_eye(g, c)),
-        "HandEyeAgreement": (lambda h: lambda: (h.calibrations, h.max_rotation_deg))(vsinv.compare_hand_eye_methods(g, c)),
+            vsinv.kinematics.ik("ur5", vsinv.kinematics.fk("ur5", [0.1, -1.2, 1.0, -0.5, 1.4, 0.3]))),
+        "Distortion": (lambda d: lambda: (d.coefficients, d.model))(vsinv.vision.Distortion([0.1, 0.01, 0, 0, 0], "plumb_bob")),
+        "HandEyeCalibration": (lambda h: lambda: (h.matrix, h.residuals))(vsinv.calibration.calibrate_hand_eye(g, c)),
+        "HandEyeAgreement": (lambda h: lambda: (h.calibrations, h.max_rotation_deg))(vsinv.calibration.compare_hand_eye_methods(g, c)),
     }
     for name, call in calls.items():
         counts = hammer(call)
@@ -193,4 +193,4 @@ def test_every_class_is_covered() -> None:
 
 def test_docstrings_say_threads_take_turns() -> None:
     for name in ("ImageServo", "TagTracker", "DotTracker"):
-        assert "several threads" in (getattr(vsinv, name).__doc__ or ""), name
+        assert "several threads" in (getattr(vsinv.vision if "Tracker" in name else vsinv, name).__doc__ or ""), name

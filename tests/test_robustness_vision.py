@@ -57,7 +57,7 @@ IMG_LOCK: dict[str, Any] = {}
 
 def rendered() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if "view" not in IMG_LOCK:
-        IMG_LOCK["view"] = vsinv.render_view(VISION)
+        IMG_LOCK["view"] = vsinv.vision.render_view(VISION)
     return IMG_LOCK["view"]
 
 
@@ -65,8 +65,8 @@ def rendered() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 @fuzz_settings(40)
 @given(st.data())
 def test_render(data: Any) -> None:
-    fn = data.draw(st.sampled_from([vsinv.render, vsinv.render_view]))
-    p0 = vsinv.pose_from_position_thetau([0.02, -0.01, -0.05], [0.05, -0.02, 0.1])
+    fn = data.draw(st.sampled_from([vsinv.vision.render, vsinv.vision.render_view]))
+    p0 = vsinv.geometry.pose_from_position_thetau([0.02, -0.01, -0.05], [0.05, -0.02, 0.1])
     scen = dict(VISION)
     size = data.draw(st.sampled_from([None, (64, 48), (1, 1), (0, 48), (-5, 48), (70000, 10), (12.5, 48), ("a", 48)]))
     if size is not None:
@@ -97,7 +97,7 @@ def test_render(data: Any) -> None:
     ref = fn(**args)
     fuzz(data, fn, args, strategies, ref=ref, check=check, finite=False,
          digest=lambda o: o if isinstance(o, np.ndarray) else o[0])
-    if size is None and fn is vsinv.render_view:
+    if size is None and fn is vsinv.vision.render_view:
         image, px, vis = ref
         h, w = image.shape
         inside = (px[:, 0] >= 0) & (px[:, 0] < w) & (px[:, 1] >= 0) & (px[:, 1] < h)
@@ -109,14 +109,14 @@ def test_render(data: Any) -> None:
 @given(st.data())
 def test_detect_dots(data: Any) -> None:
     image, px, vis = rendered()
-    ref = vsinv.detect_dots(image)
+    ref = vsinv.vision.detect_dots(image)
     assert len(ref) == int(vis.sum())
     args = {"image": image, "threshold": None, "min_area": 8, "max_area": None,
             "min_fill": 0.95, "min_contrast": 20, "max_ring_residual": 0.15}
     digest = lambda d: (d.centroids, d.areas, d.bboxes)  # noqa: E731
     out_of_unit = {k: INVALID for k in ("negative", "neghuge", "neginf", "posinf", "huge")}
     negative = {k: INVALID for k in ("negative", "neghuge", "neginf")}
-    name, v, out = fuzz(data, vsinv.detect_dots, args,
+    name, v, out = fuzz(data, vsinv.vision.detect_dots, args,
                         {"image": image_variants(image),
                          "threshold": ints(128, overrides={"huge": INVALID, "none": SAME, "valid": ANY, "npint": ANY}),
                          "min_area": ints(8),
@@ -145,10 +145,10 @@ def test_dot_tracker(data: Any) -> None:
     image, px, vis = rendered()
     clicks = px[vis] + 1.0
     args = {"image": image, "initial_pixels": clicks, "search_radius": 20.0, "max_search_radius": 80.0, "min_area": 4}
-    ref = vsinv.DotTracker(**args)
+    ref = vsinv.vision.DotTracker(**args)
     digest = lambda t: t.positions  # noqa: E731
     over = {"fewer": ANY, "empty": ANY, "huge": ANY, "zero": ANY}
-    name, v, out = fuzz(data, vsinv.DotTracker, args,
+    name, v, out = fuzz(data, vsinv.vision.DotTracker, args,
                         {"image": image_variants(image), "initial_pixels": arrays(clicks, overrides=over),
                          "search_radius": floats(20.0, overrides={"nan": INVALID}),
                          "max_search_radius": floats(80.0, overrides={"nan": INVALID}), "min_area": ints(4),
@@ -178,9 +178,9 @@ def test_images_on_disk(tmp_path_factory: Any, data: Any) -> None:
     expect = v.expect
     if expect in (SAME, ANY) and target in ("dir", "missing/x.png"):
         expect = RAISE
-    out = call(vsinv.save_image, v.value, path, _expect=expect, _names=("image", str(path), "path"))
+    out = call(vsinv.vision.save_image, v.value, path, _expect=expect, _names=("image", str(path), "path"))
     if returned(out) and v.expect == SAME and target == "ok.png":
-        back = call(vsinv.load_image, path, _expect=RETURN)
+        back = call(vsinv.vision.load_image, path, _expect=RETURN)
         assert np.array_equal(back, image)
         assert np.array_equal(cv2.imread(str(path), cv2.IMREAD_UNCHANGED), image)
     # bad files
@@ -204,11 +204,11 @@ def test_images_on_disk(tmp_path_factory: Any, data: Any) -> None:
         garbage = folder / "bad.gif"
         garbage.write_bytes(b"GIF89a" + bytes(20))
         expect = RAISE
-    out = call(vsinv.load_image, garbage, _expect=expect, _names=(str(garbage), "image"))
+    out = call(vsinv.vision.load_image, garbage, _expect=expect, _names=(str(garbage), "image"))
     if returned(out):
         assert out.dtype == np.uint8 and out.shape == image.shape
     for bad, e in ((folder / "nothing.png", RAISE), (folder, RAISE), (None, TYPE), (3, TYPE)):
-        call(vsinv.load_image, bad, _expect=e, _names=(str(bad), "path", "image"))
+        call(vsinv.vision.load_image, bad, _expect=e, _names=(str(bad), "path", "image"))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -217,7 +217,7 @@ def test_images_on_disk(tmp_path_factory: Any, data: Any) -> None:
 
 def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     if "reference" not in IMG_LOCK:
-        IMG_LOCK["reference"] = vsinv.render_view(VISION, reference=True)
+        IMG_LOCK["reference"] = vsinv.vision.render_view(VISION, reference=True)
     return IMG_LOCK["reference"]
 
 
@@ -226,7 +226,7 @@ def reference_view() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 @given(st.data())
 def test_tag_tracker(data: Any) -> None:
     image = tag_image()
-    ref = vsinv.TagTracker()
+    ref = vsinv.vision.TagTracker()
     families = st.sampled_from([V("tag36h11", SAME, "default"), V("tag16h5", RETURN, "other family"),
                                 V("tag36h12", INVALID, "unknown"), V(None, TYPE, "none")])
     decimations = st.sampled_from([V(None, SAME, "default"), V(1, RETURN, "full size"), V(8, RETURN, "largest"),
@@ -234,7 +234,7 @@ def test_tag_tracker(data: Any) -> None:
                                    V(2.0, TYPE, "float")])
     refreshes = st.sampled_from([V(15, SAME, "default"), V(0, RETURN, "never"), V(1, RETURN, "every frame"),
                                  V(-1, INVALID, "negative"), V(2**40, INVALID, "huge"), V(1.5, TYPE, "float")])
-    name, v, out = fuzz(data, vsinv.TagTracker, {"family": "tag36h11", "decimation": None, "refresh": 15},
+    name, v, out = fuzz(data, vsinv.vision.TagTracker, {"family": "tag36h11", "decimation": None, "refresh": 15},
                         {"family": families, "decimation": decimations, "refresh": refreshes},
                         digest=lambda t: t.read_whole, ref=ref)
     tracker = out if returned(out) else ref
@@ -351,7 +351,7 @@ def tag_image() -> np.ndarray:
 @given(st.data())
 def test_detect_tags(data: Any) -> None:
     image = tag_image()
-    ref = vsinv.detect_tags(image)
+    ref = vsinv.vision.detect_tags(image)
     assert list(ref.ids) == [0, 5]
     families = st.sampled_from([V("tag36h11", SAME, "default"), V("tag16h5", RETURN, "other family"),
                                 V("tag25h9", RETURN, "other"), V("tag36h10", RETURN, "other"),
@@ -363,7 +363,7 @@ def test_detect_tags(data: Any) -> None:
                                    V(-1, INVALID, "negative"), V(2**40, INVALID, "huge"), V(2.0, TYPE, "float"),
                                    V("2", TYPE, "str")])
     digest = lambda t: (t.ids, t.corners)  # noqa: E731
-    name, v, out = fuzz(data, vsinv.detect_tags, {"image": image, "family": "tag36h11", "decimation": None},
+    name, v, out = fuzz(data, vsinv.vision.detect_tags, {"image": image, "family": "tag36h11", "decimation": None},
                         {"image": image_variants(image), "family": families, "decimation": decimations},
                         digest=digest, ref=ref)
     if returned(out):
@@ -374,8 +374,8 @@ def test_detect_tags(data: Any) -> None:
         assert early is False  # an ordinary image is searched whole
         m = len(out)
         assert ids.shape == (m,) and ids.dtype == np.int64 and corners.shape == (m, 4, 2)
-        assert family in vsinv.TAG_FAMILIES and repr(out).startswith("Tags(")
-        assert isinstance(vsinv.TAG_FAMILIES, tuple) and all(isinstance(f, str) for f in vsinv.TAG_FAMILIES)
+        assert family in vsinv.vision.TAG_FAMILIES and repr(out).startswith("Tags(")
+        assert isinstance(vsinv.vision.TAG_FAMILIES, tuple) and all(isinstance(f, str) for f in vsinv.vision.TAG_FAMILIES)
         assert (np.diff(ids) > 0).all()
 
 
@@ -409,7 +409,7 @@ def test_decode_image(data: Any) -> None:
     grey, _, _ = rendered()
     png = cv2.imencode(".png", grey)[1].tobytes()
     jpeg = cv2.imencode(".jpg", grey)[1].tobytes()
-    ref = vsinv.decode_image(png)
+    ref = vsinv.vision.decode_image(png)
     # Independent: OpenCV's decoder of the same bytes, to the bit (a lossless grey PNG).
     assert np.array_equal(ref, cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE))
     payloads = st.sampled_from([
@@ -420,7 +420,7 @@ def test_decode_image(data: Any) -> None:
     ])
     formats = st.sampled_from([V("png", SAME, "png"), V(None, SAME, "none"), V("jpeg", INVALID, "other"),
                                V("PNG", INVALID, "upper"), V(1, INVALID, "int")])
-    fuzz(data, vsinv.decode_image, {"data": png, "format": "png"}, {"data": payloads, "format": formats}, ref=ref,
+    fuzz(data, vsinv.vision.decode_image, {"data": png, "format": "png"}, {"data": payloads, "format": formats}, ref=ref,
          names={"data": ("data",), "format": ("format", "data")})
 
 
@@ -430,10 +430,10 @@ def test_decode_image(data: Any) -> None:
 def test_to_grey(data: Any) -> None:
     grey, _, _ = rendered()
     colour = np.stack([grey, 255 - grey, grey // 2], axis=-1)
-    ref = vsinv.to_grey(colour)
+    ref = vsinv.vision.to_grey(colour)
     # Independent: OpenCV's Rec. 601 conversion of the same frame, to the bit.
     assert np.array_equal(ref, cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY))
     orders = st.sampled_from([V("rgb", SAME, "rgb"), V(None, SAME, "none"), V("bgr", ANY, "bgr"),
                               V("RGB", INVALID, "upper"), V(3, INVALID, "int"), V("", INVALID, "empty")])
-    fuzz(data, vsinv.to_grey, {"image": colour, "order": "rgb"},
+    fuzz(data, vsinv.vision.to_grey, {"image": colour, "order": "rgb"},
          {"image": colour_variants(colour), "order": orders}, ref=ref)

@@ -33,7 +33,7 @@ def views(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     from vsinv.images import write_scenario_images
 
     write_scenario_images(scenario, folder)
-    start, start_px, _ = vsinv.render_view(scenario)
+    start, start_px, _ = vsinv.vision.render_view(scenario)
     ref_px = vsinv.images.read_points(folder / "reference.csv")
     return {"folder": folder, "reference": str(folder / "reference.png"), "ref_px": ref_px, "start": start, "start_px": start_px}
 
@@ -164,12 +164,12 @@ def test_images_become_grey_as_opencv_converts_them() -> None:
         np.testing.assert_array_equal(grey, cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY))
         np.testing.assert_array_equal(image_to_grey(image_msg(rgb[:, :, ::-1].copy(), "bgr8", pad)), grey)
         np.testing.assert_array_equal(image_to_grey(image_msg(rgb[:, :, 0].copy(), "mono8", pad)), rgb[:, :, 0])
-    # as vsinv.load_image reads a colour file
+    # as vsinv.vision.load_image reads a colour file
     import tempfile
 
     with tempfile.TemporaryDirectory() as d:
         cv2.imwrite(str(Path(d) / "c.png"), rgb[:, :, ::-1])
-        np.testing.assert_array_equal(vsinv.load_image(Path(d) / "c.png"), grey)
+        np.testing.assert_array_equal(vsinv.vision.load_image(Path(d) / "c.png"), grey)
     # rclpy holds uint8[] fields as array.array('B')
     import array
 
@@ -248,11 +248,11 @@ def test_the_end_effector_twist_moves_the_camera_as_the_camera_twist() -> None:
     for _ in range(20):
         q = rng.normal(size=4)
         x = hand_eye_matrix("X", [*rng.normal(size=3) * 0.2, *(q / np.linalg.norm(q))])
-        e = vsinv.exp_twist(rng.normal(size=6), 1.0)
+        e = vsinv.geometry.exp_twist(rng.normal(size=6), 1.0)
         twist = rng.normal(size=6)
         twist_ee = twist_in_end_effector_frame(twist, x)
         for t in (0.01, 0.3):
-            np.testing.assert_allclose(e @ vsinv.exp_twist(twist_ee, t) @ x, e @ x @ vsinv.exp_twist(twist, t), atol=1e-12)
+            np.testing.assert_allclose(e @ vsinv.geometry.exp_twist(twist_ee, t) @ x, e @ x @ vsinv.geometry.exp_twist(twist, t), atol=1e-12)
 
 
 def test_annotated_image_marks_found_and_lost_points() -> None:
@@ -364,7 +364,7 @@ def test_the_guides_parameters_file_is_read(tmp_path: Path, monkeypatch: pytest.
     assert block, "the ROS 2 guide's parameters block"
     parameters = yaml.safe_load(block.group(1))["vsinv_ros"]["ros__parameters"]
     monkeypatch.chdir(tmp_path)
-    vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / parameters["reference_image"])
+    vsinv.vision.save_image(np.zeros((48, 64), np.uint8), tmp_path / parameters["reference_image"])
     (tmp_path / parameters["reference_depths_file"]).write_text("z\n" + "0.5\n" * 16)
 
     c = parse_parameters(flat(parameters))
@@ -406,7 +406,7 @@ def test_lost_features_stop_with_a_zero_twist(views: dict[str, Any]) -> None:
 
 def test_a_new_camera_info_is_used_from_the_next_session(views: dict[str, Any]) -> None:
     s = session(views, K_hat=None)
-    none = vsinv.Distortion([0.0, 0.0, 0.0, 0.0])
+    none = vsinv.vision.Distortion([0.0, 0.0, 0.0, 0.0])
     s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))
     assert s.start(0.0)[0]
     s.camera_info((vsinv.Intrinsics(600.0, 600.0, 416.0, 312.0), none))  # the same lens again: nothing pending

@@ -15,7 +15,7 @@ import vsinv
 from test_ros_loop import HAND_EYE, K_6MM, SCENARIO, bridge_parameters, ros_ready, run_bridge_with  # noqa: F401
 from vsinv.ros import hand_eye_matrix
 
-START = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+START = vsinv.geometry.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
 
 
 @pytest.mark.parametrize("how", ["png", "jpeg"])

@@ -1,6 +1,6 @@
 """The bridge's image gate, live parameter changes and colour conversion, without ROS: which
 images may be stepped on (frame, stamp, size; CameraInfo's size), what a parameter set changes,
-and vsinv.to_grey against OpenCV's cvtColor."""
+and vsinv.vision.to_grey against OpenCV's cvtColor."""
 
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def test_sizes_follow_camera_info_or_the_first_image() -> None:
 @pytest.fixture(scope="module")
 def session(tmp_path_factory: pytest.TempPathFactory) -> BridgeSession:
     path = str(tmp_path_factory.mktemp("gate") / "reference.png")
-    vsinv.save_image(np.zeros((48, 64), np.uint8), path)
+    vsinv.vision.save_image(np.zeros((48, 64), np.uint8), path)
     config = parse_parameters({"reference_image": path, "depth": 0.5, "law": "ibvs", "camera_frame": "cam",
                                "max_linear_speed": 0.2, "max_angular_speed": 1.0})
     return BridgeSession(config)
@@ -94,10 +94,10 @@ def test_to_grey_is_opencvs_cvtcolor(shape: tuple[int, int]) -> None:
     cv2 = pytest.importorskip("cv2")
     rng = np.random.default_rng(3)
     colour = rng.integers(0, 256, (*shape, 3), dtype=np.uint8)
-    np.testing.assert_array_equal(vsinv.to_grey(colour), cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY))
-    np.testing.assert_array_equal(vsinv.to_grey(colour, order="bgr"), cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY))
+    np.testing.assert_array_equal(vsinv.vision.to_grey(colour), cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY))
+    np.testing.assert_array_equal(vsinv.vision.to_grey(colour, order="bgr"), cv2.cvtColor(colour, cv2.COLOR_BGR2GRAY))
     strided = colour[:, ::2]  # not contiguous: copied once
-    np.testing.assert_array_equal(vsinv.to_grey(strided), cv2.cvtColor(np.ascontiguousarray(strided), cv2.COLOR_RGB2GRAY))
+    np.testing.assert_array_equal(vsinv.vision.to_grey(strided), cv2.cvtColor(np.ascontiguousarray(strided), cv2.COLOR_RGB2GRAY))
 
 
 @pytest.mark.parametrize("shape", [(1080, 1920), (481, 643), (7, 5), (33, 37), (1, 1), (513, 1)])
@@ -118,7 +118,7 @@ def test_to_grey_with_alpha_and_any_strides_is_opencvs_cvtcolor(shape: tuple[int
         for name, view in views.items():
             for order in ("rgb", "bgr"):
                 expected = cv2.cvtColor(np.ascontiguousarray(view), codes[(channels, order)])
-                got = vsinv.to_grey(view, order=order)  # type: ignore[arg-type]
+                got = vsinv.vision.to_grey(view, order=order)  # type: ignore[arg-type]
                 assert got.shape == view.shape[:2], (name, channels, order)
                 np.testing.assert_array_equal(got, expected.reshape(view.shape[:2]), err_msg=f"{name} {channels} {order}")
 
@@ -127,9 +127,9 @@ def test_to_grey_with_alpha_and_any_strides_is_opencvs_cvtcolor(shape: tuple[int
                                        (np.zeros((0, 4, 3), np.uint8), "empty"), ([1, 2, 3], "list")])
 def test_to_grey_refuses_other_arrays(bad: Any, what: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match=what):
-        vsinv.to_grey(bad)
+        vsinv.vision.to_grey(bad)
     with pytest.raises(vsinv.InvalidInput, match="invalid parameter `order`: expected 'rgb' or 'bgr'"):
-        vsinv.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
+        vsinv.vision.to_grey(np.zeros((2, 2, 3), np.uint8), order="rgba")  # type: ignore[arg-type]
 
 
 

@@ -21,7 +21,7 @@ def test_lifecycle_transitions_start_and_stop_the_servo(tmp_path: Path) -> None:
     parameters.update(output_frame="camera", camera_frame="camera_optical_frame", stop={"max_iterations": 100000, "stall": False})
     for key in ("hand_eye", "end_effector_frame"):
         parameters.pop(key)
-    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    start = vsinv.geometry.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
     config = {"scenario": SCENARIO, "K": K_6MM, "start_pose": start.tolist()}
     r, err = run_bridge_with(tmp_path, parameters, "ros_lifecycle_sim.py", config, timeout=240, options=("--lifecycle",))
     print(f"\nlifecycle: deactivate -> zero twist {r['deactivate_ms']:.2f} ms; transitions "

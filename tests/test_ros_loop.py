@@ -117,17 +117,17 @@ def in_process_loop(parameters: dict[str, Any], start: np.ndarray) -> tuple[int,
     options = {k: v for k, v in parameters.items() if k in ("reference_depths", "law", "rz_task", "max_linear_speed",
                                                             "max_angular_speed", "dt", "stop")}
     pipeline = vsinv.ImageServo(
-        vsinv.load_image(parameters["reference_image"]), "dots", vsinv.Intrinsics(*K_6MM),
+        vsinv.vision.load_image(parameters["reference_image"]), "dots", vsinv.Intrinsics(*K_6MM),
         reference_points=np.reshape(parameters["reference_points"], (-1, 2)),
         first_points=np.reshape(parameters["first_points"], (-1, 2)), **options,
     )
     pose = start
     for _ in range(parameters["stop"]["max_iterations"] + 1):
-        step = pipeline.step(vsinv.render(scenario, pose=pose))
+        step = pipeline.step(vsinv.vision.render(scenario, pose=pose))
         if not step.running:
             break
-        pose = pose @ vsinv.exp_twist(step.twist, DT)
-    position, thetau = vsinv.thetau_from_pose(pose)
+        pose = pose @ vsinv.geometry.exp_twist(step.twist, DT)
+    position, thetau = vsinv.geometry.thetau_from_pose(pose)
     return pipeline.iterations, 1e3 * float(np.linalg.norm(position)), float(np.degrees(np.linalg.norm(thetau)))
 
 
@@ -135,7 +135,7 @@ def test_the_loop_converges_through_ros_messages(tmp_path: Path) -> None:
     env = ros_env()
     parameters = bridge_parameters(tmp_path)
     params = write_params(tmp_path / "bridge.yaml", parameters)
-    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    start = vsinv.geometry.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
     config = {"scenario": SCENARIO, "K": K_6MM, "start_pose": start.tolist(), "dt": DT, "frame": "tool0",
               "hand_eye": hand_eye_matrix("hand_eye", HAND_EYE).tolist(), "timeout": 240.0}
     (tmp_path / "sim.json").write_text(json.dumps(config))
@@ -231,7 +231,7 @@ def test_every_fault_stops_the_robot_at_once(tmp_path: Path) -> None:
                       stop={"max_iterations": 100000, "stall": False}, max_linear_speed=0.25)
     for key in ("hand_eye", "end_effector_frame"):
         parameters.pop(key)
-    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    start = vsinv.geometry.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
     config = {"scenario": SCENARIO, "K": K_6MM, "start_pose": start.tolist()}
     r, err = run_bridge_with(tmp_path, parameters, "ros_fault_sim.py", config, timeout=240)
     assert r["status_before_images"].get("state") == "idle", r["status_before_images"]  # latched, from the start
@@ -265,7 +265,7 @@ def test_large_images_converge(tmp_path: Path, width: int, height: int, encoding
     parameters["first_points"] = [x + (dx if i % 2 == 0 else dy) for i, x in enumerate(parameters["first_points"])]
     parameters.update(dt=1.0 / 30.0)
     k = [K_6MM[0], K_6MM[1], width / 2.0, height / 2.0]
-    start = vsinv.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
+    start = vsinv.geometry.pose_from_position_thetau([0.2, -0.15, -0.15], np.radians([-19.33, -4.86, 77.28]))
     config = {"scenario": SCENARIO, "K": k, "start_pose": start.tolist(), "dt": 1.0 / 30.0, "frame": "tool0",
               "hand_eye": hand_eye_matrix("hand_eye", HAND_EYE).tolist(), "timeout": 240.0, "size": [width, height],
               "encoding": encoding, "converge_only": True}

@@ -45,7 +45,7 @@ def test_the_launch_file_declares_its_arguments() -> None:
 def test_the_parameters_file_is_read(tmp_path: Path) -> None:
     yaml = pytest.importorskip("yaml")
     parameters = yaml.safe_load((PACKAGE / "config" / "servo.yaml").read_text())["vsinv_ros"]["ros__parameters"]
-    vsinv.save_image(np.zeros((48, 64), np.uint8), tmp_path / "reference.png")
+    vsinv.vision.save_image(np.zeros((48, 64), np.uint8), tmp_path / "reference.png")
     (tmp_path / "depths.csv").write_text("z\n" + "0.5\n" * 16)
     parameters.update(reference_image=str(tmp_path / "reference.png"), reference_depths_file=str(tmp_path / "depths.csv"))
 

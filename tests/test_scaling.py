@@ -29,35 +29,35 @@ pts = np.c_[rng.uniform(-0.3, 0.3, (N, 2)), rng.uniform(0.5, 1.0, N)]
 
 # Each case: the call, the bound in seconds, and the error it must raise (None: it answers).
 CASES = {
-    "choose_basis 10^6": ("vsinv.choose_basis(rng.uniform(0, 640, (10**6, 2)))", None),
-    "invariant_points auto": ("vsinv.invariant_points(px, 'auto')", None),
-    "invariant_jacobian auto": ("vsinv.invariant_jacobian(px, z, K, 'auto')", None),
-    "jacobian_factors auto": ("vsinv.jacobian_factors(px, z, 'auto')", None),
-    "structure_ratio auto": ("vsinv.structure_ratio(px, z, K, 'auto')", None),
-    "rz_coefficients auto": ("vsinv.rz_coefficients(px2, z, px, K, 'auto')", None),
-    "interaction_matrix": ("vsinv.interaction_matrix(px, z, K)", None),
-    "project": ("vsinv.project(pts, K)", None),
-    "distort_points": ("vsinv.distort_points(px, K, [0.1, 0.01, 0.001, 0.001])", None),
-    "undistort_points": ("vsinv.undistort_points(px, K, [0.1, 0.01, 0.001, 0.001])", None),
-    "estimate_plane_parallax auto": ("vsinv.estimate_plane_parallax(px2, px, 'auto')", None),
-    "InvariantPath auto": ("vsinv.InvariantPath(px2, px, 1.0, 'auto').sample(0.5)", None),
-    "depths_from_translation": ("vsinv.depths_from_translation(px * 1.01 - 3.2, px)", None),
-    "ResectionDepths": ("vsinv.ResectionDepths(px2, z, px).estimate(px2)", None),
-    "InvariantController auto + step": ("vsinv.InvariantController(px, K, basis='auto').step(px2, z)", None),
-    "IbvsController step": ("vsinv.IbvsController(px, K).step(px2, z)", None),
+    "choose_basis 10^6": ("vsinv.laws.choose_basis(rng.uniform(0, 640, (10**6, 2)))", None),
+    "invariant_points auto": ("vsinv.laws.invariant_points(px, 'auto')", None),
+    "invariant_jacobian auto": ("vsinv.laws.invariant_jacobian(px, z, K, 'auto')", None),
+    "jacobian_factors auto": ("vsinv.laws.jacobian_factors(px, z, 'auto')", None),
+    "structure_ratio auto": ("vsinv.laws.structure_ratio(px, z, K, 'auto')", None),
+    "rz_coefficients auto": ("vsinv.laws.rz_coefficients(px2, z, px, K, 'auto')", None),
+    "interaction_matrix": ("vsinv.laws.interaction_matrix(px, z, K)", None),
+    "project": ("vsinv.geometry.project(pts, K)", None),
+    "distort_points": ("vsinv.vision.distort_points(px, K, [0.1, 0.01, 0.001, 0.001])", None),
+    "undistort_points": ("vsinv.vision.undistort_points(px, K, [0.1, 0.01, 0.001, 0.001])", None),
+    "estimate_plane_parallax auto": ("vsinv.calibration.estimate_plane_parallax(px2, px, 'auto')", None),
+    "InvariantPath auto": ("vsinv.laws.InvariantPath(px2, px, 1.0, 'auto').sample(0.5)", None),
+    "depths_from_translation": ("vsinv.calibration.depths_from_translation(px * 1.01 - 3.2, px)", None),
+    "ResectionDepths": ("vsinv.calibration.ResectionDepths(px2, z, px).estimate(px2)", None),
+    "InvariantController auto + step": ("vsinv.laws.InvariantController(px, K, basis='auto').step(px2, z)", None),
+    "IbvsController step": ("vsinv.laws.IbvsController(px, K).step(px2, z)", None),
     "detect_dots 8000x8000": (
-        "img = np.zeros((8000, 8000), np.uint8); img[::97, ::89] = 255; vsinv.detect_dots(img)",
+        "img = np.zeros((8000, 8000), np.uint8); img[::97, ::89] = 255; vsinv.vision.detect_dots(img)",
         None,
     ),
     "DotTracker 8000x8000": (
         "img = np.zeros((8000, 8000), np.uint8); img[100:104, 100:104] = 255; img[7000:7004, 7000:7004] = 255\n"
-        "vsinv.DotTracker(img, [[101.0, 101.0], [7001.0, 7001.0]]).track(img)",
+        "vsinv.vision.DotTracker(img, [[101.0, 101.0], [7001.0, 7001.0]]).track(img)",
         None,
     ),
     "render 20000x20000": (
         "s = vsinv.load_scenario('vision-12-12').to_dict()\n"
         "s['camera'] = dict(s['camera'], width=20000, height=20000)\n"
-        "vsinv.render(s)",
+        "vsinv.vision.render(s)",
         "camera.width",  # refused when the scenario loads (issue 28)
     ),
     "run_scenario 20000x20000 image": (
@@ -125,7 +125,7 @@ def test_a_huge_convex_hull_is_refused_naming_the_argument_and_the_limit() -> No
     circle = np.c_[320 + 200 * np.cos(t), 240 + 200 * np.sin(t)]
     start = time.perf_counter()
     with pytest.raises(vsinv.InvalidInput, match=r"pixels.*10000"):
-        vsinv.choose_basis(circle)
+        vsinv.laws.choose_basis(circle)
     assert time.perf_counter() - start < 5.0
 
 
@@ -137,13 +137,13 @@ def test_auto_basis_validates_the_other_arguments_before_searching() -> None:
     k = vsinv.Intrinsics(800.0, 800.0, 320.0, 240.0)
     depths = np.ones(len(circle))
     calls = {
-        "depths": lambda: vsinv.invariant_jacobian(circle, depths[:-1], k, "auto"),
-        "depth -1": lambda: vsinv.jacobian_factors(circle, -depths, "auto"),
-        "depth": lambda: vsinv.structure_ratio(circle, depths[:5], k, "auto"),
-        "reference_pixels": lambda: vsinv.rz_coefficients(circle, depths, circle[:-1], k, "auto"),
-        "gain": lambda: vsinv.InvariantController(circle, k, gain=-1.0, basis="auto"),
-        "path duration": lambda: vsinv.InvariantPath(circle, circle, -1.0, "auto"),
-        "current_pixels": lambda: vsinv.estimate_plane_parallax(circle[:-1], circle, "auto"),
+        "depths": lambda: vsinv.laws.invariant_jacobian(circle, depths[:-1], k, "auto"),
+        "depth -1": lambda: vsinv.laws.jacobian_factors(circle, -depths, "auto"),
+        "depth": lambda: vsinv.laws.structure_ratio(circle, depths[:5], k, "auto"),
+        "reference_pixels": lambda: vsinv.laws.rz_coefficients(circle, depths, circle[:-1], k, "auto"),
+        "gain": lambda: vsinv.laws.InvariantController(circle, k, gain=-1.0, basis="auto"),
+        "path duration": lambda: vsinv.laws.InvariantPath(circle, circle, -1.0, "auto"),
+        "current_pixels": lambda: vsinv.calibration.estimate_plane_parallax(circle[:-1], circle, "auto"),
     }
     for name, call in calls.items():
         with pytest.raises(vsinv.VsinvError) as err:
@@ -172,7 +172,7 @@ def test_the_widest_triangle_matches_the_exhaustive_search_through_the_api() -> 
     rng = np.random.default_rng(4)
     sets = [rng.uniform(0, 640, (250, 2)), rng.integers(0, 8, (300, 2)).astype(float), rng.normal(300, 50, (260, 2))]
     for px in sets:
-        assert vsinv.choose_basis(px) == exhaustive_basis(px)
+        assert vsinv.laws.choose_basis(px) == exhaustive_basis(px)
 
 
 def test_a_long_search_releases_the_gil() -> None:
@@ -182,7 +182,7 @@ def test_a_long_search_releases_the_gil() -> None:
 
     def search() -> None:
         span["start"] = time.perf_counter()
-        vsinv.choose_basis(px)
+        vsinv.laws.choose_basis(px)
         span["end"] = time.perf_counter()
 
     worker = threading.Thread(target=search)

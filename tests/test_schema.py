@@ -33,7 +33,7 @@ def _expected_shape(column: dict, result: vsinv.RunResult) -> tuple[int, ...]:
 
 
 def _check_columns(result: vsinv.RunResult, present: set[str]) -> None:
-    declared = {c["name"]: c for c in vsinv.recorded_columns()}
+    declared = {c["name"]: c for c in vsinv.sim.recorded_columns()}
     assert set(result.arrays) == present <= set(declared)  # nothing recorded is undeclared
     for name, c in declared.items():
         value = getattr(result, name)
@@ -46,7 +46,7 @@ def _check_columns(result: vsinv.RunResult, present: set[str]) -> None:
 
 
 def test_declaration_is_complete_and_documented() -> None:
-    columns = vsinv.recorded_columns()
+    columns = vsinv.sim.recorded_columns()
     names = [c["name"] for c in columns]
     assert len(names) == len(set(names))
     assert tuple(columns) == vsinv.RunResult.columns
@@ -61,7 +61,7 @@ def test_declaration_is_complete_and_documented() -> None:
 
 
 def test_every_declared_column_has_its_shape(lens: vsinv.RunResult, arm: vsinv.RunResult) -> None:
-    always = {c["name"] for c in vsinv.recorded_columns() if c["recorded"] == "always"}
+    always = {c["name"] for c in vsinv.sim.recorded_columns() if c["recorded"] == "always"}
     _check_columns(lens, always)
     _check_columns(arm, always | {"joint_velocities"})
     vision = vsinv.run_scenario("vision-12-12")
@@ -70,33 +70,38 @@ def test_every_declared_column_has_its_shape(lens: vsinv.RunResult, arm: vsinv.R
     _check_columns(vsinv.run_scenario("lens-12-6", record=False), always)
 
 
-def test_summary_is_si_with_the_older_keys_as_extras(lens: vsinv.RunResult) -> None:
+# The older names the summary and the batch table gave some numbers (millimetres, degrees, a
+# unit suffix) before 0.1.0 was published; removed (issue 29, item 3).
+OLDER_NAMES = (
+    "final_translation_error_mm", "final_rotation_error_deg", "final_image_error_px", "start_translation_error_mm",
+    "start_rotation_error_deg", "max_line_deviation_mm", "peak_linear_speed_m_s", "peak_angular_speed_deg_s",
+    "path_duration_s", "detection_error_median_px", "detection_error_max_px", "pixel_sigma_px",
+    "reference_pixel_sigma_px", "translation_sigma_mm", "rotation_sigma_deg", "translation_uncertainty_mm",
+    "rotation_uncertainty_deg",
+)
+
+
+def test_summary_is_si_with_one_name_per_number(lens: vsinv.RunResult) -> None:
     s = lens.summary
-    fields = vsinv.summary_fields()
-    declared = {f["name"] for f in fields} | {f["legacy"] for f in fields if f["legacy"]}
+    fields = vsinv.sim.summary_fields()
+    assert all(set(f) == {"name", "unit", "description"} for f in fields)
+    declared = {f["name"] for f in fields}
     others = {"name", "status", "message", "iterations", "stop_rule", "prop1", "prop2", "within_tolerance", "basis", "basis_switches"}
-    assert set(s) == declared | others
+    assert set(s) == declared | others and not set(OLDER_NAMES) & set(s)
     assert s["stop_rule"] in ("pixel", "invariant") and s["status"] == "converged"
-    for f in fields:
-        if f["legacy"] is None or s[f["name"]] is None:
-            continue
-        legacy = f["legacy"]
-        factor = 1e3 if legacy.endswith("_mm") else 180 / math.pi if "_deg" in legacy else 1.0
-        assert s[legacy] == pytest.approx(s[f["name"]] * factor, rel=1e-15), f["name"]
     assert s["final_translation_error"] < 1e-3 and s["final_rotation_error"] < math.radians(0.1)
-    assert s["final_translation_error_mm"] == s["final_translation_error"] * 1e3
 
 
-def test_batch_table_is_si_with_the_older_columns(lens: vsinv.RunResult) -> None:
-    table = vsinv.run_batch(["lens-12-6"])
+def test_batch_table_is_si_with_one_name_per_number(lens: vsinv.RunResult) -> None:
+    table = vsinv.sim.run_batch(["lens-12-6"])
     s = lens.summary
-    keys = ("final_translation_error", "final_rotation_error", "final_image_error", "max_line_deviation",
-            "translation_uncertainty", "rotation_uncertainty", "pixel_sigma")
-    legacy = ("final_translation_error_mm", "final_rotation_error_deg", "final_image_error_px", "max_line_deviation_mm",
-              "translation_uncertainty_mm", "rotation_uncertainty_deg", "pixel_sigma_px")
-    for key in keys + legacy:
+    keys = ("final_translation_error", "final_rotation_error", "final_image_error", "final_invariant_error",
+            "max_line_deviation", "observed_max_eps", "translation_uncertainty", "rotation_uncertainty", "pixel_sigma")
+    for key in keys:
         expected = math.nan if s[key] is None else s[key]
         np.testing.assert_equal(table[key][0], expected, err_msg=key)
+    others = {"status", "iterations", "prop1", "prop2", "within_tolerance", "message"}
+    assert set(table) == set(keys) | others, sorted(set(table) ^ (set(keys) | others))
 
 
 def test_npz_follows_the_declaration(lens: vsinv.RunResult, tmp_path) -> None:

@@ -43,30 +43,30 @@ vectors = st.lists(st.floats(-3.0, 3.0), min_size=6, max_size=6).map(np.array)
 def test_exp_twist_is_the_matrix_exponential(twist: np.ndarray, dt: float) -> None:
     xi = np.zeros((4, 4))
     xi[:3, :3], xi[:3, 3] = hat(twist[3:]), twist[:3]
-    assert np.allclose(vsinv.exp_twist(twist, dt), expm_series(xi * dt), atol=1e-9)
+    assert np.allclose(vsinv.geometry.exp_twist(twist, dt), expm_series(xi * dt), atol=1e-9)
 
 
 @settings(max_examples=200, deadline=None)
 @given(vectors)
 def test_pose_from_position_thetau_is_rodrigues_and_inverts(v: np.ndarray) -> None:
     position, thetau = v[:3], v[3:]
-    pose = vsinv.pose_from_position_thetau(position, thetau)
+    pose = vsinv.geometry.pose_from_position_thetau(position, thetau)
     assert np.allclose(pose[:3, :3], rodrigues(thetau), atol=1e-12)
     assert np.allclose(pose[:3, 3], position) and np.array_equal(pose[3], [0, 0, 0, 1])
-    p, tu = vsinv.thetau_from_pose(pose)
+    p, tu = vsinv.geometry.thetau_from_pose(pose)
     assert np.allclose(p, position)
-    assert np.allclose(vsinv.pose_from_position_thetau(p, tu), pose, atol=1e-12)  # same rotation
+    assert np.allclose(vsinv.geometry.pose_from_position_thetau(p, tu), pose, atol=1e-12)  # same rotation
     assert np.linalg.norm(tu) <= np.pi + 1e-12
 
 
 def test_pose_helpers_refuse_bad_input() -> None:
     with pytest.raises(vsinv.InvalidInput, match=r"twist: expected shape \(6\), got \[5\]"):
-        vsinv.exp_twist([0.0] * 5)
+        vsinv.geometry.exp_twist([0.0] * 5)
     with pytest.raises(vsinv.InvalidInput, match="twist: non-finite value at index 0"):
-        vsinv.exp_twist([np.nan] + [0.0] * 5)
+        vsinv.geometry.exp_twist([np.nan] + [0.0] * 5)
     with pytest.raises(vsinv.InvalidInput, match="dt: non-finite value"):
-        vsinv.exp_twist([0.0] * 6, np.inf)
+        vsinv.geometry.exp_twist([0.0] * 6, np.inf)
     with pytest.raises(vsinv.InvalidInput, match=r"invalid parameter `pose`: not a rigid motion \(rotation block must be orthonormal with det \+1, last row 0 0 0 1\)"):
-        vsinv.thetau_from_pose(np.ones((4, 4)))
+        vsinv.geometry.thetau_from_pose(np.ones((4, 4)))
     with pytest.raises(vsinv.InvalidInput, match=r"thetau: expected shape \(3\), got \[2\]"):
-        vsinv.pose_from_position_thetau([0, 0, 0], [0, 0])
+        vsinv.geometry.pose_from_position_thetau([0, 0, 0], [0, 0])

@@ -17,7 +17,7 @@ START = [0.05, -0.04, -0.06, 0.1, -0.12, 0.3]
 
 def view(pose: np.ndarray, k: vsinv.Intrinsics = K) -> tuple[np.ndarray, np.ndarray]:
     rot, centre = pose[:3, :3], pose[:3, 3]
-    return vsinv.project((POINTS - centre) @ rot, k)
+    return vsinv.geometry.project((POINTS - centre) @ rot, k)
 
 
 def reference() -> tuple[np.ndarray, np.ndarray]:
@@ -25,13 +25,13 @@ def reference() -> tuple[np.ndarray, np.ndarray]:
 
 
 def run(servo: vsinv.Servo, per_step: bool = False, limit: int = 3000) -> tuple[vsinv.ServoStep, np.ndarray]:
-    pose = vsinv.exp_twist(START)
+    pose = vsinv.geometry.exp_twist(START)
     for _ in range(limit):
         pixels, depths = view(pose)
         step = servo.step(pixels, depths=depths if per_step else None)
         if not step.running:
             return step, pose
-        pose = pose @ vsinv.exp_twist(step.twist * 0.04)
+        pose = pose @ vsinv.geometry.exp_twist(step.twist * 0.04)
     raise AssertionError("the session never stopped")
 
 
@@ -53,8 +53,8 @@ def test_first_twist_is_the_controllers():
     """The session's law is the InvariantController: the same twist from the same image."""
     px, z = reference()
     servo = vsinv.Servo(px, K_HAT, reference_depths=z, basis=(0, 5, 10))
-    ctl = vsinv.InvariantController(px, K_HAT, basis=(0, 5, 10))
-    pixels, _ = view(vsinv.exp_twist(START))
+    ctl = vsinv.laws.InvariantController(px, K_HAT, basis=(0, 5, 10))
+    pixels, _ = view(vsinv.geometry.exp_twist(START))
     step = servo.step(pixels)
     assert step.running and step.telemetry["law_ran"]
     np.testing.assert_array_equal(step.twist, ctl.step(pixels, z))
@@ -65,10 +65,10 @@ def test_first_twist_is_the_controllers():
 def test_depth_sources(source):
     px, z = reference()
     if source == "resection":
-        first, _ = view(vsinv.exp_twist([0.0, 0.0, -0.1, 0, 0, 0]))
-        second, _ = view(vsinv.exp_twist([0.05, 0.0, -0.1, 0, 0, 0]))
-        first_depths, _, _ = vsinv.depths_from_translation(first, second)
-        depths: object = vsinv.ResectionDepths(first, first_depths, px, 0.6)
+        first, _ = view(vsinv.geometry.exp_twist([0.0, 0.0, -0.1, 0, 0, 0]))
+        second, _ = view(vsinv.geometry.exp_twist([0.05, 0.0, -0.1, 0, 0, 0]))
+        first_depths, _, _ = vsinv.calibration.depths_from_translation(first, second)
+        depths: object = vsinv.calibration.ResectionDepths(first, first_depths, px, 0.6)
     else:
         depths = source
     servo = vsinv.Servo(px, K_HAT, depths=depths, reference_depths=z)
@@ -88,14 +88,14 @@ def test_ibvs_on_one_camera_with_a_constant_depth():
 def test_lost_features_and_the_iteration_limit():
     px, z = reference()
     servo = vsinv.Servo(px, K_HAT, reference_depths=z)
-    pixels, _ = view(vsinv.exp_twist(START))
+    pixels, _ = view(vsinv.geometry.exp_twist(START))
     visible = np.ones(12, bool)
     first = servo.basis
     visible[first[0]] = False  # a hidden basis point: the basis switches (issue 27)
-    step = servo.step(pixels, visible)
+    step = servo.step(pixels, visible=visible)
     assert step.verdict == "running" and first[0] not in servo.basis and servo.basis_switches == 1
     assert step.telemetry["basis"] == servo.basis and step.telemetry["basis_switches"] == 1
-    step = servo.step(pixels, np.arange(12) < 5)  # five points: fewer than the law's six
+    step = servo.step(pixels, visible=np.arange(12) < 5)  # five points: fewer than the law's six
     assert step.verdict == "lost_features" and "5 of 12" in (step.reason or "")
     watch = vsinv.Servo(px, K_HAT, "none", reference_depths=z, stop={"max_iterations": 2})
     verdicts = [watch.step(pixels).verdict for _ in range(3)]
@@ -142,4 +142,4 @@ def test_bad_input_is_refused_by_name():
     with pytest.raises(vsinv.InvalidInput, match="invalid parameter `depths`: this session takes depths each step"):
         per_step.step(px)
     with pytest.raises(vsinv.InvalidInput, match=r"visible: expected shape \(12,\)"):
-        servo.step(px, np.ones(3, bool))
+        servo.step(px, visible=np.ones(3, bool))

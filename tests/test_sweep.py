@@ -46,7 +46,7 @@ def test_grid_is_the_cartesian_product_with_one_column_per_key():
     assert res["control.gain"].tolist() == [g for g in gains for _ in range(4)]
     assert res["noise.pixel_sigma"].tolist() == [s for _ in gains for s in sigmas for _ in range(2)]
     assert res["repeat"].tolist() == [0, 1] * 6
-    for col in ("status", "iterations", "final_translation_error_mm", "prop1", "prop2", "seed", "message"):
+    for col in ("status", "iterations", "final_translation_error", "prop1", "prop2", "seed", "message"):
         assert len(res[col]) == len(res)
     # The scenarios really carry the values of their row.
     scenarios = build_scenarios(BASE, {"control.gain": gains, "noise.pixel_sigma": sigmas}, repeats=2)
@@ -323,7 +323,7 @@ def test_prop2_fails_for_large_principal_point_errors_and_is_conservative():
     for d, p1, p2 in zip(build_scenarios(BASE, {"principal_point_error": values}), res["prop1"], res["prop2"]):
         k = vsinv.Intrinsics(*(d["camera"][f] for f in ("fku", "fkv", "u0", "v0")))
         k_hat = vsinv.Intrinsics(*(d["estimate"][f] for f in ("fku", "fkv", "u0", "v0")))
-        report = vsinv.check_stability(k, k_hat)
+        report = vsinv.laws.check_stability(k, k_hat)
         assert (report.prop1, report.prop2) == (p1, p2)
     # Prop. 2 is only sufficient: 1000 px off, it fails but the servo still converges.
     assert res["status"][2] == "converged"
@@ -340,7 +340,7 @@ def test_focal_errors_keep_prop2_a_large_skew_error_breaks_it():
     k = vsinv.Intrinsics(*(d["camera"][f] for f in ("fku", "fkv", "u0", "v0")))
     e = d["estimate"]
     k_hat = vsinv.Intrinsics(e["fku"], e["fkv"], e["u0"], e["v0"], np.radians(e["skew_deg"]))
-    assert not vsinv.check_stability(k, k_hat).prop2
+    assert not vsinv.laws.check_stability(k, k_hat).prop2
 
 
 # ---------------------------------------------------------------------------------------------
@@ -395,8 +395,9 @@ def test_summary_by_and_pandas():
     assert np.all((0 <= s["convergence_rate"]) & (s["convergence_rate"] <= 1))
     conv = res["status"][res["focal_error"] == 0.0] == "converged"
     assert s["convergence_rate"][0] == pytest.approx(conv.mean())
-    err = res["final_translation_error_mm"][res["focal_error"] == 0.5]
-    assert s["median_translation_error_mm"][1] == pytest.approx(np.median(err))
+    err = res["final_translation_error"][res["focal_error"] == 0.5]
+    assert s["median_translation_error"][1] == pytest.approx(np.median(err))
+    assert "median_translation_error_mm" not in s and "final_translation_error_mm" not in res.columns  # no older names
     assert len(res.summary_by()["runs"]) == 4  # default: the grid keys
     assert res.summary_by(())["runs"].tolist() == [12]
     pd = pytest.importorskip("pandas")
@@ -423,7 +424,7 @@ def test_write_parquet_and_csv_fallback(tmp_path, monkeypatch):
     assert len(rows) == 2 and list(rows[0]) == list(res.columns)
     assert [float(r["focal_error"]) for r in rows] == [0.0, 0.5]
     assert rows[0]["status"] == res["status"][0]
-    assert float(rows[1]["final_translation_error_mm"]) == res["final_translation_error_mm"][1]
+    assert float(rows[1]["final_translation_error"]) == res["final_translation_error"][1]
 
 
 def test_stability_maps(tmp_path):
@@ -446,22 +447,22 @@ def test_exports():
 
     import vsinv.sweep.plots
 
-    assert vsinv.run_sweep is run_sweep and vsinv.SweepResult is SweepResult
-    assert vsinv.Uniform is Uniform and vsinv.LogUniform is LogUniform and vsinv.Choice is Choice
+    assert vsinv.sim.run_sweep is run_sweep and vsinv.sim.SweepResult is SweepResult
+    assert vsinv.sim.Uniform is Uniform and vsinv.sim.LogUniform is LogUniform and vsinv.sim.Choice is Choice
     # `vsinv.sweep` is the package, not hidden by a function of the same name.
     assert isinstance(vsinv.sweep, types.ModuleType) and vsinv.sweep.Uniform is Uniform
     assert vsinv.sweep.run_sweep is run_sweep and callable(vsinv.sweep.plots.plot_stability_map)
-    for name in ("run_sweep", "sweep", "Uniform", "LogUniform", "Choice", "SweepResult"):
-        assert name in vsinv.__all__
+    for name in ("run_sweep", "Uniform", "LogUniform", "Choice", "SweepResult"):
+        assert name in vsinv.sim.__all__ and name not in vsinv.__all__
 
 
 def test_readme_sweep_example_type_checks(tmp_path):
-    """The sweep guide's use (docs/guides/sweeps.md) of `vsinv.sweep.Uniform` and `vsinv.run_sweep` passes mypy."""
+    """The sweep guide's use (docs/guides/sweeps.md) of `vsinv.sweep.Uniform` and `vsinv.sim.run_sweep` passes mypy."""
     api = pytest.importorskip("mypy.api")
     snippet = tmp_path / "snippet.py"
     snippet.write_text(
         "import numpy as np\nimport vsinv\n"
-        "res = vsinv.run_sweep('lens-12-6', {'focal_error': np.linspace(-0.5, 1.0, 3),\n"
+        "res = vsinv.sim.run_sweep('lens-12-6', {'focal_error': np.linspace(-0.5, 1.0, 3),\n"
         "                                    'roll_deg': vsinv.sweep.Uniform(-120, 120)}, draws=2, seed=1)\n"
         "table = res.summary_by('focal_error')\n"
     )

@@ -1,10 +1,10 @@
 """Every AprilTag family through every layer: a rig of each family's tags (``object.tag_family``),
 drawn by vsinv's renderer from the family data the decoder uses, is read by an independent
-decoder, the reference AprilTag library (pupil-apriltags), and by ``vsinv.detect_tags``: the
+decoder, the reference AprilTag library (pupil-apriltags), and by ``vsinv.vision.detect_tags``: the
 same ids, and corners at the renderer's ground truth (the true projections of the rig's
 corners). A tagStandard41h12 rig runs through ``load_scenario``/``vsinv run`` to ``converged``
 as the tag36h11 built-ins do; a wrong family name is refused, naming the key and listing the
-names of the one declaration (``vsinv.TAG_FAMILIES``).
+names of the one declaration (``vsinv.vision.TAG_FAMILIES``).
 
 pupil-apriltags reports corners as the AprilTag library does (bottom-left, bottom-right,
 top-right, top-left of its layout, pixel centres at +0.5): converted to OpenCV's order and
@@ -94,9 +94,9 @@ def _errors(found: dict[int, np.ndarray], truth: np.ndarray) -> np.ndarray:
 
 
 @pytest.mark.parametrize("blur, noise", [(0.0, 0.0), (0.8, 1.0)])
-@pytest.mark.parametrize("family", vsinv.TAG_FAMILIES)
+@pytest.mark.parametrize("family", vsinv.vision.TAG_FAMILIES)
 def test_rendered_tags_of_every_family_decode_at_their_projected_corners(family, blur, noise, tmp_path):
-    image, truth, visible = vsinv.render_view(_rig(family, blur, noise), reference=True)
+    image, truth, visible = vsinv.vision.render_view(_rig(family, blur, noise), reference=True)
     assert visible.all()
     reference = _reference(family, image, tmp_path)
     # tag16h5's codes are 5 bits apart, tagCircle21h7's 7: the reference decoder may read a
@@ -105,7 +105,7 @@ def test_rendered_tags_of_every_family_decode_at_their_projected_corners(family,
     # exactly the tags drawn (below).
     few_bits = family in ("tag16h5", "tagCircle21h7")
     assert set(IDS) <= set(reference) and (few_bits or sorted(reference) == IDS), (family, sorted(reference))
-    tags = vsinv.detect_tags(image, family=family)
+    tags = vsinv.vision.detect_tags(image, family=family)
     ours = {int(i): c for i, c in zip(tags.ids, tags.corners)}
     assert sorted(ours) == IDS, family
     theirs, mine = _errors({i: reference[i] for i in IDS}, truth), _errors(ours, truth)
@@ -128,7 +128,7 @@ def test_a_round_family_is_cut_to_its_disc_and_the_others_are_square():
         d = _rig(family)
         d["object"]["tags"] = d["object"]["tags"][1:2]
         d["object"]["tags"][0].update(id=0, rotation_deg=[0.0, 0.0, 0.0], position=[0.0, 0.0, 0.0])
-        image, truth, _ = vsinv.render_view(d, reference=True)
+        image, truth, _ = vsinv.vision.render_view(d, reference=True)
         cell = (truth[2] - truth[0]) / 5.0  # the reported square: 5 cells
         centre = truth.mean(axis=0)
         background = d["vision"]["background"]
@@ -176,21 +176,21 @@ def test_a_wrong_family_is_refused_naming_the_key_and_the_families():
     with pytest.raises(vsinv.InvalidInput) as error:
         vsinv.load_scenario(d)
     message = str(error.value)
-    assert "object.tag_family" in message and all(f'"{name}"' in message for name in vsinv.TAG_FAMILIES), message
+    assert "object.tag_family" in message and all(f'"{name}"' in message for name in vsinv.vision.TAG_FAMILIES), message
     d["object"]["tag_family"] = "tagCircle21h7"
     d["object"]["tags"][2]["id"] = 38  # the family has 38 ids
     with pytest.raises(vsinv.InvalidInput, match=re.escape("object.tags[2].id: a tagCircle21h7 id, 0 to 37, got 38")):
         vsinv.load_scenario(d)
     with pytest.raises(vsinv.InvalidInput, match='family: expected one of "tag36h11", .*, got "tag36h12"'):
-        vsinv.detect_tags(np.zeros((40, 40), np.uint8), family="tag36h12")
+        vsinv.vision.detect_tags(np.zeros((40, 40), np.uint8), family="tag36h12")
 
 
 def test_the_stubs_name_the_families_of_the_one_declaration():
     stub = (Path(vsinv.__file__).parent / "_core.pyi").read_text()
     literal = re.search(r"_TagFamily = Literal\[(.*?)\]", stub, re.S)
     assert literal is not None
-    assert tuple(ast.literal_eval(f"[{literal.group(1)}]")) == vsinv.TAG_FAMILIES
-    assert vsinv.TAG_FAMILIES[0] == "tag36h11" and "tagStandard41h12" in vsinv.TAG_FAMILIES
+    assert tuple(ast.literal_eval(f"[{literal.group(1)}]")) == vsinv.vision.TAG_FAMILIES
+    assert vsinv.vision.TAG_FAMILIES[0] == "tag36h11" and "tagStandard41h12" in vsinv.vision.TAG_FAMILIES
 
 
 @pytest.mark.parametrize("family", ["tagStandard41h12", "tagCircle21h7"])
@@ -200,8 +200,8 @@ def test_invariance_reads_a_rendered_rig_of_the_family(family, tmp_path: Path, c
     from vsinv import cli
 
     d = _rig(family)
-    vsinv.save_image(vsinv.render(d, reference=True), tmp_path / "ref.png")
-    vsinv.save_image(vsinv.render(d, pose=np.diag([1.0, 1.0, 1.0, 1.0])), tmp_path / "cur.png")
+    vsinv.vision.save_image(vsinv.vision.render(d, reference=True), tmp_path / "ref.png")
+    vsinv.vision.save_image(vsinv.vision.render(d, pose=np.diag([1.0, 1.0, 1.0, 1.0])), tmp_path / "cur.png")
     code = cli.main(["invariance", str(tmp_path / "ref.png"), str(tmp_path / "cur.png"), "--target", "tags",
                      "--family", family])
     captured = capsys.readouterr()

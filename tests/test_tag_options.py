@@ -52,10 +52,10 @@ def test_image_servo_takes_a_decimation() -> None:
 
 
 def test_replay_takes_the_decimation(capsys, tmp_path: Path) -> None:
-    vsinv.save_image(canvas(MARKERS), tmp_path / "ref.png")
+    vsinv.vision.save_image(canvas(MARKERS), tmp_path / "ref.png")
     (tmp_path / "frames").mkdir()
     for k in range(3):
-        vsinv.save_image(canvas(MARKERS, 3 * k, k), tmp_path / "frames" / f"{k}.png")
+        vsinv.vision.save_image(canvas(MARKERS, 3 * k, k), tmp_path / "frames" / f"{k}.png")
     args = ["replay", tmp_path / "ref.png", tmp_path / "frames", "--target", "tags", "--K-hat", "600,600,320,240",
             "--law", "ibvs", "--depth", "0.5"]
     code, out, err = run_cli(capsys, *args, "--decimation", "3")
@@ -76,11 +76,11 @@ def test_invariance_follows_tags_by_identity(capsys, tmp_path: Path) -> None:
     """The frames are the reference moved by whole pixels, one without tag 2: the image error is
     the shift, the invariant error zero (q is invariant to a shift of the image, eq. 7), and tag
     2's corners are not found in the frame without it."""
-    vsinv.save_image(canvas(MARKERS), tmp_path / "ref.png")
+    vsinv.vision.save_image(canvas(MARKERS), tmp_path / "ref.png")
     shifts = [(0, 0), (5, -3), (-8, 6)]
     for k, (du, dv) in enumerate(shifts):
-        vsinv.save_image(canvas(MARKERS, du, dv), tmp_path / f"{k}.png")
-    vsinv.save_image(canvas([MARKERS[0], MARKERS[2]]), tmp_path / "without-2.png")
+        vsinv.vision.save_image(canvas(MARKERS, du, dv), tmp_path / f"{k}.png")
+    vsinv.vision.save_image(canvas([MARKERS[0], MARKERS[2]]), tmp_path / "without-2.png")
     images = [tmp_path / f"{k}.png" for k in range(3)] + [tmp_path / "without-2.png"]
     code, out, err = run_cli(capsys, "invariance", tmp_path / "ref.png", *images, "--target", "tags",
                              "--decimation", "1", "--out", tmp_path / "inv")
@@ -94,7 +94,7 @@ def test_invariance_follows_tags_by_identity(capsys, tmp_path: Path) -> None:
             assert float(row["invariant_error"]) < 1e-8
     last = rows[36:]
     assert [r["found"] for r in last] == ["1"] * 4 + ["0"] * 4 + ["1"] * 4
-    tags = vsinv.detect_tags(canvas(MARKERS), decimation=1)
+    tags = vsinv.vision.detect_tags(canvas(MARKERS), decimation=1)
     np.testing.assert_allclose([[float(r["u"]), float(r["v"])] for r in rows[:12]], tags.corners.reshape(-1, 2), atol=1e-9)
     code, _, err = run_cli(capsys, "invariance", tmp_path / "ref.png", tmp_path / "0.png", "--target", "tags",
                            "--tag-ids", "3,1")
@@ -113,7 +113,7 @@ def test_invariance_follows_tags_by_identity(capsys, tmp_path: Path) -> None:
     ],
 )
 def test_invariance_tag_errors_name_the_option(capsys, tmp_path: Path, options, named) -> None:
-    vsinv.save_image(canvas(MARKERS), tmp_path / "ref.png")
+    vsinv.vision.save_image(canvas(MARKERS), tmp_path / "ref.png")
     (tmp_path / "ref.csv").write_text("u,v\n1,2\n")
     options = tuple(str(tmp_path / o) if o.endswith(".csv") else o for o in options)
     code, _, err = run_cli(capsys, "invariance", tmp_path / "ref.png", tmp_path / "ref.png", *options)

@@ -45,7 +45,7 @@ def _decode(image: np.ndarray, win: int = 5) -> dict[int, np.ndarray]:
 
 @pytest.mark.parametrize("rotation_deg", [[0.0, 0.0, 0.0], [0.0, -25.0, 10.0], [0.0, 45.0, 0.0]])
 def test_opencv_reads_a_rendered_tag_at_its_projected_corners(rotation_deg):
-    image, pixels, visible = vsinv.render_view(_one_tag(42, rotation_deg, 0.0, 0.0), reference=True)
+    image, pixels, visible = vsinv.vision.render_view(_one_tag(42, rotation_deg, 0.0, 0.0), reference=True)
     assert visible.all()
     found = _decode(image)
     assert list(found) == [42]
@@ -74,7 +74,7 @@ def test_a_pixel_aligned_tag_is_opencvs_marker_pixel_for_pixel():
     # black square spans whole pixels, 336..495 x 232..391.
     d = _one_tag(42, [0.0, 0.0, 0.0], 0.0, 0.0)
     d["object"]["rig"]["position"] = [-0.00025, -0.00025, 0.6]
-    image, pixels, _ = vsinv.render_view(d, reference=True)
+    image, pixels, _ = vsinv.vision.render_view(d, reference=True)
     np.testing.assert_allclose(pixels[0], [335.5, 231.5], atol=1e-9)
     dictionary = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_APRILTAG_36h11)
     marker = cv2.aruco.generateImageMarker(dictionary, 42, 160, borderBits=1)
@@ -87,7 +87,7 @@ def test_a_pixel_aligned_tag_is_opencvs_marker_pixel_for_pixel():
 def test_the_built_in_rigs_decode_by_identity_with_both_lenses():
     for name in ("tags-12-12", "tags-12-6"):
         for reference in (True, False):
-            image, pixels, visible = vsinv.render_view(name, reference=reference)
+            image, pixels, visible = vsinv.vision.render_view(name, reference=reference)
             assert visible.all()
             found = _decode(image)
             assert sorted(found) == [1, 2, 3], (name, reference)
@@ -104,7 +104,7 @@ def test_the_built_in_rigs_decode_by_identity_with_both_lenses():
 def test_the_cells_are_printed_as_opencv_prints_them():
     # Fronto-parallel, 0.08 m at 0.6 m with f = 1200 px: 20 px cells, read at their centres.
     for tag_id in (0, 7, 586):
-        image, pixels, _ = vsinv.render_view(_one_tag(tag_id, [0.0, 0.0, 0.0], 0.0, 0.0), reference=True)
+        image, pixels, _ = vsinv.vision.render_view(_one_tag(tag_id, [0.0, 0.0, 0.0], 0.0, 0.0), reference=True)
         top_left, bottom_right = pixels[0], pixels[2]
         cell = (bottom_right - top_left) / 8.0
         read = np.zeros((10, 10), dtype=bool)
@@ -137,7 +137,7 @@ def test_bad_tags_name_the_key(edit, key):
     d = copy.deepcopy(vsinv.load_scenario("tags-12-6").to_dict())
     edit(d)
     with pytest.raises(vsinv.InvalidInput, match=re.escape(key)):
-        vsinv.Scenario.from_dict(d)
+        vsinv.sim.Scenario.from_dict(d)
 
 
 def test_views_outline_each_tag_with_its_id():
@@ -146,7 +146,7 @@ def test_views_outline_each_tag_with_its_id():
 
     scenario = vsinv.load_scenario("tags-12-12")
     assert _tag_ids(scenario) == [1, 2, 3] and _tag_ids(vsinv.load_scenario("vision-12-12")) == []
-    image, pixels, _ = vsinv.render_view(scenario, reference=True)
+    image, pixels, _ = vsinv.vision.render_view(scenario, reference=True)
     hidden = pixels.copy()
     hidden[4:8] = np.nan  # tag 2 not detected: no outline
     fig = plot_view(image, hidden, pixels, "tags", tag_ids=_tag_ids(scenario))
@@ -163,7 +163,7 @@ def test_the_scene_figure_places_a_rigs_corners():
     from vsinv.plots import _object_points
 
     d = vsinv.load_scenario("tags-12-12").to_dict()
-    _, pixels, _ = vsinv.render_view(d, reference=True)
+    _, pixels, _ = vsinv.vision.render_view(d, reference=True)
     corners = _object_points(d)
     assert corners.shape == (12, 3)
     # Projected with K* at F*: the rendered views' true projections.

@@ -1,4 +1,4 @@
-"""Tags tracked between frames (`vsinv.TagTracker`, the detector of `ImageServo`'s tags): on
+"""Tags tracked between frames (`vsinv.vision.TagTracker`, the detector of `ImageServo`'s tags): on
 rendered sequences and on ViSP's AprilTag benchmark shifted between frames, every tracked frame
 gives what the whole-frame `detect_tags` gives (same ids, corners within TOLERANCE_PX), the tags
 that moved little are followed by their edges (no quad search: `reads` says "edges"), a tag
@@ -27,13 +27,13 @@ BENCHMARK = Path("/usr/share/visp-images-data/ViSP-images/AprilTag/benchmark/192
 TOLERANCE_PX = 0.02
 
 
-def _same(tracked: vsinv.Tags, whole: vsinv.Tags, what: str) -> None:
+def _same(tracked: vsinv.vision.Tags, whole: vsinv.vision.Tags, what: str) -> None:
     """The same tags, the corners within TOLERANCE_PX."""
     assert list(tracked.ids) == list(whole.ids), what
     _within(tracked, whole, what)
 
 
-def _within(tracked: vsinv.Tags, whole: vsinv.Tags, what: str) -> None:
+def _within(tracked: vsinv.vision.Tags, whole: vsinv.vision.Tags, what: str) -> None:
     """Every tracked tag is one of the whole frame's (no false identity), at its corners."""
     assert set(tracked.ids) <= set(whole.ids), what
     index = {int(t): k for k, t in enumerate(whole.ids)}
@@ -43,20 +43,20 @@ def _within(tracked: vsinv.Tags, whole: vsinv.Tags, what: str) -> None:
 
 def _pose(k: int) -> np.ndarray:
     """The reference camera moved by 1.5 mm and 0.2 degrees a frame, and so on."""
-    return vsinv.pose_from_position_thetau([0.0015 * k, -0.001 * k, 0.001 * k], np.radians([0.1 * k, -0.05 * k, 0.2 * k]))
+    return vsinv.geometry.pose_from_position_thetau([0.0015 * k, -0.001 * k, 0.001 * k], np.radians([0.1 * k, -0.05 * k, 0.2 * k]))
 
 
 @pytest.mark.parametrize("decimation", [None, 2, 3])
 def test_a_rendered_sequence_is_tracked_as_the_whole_frame_reads_it(decimation) -> None:
     scenario = vsinv.load_scenario("tags-12-12")
     options = {} if decimation is None else {"decimation": decimation}
-    tracker = vsinv.TagTracker(**options)
+    tracker = vsinv.vision.TagTracker(**options)
     tracked = 0
     for k in range(10):
-        image, _, _ = vsinv.render_view(scenario, pose=_pose(k))
+        image, _, _ = vsinv.vision.render_view(scenario, pose=_pose(k))
         got = tracker.track(image)
         tracked += not tracker.read_whole
-        _same(got, vsinv.detect_tags(image, **options), f"frame {k}")
+        _same(got, vsinv.vision.detect_tags(image, **options), f"frame {k}")
         assert len(got) == 3, f"frame {k}"
         assert tracker.reads == ["whole"] * 3 if k == 0 else ["edges"] * 3, f"frame {k}"
     assert tracked == 9
@@ -72,17 +72,17 @@ def _shifted(image: np.ndarray, du: int, dv: int) -> np.ndarray:
 
 @pytest.mark.skipif(not BENCHMARK.exists(), reason="ViSP's images (visp-images-data) are not installed")
 def test_the_benchmark_shifted_between_frames_is_tracked_as_the_whole_frame_reads_it() -> None:
-    image = vsinv.load_image(BENCHMARK)
+    image = vsinv.vision.load_image(BENCHMARK)
     shifts = [(0, 0), (0, 0), (3, -2), (5, 1), (-4, 6), (-7, 3), (2, 2), (260, -145), (260, -145), (261, -144)]
     for decimation in (2, 3):
-        tracker = vsinv.TagTracker(decimation=decimation, refresh=0)
+        tracker = vsinv.vision.TagTracker(decimation=decimation, refresh=0)
         reads, kinds = [], []
         for k, (du, dv) in enumerate(shifts):
             frame = _shifted(image, du, dv)
             got = tracker.track(frame)
             reads.append(tracker.read_whole)
             kinds.append(set(tracker.reads))
-            whole = vsinv.detect_tags(frame, decimation=decimation)
+            whole = vsinv.vision.detect_tags(frame, decimation=decimation)
             what = f"decimation {decimation}, frame {k}"
             # A tag the whole frame finds after a shift of a few pixels but not before (decimation
             # 2 reads the benchmark's large tags only now and then) waits for a whole read.
@@ -121,13 +121,13 @@ def test_tags_leaving_entering_and_no_false_identities() -> None:
         ([a, c], True, [1, 7]),
         ([a, c], False, [1, 7]),
     ]
-    tracker = vsinv.TagTracker(refresh=3)
+    tracker = vsinv.vision.TagTracker(refresh=3)
     for k, (markers, read_whole, ids) in enumerate(script):
         frame = canvas(markers)
         got = tracker.track(frame)
         assert tracker.read_whole == read_whole, f"frame {k}"
         assert list(got.ids) == ids, f"frame {k}"
-        whole = vsinv.detect_tags(frame)
+        whole = vsinv.vision.detect_tags(frame)
         assert set(got.ids) <= {m[0] for m in markers} and set(got.ids) <= set(whole.ids), f"frame {k}"
     tracker.reset()
     tracker.track(canvas([a]))
@@ -142,7 +142,7 @@ def test_tags_leaving_entering_and_no_false_identities() -> None:
 )
 def test_bad_arguments_are_refused_by_name(kwargs, name) -> None:
     with pytest.raises(vsinv.InvalidInput, match=name):
-        vsinv.TagTracker(**kwargs)
+        vsinv.vision.TagTracker(**kwargs)
 
 
 def _markers(markers: list[tuple[int, int, int, int]]) -> np.ndarray:
@@ -159,7 +159,7 @@ def test_a_tag_replaced_at_the_same_place_is_never_reported_under_the_old_id() -
     """Tag 1 followed by its edges, then replaced by tag 3 (and by tag 1 turned a quarter) at
     the same place: the edges are where they were, but the bits are not tag 1's in that
     orientation, so the follower refuses it; the tracker reports what the whole frame reads."""
-    tracker = vsinv.TagTracker(refresh=0)
+    tracker = vsinv.vision.TagTracker(refresh=0)
     other = (2, 400, 80, 0)
     script = [  # markers, ids, reads
         ([(1, 60, 60, 0), other], [1, 2], ["whole", "whole"]),
@@ -174,16 +174,16 @@ def test_a_tag_replaced_at_the_same_place_is_never_reported_under_the_old_id() -
         got = tracker.track(frame)
         assert list(got.ids) == ids, f"frame {k}"
         assert tracker.reads == reads, f"frame {k}"
-        _same(got, vsinv.detect_tags(frame), f"frame {k}")
+        _same(got, vsinv.vision.detect_tags(frame), f"frame {k}")
 
 
 def test_following_can_be_switched_off() -> None:
     """follow=False: the quad search in each crop every frame, the same tags and corners."""
     frames = [_markers([(5, 100 + k, 200 - k, 0), (9, 300 - k, 90 + 2 * k, 2)]) for k in range(4)]
-    followed, searched = vsinv.TagTracker(refresh=0), vsinv.TagTracker(refresh=0, follow=False)
+    followed, searched = vsinv.vision.TagTracker(refresh=0), vsinv.vision.TagTracker(refresh=0, follow=False)
     for k, frame in enumerate(frames):
         a, b = followed.track(frame), searched.track(frame)
         _same(a, b, f"frame {k}")
-        _same(a, vsinv.detect_tags(frame), f"frame {k}")
+        _same(a, vsinv.vision.detect_tags(frame), f"frame {k}")
         assert followed.reads == (["whole"] * 2 if k == 0 else ["edges"] * 2), f"frame {k}"
         assert searched.reads == (["whole"] * 2 if k == 0 else ["crop"] * 2), f"frame {k}"

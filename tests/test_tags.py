@@ -1,4 +1,4 @@
-"""AprilTag detection (`vsinv.detect_tags`) against closed forms and published ground truth.
+"""AprilTag detection (`vsinv.vision.detect_tags`) against closed forms and published ground truth.
 
 - Synthetic: markers drawn by OpenCV's `aruco.generateImageMarker` (an independent drawing of
   the tag36h11 codes) at known pixels, in the four orientations: the ids, and the corners in
@@ -59,7 +59,7 @@ def opencv_tags(image: np.ndarray, family: str = "tag36h11") -> dict[int, np.nda
     return {int(i): c.reshape(4, 2).astype(np.float64) for i, c in zip(ids.ravel(), corners)}
 
 
-def errors_against(found: vsinv.Tags, truth: dict[int, np.ndarray]) -> np.ndarray:
+def errors_against(found: vsinv.vision.Tags, truth: dict[int, np.ndarray]) -> np.ndarray:
     """Corner distances (pixels) of every tag of `truth`, which must all be found."""
     ids = [int(i) for i in found.ids]
     missing = sorted(set(truth) - set(ids))
@@ -96,7 +96,7 @@ PLACEMENTS = {0: (40, 40, 0), 5: (230, 40, 1), 7: (40, 200, 2), 586: (230, 200, 
 
 def test_synthetic_markers_give_ids_and_corners_in_opencvs_order_and_convention() -> None:
     image, truth = draw_markers(PLACEMENTS)
-    tags = vsinv.detect_tags(image)
+    tags = vsinv.vision.detect_tags(image)
     assert list(tags.ids) == sorted(PLACEMENTS) and tags.ids.dtype == np.int64
     assert tags.corners.shape == (4, 4, 2) and tags.corners.dtype == np.float64
     assert len(tags) == 4 and repr(tags) == "Tags(4 tag36h11 found)" and tags.family == "tag36h11"
@@ -109,7 +109,7 @@ def test_synthetic_markers_give_ids_and_corners_in_opencvs_order_and_convention(
     assert_agrees_with_opencv(tags, image, within=0.5)
 
 
-def assert_agrees_with_opencv(tags: vsinv.Tags, image: np.ndarray, within: float, offset: float = 0.1) -> None:
+def assert_agrees_with_opencv(tags: vsinv.vision.Tags, image: np.ndarray, within: float, offset: float = 0.1) -> None:
     """OpenCV finds the same ids, and the same corners: each within `within` px, and on
     average within `offset` px per axis (no half-pixel offset, no other corner order)."""
     theirs = opencv_tags(image)
@@ -125,7 +125,7 @@ def test_blurred_noisy_markers_agree_with_opencv() -> None:
     image, truth = draw_markers(PLACEMENTS, cell=7)
     blurred = cv2.GaussianBlur(image, (0, 0), 1.0).astype(np.float64)
     noisy = np.clip(blurred + np.random.default_rng(3).normal(0.0, 4.0, image.shape), 0, 255).astype(np.uint8)
-    tags = vsinv.detect_tags(noisy)
+    tags = vsinv.vision.detect_tags(noisy)
     ours = errors_against(tags, truth)
     cv = opencv_tags(noisy)
     theirs = np.concatenate([np.linalg.norm(cv[t] - c, axis=1) for t, c in truth.items()])
@@ -137,20 +137,20 @@ def test_blurred_noisy_markers_agree_with_opencv() -> None:
 
 def test_no_tags_and_bad_arguments() -> None:
     blank = np.full((120, 160), 200, np.uint8)
-    tags = vsinv.detect_tags(blank)
+    tags = vsinv.vision.detect_tags(blank)
     assert len(tags) == 0 and tags.ids.shape == (0,) and tags.corners.shape == (0, 4, 2)
     image, _ = draw_markers({3: (20, 20, 0)}, cell=5)
     with pytest.raises(vsinv.InvalidInput, match=r'family.*"tag36h11".*"tagCustom48h12", got "tag36h12"'):
-        vsinv.detect_tags(image, family="tag36h12")
+        vsinv.vision.detect_tags(image, family="tag36h12")
     for bad, message in [(image.astype(np.float64), r"expected a uint8 NumPy array: grey .* got dtype float64 with shape \(320, 420\)"),
                          (np.stack([image] * 2, axis=-1), r"expected a uint8 NumPy array: grey .* got dtype uint8 with shape \(320, 420, 2\)"),
                          (np.zeros((0, 5), np.uint8), r"empty image \(0 x 5\)"),
                          ([[1, 2]], r"expected a uint8 NumPy array: grey .* got list")]:
         with pytest.raises(vsinv.InvalidInput, match=f"^image: {message}"):
-            vsinv.detect_tags(bad)
+            vsinv.vision.detect_tags(bad)
     # A tag36h11 marker is not a tag16h5 one; the family is named in the result.
-    assert vsinv.detect_tags(image, family="tag16h5").family == "tag16h5"
-    assert list(vsinv.detect_tags(np.asfortranarray(image)).ids) == [3]
+    assert vsinv.vision.detect_tags(image, family="tag16h5").family == "tag16h5"
+    assert list(vsinv.vision.detect_tags(np.asfortranarray(image)).ids) == [3]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -165,10 +165,10 @@ def report(name: str, errors: np.ndarray) -> str:
 
 def test_apriltag_pgm_matches_its_ground_truth(visp: Path) -> None:  # noqa: F811
     folder = visp / "AprilTag"
-    image = vsinv.load_image(folder / "AprilTag.pgm")
+    image = vsinv.vision.load_image(folder / "AprilTag.pgm")
     truth = visp_corners(folder / "ground_truth_detection.txt", row_column=True)
     assert sorted(truth) == list(range(8, 20))
-    tags = vsinv.detect_tags(image)
+    tags = vsinv.vision.detect_tags(image)
     assert not tags.stopped_early  # an ordinary frame: searched whole
     errors = errors_against(tags, truth)
     report("AprilTag.pgm vs ground truth", errors)
@@ -186,10 +186,10 @@ def test_apriltag_pgm_matches_its_ground_truth(visp: Path) -> None:  # noqa: F81
 def test_benchmark_640x480_matches_its_ground_truth(visp: Path, family: str) -> None:  # noqa: F811
     folder = visp / "AprilTag" / "benchmark" / "640x480"
     stem = {"tag36h11": "tag36_11", "tag25h9": "tag25_09", "tag16h5": "tag16_05"}[family]
-    image = vsinv.load_image(folder / f"{stem}_640x480.png")
+    image = vsinv.vision.load_image(folder / f"{stem}_640x480.png")
     truth = visp_corners(folder / f"corners_{stem}.txt", row_column=False)
-    tags = vsinv.detect_tags(image, family=family)
-    assert not tags.stopped_early and not vsinv.detect_tags(image, family, decimation=1).stopped_early
+    tags = vsinv.vision.detect_tags(image, family=family)
+    assert not tags.stopped_early and not vsinv.vision.detect_tags(image, family, decimation=1).stopped_early
     errors = errors_against(tags, truth)
     report(f"{stem}_640x480 vs ground truth", errors)
     assert errors.max() <= 0.5

@@ -1,4 +1,4 @@
-"""`vsinv.detect_tags` on ViSP's AprilTag benchmark and degraded versions of it (blur, noise,
+"""`vsinv.vision.detect_tags` on ViSP's AprilTag benchmark and degraded versions of it (blur, noise,
 downscaling, rotations, JPEG, upscaling; tests/tag_sets.py), against OpenCV's aruco detector and
 the reference AprilTag library (pupil-apriltags): every tag either of them decodes, vsinv decodes
 too, no id that is not in the image, and on the clean images its corners are as close to ViSP's

@@ -147,7 +147,7 @@ def test_replay_refuses_another_target():
 @pytest.fixture(scope="module")
 def reference_image(tmp_path_factory) -> Path:
     path = tmp_path_factory.mktemp("ros") / "reference.png"
-    vsinv.save_image(np.full((48, 64), 128, np.uint8), path)
+    vsinv.vision.save_image(np.full((48, 64), 128, np.uint8), path)
     return path
 
 

@@ -32,7 +32,7 @@ def _frame(u: float) -> np.ndarray:
 @pytest.mark.parametrize("polarity", ["light", "dark"])
 def test_a_dot_leaving_the_image_is_lost_never_biased_and_found_again(polarity: str) -> None:
     flip = (lambda im: 255 - im) if polarity == "dark" else (lambda im: im)
-    tracker = vsinv.DotTracker(flip(_frame(PATH[0])), [[PATH[0] + 2, 42.0], [STILL[0] - 1, STILL[1] + 2]], polarity=polarity)
+    tracker = vsinv.vision.DotTracker(flip(_frame(PATH[0])), [[PATH[0] + 2, 42.0], [STILL[0] - 1, STILL[1] + 2]], polarity=polarity)
     seen = {"whole": 0, "cut": 0, "found_again": 0}
     was_lost = False
     for u in PATH[1:]:
@@ -57,7 +57,7 @@ def test_detect_dots_leaves_out_a_cut_dot() -> None:
     """detect_dots keeps a dot only when its box grown by the centroid's 2 px margin is in the
     image: found there within 0.02 px, and never while any of it is outside the image."""
     for u in PATH:
-        dots = vsinv.detect_dots(_frame(u))
+        dots = vsinv.vision.detect_dots(_frame(u))
         moving = dots.centroids[np.hypot(*(dots.centroids - STILL).T) > 1.0]
         assert np.min(np.hypot(*(dots.centroids - STILL).T)) < 0.02
         clear = u + RADIUS + 3.0 < SHAPE[1] - 0.5

@@ -28,7 +28,7 @@ def test_a_dot_larger_than_the_search_window_is_started_and_followed() -> None:
     # 57 px across with the default 20 px search radius (mire-2's large dot), clicked 3 px off,
     # moving 1.5 px and growing 0.3 px in radius per image.
     truth = [(100.3 + 1.5 * t, 90.7 + 1.0 * t, 28.5 + 0.3 * t) for t in range(12)]
-    tracker = vsinv.DotTracker(discs((200, 220), [truth[0]]), [[103.3, 88.7]])
+    tracker = vsinv.vision.DotTracker(discs((200, 220), [truth[0]]), [[103.3, 88.7]])
     np.testing.assert_allclose(tracker.positions[0], truth[0][:2], atol=0.02)
     for t in range(1, 12):
         pixels, found = tracker.track(discs((200, 220), [truth[t]]))
@@ -36,7 +36,7 @@ def test_a_dot_larger_than_the_search_window_is_started_and_followed() -> None:
         np.testing.assert_allclose(pixels[0], truth[t][:2], atol=0.02)
 
 
-def _lost_keeps_its_place(tracker: vsinv.DotTracker, image: np.ndarray, dot: int) -> None:
+def _lost_keeps_its_place(tracker: vsinv.vision.DotTracker, image: np.ndarray, dot: int) -> None:
     before = tracker.positions.copy()
     pixels, found = tracker.track(image)
     assert not found[dot]
@@ -46,7 +46,7 @@ def _lost_keeps_its_place(tracker: vsinv.DotTracker, image: np.ndarray, dot: int
 
 def test_a_dot_that_doubles_its_area_is_lost_then_found_again() -> None:
     shape = (120, 160)
-    tracker = vsinv.DotTracker(discs(shape, [(60.2, 60.6, 5.0), (120.0, 40.0, 5.0)]), [[61, 59], [119, 41]])
+    tracker = vsinv.vision.DotTracker(discs(shape, [(60.2, 60.6, 5.0), (120.0, 40.0, 5.0)]), [[61, 59], [119, 41]])
     _lost_keeps_its_place(tracker, discs(shape, [(60.2, 60.6, 5.0 * np.sqrt(2)), (120.0, 40.0, 5.0)]), 0)
     pixels, found = tracker.track(discs(shape, [(60.2, 60.6, 5.0), (120.0, 40.0, 5.0)]))
     assert found.all()
@@ -57,7 +57,7 @@ def test_a_dot_that_outgrows_its_window_is_lost_not_found_elsewhere() -> None:
     # A look-alike dot 17 px away, inside the dot's window, is never taken for it.
     shape = (140, 160)
     look_alike = (77.0, 67.0, 5.0)
-    tracker = vsinv.DotTracker(discs(shape, [(60.0, 60.0, 5.0), look_alike]), [[60, 60]])
+    tracker = vsinv.vision.DotTracker(discs(shape, [(60.0, 60.0, 5.0), look_alike]), [[60, 60]])
     _lost_keeps_its_place(tracker, discs(shape, [(60.0, 60.0, 30.0), look_alike]), 0)
 
 
@@ -65,7 +65,7 @@ def test_a_dot_that_merges_with_a_bright_region_is_lost_not_found_elsewhere() ->
     shape = (120, 160)
     look_alike = (72.0, 75.0, 6.0)
     first = discs(shape, [(60.0, 60.0, 6.0), look_alike])
-    tracker = vsinv.DotTracker(first, [[60, 60]])
+    tracker = vsinv.vision.DotTracker(first, [[60, 60]])
     merged = first.copy()
     merged[56:65, 64:140] = 220  # a bright bar touching the dot
     _lost_keeps_its_place(tracker, merged, 0)
@@ -74,7 +74,7 @@ def test_a_dot_that_merges_with_a_bright_region_is_lost_not_found_elsewhere() ->
 def test_a_dark_dot_that_merges_with_a_dark_region_is_lost() -> None:
     shape = (120, 160)
     first = discs(shape, [(60.0, 60.0, 6.0)], background=210, level=30)
-    tracker = vsinv.DotTracker(first, [[60, 60]], polarity="dark")
+    tracker = vsinv.vision.DotTracker(first, [[60, 60]], polarity="dark")
     merged = first.copy()
     merged[:, 64:70] = 30  # a dark band through the edge of the dot
     _lost_keeps_its_place(tracker, merged, 0)
@@ -84,7 +84,7 @@ def test_a_dot_never_takes_the_dot_in_its_window() -> None:
     # Dot 0 disappears; dot 1, 18 px away, is inside dot 0's window: dot 1 is found, dot 0 lost.
     shape = (120, 160)
     a, b = (50.0, 60.0, 4.0), (68.0, 60.0, 4.0)
-    tracker = vsinv.DotTracker(discs(shape, [a, b]), [[50, 60], [68, 60]])
+    tracker = vsinv.vision.DotTracker(discs(shape, [a, b]), [[50, 60], [68, 60]])
     for _ in range(3):
         before = tracker.positions.copy()
         pixels, found = tracker.track(discs(shape, [b]))

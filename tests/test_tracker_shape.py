@@ -24,19 +24,19 @@ def _disc(notch: int) -> np.ndarray:
 
 
 def test_a_whole_disc_starts_a_notched_one_does_not() -> None:
-    tracker = vsinv.DotTracker(_disc(0), [[82.0, 58.0]])
+    tracker = vsinv.vision.DotTracker(_disc(0), [[82.0, 58.0]])
     np.testing.assert_allclose(tracker.positions[0], [80.0, 60.0], atol=0.05)
     for notch in [20, 30]:
-        assert len(vsinv.detect_dots(_disc(notch))) == 0
+        assert len(vsinv.vision.detect_dots(_disc(notch))) == 0
         with pytest.raises(vsinv.InvalidInput, match="not a dot"):
-            vsinv.DotTracker(_disc(notch), [[82.0, 58.0]])
+            vsinv.vision.DotTracker(_disc(notch), [[82.0, 58.0]])
 
 
 @pytest.mark.skipif(not CIRCLE.exists(), reason="Debian's visp-images-data is not installed")
 def test_the_notched_disc_of_visp_is_refused_by_both() -> None:
     image = cv2.imread(str(CIRCLE), cv2.IMREAD_GRAYSCALE)
-    assert len(vsinv.detect_dots(image)) == 0
+    assert len(vsinv.vision.detect_dots(image)) == 0
     with pytest.raises(vsinv.InvalidInput, match="point 0 .*not a dot"):
-        vsinv.DotTracker(image, [[155.0, 111.0]])
+        vsinv.vision.DotTracker(image, [[155.0, 111.0]])
     with pytest.raises(vsinv.InvalidInput, match="not a dot"):
-        vsinv.DotTracker(image, [[155.0, 111.0]], search_radius=80.0, max_search_radius=160.0)
+        vsinv.vision.DotTracker(image, [[155.0, 111.0]], search_radius=80.0, max_search_radius=160.0)

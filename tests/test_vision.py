@@ -37,7 +37,7 @@ def test_detect_dots_finds_opencv_discs_within_005_px_median(radius: float) -> N
     errors = []
     for seed in range(5):
         image, centres = opencv_discs(radius, seed)
-        dots = vsinv.detect_dots(image)
+        dots = vsinv.vision.detect_dots(image)
         assert len(dots) == len(centres)
         errors.append(nearest_errors(dots.centroids, centres))
     e = np.concatenate(errors)
@@ -45,7 +45,7 @@ def test_detect_dots_finds_opencv_discs_within_005_px_median(radius: float) -> N
     assert e.max() < 0.2, (radius, e.max())
 
 
-def weighted_moments_centroid(image: np.ndarray, dots: vsinv.Dots, k: int, labels: np.ndarray) -> np.ndarray:
+def weighted_moments_centroid(image: np.ndarray, dots: vsinv.vision.Dots, k: int, labels: np.ndarray) -> np.ndarray:
     """cv2.moments of the pixels detect_dots documents for dot k: its bounding box grown by
     2 px, grey levels above the least-squares plane fitted to that box's border ring (NumPy's
     lstsq), other components masked, and the box's pixels off the dot counted only above two
@@ -75,8 +75,8 @@ def weighted_moments_centroid(image: np.ndarray, dots: vsinv.Dots, k: int, label
 @pytest.mark.parametrize("name", ["vision-12-12", "vision-12-6"])
 def test_centroids_agree_with_opencv_moments_on_rendered_images(name: str) -> None:
     for reference in (True, False):
-        image = vsinv.render(name, reference=reference)
-        dots = vsinv.detect_dots(image)
+        image = vsinv.vision.render(name, reference=reference)
+        dots = vsinv.vision.detect_dots(image)
         assert len(dots) == 12
         threshold = int(np.ceil(np.max([image[int(round(v)), int(round(u))] for u, v in dots.centroids]))) // 2
         _, labels = cv2.connectedComponents((image > threshold).astype(np.uint8), connectivity=8)
@@ -86,28 +86,28 @@ def test_centroids_agree_with_opencv_moments_on_rendered_images(name: str) -> No
 
 
 def test_rendered_views_show_the_dots_where_they_project() -> None:
-    image, pixels, visible = vsinv.render_view("vision-12-6")
+    image, pixels, visible = vsinv.vision.render_view("vision-12-6")
     assert image.dtype == np.uint8 and image.shape == (624, 832)
     assert image.flags.c_contiguous and image.base is not None  # moved from Rust, not copied
     assert visible.all()
-    dots = vsinv.detect_dots(image)
+    dots = vsinv.vision.detect_dots(image)
     assert nearest_errors(dots.centroids, pixels).max() < 0.2
-    assert np.array_equal(vsinv.render("vision-12-6"), image)  # same seed, same image
-    at_goal = vsinv.render("vision-12-6", pose=np.eye(4))
+    assert np.array_equal(vsinv.vision.render("vision-12-6"), image)  # same seed, same image
+    at_goal = vsinv.vision.render("vision-12-6", pose=np.eye(4))
     assert not np.array_equal(at_goal, image)
 
 
 def test_tracker_follows_a_run_and_reports_lost_dots() -> None:
     run = vsinv.run_scenario("vision-12-12")
     poses, times = run.pose, run.time
-    first = vsinv.render("vision-12-12", pose=poses[0], time=times[0])
-    tracker = vsinv.DotTracker(first, run.pixels[0] + 1.5, search_radius=15)
+    first = vsinv.vision.render("vision-12-12", pose=poses[0], time=times[0])
+    tracker = vsinv.vision.DotTracker(first, run.pixels[0] + 1.5, search_radius=15)
     assert len(tracker) == 12
     for i in range(1, 60, 3):
-        image = vsinv.render("vision-12-12", pose=poses[i], time=times[i])
+        image = vsinv.vision.render("vision-12-12", pose=poses[i], time=times[i])
         pixels, found = tracker.track(image)
         assert found.all()
-        _, truth, _ = vsinv.render_view("vision-12-12", pose=poses[i], time=times[i])
+        _, truth, _ = vsinv.vision.render_view("vision-12-12", pose=poses[i], time=times[i])
         assert np.abs(pixels - truth).max() < 0.3
     pixels, found = tracker.track(np.full((624, 832), 30, np.uint8))
     assert not found.any()
@@ -120,8 +120,8 @@ def test_run_reports_detection_errors() -> None:
     assert s["status"] == "converged"
     assert run.detection_error is not None and run.detection_error.shape == run.pixels.shape[:2]
     finite = run.detection_error[np.isfinite(run.detection_error)]
-    assert np.isclose(np.median(finite), s["detection_error_median_px"])
-    assert np.isclose(finite.max(), s["detection_error_max_px"])
+    assert np.isclose(np.median(finite), s["detection_error_median"])
+    assert np.isclose(finite.max(), s["detection_error_max"])
     assert vsinv.run_scenario("lens-12-6").detection_error is None
 
 
@@ -138,27 +138,27 @@ def test_run_reports_detection_errors() -> None:
 )
 def test_bad_images_raise_invalid_input(image: object, fragment: str) -> None:
     with pytest.raises(vsinv.InvalidInput, match=fragment):
-        vsinv.detect_dots(image)  # type: ignore[arg-type]
+        vsinv.vision.detect_dots(image)  # type: ignore[arg-type]
 
 
 def test_tracker_refuses_clicks_without_a_dot() -> None:
-    image = vsinv.render("vision-12-12", reference=True)
+    image = vsinv.vision.render("vision-12-12", reference=True)
     with pytest.raises(vsinv.InvalidInput, match=r"initial_pixels: point 0 at \(5\.0, 5\.0\): no dot around it \(no whole dot under it\)"):
-        vsinv.DotTracker(image, [[5.0, 5.0]])
+        vsinv.vision.DotTracker(image, [[5.0, 5.0]])
     with pytest.raises(vsinv.InvalidInput, match="initial_pixels: non-finite value at row 0, column 0"):
-        vsinv.DotTracker(image, [[np.nan, 5.0]])
+        vsinv.vision.DotTracker(image, [[np.nan, 5.0]])
     with pytest.raises(vsinv.InvalidInput, match=r"initial_pixels: expected shape \(n, 2\)"):
-        vsinv.DotTracker(image, np.zeros((3, 3)))
-    tracker = vsinv.DotTracker(image, vsinv.render_view("vision-12-12", reference=True)[1])
+        vsinv.vision.DotTracker(image, np.zeros((3, 3)))
+    tracker = vsinv.vision.DotTracker(image, vsinv.vision.render_view("vision-12-12", reference=True)[1])
     with pytest.raises(vsinv.InvalidInput, match="tracker was started"):
         tracker.track(np.zeros((10, 10), np.uint8))
 
 
 def test_non_contiguous_images_are_read() -> None:
-    image = vsinv.render("vision-12-12", reference=True)
+    image = vsinv.vision.render("vision-12-12", reference=True)
     wide = np.zeros((624, 832 * 2), np.uint8)
     wide[:, ::2] = image
     view = wide[:, ::2]
     assert not view.flags.c_contiguous
-    a, b = vsinv.detect_dots(view), vsinv.detect_dots(image)
+    a, b = vsinv.vision.detect_dots(view), vsinv.vision.detect_dots(image)
     assert np.array_equal(a.centroids, b.centroids)

@@ -23,8 +23,7 @@ def run_batch(
     arrays, one row per scenario: status (str), iterations, the summary fields
     final_translation_error, final_rotation_error, final_image_error, final_invariant_error,
     max_line_deviation, observed_max_eps, pixel_sigma, translation_uncertainty,
-    rotation_uncertainty (SI, NaN where not measured; each also under its older name, ``_mm``,
-    ``_deg``, ``_px``), prop1, prop2, within_tolerance, message (str). A scenario whose
+    rotation_uncertainty (SI, NaN where not measured), prop1, prop2, within_tolerance, message (str). A scenario whose
     configuration is invalid raises before anything runs; a run that fails on the way has
     status "error" and its message.
 

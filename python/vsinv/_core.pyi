@@ -285,7 +285,7 @@ class InvariantController:
         K_hat: _IntrinsicsLike,
         gain: float = 1.0,
         gain_rz: float = 1.0,
-        basis: _Basis = (0, 1, 2),
+        basis: _Basis = "auto",
         feedforward: bool = True,
         min_structure_ratio: float = 0.001,
         rz_task: Literal["angle", "tau21"] = "angle",
@@ -293,12 +293,11 @@ class InvariantController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> InvariantController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array:
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
         """One control step from the current pixels (n, 2) and depth estimates (n,): the twist (vx, vy, vz,
-        wx, wy, wz) in the camera frame, m/s and rad/s."""
-    def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with some points hidden: `visible` is a bool array (n,); hidden points' pixels and depths
-        are ignored (may be NaN) and drop out of s and J_hat."""
+        wx, wy, wz) in the camera frame, m/s and rad/s. `visible`, a bool array (n,) (None: all), hides
+        points: their pixels and depths are ignored (may be NaN) and drop out of s and J_hat; the three
+        basis points and three more must be visible (else DegenerateGeometry)."""
     def set_k_hat(self, K_hat: _IntrinsicsLike) -> None:
         """Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom read-out
         during the servo; the next step uses them."""
@@ -376,11 +375,11 @@ class IbvsController:
         max_linear_speed: float | None = None,
         max_angular_speed: float | None = None,
     ) -> IbvsController: ...
-    def step(self, pixels: _ArrayLike, depths: _ArrayLike) -> _F64Array:
-        """One control step: the twist (6,) in the camera frame."""
-    def step_visible(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike) -> _F64Array:
-        """A step with only the points flagged in `visible`, a bool array (n,) (hidden points' pixels and
-        depths are ignored and may be NaN); at least 4 must be visible (else DegenerateGeometry)."""
+    def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
+        """One control step from the current pixels (n, 2) and depths (n,): the twist (6,) in the camera
+        frame. `visible`, a bool array (n,) (None: all), keeps only the flagged points (hidden points'
+        pixels and depths are ignored and may be NaN); at least 4 must be visible (else
+        DegenerateGeometry)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -446,11 +445,12 @@ class Servo:
         dt: float = 0.04,
     ) -> Servo: ...
     def step(
-        self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None, depths: _ArrayLike | None = None
+        self, pixels: _ArrayLike, depths: _ArrayLike | None = None, visible: npt.ArrayLike | None = None
     ) -> ServoStep:
-        """One step from the current pixels (n, 2): `visible` a bool array (n,) of the points found (None:
-        all), `depths` (n,) with `depths="per_step"`. After a stop, every later step returns that stop
-        again (zero twist)."""
+        """One step from the current pixels (n, 2): `depths` (n,) with `depths="per_step"` (None
+        otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a ServoStep:
+        the twist to send (zero when stopping), the verdict and the telemetry. After a stop, every
+        later step returns that stop again (zero twist)."""
     @property
     def iterations(self) -> int:
         """Control steps applied."""
@@ -702,7 +702,6 @@ class _Column(TypedDict):
 class _SummaryField(TypedDict):
     name: str
     unit: str
-    legacy: str | None
     description: str
 
 def recorded_columns() -> list[_Column]:
@@ -711,8 +710,7 @@ def recorded_columns() -> list[_Column]:
     points, ``"n_joints"`` joints), dtype, which runs record it, description."""
 
 def summary_fields() -> list[_SummaryField]:
-    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, the older name in
-    millimetres / degrees / with a unit suffix that the summary also has, description."""
+    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, description."""
 
 _PlotKind = Literal[
     "image_trajectories", "errors", "task_functions", "velocities", "pose_errors", "path3d", "joints", "joint_velocities"
@@ -815,11 +813,10 @@ def run_batch(
     scenario: status (str), iterations, the summary fields final_translation_error,
     final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
     observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where not
-    measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2, within_tolerance,
-    message (str).
+    measured), prop1, prop2, within_tolerance, message (str).
 
     ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
-    as runs finish (``done`` increasing to ``total``); ``vsinv.run_batch`` draws a tqdm bar
+    as runs finish (``done`` increasing to ``total``); ``vsinv.sim.run_batch`` draws a tqdm bar
     instead for None, True or False. Ctrl-C or an exception of ``progress`` stops the batch
     and is raised. Works in a process forked after earlier batches (the pools are rebuilt).
     """

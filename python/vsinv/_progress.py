@@ -1,4 +1,4 @@
-"""Progress reports shared by :func:`vsinv.run_batch` and :func:`vsinv.run_sweep`: a tqdm bar
+"""Progress reports shared by :func:`vsinv.sim.run_batch` and :func:`vsinv.sim.run_sweep`: a tqdm bar
 over runs, or a callable ``progress(done, total)``. The Rust side only calls a callable it is
 given (``vsinv._core.run_batch``); the bar is made here."""
 

@@ -27,7 +27,8 @@ from typing import Any, Callable, Optional, Sequence, TextIO
 
 import numpy as np
 
-from . import VsinvError, __version__, list_scenarios, load_scenario, run_scenario
+from . import VsinvError, __version__, load_scenario, run_scenario
+from .sim import list_scenarios
 from .cli_images import add_allow_outside_files, add_image_commands, cmd_invariance, cmd_render
 from .cli_replay import add_replay_command, cmd_replay
 
@@ -186,7 +187,7 @@ def _build_parser() -> argparse.ArgumentParser:
     sw = sub.add_parser(
         "sweep",
         help="run a scenario over a grid / random draws of parameters",
-        description="Run a scenario for every combination of the varied parameters (vsinv.run_sweep) and print the "
+        description="Run a scenario for every combination of the varied parameters (vsinv.sim.run_sweep) and print the "
         "convergence rate and median final errors per grid point. Keys: any dotted scenario key "
         "(noise.pixel_sigma, control.gain, start.position.2, ...) or a derived key: "
         "focal_error, principal_point_error, roll_deg, lens_ratio.",

@@ -47,7 +47,7 @@ def _triple(text: str) -> tuple[float, float, float]:
 
 
 def _add_law_options(p: argparse.ArgumentParser) -> None:
-    """A command option per law option of ``vsinv.LAW_OPTIONS`` (declared once, in the servo
+    """A command option per law option of ``vsinv.laws.LAW_OPTIONS`` (declared once, in the servo
     layer); unset: the law's default."""
     group = p.add_argument_group("law options", "each read by the laws named (unset: the law's default)")
     for o in LAW_OPTIONS:

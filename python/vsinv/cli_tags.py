@@ -1,6 +1,6 @@
 """The tag target's settings as command options, shared by ``vsinv replay`` and ``vsinv
 invariance`` (``--target tags``): each is a keyword argument of :class:`vsinv.ImageServo` and
-:func:`vsinv.detect_tags` of the same name (``tag_ids`` is ``--tag-ids``), stated once here.
+:func:`vsinv.vision.detect_tags` of the same name (``tag_ids`` is ``--tag-ids``), stated once here.
 Their values are checked by the library, whose errors name the argument; a command renames
 it to the option (:data:`TAG_OPTION_NAMES` with :func:`vsinv.cli_tracker.named_as_options`)."""
 

@@ -1,5 +1,5 @@
 """The dot tracker's settings as command options, shared by ``vsinv invariance`` and ``vsinv
-replay``: each of :class:`vsinv.DotTracker`'s keyword arguments is an option of the same name
+replay``: each of :class:`vsinv.vision.DotTracker`'s keyword arguments is an option of the same name
 (``search_radius`` is ``--search-radius``), stated once here with its default and its bounds, so
 that a bad value is refused by argparse naming the option as the user typed it."""
 

@@ -94,7 +94,7 @@ def summary_json(summary: dict[str, Any], indent: Optional[int] = None) -> str:
 
 
 def save_npz(result: RunResult, path: _PathLike) -> Path:
-    """Write every recorded column (:func:`vsinv.recorded_columns`), the summary (entry
+    """Write every recorded column (:func:`vsinv.sim.recorded_columns`), the summary (entry
     ``summary_json``, a JSON string) and the columns' declaration (entry ``columns_json``:
     name, unit, shape, ...) to a compressed ``.npz`` archive; returns the path written."""
     out = Path(path)
@@ -433,7 +433,7 @@ def plot_velocities(result: RunResult, ax: AxesArg = None, *, scenario: _Scenari
 def theta_u(rotations: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The theta-u vectors (rad) of rotation matrices (..., 3, 3): the axis u times the angle
     theta in [0, pi] (the rotation error components of the paper's Figs. 5, 7 and 9), by
-    :func:`vsinv.thetau_from_rotations`; NaN for a matrix with a non-finite entry (a pose not
+    :func:`vsinv.geometry.thetau_from_rotations`; NaN for a matrix with a non-finite entry (a pose not
     recorded)."""
     r = np.asarray(rotations, dtype=float)
     if r.ndim < 2 or r.shape[-2:] != (3, 3):

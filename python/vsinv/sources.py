@@ -6,7 +6,7 @@ Every source yields ``(name, image)`` pairs, the image a ``(height, width)`` uin
 - an array ``(n, height, width)`` (or one ``(height, width)`` image), or any iterable of such
   arrays: names ``frame-0000``, ``frame-0001``, ...;
 - a folder: its image files (PNG, PGM/PPM/PNM/PAM, JPEG) in the order of their names, read with
-  :func:`vsinv.load_image` (colour converted to grey);
+  :func:`vsinv.vision.load_image` (colour converted to grey);
 - a video file: its frames read with OpenCV's ``VideoCapture`` (the optional extra
   ``pip install "vsinv[video]"``), converted to grey with OpenCV's Rec. 601 weights;
 - a live camera: a device index (``0``) or a device path (``"/dev/video0"``), read with OpenCV's

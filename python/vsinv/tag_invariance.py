@@ -36,7 +36,7 @@ def track_tag_invariance(
     """Decodes the tags of ``family`` in ``reference`` (those of ``tag_ids``, each of which
     must be there; None: all), then in each image, and measures per corner the image and
     invariant errors of eq. (7); a corner whose tag is not decoded in an image is not found
-    there (its last pixel is kept). ``decimation`` is :func:`vsinv.detect_tags`'s (None: its
+    there (its last pixel is kept). ``decimation`` is :func:`vsinv.vision.detect_tags`'s (None: its
     default). The points are the corners in identity order; ``basis`` indexes them."""
     options: dict[str, Any] = {"family": family}
     if decimation is not None:

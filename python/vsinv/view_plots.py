@@ -3,7 +3,7 @@ last views with the tracked centroids, an animated GIF of the servo) and the pap
 for dots tracked through image files. A tag rig's views also show each tag's outline (its
 four detected corners) and id.
 
-The views are rendered again from the recorded poses (``vsinv.render`` is deterministic: the
+The views are rendered again from the recorded poses (``vsinv.vision.render`` is deterministic: the
 same pose, time and seed give the simulator's image).
 """
 

@@ -140,7 +140,7 @@ impl Raw {
                 "camera_matrix",
                 format!(
                     "K[0,1] = {} but calibration files describe a camera without skew ([[fx, 0, cx], [0, fy, cy], [0, 0, 1]])",
-                    k[(0, 1)]
+                    crate::error::Short(k[(0, 1)])
                 ),
             ));
         }
@@ -576,6 +576,11 @@ dist_coeffs: !!opencv-matrix
         assert_eq!(f, "");
         let e = load_calibration("/nonexistent/cal.yaml").unwrap_err();
         assert!(e.to_string().contains("/nonexistent/cal.yaml"), "{e}");
+        // A huge skew term is written short, not with its 301 digits.
+        let (_, r) = field_of(
+            parse_calibration(&ROS.replace("800.5, 0, 320.25", "800.5, 1e300, 320.25"), "x.yaml").unwrap_err(),
+        );
+        assert!(r.contains("K[0,1] = 1.0e300 but"), "{r}");
     }
 
     /// Regression (issue 16): nine levels of nine aliases (about 600 bytes) made the loader

@@ -13,31 +13,24 @@ use crate::core::ibvs::{IbvsController, Interaction};
 use crate::core::rz_task::RzTask;
 use crate::core::saturation::TwistLimits;
 
-/// Reads the step's arrays in place and returns the twist as a new (6,) array.
+/// Reads the step's arrays in place and returns the twist as a new (6,) array; `visible`, a
+/// bool array of one flag per pixel row (None: all), hides points from the step.
 fn step_controller<'py, C: Controller>(
     ctl: &mut C,
     py: Python<'py>,
     pixels: &Bound<'py, PyAny>,
     depths: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
-    let tw = ctl.step(points2(&a)?, z.as_slice()?)?;
-    finite_out("pixels, depths", tw.as_slice())?;
-    Ok(vec1(py, tw.as_slice()))
-}
-
-/// `step_controller` with a visibility mask: a bool array of one flag per pixel row.
-fn step_controller_visible<'py, C: Controller>(
-    ctl: &mut C,
-    py: Python<'py>,
-    pixels: &Bound<'py, PyAny>,
-    depths: &Bound<'py, PyAny>,
-    visible: &Bound<'py, PyAny>,
+    visible: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let (a, z) = (pixels_arg(pixels, "pixels")?, depths_arg(depths)?);
     let px = points2(&a)?;
-    let v = bool_array(visible, "visible", px.len())?;
-    let tw = ctl.step_visible(px, z.as_slice()?, v.as_slice()?)?;
+    let tw = match visible {
+        None => ctl.step(px, z.as_slice()?)?,
+        Some(visible) => {
+            let v = bool_array(visible, "visible", px.len())?;
+            ctl.step_visible(px, z.as_slice()?, v.as_slice()?)?
+        }
+    };
     finite_out("pixels, depths", tw.as_slice())?;
     Ok(vec1(py, tw.as_slice()))
 }
@@ -69,8 +62,8 @@ impl PyInvariantController {
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
-        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Fixed([0, 1, 2]), feedforward = true, min_structure_ratio = crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO, rz_task = "angle", adaptive_gain = None, max_linear_speed = None, max_angular_speed = None),
-        text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis=(0, 1, 2), feedforward=True, min_structure_ratio=0.001, rz_task='angle', adaptive_gain=None, max_linear_speed=None, max_angular_speed=None)"
+        signature = (reference_pixels, K_hat, gain = 1.0, gain_rz = 1.0, basis = BasisArg::Auto, feedforward = true, min_structure_ratio = crate::core::jacobian::DEFAULT_MIN_STRUCTURE_RATIO, rz_task = "angle", adaptive_gain = None, max_linear_speed = None, max_angular_speed = None),
+        text_signature = "(reference_pixels, K_hat, gain=1.0, gain_rz=1.0, basis='auto', feedforward=True, min_structure_ratio=0.001, rz_task='angle', adaptive_gain=None, max_linear_speed=None, max_angular_speed=None)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -110,27 +103,19 @@ impl PyInvariantController {
     }
 
     /// One control step from the current pixels (n, 2) and depth estimates (n,): the twist
-    /// (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s.
+    /// (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s. `visible`, a bool array
+    /// (n,) (None: all), hides points: their pixels and depths are ignored (may be NaN) and
+    /// drop out of s and J_hat; the three basis points and three more must be visible (else
+    /// DegenerateGeometry).
+    #[pyo3(signature = (pixels, depths, visible = None))]
     fn step<'py>(
         &mut self,
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
         depths: &Bound<'py, PyAny>,
+        visible: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        step_controller(&mut self.inner, py, pixels, depths)
-    }
-
-    /// A step with some points hidden: `visible` is a bool array (n,); hidden points'
-    /// pixels and depths are ignored (may be NaN) and drop out of s and J_hat. The three basis
-    /// points and three more must be visible (else DegenerateGeometry).
-    fn step_visible<'py>(
-        &mut self,
-        py: Python<'py>,
-        pixels: &Bound<'py, PyAny>,
-        depths: &Bound<'py, PyAny>,
-        visible: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        step_controller_visible(&mut self.inner, py, pixels, depths, visible)
+        step_controller(&mut self.inner, py, pixels, depths, visible)
     }
 
     /// Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom
@@ -365,27 +350,19 @@ impl PyIbvsController {
         Ok(Self { inner })
     }
 
-    /// One control step: the twist (6,) in the camera frame.
+    /// One control step from the current pixels (n, 2) and depths (n,): the twist (6,) in the
+    /// camera frame. `visible`, a bool array (n,) (None: all), keeps only the flagged points
+    /// (hidden points' pixels and depths are ignored and may be NaN); at least 4 must be
+    /// visible (else DegenerateGeometry).
+    #[pyo3(signature = (pixels, depths, visible = None))]
     fn step<'py>(
         &mut self,
         py: Python<'py>,
         pixels: &Bound<'py, PyAny>,
         depths: &Bound<'py, PyAny>,
+        visible: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        step_controller(&mut self.inner, py, pixels, depths)
-    }
-
-    /// A step with only the points flagged in `visible`, a bool array (n,) (hidden points'
-    /// pixels and depths are ignored and may be NaN); at least 4 must be visible (else
-    /// DegenerateGeometry).
-    fn step_visible<'py>(
-        &mut self,
-        py: Python<'py>,
-        pixels: &Bound<'py, PyAny>,
-        depths: &Bound<'py, PyAny>,
-        visible: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        step_controller_visible(&mut self.inner, py, pixels, depths, visible)
+        step_controller(&mut self.inner, py, pixels, depths, visible)
     }
 
     /// The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the

@@ -1,4 +1,4 @@
-//! `vsinv.LAW_OPTIONS`: the servo layer's table of the laws' options, for the layers written
+//! `vsinv.laws.LAW_OPTIONS`: the servo layer's table of the laws' options, for the layers written
 //! in Python (the ROS parameters, the CLI flags, the docs), with its check and its Markdown.
 
 use pyo3::prelude::*;

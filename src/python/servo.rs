@@ -235,7 +235,7 @@ pub(super) struct PyServo {
 #[pymethods]
 impl PyServo {
     /// The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
-    /// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.LAW_OPTIONS`).
+    /// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`).
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
@@ -260,20 +260,20 @@ impl PyServo {
         Ok(Self { inner })
     }
 
-    /// One step from the current pixels (n, 2): `visible` a bool array (n,) of the points found
-    /// (None: all), `depths` (n,) with `depths="per_step"`. Returns a ServoStep: the twist to
-    /// send (zero when stopping), the verdict and the telemetry.
-    #[pyo3(signature = (pixels, visible = None, depths = None))]
+    /// One step from the current pixels (n, 2): `depths` (n,) with `depths="per_step"` (None
+    /// otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a
+    /// ServoStep: the twist to send (zero when stopping), the verdict and the telemetry.
+    #[pyo3(signature = (pixels, depths = None, visible = None))]
     fn step(
         &mut self,
         pixels: &Bound<'_, PyAny>,
-        visible: Option<&Bound<'_, PyAny>>,
         depths: Option<&Bound<'_, PyAny>>,
+        visible: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyServoStep> {
         let a = pixels_arg(pixels, "pixels")?;
         let px = points2(&a)?;
-        let v = visible.map(|v| bool_array(v, "visible", px.len())).transpose()?;
         let z = depths.map(depths_arg).transpose()?;
+        let v = visible.map(|v| bool_array(v, "visible", px.len())).transpose()?;
         let step = self.inner.step(
             px,
             v.as_ref().map(|v| v.as_slice()).transpose()?,

@@ -234,8 +234,7 @@ pub fn recorded_columns(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
         .collect()
 }
 
-/// The numbers of `RunResult.summary` (SI, `px`, `1`): name, unit, the older name in millimetres / degrees / with a
-/// unit suffix that the summary also has, description.
+/// The numbers of `RunResult.summary` (SI, `px`, `1`): name, unit, description.
 #[pyfunction]
 pub fn summary_fields(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     SUMMARY_FIELDS
@@ -244,7 +243,6 @@ pub fn summary_fields(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
             let d = PyDict::new(py);
             d.set_item("name", f.name)?;
             d.set_item("unit", f.unit)?;
-            d.set_item("legacy", f.legacy.map(|l| l.apply(0.0).0))?;
             d.set_item("description", f.description)?;
             Ok(d)
         })
@@ -281,8 +279,7 @@ fn array<T: numpy::Element>(py: Python<'_>, data: Vec<T>, shape: &[usize]) -> Py
     Ok(PyArray1::from_vec(py, data).reshape(shape)?.into_any().unbind())
 }
 
-/// The summary as a dictionary: SI numbers (units in `SUMMARY_FIELDS`), each with its older
-/// millimetre / degree / suffixed name too.
+/// The summary as a dictionary: SI numbers (units in `SUMMARY_FIELDS`).
 pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<Bound<'py, PyDict>> {
     let s = &o.summary;
     let d = PyDict::new(py);
@@ -297,11 +294,7 @@ pub fn summary_dict<'py>(py: Python<'py>, name: &str, o: &Outcome) -> PyResult<B
     d.set_item("basis", s.basis.to_vec())?;
     d.set_item("basis_switches", s.basis_switches)?;
     for f in &SUMMARY_FIELDS {
-        let v = (f.value)(s);
-        d.set_item(f.name, v)?;
-        if let Some(l) = f.legacy {
-            d.set_item(l.apply(0.0).0, v.map(|v| l.apply(v).1))?;
-        }
+        d.set_item(f.name, (f.value)(s))?;
     }
     Ok(d)
 }
@@ -433,11 +426,11 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// arrays, one row per scenario: status (str), iterations, the summary fields final_translation_error,
 /// final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
 /// observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where
-/// not measured; each also under its older name, `_mm`, `_deg`, `_px`), prop1, prop2,
+/// not measured), prop1, prop2,
 /// within_tolerance, message (str). A scenario whose configuration is invalid raises before
 /// anything runs; a run that fails on the way has status "error" and its message.
 /// `progress`: None, or a callable `progress(done, total)` called from this thread as runs
-/// finish (`vsinv.run_batch` makes a tqdm bar of None, True or False). Ctrl-C (or an exception
+/// finish (`vsinv.sim.run_batch` makes a tqdm bar of None, True or False). Ctrl-C (or an exception
 /// of `progress`) stops the batch and is raised.
 #[pyfunction]
 #[pyo3(signature = (scenarios, threads = None, allow_outside_files = false, progress = None))]
@@ -514,7 +507,7 @@ fn batch_text(item: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<String> {
     Ok(scenario_arg_with(item, access)?.to_json()?)
 }
 
-/// The numbers of `run_batch`'s table (summary fields, SI; each also under its older name).
+/// The numbers of `run_batch`'s table (summary fields, SI).
 const BATCH_FIELDS: [&str; 9] = [
     "final_translation_error",
     "final_rotation_error",
@@ -591,10 +584,6 @@ impl BatchTable {
         d.set_item("status", str_array(self.status)?)?;
         d.set_item("iterations", PyArray1::from_vec(py, self.iterations))?;
         for (name, c) in BATCH_FIELDS.iter().zip(self.floats) {
-            if let Some(l) = summary_field(name).and_then(|f| f.legacy) {
-                let old: Vec<f64> = c.iter().map(|&v| l.apply(v).1).collect();
-                d.set_item(l.apply(0.0).0, PyArray1::from_vec(py, old))?;
-            }
             d.set_item(*name, PyArray1::from_vec(py, c))?;
         }
         d.set_item("prop1", PyArray1::from_vec(py, self.prop1))?;

@@ -1,4 +1,4 @@
-//! `vsinv.TagTracker`: AprilTags through a sequence of frames (the `vision` layer's
+//! `vsinv.vision.TagTracker`: AprilTags through a sequence of frames (the `vision` layer's
 //! `TagDetector`), each searched near its last corners first; the work runs with the GIL
 //! released.
 

@@ -289,30 +289,7 @@ impl Recording {
     }
 }
 
-/// The older name of a summary number, in millimetres or degrees (kept for existing users).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Legacy {
-    /// The same value under another name.
-    Same(&'static str),
-    /// Metres (or metres per second) given in millimetres.
-    Milli(&'static str),
-    /// Radians (or radians per second) given in degrees.
-    Degrees(&'static str),
-}
-
-impl Legacy {
-    /// The older name and the value under it.
-    pub fn apply(self, v: f64) -> (&'static str, f64) {
-        match self {
-            Legacy::Same(name) => (name, v),
-            Legacy::Milli(name) => (name, v * 1e3),
-            Legacy::Degrees(name) => (name, v.to_degrees()),
-        }
-    }
-}
-
-/// A number of the summary: name, unit, its value (None where it does not apply), and the
-/// older name it is also given under.
+/// A number of the summary: name, unit and its value (None where it does not apply).
 #[derive(Debug, Clone, Copy)]
 pub struct SummaryField {
     /// The name (a key of the summary dict).
@@ -321,8 +298,6 @@ pub struct SummaryField {
     pub unit: &'static str,
     /// The value in a summary.
     pub value: fn(&Summary) -> Option<f64>,
-    /// The older name (millimetres, degrees or a unit suffix), if any.
-    pub legacy: Option<Legacy>,
     /// What it is.
     pub description: &'static str,
 }
@@ -331,13 +306,10 @@ const fn field(
     name: &'static str,
     unit: &'static str,
     value: fn(&Summary) -> Option<f64>,
-    legacy: Option<Legacy>,
     description: &'static str,
 ) -> SummaryField {
-    SummaryField { name, unit, value, legacy, description }
+    SummaryField { name, unit, value, description }
 }
-
-use Legacy::{Degrees, Milli, Same};
 
 /// The numbers of the summary: the one declaration of their names and units.
 pub const SUMMARY_FIELDS: [SummaryField; 29] = [
@@ -345,167 +317,124 @@ pub const SUMMARY_FIELDS: [SummaryField; 29] = [
         "final_translation_error",
         "m",
         |s| Some(s.final_translation_error),
-        Some(Milli("final_translation_error_mm")),
         "final distance of the camera centre from the reference pose",
     ),
     field(
         "final_rotation_error",
         "rad",
         |s| Some(s.final_rotation_error),
-        Some(Degrees("final_rotation_error_deg")),
         "final rotation angle from the reference pose",
     ),
     field(
         "final_image_error",
         "px",
         |s| Some(s.final_image_error),
-        Some(Same("final_image_error_px")),
         "final largest distance of a visible point from its reference pixel",
     ),
-    field("final_invariant_error", "1", |s| Some(s.final_invariant_error), None, "final ||s - s*||"),
-    field("final_tau_11", "1", |s| Some(s.final_tau[0]), None, "final tau_11"),
-    field("final_tau_21", "1", |s| Some(s.final_tau[1]), None, "final tau_21"),
-    field("final_tau_22", "1", |s| Some(s.final_tau[2]), None, "final tau_22"),
-    field(
-        "start_translation_error",
-        "m",
-        |s| Some(s.start_error.0),
-        Some(Milli("start_translation_error_mm")),
-        "start distance from the reference pose",
-    ),
-    field(
-        "start_rotation_error",
-        "rad",
-        |s| Some(s.start_error.1),
-        Some(Degrees("start_rotation_error_deg")),
-        "start rotation angle from the reference pose",
-    ),
+    field("final_invariant_error", "1", |s| Some(s.final_invariant_error), "final ||s - s*||"),
+    field("final_tau_11", "1", |s| Some(s.final_tau[0]), "final tau_11"),
+    field("final_tau_21", "1", |s| Some(s.final_tau[1]), "final tau_21"),
+    field("final_tau_22", "1", |s| Some(s.final_tau[2]), "final tau_22"),
+    field("start_translation_error", "m", |s| Some(s.start_error.0), "start distance from the reference pose"),
+    field("start_rotation_error", "rad", |s| Some(s.start_error.1), "start rotation angle from the reference pose"),
     field(
         "max_line_deviation",
         "m",
         |s| Some(s.max_line_deviation),
-        Some(Milli("max_line_deviation_mm")),
         "largest distance of the camera centre from the segment between start and goal",
     ),
     field(
         "peak_linear_speed",
         "m/s",
         |s| Some(s.peak_speeds.0),
-        Some(Same("peak_linear_speed_m_s")),
         "largest commanded linear speed (after the law's twist limits)",
     ),
     field(
         "peak_angular_speed",
         "rad/s",
         |s| Some(s.peak_speeds.1),
-        Some(Degrees("peak_angular_speed_deg_s")),
         "largest commanded angular speed (after the law's twist limits)",
     ),
     field(
         "path_duration",
         "s",
         |s| s.tracking.map(|t| t.duration),
-        Some(Same("path_duration_s")),
         "duration of the planned path (None without a path)",
     ),
     field(
         "plane_parallax_residual",
         "1",
         |s| s.tracking.map(|t| t.plane_parallax_residual),
-        None,
         "RMS residual of the plane + parallax estimate",
     ),
     field(
         "tracking_sigma",
         "1",
         |s| s.tracking.map(|t| t.sigma),
-        None,
         "Prop. 3: smallest eigenvalue of A(t) + A(t)^T along the path",
     ),
-    field("tracking_psi", "m/s, rad/s", |s| s.tracking.map(|t| t.psi), None, "Prop. 3: psi = 2 max ||b(t)||"),
-    field("tracking_phi", "1/s", |s| s.tracking.map(|t| t.phi), None, "Prop. 3: phi = lambda sigma"),
-    field(
-        "tracking_bound",
-        "m, rad",
-        |s| s.tracking.map(|t| t.bound),
-        None,
-        "Prop. 3: the bound psi / phi on ||eps(t)||",
-    ),
+    field("tracking_psi", "m/s, rad/s", |s| s.tracking.map(|t| t.psi), "Prop. 3: psi = 2 max ||b(t)||"),
+    field("tracking_phi", "1/s", |s| s.tracking.map(|t| t.phi), "Prop. 3: phi = lambda sigma"),
+    field("tracking_bound", "m, rad", |s| s.tracking.map(|t| t.bound), "Prop. 3: the bound psi / phi on ||eps(t)||"),
     field(
         "observed_max_eps",
         "m, rad",
         |s| s.tracking.map(|t| t.max_eps),
-        None,
         "largest ||eps(t)|| observed while the reference moved",
     ),
     field(
         "detection_error_median",
         "px",
         |s| s.detection_error.map(|e| e.0),
-        Some(Same("detection_error_median_px")),
         "median distance of a tracked centroid from its dot's true projection (None without [vision])",
     ),
     field(
         "detection_error_max",
         "px",
         |s| s.detection_error.map(|e| e.1),
-        Some(Same("detection_error_max_px")),
         "largest distance of a tracked centroid from its dot's true projection (None without [vision])",
     ),
     field(
         "min_manipulability",
         "1",
         |s| s.min_manipulability,
-        None,
         "smallest manipulability of the arm (None for other robots)",
     ),
-    field(
-        "pixel_sigma",
-        "px",
-        |s| s.certainty.map(|c| c.pixel_sigma),
-        Some(Same("pixel_sigma_px")),
-        "pixel noise measured on the final images",
-    ),
+    field("pixel_sigma", "px", |s| s.certainty.map(|c| c.pixel_sigma), "pixel noise measured on the final images"),
     field(
         "reference_pixel_sigma",
         "px",
         |s| s.certainty.map(|c| c.reference_pixel_sigma),
-        Some(Same("reference_pixel_sigma_px")),
         "the reference image's pixel noise",
     ),
     field(
         "translation_sigma",
         "m",
         |s| s.certainty.map(|c| c.sigma.0),
-        Some(Milli("translation_sigma_mm")),
         "one sigma of the final position the images allow",
     ),
     field(
         "rotation_sigma",
         "rad",
         |s| s.certainty.map(|c| c.sigma.1),
-        Some(Degrees("rotation_sigma_deg")),
         "one sigma of the final orientation the images allow",
     ),
     field(
         "translation_uncertainty",
         "m",
         |s| s.certainty.map(|c| c.bound.0),
-        Some(Milli("translation_uncertainty_mm")),
         "3 sigma plus the offset the mean error implies, position",
     ),
     field(
         "rotation_uncertainty",
         "rad",
         |s| s.certainty.map(|c| c.bound.1),
-        Some(Degrees("rotation_uncertainty_deg")),
         "3 sigma plus the offset the mean error implies, orientation",
     ),
     field(
         "floor_pixel_sigma",
         "px",
         |s| s.certainty.and_then(|c| c.floor_pixel_sigma),
-        None,
         "the disagreement floor between the reference and the current detections the stall rule measured \
          (included in the uncertainty bounds; none with the stall rule off)",
     ),
@@ -533,10 +462,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn names_are_unique_and_legacy_names_differ() {
+    fn names_are_unique() {
         let mut names: Vec<&str> = COLUMNS.iter().map(|c| c.name).collect();
         names.extend(SUMMARY_FIELDS.iter().map(|f| f.name));
-        names.extend(SUMMARY_FIELDS.iter().filter_map(|f| f.legacy.map(|l| l.apply(0.0).0)));
         let n = names.len();
         names.sort_unstable();
         names.dedup();

@@ -30,7 +30,7 @@ ENCODINGS = ("mono8", "rgb8", "bgr8", "rgba8", "bgra8")
 def image_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     """A sensor_msgs/Image (mono8, rgb8, bgr8, rgba8 or bgra8; rows of ``step`` bytes) as a
     (height, width) uint8 array (colour by Rec. 601 luma in Rust, alpha ignored:
-    :func:`vsinv.to_grey`); another encoding or inconsistent sizes are refused with
+    :func:`vsinv.vision.to_grey`); another encoding or inconsistent sizes are refused with
     InvalidInput."""
     encoding, height, width, step = str(msg.encoding), int(msg.height), int(msg.width), int(msg.step)
     if encoding not in ENCODINGS:
@@ -69,7 +69,7 @@ def compressed_format(text: str) -> Optional[Literal["png", "jpeg"]]:
 
 def compressed_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
     """A sensor_msgs/CompressedImage (JPEG or PNG, :func:`compressed_format`) as a (height,
-    width) uint8 array, decoded in Rust (:func:`vsinv.decode_image`: the declared size checked
+    width) uint8 array, decoded in Rust (:func:`vsinv.vision.decode_image`: the declared size checked
     against the pixel limit before decoding); undecodable, oversized or mislabelled data is
     refused with InvalidInput."""
     expected = compressed_format(str(msg.format))
@@ -149,6 +149,6 @@ def hand_eye_matrix(name: str, values: npt.ArrayLike) -> npt.NDArray[np.float64]
 def twist_in_end_effector_frame(twist: npt.ArrayLike, hand_eye: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     """The camera twist (v, w), camera frame, as the end effector's twist in its own frame for
     the camera pose ``hand_eye`` in it (R, t): w_e = R w, v_e = R v + t x w_e, the adjoint of
-    the rigid mount (:func:`vsinv.twist_adjoint`, a rigid body's velocity field)."""
+    the rigid mount (:func:`vsinv.geometry.twist_adjoint`, a rigid body's velocity field)."""
     t6 = np.asarray(twist, dtype=float)
     return twist_adjoint(hand_eye) @ t6

@@ -46,7 +46,7 @@ _ROS_KINDS = {"number": "float", "flag": "bool", "choice": "str", "adaptive_gain
 
 
 def _law_parameters() -> tuple[Parameter, ...]:
-    """The laws' options (``vsinv.LAW_OPTIONS``, declared once in the servo layer) as
+    """The laws' options (``vsinv.laws.LAW_OPTIONS``, declared once in the servo layer) as
     parameters of the same names; unset: the law's default."""
     out = []
     for o in LAW_OPTIONS:

@@ -48,7 +48,7 @@ then the noise seed.
 every grid value and for each distribution's bounds) raise :class:`vsinv.InvalidInput` naming
 the key before anything runs.
 
-**Execution.** Runs go through :func:`vsinv.run_batch` in chunks. Without an ``executor`` the
+**Execution.** Runs go through :func:`vsinv.sim.run_batch` in chunks. Without an ``executor`` the
 chunks run one after another in this process, each on all cores (rayon; ``threads`` is passed
 through). With any :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``, dask's
 ``client.get_executor()``, ...) the module-level :func:`vsinv.sweep.execute._run_chunk` is

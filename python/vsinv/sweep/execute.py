@@ -1,4 +1,4 @@
-"""Running a sweep: chunks through :func:`vsinv.run_batch`, in this process or on any
+"""Running a sweep: chunks through :func:`vsinv.sim.run_batch`, in this process or on any
 :class:`concurrent.futures.Executor` (a bounded number in flight), with a progress bar."""
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ log = logging.getLogger("vsinv")
 def _run_chunk(
     scenarios: list[str], threads: Optional[int] = None, allow_outside_files: bool = False
 ) -> dict[str, Column]:
-    """Run a chunk of scenarios written as JSON texts with :func:`vsinv.run_batch` (module
+    """Run a chunk of scenarios written as JSON texts with :func:`vsinv.sim.run_batch` (module
     level: picklable, for executors; texts pickle faster than nested dicts). The sweep has
     its own bar: the chunk shows none."""
     return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=None)
@@ -97,7 +97,7 @@ def run_sweep(
     - ``draws``: number of random samples (required when a distribution is given).
     - ``seed``: seeds the random draws and the noise seeds (same seed, same sweep).
     - ``executor``: a ``concurrent.futures.Executor`` to run the chunks on (None: here).
-    - ``chunk_size``: runs per :func:`vsinv.run_batch` call; default
+    - ``chunk_size``: runs per :func:`vsinv.sim.run_batch` call; default
       ``max(64, ceil(n / (4 * workers)))``, at most 1024 (each run in flight holds
       a few kB: the cap keeps memory flat).
     - ``threads``: rayon threads per chunk (None: all cores).

@@ -151,14 +151,14 @@ _ORIGIN = np.zeros(3)
 
 def rotation_from_thetau(thetau: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The rotation matrix of a theta-u vector (radians): the rotation block of
-    :func:`vsinv.pose_from_position_thetau`."""
+    :func:`vsinv.geometry.pose_from_position_thetau`."""
     r = _real_array(thetau, "thetau", (3,))
     return np.ascontiguousarray(pose_from_position_thetau(_ORIGIN, r)[:3, :3])
 
 
 def thetau_from_rotation(rot: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The theta-u vector (radians, angle in [0, pi]) of a rotation matrix (orthonormal with
-    determinant +1 within 1e-6): :func:`vsinv.thetau_from_pose` of that rotation."""
+    determinant +1 within 1e-6): :func:`vsinv.geometry.thetau_from_pose` of that rotation."""
     r = _real_array(rot, "rot", (3, 3))
     pose = np.eye(4)
     pose[:3, :3] = r

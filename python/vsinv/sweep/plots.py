@@ -1,6 +1,6 @@
-"""Stability maps of a parameter sweep (:func:`vsinv.run_sweep`).
+"""Stability maps of a parameter sweep (:func:`vsinv.sim.run_sweep`).
 
->>> res = vsinv.run_sweep("lens-12-6", {"principal_point_error": np.linspace(-2000, 2000, 41)})
+>>> res = vsinv.sim.run_sweep("lens-12-6", {"principal_point_error": np.linspace(-2000, 2000, 41)})
 >>> plot_stability_map(res, "stability_map.png")
 
 One varied key: the convergence rate and the median final translation error against the

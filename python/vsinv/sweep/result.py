@@ -25,8 +25,6 @@ _RATE_COLUMNS = ("runs", "converged", "convergence_rate", "prop1_rate", "prop2_r
 _MEDIANS = (
     ("final_translation_error", "median_translation_error"),
     ("final_rotation_error", "median_rotation_error"),
-    ("final_translation_error_mm", "median_translation_error_mm"),
-    ("final_rotation_error_deg", "median_rotation_error_deg"),
     ("final_invariant_error", "median_invariant_error"),
     ("iterations", "median_iterations"),
 )
@@ -38,7 +36,7 @@ class SweepResult:
 
     ``columns`` holds the varied keys (one column each, named by the key), ``"repeat"``
     (repetition index), ``"seed"`` (the run's noise seed) and every column of
-    :func:`vsinv.run_batch` (status, iterations, final errors, prop1, prop2, ...).
+    :func:`vsinv.sim.run_batch` (status, iterations, final errors, prop1, prop2, ...).
     """
 
     columns: dict[str, Column]
@@ -108,7 +106,7 @@ class SweepResult:
         ``prop2_rate`` (fractions of runs where Prop. 1 / Prop. 2 holds) and the medians
         ``median_translation_error`` (m), ``median_rotation_error`` (rad),
         ``median_invariant_error``, ``median_iterations`` (over every run of the group, NaN
-        ignored; also ``median_translation_error_mm`` and ``median_rotation_error_deg``). With ``bins``, a numeric key with more distinct values than ``bins`` is
+        ignored). With ``bins``, a numeric key with more distinct values than ``bins`` is
         grouped into ``bins`` equal-width bins labelled by their centres (for random keys).
         Groups of grid keys come in the grid's order, others sorted by value. ``keys=()``
         gives one row for all runs."""

@@ -6,7 +6,7 @@
 //! |---|---|
 //! | the law ([`Law::from_options`](super::Law::from_options)) | defaults, ranges (errors name the option) |
 //! | scenario files (`sim::scenario`, `[control]`) | the keys, which law reads each, the values' checks |
-//! | Python (`Servo`, `ImageServo` keyword arguments; `vsinv.LAW_OPTIONS`) | names, kinds, the law check |
+//! | Python (`Servo`, `ImageServo` keyword arguments; `vsinv.laws.LAW_OPTIONS`) | names, kinds, the law check |
 //! | the ROS 2 bridge's parameters (`vsinv/ros/params.py`) | names, kinds, choices, docs |
 //! | `vsinv replay` flags (`vsinv/cli_replay.py`) | names, kinds, choices, docs |
 //! | the reference table of the docs ([`markdown_table`]) | everything |
