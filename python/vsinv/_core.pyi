@@ -190,6 +190,9 @@ class VsinvError(Exception):
     """What usually causes a degenerate estimate."""
     key: str | None
     """The dotted scenario key at fault ('control.gain'); None for the whole document."""
+    location: tuple[str | int, ...] | None
+    """Where the error is, as data: keys and indices from the input's root, as the message names
+    it (('control', 'gain'), ('pixels', 4, 1), ('object', 'points', 2); () for a whole scenario)."""
     file: str | None
     """The file at fault (a scenario, calibration or URDF file)."""
     field: str | None
