@@ -3,8 +3,14 @@
 //! with that layer's feature, so that the control core (`--no-default-features`) speaks only
 //! of its own inputs. A higher layer words a core error in its own terms where it reports one
 //! (the remedy of [`Error::DegenerateStructure`], see [`degenerate_structure_text`]).
+//!
+//! An error about one position of its input says where as data, [`Error::location`] (a
+//! [`Location`]: keys and indices, the core's vocabulary), rendered in its message as
+//! `control.gain`, `object.points[2][1]` or `[3].camera.fku`; Python sees it as `err.location`.
 
 use thiserror::Error;
+
+pub use crate::location::{Location, Step};
 
 /// Everything that can go wrong in `vsinv`.
 ///
@@ -112,8 +118,9 @@ pub enum Error {
     /// Of the simulator's scenarios: only with the feature `sim`.
     #[cfg(feature = "sim")]
     Scenario {
-        /// Dotted path of the key at fault (empty for the whole document).
-        key: String,
+        /// The key at fault (`control.gain`, `object.points[2][1]`; empty for the whole
+        /// document).
+        key: Location,
         /// What is wrong.
         reason: String,
     },
@@ -160,7 +167,7 @@ pub enum Error {
         /// The file path.
         file: String,
         /// The entry at fault (e.g. `camera_matrix.data`; empty for the whole file).
-        field: String,
+        field: Location,
         /// What is wrong.
         reason: String,
     },
@@ -251,6 +258,31 @@ impl Error {
         match self {
             Error::DegenerateStructure { ratio, threshold } => degenerate_structure_text(*ratio, *threshold, remedy),
             other => other.to_string(),
+        }
+    }
+
+    /// Where in its input the error is, as data: the argument and its row and column
+    /// (`pixels[4][1]`), the scenario key (`control.gain`), the calibration file's entry, the
+    /// image's argument; `None` for errors about no one position (intrinsics, a collinear basis,
+    /// a planar object). Its `Display` is the text the message shows.
+    pub fn location(&self) -> Option<Location> {
+        match self {
+            Error::NonFinite { what, index } => Some(Location::key(*what).then_index(*index)),
+            Error::NonFinitePoint { what, row, column } => {
+                Some(Location::key(*what).then_index(*row).then_index(*column))
+            }
+            Error::Shape { what, .. } => Some(Location::key(*what)),
+            Error::InvalidParameter { name, .. } => Some(Location::key(*name)),
+            Error::Distortion { index, .. } => Some(Location::root().then_index(*index)),
+            #[cfg(feature = "sim")]
+            Error::Scenario { key, .. } => Some(key.clone()),
+            #[cfg(feature = "vision")]
+            Error::InvalidImage { what, .. } => Some(Location::key(what.as_str())),
+            #[cfg(feature = "calibration")]
+            Error::Calibration { field, .. } => Some(field.clone()),
+            #[cfg(feature = "calibration")]
+            Error::InvalidPose { what, index, .. } => Some(Location::key(*what).then_index(*index)),
+            _ => None,
         }
     }
 

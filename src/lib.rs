@@ -10,6 +10,7 @@
 //! |---|---|---|---|
 //! | the control core: the paper's mathematics | [`core`] | always | nalgebra, thiserror |
 //! | the one error type | [`error`] | always | |
+//! | where an error is (keys and indices) | [`location`] | always | |
 //! | the servo session: stop rules, depth sources, path following, verdicts | `servo` | `servo` | |
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
 //! | many runs in parallel | `sim::batch` | `batch` (default) | rayon |
@@ -75,6 +76,7 @@ pub mod core;
 pub mod error;
 #[cfg(any(feature = "calibration", feature = "vision"))]
 pub mod input_file;
+pub mod location;
 #[cfg(any(feature = "batch", feature = "vision"))]
 pub mod parallel;
 #[cfg(feature = "servo")]
@@ -103,3 +105,4 @@ pub use crate::core::uncertainty::{
     ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty, pixel_pose_uncertainty,
 };
 pub use error::{Error, Result};
+pub use location::Location;

@@ -190,7 +190,7 @@ fn an_arm_scenario_is_placed_by_the_camera_pose() {
 
 fn key_error(s: &Scenario) -> (String, String) {
     match s.to_config() {
-        Err(Error::Scenario { key, reason }) => (key, reason),
+        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }

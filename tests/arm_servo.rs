@@ -176,7 +176,7 @@ fn a_start_near_a_singularity_ends_singular() {
 
 fn key_error(s: &Scenario) -> (String, String) {
     match s.to_config() {
-        Err(Error::Scenario { key, reason }) => (key, reason),
+        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }

@@ -125,7 +125,7 @@ fn scenario_limits_and_gains_are_checked_with_their_keys() {
         let text = base.replacen(old, new, 1);
         let err = Scenario::from_toml(&text).and_then(|s| s.to_config());
         match err {
-            Err(Error::Scenario { key: k, .. }) => assert!(k.starts_with(key), "{new}: key {k}"),
+            Err(Error::Scenario { key: k, .. }) => assert!(k.to_string().starts_with(key), "{new}: key {k}"),
             other => panic!("{new}: {other:?}"),
         }
     }

@@ -118,7 +118,7 @@ fn a_calibration_file_gives_the_same_run_as_its_numbers() {
 fn calibration_errors_name_the_key() {
     let dir = scratch("errors");
     let key_of = |table: &str| match with_camera_table(&dir, table) {
-        Err(vsinv::Error::Scenario { key, reason }) => (key, reason),
+        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("{other:?}"),
     };
     let (key, reason) = key_of("[camera]\ncalibration = \"barrel.yaml\"\nfku = 600.0\n");

@@ -71,7 +71,7 @@ fn every_scenario_key_takes_its_range_and_reaches_the_law() {
             for bad in invalid(o) {
                 match Scenario::from_toml(&scenario_text(law, &format!("{key} = {bad}"))) {
                     Err(Error::Scenario { key: at, reason }) => {
-                        assert!(at.starts_with(&format!("control.{key}")), "{key} = {bad}: {at}: {reason}")
+                        assert!(at.to_string().starts_with(&format!("control.{key}")), "{key} = {bad}: {at}: {reason}")
                     }
                     other => panic!("{key} = {bad} under {law}: expected a scenario error, got {other:?}"),
                 }

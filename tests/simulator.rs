@@ -235,7 +235,7 @@ fn recording_shapes() {
 
 fn scenario_error(text: &str) -> (String, String) {
     match Scenario::from_toml(text) {
-        Err(Error::Scenario { key, reason }) => (key, reason),
+        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }
@@ -369,7 +369,7 @@ fn rotation_deg_is_the_key_and_the_older_rotation_is_read_as_degrees() {
     let both = text.replace("rotation_deg = [", "rotation = [0.0, 0.0, 0.0]\nrotation_deg = [");
     match Scenario::from_toml(&both) {
         Err(vsinv::Error::Scenario { key, reason }) => {
-            assert!(key.starts_with("start") && reason.contains("duplicate"), "{key}: {reason}")
+            assert!(key.to_string().starts_with("start") && reason.contains("duplicate"), "{key}: {reason}")
         }
         other => panic!("{other:?}"),
     }

@@ -216,3 +216,20 @@ def test_the_docs_table_is_the_declaration() -> None:
     page = (Path(__file__).resolve().parent.parent / "docs/reference/law-options.md").read_text(encoding="utf-8")
     table = vsinv._core.law_options_markdown().strip()
     assert table in page, "docs/reference/law-options.md: paste vsinv._core.law_options_markdown() again"
+
+
+def of_another_kind(o: dict[str, Any]) -> Any:
+    """A value of another kind than the option's (a string for a number, a number for a choice,
+    a flag for the adaptive gain's triple)."""
+    return {"number": "fast", "flag": "yes", "choice": 3, "adaptive_gain": True}[o["kind"]]
+
+
+@pytest.mark.parametrize("o", OPTIONS, ids=[o["name"] for o in OPTIONS])
+def test_a_value_of_another_kind_is_invalid_input_naming_the_option(o):
+    """Issue 29, item 1: ``check_law_option("adaptive_gain", True)`` raised a bare TypeError that
+    did not name the option."""
+    with pytest.raises(vsinv.InvalidInput) as info:
+        _core.check_law_option(o["name"], of_another_kind(o))
+    err = info.value
+    assert (err.kind, err.argument, err.location) == ("invalid_argument", o["name"], (o["name"],)), str(err)
+    assert str(err).startswith(f"{o['name']}: "), str(err)

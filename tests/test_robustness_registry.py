@@ -72,6 +72,31 @@ def test_the_tables_describe_what_the_package_raises(name: str) -> None:
     assert all(hasattr(e, a["name"]) for a in vsinv.errors.ERROR_ATTRIBUTES)
 
 
+_TRACKER_IMAGE = np.zeros((48, 64), np.uint8)
+_TRACKER_IMAGE[20:28, 28:36] = 255
+
+
+@covers("TRACKER_SETTINGS")
+@settings(max_examples=60, deadline=None)
+@given(st.text(max_size=24), st.one_of(st.text(max_size=8), st.floats(), st.integers(-5, 200), st.none()))
+def test_the_tracker_settings_describe_what_image_servo_takes(key: str, value: object) -> None:
+    """Any key of ``ImageServo``'s ``tracker`` outside ``vsinv.vision.TRACKER_SETTINGS`` is refused
+    naming it and listing the table; a key of the table takes any value without an exception
+    other than ``InvalidInput`` naming it."""
+    settings_ = {s["name"]: s for s in vsinv.vision.TRACKER_SETTINGS}
+    args = {"reference_points": [[32.0, 24.0]], "law": "none", "depths": 0.5}
+    k = vsinv.Intrinsics(600.0, 600.0, 32.0, 24.0)
+    try:
+        vsinv.ImageServo(_TRACKER_IMAGE, "dots", k, tracker={key: value}, **args)
+    except vsinv.InvalidInput as e:
+        if key not in settings_:
+            assert str(e) == f"tracker.{key}: unknown key; known: {', '.join(settings_)}"
+        else:
+            assert key in str(e) or "tracker" in str(e), str(e)
+    else:
+        assert key in settings_
+
+
 def public_members(cls: type) -> list[str]:
     out = []
     for name in dir(cls):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import vsinv
-from vsinv import _core, cli_replay
+from vsinv import _core, cli_images, cli_replay
 from vsinv.ros import params
 
 pytestmark = pytest.mark.vision
@@ -178,3 +178,23 @@ def test_ros_parameters_take_each_target(target, reference_image):
             with pytest.raises(_core.InvalidInput, match=f"^parameter {name}: not a parameter of target"):
                 params.parse_parameters({**base, **_ros_values(target), name: value})
 
+
+
+def _invariance(*extra: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    cli_images.add_image_commands(parser.add_subparsers())
+    return parser.parse_args(["invariance", "ref.png", "a.png", *extra])
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_invariance_takes_each_target_and_follows_it_with_its_own_code(name):
+    """``vsinv invariance --target`` reads the table as ``vsinv replay`` does; every target of the
+    table has its way through image files (a new one cannot fall through to the dots' code)."""
+    assert _invariance("--target", name).target == name
+    assert cli_images.TARGET_NAMES == tuple(NAMES)
+    assert set(cli_images.TRACKERS) == set(NAMES)
+
+
+def test_invariance_refuses_another_target():
+    with pytest.raises(SystemExit):
+        _invariance("--target", "rings")

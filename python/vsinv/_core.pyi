@@ -49,6 +49,12 @@ def law_options_markdown() -> str:
 #: "ids", "count", "tracker"), choices, min, max, default, required, doc), scenario_keys.
 TARGETS: tuple[dict[str, Any], ...]
 
+#: The dot tracker's settings, declared once in the vision layer (Rust
+#: `vision::tracker::TRACKER_SETTINGS`): the keys of the dots' `tracker` argument of `ImageServo`,
+#: the ROS parameters `tracker.*`, the command options `--search-radius`... Keys: name, kind
+#: ("number", "count", "choice"), default, min, min_open, choices, unit, doc.
+TRACKER_SETTINGS: tuple[dict[str, Any], ...]
+
 #: The exception classes, declared once (Rust `src/python/errors.rs`, `CLASSES`): name, parent
 #: (None: the root), builtin (the Python exception it also derives from), doc. A test checks the
 #: classes below against it.
@@ -132,6 +138,7 @@ __all__ = [
     "check_law_option",
     "law_options_markdown",
     "TARGETS",
+    "TRACKER_SETTINGS",
     "ERROR_CLASSES",
     "ERROR_KINDS",
     "ERROR_ATTRIBUTES",
@@ -190,6 +197,9 @@ class VsinvError(Exception):
     """What usually causes a degenerate estimate."""
     key: str | None
     """The dotted scenario key at fault ('control.gain'); None for the whole document."""
+    location: tuple[str | int, ...] | None
+    """Where the error is, as data: keys and indices from the input's root, as the message names
+    it (('control', 'gain'), ('pixels', 4, 1), ('object', 'points', 2); () for a whole scenario)."""
     file: str | None
     """The file at fault (a scenario, calibration or URDF file)."""
     field: str | None

@@ -8,15 +8,19 @@ import argparse
 import math
 import sys
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
-from ._core import VsinvError
+from ._core import TARGETS, VsinvError
 from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import InvarianceResult, track_invariance, write_invariance_csv, write_scenario_images
 from .tag_invariance import track_tag_invariance
+
+#: The targets the command can follow (``vsinv._core.TARGETS``, declared once in the vision
+#: layer), as ``vsinv replay`` reads them.
+TARGET_NAMES = tuple(t["name"] for t in TARGETS)
 
 __all__ = ["add_allow_outside_files", "add_image_commands", "cmd_invariance", "cmd_render", "complete", "measurement_summary"]
 
@@ -56,11 +60,8 @@ def add_image_commands(sub: Any) -> None:
     )
     inv.add_argument("reference", metavar="REF", type=Path, help="the reference image (PNG, PGM/PPM or JPEG)")
     inv.add_argument("images", metavar="IMG", type=Path, nargs="+", help="the images, in tracking order (PNG, PGM/PPM or JPEG)")
-    inv.add_argument(
-        "--target", choices=("dots", "tags"), default="dots",
-        help="what to follow: dots (tracked from clicks) or tags (AprilTag corners, by identity: corner c of tag t is "
-        "point 4 t + c, numbered in identity order) (dots)",
-    )
+    what = "; ".join(f"{t['name']}: {t['doc']}" for t in TARGETS)
+    inv.add_argument("--target", choices=TARGET_NAMES, default="dots", help=f"what to follow ({what}) (dots)")
     inv.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate dot positions in REF (u, v columns); required")
     inv.add_argument(
         "--first-points", metavar="CSV", type=Path,
@@ -133,20 +134,35 @@ def complete(result: InvarianceResult) -> bool:
     return bool(result.found.all()) and bool(np.isfinite(result.invariant_error).all())
 
 
-def _track(args: argparse.Namespace) -> InvarianceResult:
-    """The errors of the target of ``--target`` through the images."""
-    basis = _parse_basis(args.basis)
-    if args.target == "tags":
-        for given, option in ((args.points, "--points"), (args.first_points, "--first-points")):
-            if given is not None:
-                raise ValueError(f"{option}: not an option of --target tags (tags match by identity, no clicks)")
-        return track_tag_invariance(args.reference, args.images, basis, **tag_options(args))
+def _track_dots(args: argparse.Namespace, basis: Optional[Sequence[int]]) -> InvarianceResult:
+    """Dots: tracked from the clicks of ``--points`` (and ``--first-points``)."""
     if args.points is None:
         raise ValueError("--points: --target dots needs the dots' approximate positions in REF")
     return track_invariance(
         args.reference, args.images, args.points, basis, first_points=args.first_points,
         labels=("--points", "--first-points"), **tracker_options(args),
     )
+
+
+def _track_tags(args: argparse.Namespace, basis: Optional[Sequence[int]]) -> InvarianceResult:
+    """Tags: corners matched by identity, no clicks."""
+    for given, option in ((args.points, "--points"), (args.first_points, "--first-points")):
+        if given is not None:
+            raise ValueError(f"{option}: not an option of --target tags (tags match by identity, no clicks)")
+    return track_tag_invariance(args.reference, args.images, basis, **tag_options(args))
+
+
+#: How the command follows each target of ``TARGET_NAMES`` through image files (a test checks
+#: every target of the table has one: a new target cannot fall through to another's code).
+TRACKERS: dict[str, Callable[[argparse.Namespace, Optional[Sequence[int]]], InvarianceResult]] = {
+    "dots": _track_dots,
+    "tags": _track_tags,
+}
+
+
+def _track(args: argparse.Namespace) -> InvarianceResult:
+    """The errors of the target of ``--target`` through the images."""
+    return TRACKERS[args.target](args, _parse_basis(args.basis))
 
 
 def cmd_invariance(args: argparse.Namespace) -> int:

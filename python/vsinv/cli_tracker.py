@@ -1,7 +1,8 @@
 """The dot tracker's settings as command options, shared by ``vsinv invariance`` and ``vsinv
 replay``: each of :class:`vsinv.vision.DotTracker`'s keyword arguments is an option of the same name
-(``search_radius`` is ``--search-radius``), stated once here with its default and its bounds, so
-that a bad value is refused by argparse naming the option as the user typed it."""
+(``search_radius`` is ``--search-radius``), with the default and the bound of its entry of
+``vsinv.vision.TRACKER_SETTINGS`` (declared once in the vision layer), so that a bad value is
+refused by argparse naming the option as the user typed it."""
 
 from __future__ import annotations
 
@@ -9,18 +10,27 @@ import argparse
 import math
 from typing import Any, Callable, Mapping
 
-from ._core import VsinvError
+from ._core import TRACKER_SETTINGS, VsinvError
 
 __all__ = ["POLARITIES", "add_tracker_options", "named_as_options", "tracker_options"]
 
-#: The dots' polarities the tracker knows.
-POLARITIES = ("light", "dark", "auto")
+#: The tracker's settings by name (``vsinv.vision.TRACKER_SETTINGS``).
+_SETTINGS = {s["name"]: s for s in TRACKER_SETTINGS}
 
-#: DotTracker's defaults (src/vision/tracker/mod.rs, TrackerConfig::default).
-_SEARCH_RADIUS = 20.0
-_MAX_SEARCH_RADIUS = 80.0
-_MIN_AREA = 4
-_MAX_AREA_RATIO = 1.5
+#: The dots' polarities the tracker knows.
+POLARITIES: tuple[str, ...] = tuple(_SETTINGS["polarity"]["choices"])
+
+#: DotTracker's defaults (TrackerConfig::default, checked equal to the table in Rust).
+_SEARCH_RADIUS: float = _SETTINGS["search_radius"]["default"]
+_MAX_SEARCH_RADIUS: float = _SETTINGS["max_search_radius"]["default"]
+_MIN_AREA: int = _SETTINGS["min_area"]["default"]
+_MAX_AREA_RATIO: float = _SETTINGS["max_area_ratio"]["default"]
+
+
+def _bounded(name: str) -> Callable[[str], float]:
+    """The argparse type of the number setting ``name``: its table's bound."""
+    s = _SETTINGS[name]
+    return _finite_at_least(float(s["min"]), bool(s["min_open"]))
 
 
 def _finite_at_least(low: float, strict: bool) -> Callable[[str], float]:
@@ -54,15 +64,15 @@ def add_tracker_options(parser: Any, scope: str = "") -> None:
     """Adds the tracker's options to a command; ``scope`` starts each help text (``"dots: "``
     where the command also follows other targets)."""
     parser.add_argument(
-        "--search-radius", metavar="PX", type=_finite_at_least(2.0, False), default=_SEARCH_RADIUS,
+        "--search-radius", metavar="PX", type=_bounded("search_radius"), default=_SEARCH_RADIUS,
         help=f"{scope}tracker window half-side around each dot's prediction, >= 2 ({_SEARCH_RADIUS:g})",
     )
     parser.add_argument(
-        "--max-search-radius", metavar="PX", type=_finite_at_least(2.0, False), default=None,
+        "--max-search-radius", metavar="PX", type=_bounded("max_search_radius"), default=None,
         help=f"{scope}largest window while a dot is lost ({_MAX_SEARCH_RADIUS:g}, or --search-radius when larger)",
     )
     parser.add_argument(
-        "--polarity", choices=POLARITIES, default="light",
+        "--polarity", choices=POLARITIES, default=_SETTINGS["polarity"]["default"],
         help=f"{scope}light dots, dark dots, or decided by each image the dots are clicked in (light)",
     )
     parser.add_argument(
@@ -70,7 +80,7 @@ def add_tracker_options(parser: Any, scope: str = "") -> None:
         help=f"{scope}smallest dot, pixels above its threshold ({_MIN_AREA})",
     )
     parser.add_argument(
-        "--max-area-ratio", metavar="R", type=_finite_at_least(1.0, True), default=_MAX_AREA_RATIO,
+        "--max-area-ratio", metavar="R", type=_bounded("max_area_ratio"), default=_MAX_AREA_RATIO,
         help=f"{scope}largest change of a dot's area from image to image, > 1 ({_MAX_AREA_RATIO:g})",
     )
 

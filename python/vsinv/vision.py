@@ -4,6 +4,7 @@ simulated camera, image files and grey conversion, lens distortion, and the pixe
 from ._core import (
     TAG_FAMILIES,
     TARGETS,
+    TRACKER_SETTINGS,
     Distortion,
     DotTracker,
     Dots,
@@ -26,6 +27,7 @@ from .sources import frames
 __all__ = [
     "TAG_FAMILIES",
     "TARGETS",
+    "TRACKER_SETTINGS",
     "Distortion",
     "DotTracker",
     "Dots",

@@ -102,7 +102,7 @@ struct Raw {
 }
 
 fn err(file: &str, field: impl Into<String>, reason: impl Into<String>) -> Error {
-    Error::Calibration { file: file.to_string(), field: field.into(), reason: reason.into() }
+    Error::Calibration { file: file.to_string(), field: crate::Location::parse(&field.into()), reason: reason.into() }
 }
 
 impl Raw {
@@ -521,7 +521,7 @@ dist_coeffs: !!opencv-matrix
 
     fn field_of(e: Error) -> (String, String) {
         match e {
-            Error::Calibration { field, reason, .. } => (field, reason),
+            Error::Calibration { field, reason, .. } => (field.to_string(), reason),
             other => panic!("{other:?}"),
         }
     }

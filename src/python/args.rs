@@ -3,7 +3,7 @@
 //! raise `InvalidInput` naming the argument, as every other bad value does. A wrong Python
 //! type (a str where an integer is expected) still raises `TypeError` naming the argument.
 
-use pyo3::exceptions::{PyOverflowError, PyValueError};
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::PyString;
 
@@ -97,20 +97,19 @@ pub fn threshold(obj: &Bound<'_, PyAny>) -> PyResult<Option<u8>> {
     Ok(Some(int_in_range(obj, "threshold", 0, 255)? as u8))
 }
 
-/// `None` or `(lambda_0, lambda_inf, lambda'_0)`.
+/// `None` or `(lambda_0, lambda_inf, lambda'_0)`; anything else (a bool, a string, two
+/// numbers) is `InvalidInput` naming `adaptive_gain`, never a bare `TypeError`.
 pub fn adaptive_gain(obj: &Bound<'_, PyAny>) -> PyResult<Option<(f64, f64, f64)>> {
     if obj.is_none() {
         return Ok(None);
     }
     let py = obj.py();
-    match obj.extract::<(f64, f64, f64)>() {
-        Ok(t) => Ok(Some(t)),
-        Err(e) if e.is_instance_of::<PyValueError>(py) => Err(invalid_argument(
+    obj.extract::<(f64, f64, f64)>().map(Some).map_err(|e| {
+        invalid_argument(
             "adaptive_gain",
             format!("adaptive_gain: expected (lambda_0, lambda_inf, lambda'_0), three numbers ({})", e.value(py)),
-        )),
-        Err(e) => Err(e),
-    }
+        )
+    })
 }
 
 /// A basis argument: three point indices, or "auto" for the widest triangle of the

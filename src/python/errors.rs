@@ -15,6 +15,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 use crate::Error;
+use crate::location::Step;
 use crate::sim::scenario::DEPTHS_REMEDY;
 
 static VSINV_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
@@ -113,6 +114,12 @@ pub(crate) const ATTRIBUTES: &[(&str, &str, &str)] = &[
     ("estimate", "str", "What was being estimated (a degenerate estimate)."),
     ("hint", "str", "What usually causes a degenerate estimate."),
     ("key", "str", "The dotted scenario key at fault ('control.gain'); None for the whole document."),
+    (
+        "location",
+        "tuple[str | int, ...]",
+        "Where the error is, as data: keys and indices from the input's root, as the message names it \
+         (('control', 'gain'), ('pixels', 4, 1), ('object', 'points', 2); () for a whole scenario).",
+    ),
     ("file", "str", "The file at fault (a scenario, calibration or URDF file)."),
     ("field", "str", "The entry of a calibration file at fault ('camera_matrix.data')."),
     ("a_hat", "float", "The vanishing coefficient of the rz law (eq. 23)."),
@@ -236,6 +243,8 @@ pub(crate) enum Value {
     Int(usize),
     Float(f64),
     Basis([usize; 3]),
+    /// Where the error is: a tuple of keys (str) and indices (int).
+    Location(crate::Location),
     /// An attribute copied from another exception.
     Object(Py<PyAny>),
 }
@@ -247,9 +256,24 @@ impl Value {
             Value::Int(i) => i.into_pyobject(py)?.into_any(),
             Value::Float(x) => x.into_pyobject(py)?.into_any(),
             Value::Basis(b) => PyTuple::new(py, b)?.into_any(),
+            Value::Location(at) => location_tuple(py, at)?.into_any(),
             Value::Object(o) => o.bind(py).clone(),
         })
     }
+}
+
+/// A location as Python sees it: a tuple of keys (str) and indices (int), `()` for the whole
+/// input.
+fn location_tuple<'py>(py: Python<'py>, at: &crate::Location) -> PyResult<Bound<'py, PyTuple>> {
+    let steps = at
+        .steps()
+        .iter()
+        .map(|step| match step {
+            Step::Key(k) => Ok(k.into_pyobject(py)?.into_any()),
+            Step::Index(i) => Ok(i.into_pyobject(py)?.into_any()),
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    PyTuple::new(py, steps)
 }
 
 /// The exception class of an error.
@@ -280,9 +304,11 @@ impl PyError {
         self
     }
 
-    /// Sets `argument`.
+    /// Sets `argument`, and `location` to it (an attribute set later wins: this replaces a
+    /// location copied from a cause).
     pub(crate) fn argument(self, argument: &str) -> Self {
         self.with("argument", Value::Str(argument.to_string()))
+            .with("location", Value::Location(crate::Location::key(argument)))
     }
 
     /// Sets `reason`.
@@ -368,13 +394,13 @@ fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
             ("degenerate_estimate", vec![("estimate", s(what)), ("ratio", Float(*ratio)), ("hint", s(hint))])
         }
         Error::Scenario { key, reason } => {
-            ("scenario", opt(key).map(|k| ("key", k)).into_iter().chain([("reason", s(reason))]).collect())
+            ("scenario", opt(&key.to_string()).map(|k| ("key", k)).into_iter().chain([("reason", s(reason))]).collect())
         }
         Error::InvalidImage { what, reason } => ("invalid_image", vec![("argument", s(what)), ("reason", s(reason))]),
         Error::Urdf { file, message } => ("urdf", vec![("file", s(file)), ("reason", s(message))]),
         Error::Distortion { index, reason } => ("distortion", vec![("index", Int(*index)), ("reason", s(reason))]),
         Error::Calibration { file, field, reason } => {
-            let field = opt(field).map(|f| ("field", f));
+            let field = opt(&field.to_string()).map(|f| ("field", f));
             ("calibration", [("file", s(file))].into_iter().chain(field).chain([("reason", s(reason))]).collect())
         }
         Error::RzSingular { a_hat } => ("rz_singular", vec![("a_hat", Float(*a_hat))]),
@@ -393,7 +419,8 @@ fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
 impl From<&Error> for PyError {
     fn from(err: &Error) -> Self {
         let class = if err.is_degenerate() { Class::Degenerate } else { Class::InvalidInput };
-        let (kind, attributes) = describe(err);
+        let (kind, mut attributes) = describe(err);
+        attributes.extend(err.location().map(|at| ("location", Value::Location(at))));
         // Python users pass depths to scenarios too: the remedy names the scenario key.
         let message = err.message_with_remedy(DEPTHS_REMEDY);
         Self { class, message, kind: Some(kind), attributes }

@@ -12,13 +12,12 @@ use super::intrinsics;
 use super::lens::distortion_arg;
 use super::servo::{PyServoStep, ServoOptions};
 use super::shared::Shared;
-use super::vision::polarity_arg;
 use crate::vision::image_servo::{ImageServo, ImageServoConfig, ImageTargetKind};
 use crate::vision::targets::{self, ArgKind, ArgValue, TARGETS, TargetArg, TargetArgs, TargetSpec};
-use crate::vision::tracker::TrackerConfig;
+use crate::vision::tracker::{SettingKind, SettingValue, TrackerConfig, tracker_setting, tracker_setting_names};
 
-/// The `tracker` dictionary over the default tracker settings; an unknown key is refused by
-/// name.
+/// The `tracker` dictionary over the default tracker settings, each read as its entry of
+/// [`TRACKER_SETTINGS`] says; an unknown key is refused by name.
 fn tracker_config(tracker: Option<&Bound<'_, PyDict>>) -> PyResult<TrackerConfig> {
     let mut config = TrackerConfig::default();
     let Some(tracker) = tracker else { return Ok(config) };
@@ -26,22 +25,34 @@ fn tracker_config(tracker: Option<&Bound<'_, PyDict>>) -> PyResult<TrackerConfig
         let key: String =
             key.extract().map_err(|_| invalid_argument("tracker", "tracker: keys must be strings".into()))?;
         let name = format!("tracker.{key}");
-        let bad = |_| invalid_argument(&name, format!("{name}: expected a number"));
-        match key.as_str() {
-            "search_radius" => config.search_radius = value.extract().map_err(bad)?,
-            "max_search_radius" => config.max_search_radius = value.extract().map_err(bad)?,
-            "min_area" => config.min_area = super::args::min_area(&value)?,
-            "max_area_ratio" => config.max_area_ratio = value.extract().map_err(bad)?,
-            "polarity" => {
+        let Some(setting) = tracker_setting(&key) else {
+            let known = tracker_setting_names();
+            return Err(invalid_argument(&name, format!("{name}: unknown key; known: {known}")));
+        };
+        let value = match setting.kind {
+            SettingKind::Number { .. } => SettingValue::Number(
+                value.extract().map_err(|_| invalid_argument(&name, format!("{name}: expected a number")))?,
+            ),
+            SettingKind::Count => SettingValue::Count(super::args::count(&value, setting.name).map_err(|e| {
+                // Not a number at all (a bare TypeError): named as the other kinds are.
+                if e.is_instance_of::<pyo3::exceptions::PyTypeError>(value.py()) {
+                    invalid_argument(&name, format!("{name}: expected a whole number"))
+                } else {
+                    e
+                }
+            })?),
+            SettingKind::Choice(names) => {
                 let p: String =
                     value.extract().map_err(|_| invalid_argument(&name, format!("{name}: expected a string")))?;
-                config.polarity = polarity_arg(&p)?;
+                if !names.contains(&p.as_str()) {
+                    let names = names.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(", ");
+                    let key = setting.name;
+                    return Err(invalid_argument(key, format!("{key}: expected one of {names}, got {p:?}")));
+                }
+                SettingValue::Choice(p)
             }
-            _ => {
-                let known = "search_radius, max_search_radius, min_area, max_area_ratio, polarity";
-                return Err(invalid_argument(&name, format!("{name}: unknown key; known: {known}")));
-            }
-        }
+        };
+        config.set(setting.name, value)?;
     }
     Ok(config)
 }

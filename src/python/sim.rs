@@ -14,9 +14,7 @@ use super::values;
 use crate::sim::arm::ArmRobot;
 use crate::sim::outcome::{Buffer, COLUMNS, Recorded, SUMMARY_FIELDS, summary_field};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::{
-    BUILTIN, FileAccess, MAX_SCENARIO_BYTES, Scenario, builtin, check_point_count, scenario_error,
-};
+use crate::sim::scenario::{BUILTIN, FileAccess, MAX_SCENARIO_BYTES, Scenario, builtin, check_point_count};
 use crate::sim::{Outcome, simulate};
 
 /// A validated scenario (see the README for the schema).
@@ -85,22 +83,24 @@ fn scenario_value(d: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
 /// [`scenario_value`] of the item `index` of a batch: keys as the batch's validation names
 /// them (`[3].control.gain`).
 fn scenario_value_at(d: &Bound<'_, PyAny>, index: Option<usize>) -> PyResult<serde_json::Value> {
-    let at = |key: &str| match (index, key.is_empty()) {
-        (None, _) => key.to_string(),
-        (Some(i), true) => format!("[{i}]"),
-        (Some(i), false) => format!("[{i}].{key}"),
+    let at = |key: crate::Location, reason: String| crate::Error::Scenario {
+        key: match index {
+            Some(i) => key.under_index(i),
+            None => key,
+        },
+        reason,
     };
     // Too many object points are refused before the dictionary is read (a million took 5 s
     // and 300 MB to be refused as too much text).
     if let Ok(n) = d.get_item("object").and_then(|o| o.get_item("points")).and_then(|p| p.len()) {
         check_point_count(n).map_err(|e| match e {
-            crate::Error::Scenario { key, reason } => scenario_error(&at(&key), reason),
+            crate::Error::Scenario { key, reason } => at(key, reason),
             other => other,
         })?;
     }
     // As many values as the text limit could hold (two bytes each at least, "0,").
     let max_values = usize::try_from(MAX_SCENARIO_BYTES / 2).unwrap_or(usize::MAX);
-    values::to_value(d, max_values)?.map_err(|e| scenario_error(&at(&e.path), e.reason).into())
+    values::to_value(d, max_values)?.map_err(|e| at(crate::Location::parse(&e.path), e.reason).into())
 }
 
 /// A scenario from a `Scenario`, a dictionary, a built-in name or a TOML file path; the files

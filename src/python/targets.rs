@@ -1,11 +1,14 @@
 //! `vsinv._core.TARGETS`: the vision layer's table of the targets
 //! ([`TARGETS`](crate::vision::targets::TARGETS)), for the layers written in Python (the
-//! `--target` choices, the ROS parameter `target`, the docs).
+//! `--target` choices, the ROS parameter `target`, the docs); and `TRACKER_SETTINGS`, the dot
+//! tracker's settings ([`TRACKER_SETTINGS`](crate::vision::tracker::TRACKER_SETTINGS): the
+//! dots' argument `tracker`, the ROS parameters `tracker.*`, the command options).
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::vision::targets::{ArgKind, TARGETS, TargetArg, TargetSpec};
+use crate::vision::tracker::{SettingKind, TRACKER_SETTINGS, TrackerSetting};
 
 /// One argument as a dict: name, kind, choices, min, max, default, required, doc.
 fn arg_dict<'py>(py: Python<'py>, a: &TargetArg) -> PyResult<Bound<'py, PyDict>> {
@@ -39,10 +42,40 @@ fn target_dict<'py>(py: Python<'py>, t: &TargetSpec) -> PyResult<Bound<'py, PyDi
     Ok(d)
 }
 
-/// Adds `TARGETS`.
+/// One tracker setting as a dict: name, kind ("number", "count", "choice"), default (a float,
+/// an int or a str), min, min_open, choices, unit, doc.
+fn setting_dict<'py>(py: Python<'py>, s: &TrackerSetting) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("name", s.name)?;
+    d.set_item("kind", s.kind.name())?;
+    let bad_default = || pyo3::exceptions::PyRuntimeError::new_err(format!("tracker setting {}: default", s.name));
+    let (default, min, min_open, choices): (Bound<'py, PyAny>, Option<f64>, bool, &[&str]) = match s.kind {
+        SettingKind::Number { min, strict } => {
+            let x: f64 = s.default.parse().map_err(|_| bad_default())?;
+            (x.into_pyobject(py)?.into_any(), Some(min), strict, &[])
+        }
+        SettingKind::Count => {
+            let n: usize = s.default.parse().map_err(|_| bad_default())?;
+            (n.into_pyobject(py)?.into_any(), Some(0.0), false, &[])
+        }
+        SettingKind::Choice(names) => (s.default.into_pyobject(py)?.into_any(), None, false, names),
+    };
+    d.set_item("default", default)?;
+    d.set_item("min", min)?;
+    d.set_item("min_open", min_open)?;
+    d.set_item("choices", PyTuple::new(py, choices)?)?;
+    d.set_item("unit", s.unit)?;
+    d.set_item("doc", s.doc)?;
+    Ok(d)
+}
+
+/// Adds `TARGETS` and `TRACKER_SETTINGS`.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     let table: Vec<Bound<'_, PyDict>> = TARGETS.iter().map(|t| target_dict(py, t)).collect::<PyResult<_>>()?;
     m.add("TARGETS", PyTuple::new(py, table)?)?;
+    let settings: Vec<Bound<'_, PyDict>> =
+        TRACKER_SETTINGS.iter().map(|s| setting_dict(py, s)).collect::<PyResult<_>>()?;
+    m.add("TRACKER_SETTINGS", PyTuple::new(py, settings)?)?;
     Ok(())
 }

@@ -76,11 +76,8 @@ fn json_batch_on_pool(
             .find_map_first(|(i, t)| Scenario::config_from_json_with(t, access).err().map(|e| (i, e)));
         if let Some((i, err)) = first_error {
             return Err(match err {
-                Error::Scenario { key, reason } => Error::Scenario {
-                    key: if key.is_empty() { format!("[{i}]") } else { format!("[{i}].{key}") },
-                    reason,
-                },
-                other => Error::Scenario { key: format!("[{i}]"), reason: other.to_string() },
+                Error::Scenario { key, reason } => Error::Scenario { key: key.under_index(i), reason },
+                other => Error::Scenario { key: crate::Location::root().then_index(i), reason: other.to_string() },
             });
         }
         Ok(texts.par_iter().map(|t| run_one(t, access, watch)).collect())
@@ -193,7 +190,7 @@ mod tests {
         let mut bad = texts.clone();
         bad[1] = bad[1].replace("\"gain\":1.0", "\"gain\":-1.0");
         match run_json_batch(&bad, None) {
-            Err(Error::Scenario { key, .. }) => assert_eq!(key, "[1].control.gain"),
+            Err(Error::Scenario { key, .. }) => assert_eq!(key.to_string(), "[1].control.gain"),
             other => panic!("{other:?}"),
         }
     }

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, cast
 import numpy as np
 import numpy.typing as npt
 
-from .._core import LAW_OPTIONS, TARGETS, Distortion, Intrinsics, InvalidInput, check_law_option, load_calibration
+from .._core import LAW_OPTIONS, TARGETS, TRACKER_SETTINGS, Distortion, Intrinsics, InvalidInput, check_law_option, load_calibration
 from .conversions import hand_eye_matrix, intrinsics_from_numbers
 
 if TYPE_CHECKING:
@@ -61,14 +61,21 @@ def _law_parameters() -> tuple[Parameter, ...]:
 #: The ROS type of each kind of target argument (points: a flat list, or ``NAME_file``).
 _ROS_TARGET_KINDS = {"points": "floats", "choice": "str", "ids": "ints", "count": "int"}
 
-#: The dot tracker's settings (a target argument of kind "tracker"), one parameter each.
-_TRACKER_PARAMETERS = (
-    ("search_radius", "float", "the tracker's search radius, pixels"),
-    ("max_search_radius", "float", "the largest search radius, pixels"),
-    ("min_area", "int", "the smallest dot, pixels"),
-    ("max_area_ratio", "float", "the largest area change between frames"),
-    ("polarity", "str", "light, dark or auto"),
-)
+#: The ROS type of each kind of tracker setting.
+_ROS_SETTING_KINDS = {"number": "float", "count": "int", "choice": "str"}
+
+
+def _tracker_parameters(name: str, scope: str) -> tuple[Parameter, ...]:
+    """The dot tracker's settings (``vsinv.vision.TRACKER_SETTINGS``, declared once in the vision
+    layer), one parameter ``NAME.KEY`` each; unset: the tracker's default. The values are
+    checked by ImageServo (its messages), not here: the choices are in the text only."""
+    out = []
+    for s in TRACKER_SETTINGS:
+        unit = f", {s['unit']}" if s["unit"] else ""
+        choices = f" ({', '.join(s['choices'])})" if s["choices"] else ""
+        doc = f"{scope}the tracker's {s['doc']}{choices}{unit}; unset: {s['default']!r}"
+        out.append(Parameter(f"{name}.{s['name']}", _ROS_SETTING_KINDS[s["kind"]], None, doc))
+    return tuple(out)
 
 
 def _arg_parameters(target: str, a: dict[str, Any]) -> tuple[Parameter, ...]:
@@ -76,7 +83,7 @@ def _arg_parameters(target: str, a: dict[str, Any]) -> tuple[Parameter, ...]:
     for points; ``NAME.KEY`` per setting of the tracker)."""
     scope, name, kind = f"{target}: ", a["name"], a["kind"]
     if kind == "tracker":
-        return tuple(Parameter(f"{name}.{k}", t, None, scope + doc) for k, t, doc in _TRACKER_PARAMETERS)
+        return _tracker_parameters(name, scope)
     doc = scope + a["doc"]
     if kind == "count":
         doc += f", {a['min']}..={a['max']}"

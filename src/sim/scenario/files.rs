@@ -81,7 +81,7 @@ mod tests {
 
     fn key_and_reason(r: Result<PathBuf>) -> (String, String) {
         match r.unwrap_err() {
-            Error::Scenario { key, reason } => (key, reason),
+            Error::Scenario { key, reason } => (key.to_string(), reason),
             other => panic!("{other:?}"),
         }
     }

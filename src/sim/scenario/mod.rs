@@ -72,9 +72,8 @@ fn shorten_quotes(message: &str) -> String {
 }
 
 pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
-    // serde_path_to_error names the document root ".".
-    let key = if key == "." { "" } else { key };
-    Error::Scenario { key: key.to_string(), reason: reason.into() }
+    // serde_path_to_error names the document root "." ([`Location::parse`] reads it as the root).
+    Error::Scenario { key: crate::Location::parse(key), reason: reason.into() }
 }
 
 /// Scenario text (TOML, or JSON: a batch's items) is held to the file limit,

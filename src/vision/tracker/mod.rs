@@ -18,10 +18,14 @@
 //! prediction than to its own is not taken (overlapping windows), nor one whose box holds
 //! another dot's prediction.
 
+mod settings;
 mod shape;
 mod start;
 mod window_search;
 
+pub use self::settings::{
+    SettingKind, SettingValue, TRACKER_SETTINGS, TrackerSetting, tracker_setting, tracker_setting_names,
+};
 pub use self::start::MAX_START_PIXELS;
 
 use self::shape::Shape;
