@@ -45,7 +45,7 @@ AREAS = {
     "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py"],
     "docs": ["test_docs.py", "test_readme_blocks.py"],
     "robustness": [
-        "test_errors.py", "test_fork_safety.py", "test_fuzz_scenarios.py", "test_hostile_files.py",
+        "test_error_locations.py", "test_errors.py", "test_fork_safety.py", "test_fuzz_scenarios.py", "test_hostile_files.py",
         "test_hostile_sizes.py", "test_robustness_camera.py", "test_robustness_control.py",
         "test_robustness_geometry.py", "test_robustness_kinematics.py", "test_robustness_limits.py",
         "test_robustness_planning.py", "test_robustness_registry.py", "test_robustness_scenarios.py",
