@@ -1,0 +1,13 @@
+"""MuJoCo worlds for vsinv (the optional extra ``mujoco``: ``pip install 'vsinv[mujoco]'``).
+
+:class:`World` puts a scenario's target and camera into a MuJoCo scene (or opens a user's MJCF
+file) and renders grey images in vsinv's conventions; :func:`run` closes the loop of a scenario
+through those images with :class:`vsinv.ImageServo`. Nothing else in vsinv imports this module.
+MuJoCo renders offscreen through EGL (``MUJOCO_GL=egl`` is set unless already set).
+"""
+
+from ._camera import FLIP, k_of_fovy, k_of_intrinsics
+from ._loop import MujocoRun, run
+from ._world import World, available
+
+__all__ = ["FLIP", "MujocoRun", "World", "available", "k_of_fovy", "k_of_intrinsics", "run"]

@@ -1,0 +1,256 @@
+"""vsinv.mujoco (issue 31, item 1): worlds made from scenarios or from a user's MJCF file,
+rendered by MuJoCo in vsinv's conventions, and the closed loop through those images.
+
+The independent checks: MuJoCo's own renders (centroids of small spheres, MuJoCo's camera frame
+after its kinematics) against vsinv's pinhole projection; a scenario's target rendered by MuJoCo
+against vsinv's own renderer of the same scenario; the loop's end against the scene's truth.
+Skips (saying what to install) when mujoco or an EGL/OpenGL stack is missing.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import vsinv  # noqa: E402
+import vsinv.mujoco as vm  # noqa: E402
+
+pytestmark = pytest.mark.sim
+
+_WHY_NOT = vm.available()
+if _WHY_NOT is not None:
+    pytest.skip(_WHY_NOT, allow_module_level=True)
+
+import mujoco  # noqa: E402
+
+POINTS = np.array([[0, 0, 0], [0.08, 0.03, 0.02], [-0.06, 0.05, -0.04], [0.02, -0.07, 0.06], [-0.05, -0.04, 0.05]])
+
+
+def _spheres_mjcf(path: Path, camera_fovy: float = 45.0) -> Path:
+    """A user's MJCF: small white spheres at POINTS lit by a full ambient light, a free camera."""
+    geoms = "".join(f'<geom type="sphere" size="0.004" pos="{x} {y} {z}" rgba="1 1 1 1"/>' for x, y, z in POINTS)
+    path.write_text(
+        f"""<mujoco><visual><headlight ambient="1 1 1" diffuse="0 0 0" specular="0 0 0"/></visual>
+        <worldbody>{geoms}<camera name="eye" pos="1 1 1" fovy="{camera_fovy}"/></worldbody></mujoco>"""
+    )
+    return path
+
+
+def _look_at(eye, target, up) -> np.ndarray:
+    eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
+    z = (target - eye) / np.linalg.norm(target - eye)
+    x = np.cross(z, up)
+    x /= np.linalg.norm(x)
+    pose = np.eye(4)
+    pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    pose[:3, 3] = eye
+    return pose
+
+
+def _centroids(image: np.ndarray, count: int) -> np.ndarray:
+    """Intensity-weighted centroids of the bright blobs (OpenCV's labelling, not vsinv's detector)."""
+    cv2 = pytest.importorskip("cv2", reason="pip install opencv-python-headless")
+    n, labels = cv2.connectedComponents((image > 60).astype(np.uint8))
+    found = n - 1
+    assert found == count, found
+    weight = np.clip(image.astype(float) - 20.0, 0, None)
+    out = []
+    for label in range(1, found + 1):
+        v, u = np.nonzero(labels == label)
+        w = weight[v, u]
+        out.append([(u * w).sum() / w.sum(), (v * w).sum() / w.sum()])
+    return np.array(out)
+
+
+KS = [None, (520.0, 470.0, 183.3, 161.8), (300.0, 300.0, 214.0, 139.5)]  # None: the MJCF's fovy
+
+
+@pytest.mark.parametrize("K", KS, ids=["fovy", "anisotropic-off-centre", "wide-off-centre"])
+def test_K_is_what_mujoco_renders(tmp_path: Path, K) -> None:
+    """Spheres at known points rendered by MuJoCo from vsinv poses: their centroids are where
+    vsinv.geometry.project puts them with `world.K` (from MuJoCo's fovy, or set through its
+    camera intrinsics), within a fraction of a pixel and without bias."""
+    with vm.World.from_mjcf(_spheres_mjcf(tmp_path / "spheres.xml"), camera="eye", width=400, height=300) as world:
+        if K is not None:
+            world.set_K(K)
+        else:  # f = (H / 2) / tan(fovy / 2), centre ((W - 1) / 2, (H - 1) / 2)
+            np.testing.assert_allclose(
+                [world.K.fku, world.K.fkv, world.K.u0, world.K.v0], [150 / np.tan(np.radians(22.5))] * 2 + [199.5, 149.5], rtol=1e-6
+            )
+        residuals = []
+        for eye, up in [((0.4, 0.1, 0.2), (0, 0, 1)), ((0.1, -0.45, 0.1), (0.3, 0, 1)), ((-0.3, 0.2, -0.3), (1, 1, 0))]:
+            pose = _look_at(eye, (0.01, 0.0, 0.005), up)
+            image = world.render(pose)
+            cam = (POINTS - pose[:3, 3]) @ pose[:3, :3]
+            expected, _ = vsinv.geometry.project(cam, world.K)
+            for c in _centroids(image, len(POINTS)):
+                residuals.append(c - expected[np.argmin(np.linalg.norm(expected - c, axis=1))])
+        residuals = np.array(residuals)
+        assert np.abs(residuals).max() < 0.35, residuals
+        assert np.abs(residuals.mean(axis=0)).max() < 0.1, residuals.mean(axis=0)  # a half pixel or a flip would show
+
+
+def test_camera_frame_and_move_camera(tmp_path: Path) -> None:
+    """MuJoCo's camera frame (cam_xmat after kinematics) of a vsinv pose is vsinv's turned by pi
+    about x; camera_pose() reads it back; move_camera integrates the twist as exp_twist does."""
+    rng = np.random.default_rng(31)
+    with vm.World.from_mjcf(_spheres_mjcf(tmp_path / "s.xml"), camera="eye", width=64, height=48) as world:
+        assert world.free_camera
+        for _ in range(5):
+            pose = vsinv.geometry.pose_from_position_thetau(rng.normal(size=3), rng.uniform(-2, 2, size=3))
+            world.render(pose)
+            R = world.data.cam_xmat[world.camera_id].reshape(3, 3)
+            np.testing.assert_allclose(R, pose[:3, :3] @ np.diag([1, -1, -1]), atol=1e-9)
+            np.testing.assert_allclose(world.camera_pose(), pose, atol=1e-9)
+            twist = rng.normal(size=6) * 0.2
+            moved = world.move_camera(twist, 0.5)
+            np.testing.assert_allclose(moved, pose @ vsinv.geometry.exp_twist(twist, 0.5), atol=1e-12)
+            np.testing.assert_allclose(world.camera_pose(), moved, atol=1e-9)
+            # vz moves MuJoCo's camera along its -z (where it looks)
+            before = world.camera_pose()
+            world.move_camera([0, 0, 0.1, 0, 0, 0], 1.0)
+            mujoco.mj_kinematics(world.model, world.data)
+            R = world.data.cam_xmat[world.camera_id].reshape(3, 3)
+            np.testing.assert_allclose(world.camera_pose()[:3, 3] - before[:3, 3], -0.1 * R[:, 2], atol=1e-9)
+
+
+def test_from_mjcf_with_a_camera_on_a_moving_body(tmp_path: Path) -> None:
+    """A user's arm-like MJCF: the camera on a hinged link follows the joint; the target body is
+    named; render(pose) is refused for a carried camera; wrong names are refused by name."""
+    path = tmp_path / "arm.xml"
+    path.write_text(
+        """<mujoco><visual><headlight ambient="0.6 0.6 0.6"/></visual><worldbody>
+        <body name="target" pos="0 0 -1"><geom type="box" size="0.1 0.1 0.01" rgba="1 1 1 1"/></body>
+        <body name="link"><joint name="pan" type="hinge" axis="0 1 0"/>
+          <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.02" mass="0.5"/>
+          <camera name="wrist" pos="0 0 0" fovy="50"/></body>
+        </worldbody></mujoco>"""
+    )
+    with pytest.raises(vsinv.InvalidInput, match="camera"):
+        vm.World.from_mjcf(path, camera="nope")
+    with pytest.raises(vsinv.InvalidInput, match="target_bodies"):
+        vm.World.from_mjcf(path, camera="wrist", target_bodies=("table",))
+    with vm.World.from_mjcf(path, camera="wrist", width=160, height=120, target_bodies=("target",)) as world:
+        assert not world.free_camera
+        image = world.render()
+        # MuJoCo's camera looks down its -z, at the target: the white box fills the image centre.
+        assert image[50:70, 70:90].min() > 100, image[50:70, 70:90]
+        px, z = world.project([[0.0, 0.0, -1.0]])
+        np.testing.assert_allclose(px[0], [79.5, 59.5], atol=1e-9)
+        assert z[0] == pytest.approx(1.0)
+        world.data.qpos[0] = 0.6  # turn the link: the camera follows, the box leaves the centre
+        turned = world.camera_pose()
+        np.testing.assert_allclose(np.degrees(np.arccos(turned[:3, :3] @ [0, 0, 1] @ [0, 0, -1])), np.degrees(0.6), atol=1e-6)
+        assert world.render()[50:70, 70:90].max() < image[50:70, 70:90].min()
+        with pytest.raises(vsinv.InvalidInput, match="carried"):
+            world.render(np.eye(4))
+
+
+@pytest.mark.parametrize("name", ["lens-12-6", "tags-12-6"])
+def test_world_from_a_builtin_renders_its_target(name: str) -> None:
+    """The scenario's target in MuJoCo at F* with [reference_camera]'s K is where vsinv's own
+    renderer draws it: dots' centroids within 0.1 px of their projections, the tags decoded with
+    the same identities and corners within 0.1 px."""
+    d = vsinv.load_scenario(name).to_dict()
+    r = d["reference_camera"]
+    drawn, pixels, _ = vsinv.vision.render_view(name, reference=True)
+    with vm.World.from_scenario(name) as world:
+        assert (world.width, world.height) == (832, 624)
+        np.testing.assert_allclose([world.K.fku, world.K.u0], [600.0, 416.0], rtol=1e-6)  # [camera]
+        world.set_K((r["fku"], r["fkv"], r["u0"], r["v0"]))
+        image = world.render(np.eye(4))
+    if world.target == "dots":
+        found = vsinv.vision.detect_dots(image).centroids
+        assert len(found) == len(pixels)
+        gap = np.linalg.norm(found[:, None] - pixels[None], axis=2).min(axis=0)
+        assert gap.max() < 0.1, gap
+    else:
+        ours, theirs = vsinv.vision.detect_tags(image), vsinv.vision.detect_tags(drawn)
+        assert list(ours.ids) == list(theirs.ids) == [1, 2, 3]
+        gap = np.linalg.norm(np.asarray(ours.corners) - np.asarray(theirs.corners), axis=2)
+        assert gap.max() < 0.1, gap
+
+
+def test_bad_arguments_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(vsinv.InvalidInput, match="path"):
+        vm.World.from_mjcf(tmp_path / "missing.xml", camera="eye")
+    with vm.World.from_mjcf(_spheres_mjcf(tmp_path / "s.xml"), camera="eye", width=32, height=24) as world:
+        with pytest.raises(vsinv.InvalidInput, match="K"):
+            world.set_K((-1.0, 100.0, 10.0, 10.0))
+        with pytest.raises(vsinv.InvalidInput, match="pose"):
+            world.render(np.full((4, 4), np.nan))
+    with pytest.raises(vsinv.InvalidInput, match="supersample"):
+        vm.World.from_scenario("lens-12-6", supersample=9)
+
+
+# -- the closed loop -------------------------------------------------------------------------
+# The lens change of sec. 5.2 (12 mm -> 6 mm, K_hat off) from the paper's start (290 mm, 80
+# degrees) and two others, with the issue's requirement as the stop tolerance. The invariant
+# law's frames are rendered 2 x 2 supersampled (a sensor's pixel integrates light over its
+# area): with MuJoCo's own pixels (4 samples each) the runs end 0.2-0.9 mm from F* but the
+# detections of the two lenses disagree too much for the images to certify 1 mm (`settled`).
+GOAL_MM, GOAL_DEG = 1.0, 0.2
+STARTS = [
+    None,  # the scenario's [start]
+    ([-0.1, 0.05, -0.12], [5.0, -10.0, -45.0]),  # every dot 20 px or more inside the image
+    ([0.1, -0.05, -0.1], [-5.0, 8.0, 50.0]),
+]
+
+
+def _lens_change() -> dict:
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["stop"]["max_translation_uncertainty"] = GOAL_MM * 1e-3
+    d["stop"]["max_rotation_uncertainty_deg"] = GOAL_DEG
+    return d
+
+
+def _start(s) -> np.ndarray:
+    if s is None:
+        s = (vsinv.load_scenario("lens-12-6").to_dict()["start"][k] for k in ("position", "rotation_deg"))
+    position, rotation_deg = s
+    return vsinv.geometry.pose_from_position_thetau(position, np.radians(rotation_deg))
+
+
+def _runs(law: str, supersample: int) -> list[vm.MujocoRun]:
+    d = _lens_change()
+    with vm.World.from_scenario(d, supersample=supersample) as world:
+        return [vm.run(d, law=law, world=world, start=None if s is None else _start(s)) for s in STARTS]
+
+
+def _table(runs: list[vm.MujocoRun]) -> str:
+    return "\n".join(
+        f"{r.summary['status']:10} {r.summary['iterations']:4d} it {1e3 * r.summary['final_translation_error']:8.3f} mm "
+        f"{np.degrees(r.summary['final_rotation_error']):7.3f} deg ({r.summary['message']})" for r in runs
+    )
+
+
+def test_the_lens_change_converges_through_mujoco_images() -> None:
+    """From three starts the invariant law ends `converged` within 1 mm and 0.2 degrees of F*
+    (the truth is the scene's pose); the summary has RunResult.summary's keys."""
+    runs = _runs("invariant", supersample=2)
+    table = _table(runs)
+    print(table)
+    keys = set(vsinv.run_scenario("lens-12-6", record=False).summary)
+    for r, s in zip(runs, STARTS):
+        np.testing.assert_allclose(r.pose[0], _start(s), atol=1e-12)  # recorded from the start
+        assert keys <= set(r.summary), keys - set(r.summary)
+        assert r.summary["status"] == "converged", table
+        assert 1e3 * r.summary["final_translation_error"] < GOAL_MM, table
+        assert np.degrees(r.summary["final_rotation_error"]) < GOAL_DEG, table
+        assert r.pose.shape == (r.summary["iterations"] + 1, 4, 4) and r.found.all()
+
+
+def test_ibvs_never_claims_converged_on_the_lens_change() -> None:
+    """IBVS matches pixels of another lens: it ends far from F* and never says `converged`."""
+    runs = _runs("ibvs", supersample=1)
+    table = _table(runs)
+    print(table)
+    assert all(r.summary["status"] != "converged" for r in runs), table
+    assert min(r.summary["final_translation_error"] for r in runs) > 0.01, table
+
