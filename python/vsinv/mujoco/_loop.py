@@ -23,12 +23,13 @@ _STOP_KEYS = ("max_iterations", "pixel_error", "invariant_error", "tau21", "wind
 class MujocoRun:
     """A run through MuJoCo's images: `summary` (the keys of `RunResult.summary` this loop can
     fill; the others are None), and per iteration `time` (s), `pose` (N, 4, 4: camera in F*),
-    `twist` (N, 6), `invariant_error` (N,), `found` (N, n) and the last image."""
+    `twist` (N, 6), `K` (N, 4: fku, fkv, u0, v0 of the frame, which a `[camera] zoom` changes), `invariant_error` (N,), `found` (N, n) and the last image."""
 
     summary: dict[str, Any]
     time: np.ndarray
     pose: np.ndarray
     twist: np.ndarray
+    K: np.ndarray
     invariant_error: np.ndarray
     found: np.ndarray
     last_image: np.ndarray = field(repr=False)
@@ -99,9 +100,17 @@ def run(scenario: Any, *, law: str | None = None, start: Any = None, supersample
             w.close()
 
 
-def _intrinsics(d: dict[str, Any], key: str) -> Intrinsics:
+def _intrinsics(d: dict[str, Any], key: str, t: float = 0.0) -> Intrinsics:
+    """K of `[key]` at time `t`: a `[camera] zoom` (times, fku, fkv, optional u0, v0) is
+    interpolated piecewise linearly and held outside its times, as the simulator's."""
     c = d[key]
-    return Intrinsics(c["fku"], c["fkv"], c["u0"], c["v0"])
+    k = [float(c["fku"]), float(c["fkv"]), float(c["u0"]), float(c["v0"])]
+    zoom = c.get("zoom")
+    if zoom:
+        for i, name in enumerate(("fku", "fkv", "u0", "v0")):
+            if zoom.get(name) is not None:
+                k[i] = float(np.interp(t, zoom["times"], zoom[name]))
+    return Intrinsics(*k)
 
 
 def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray, max_iterations: int | None) -> tuple[Any, np.ndarray, float]:
@@ -138,13 +147,16 @@ def _run(d: dict[str, Any], world: World, law: str | None, start: Any, max_itera
         start = geometry.pose_from_position_thetau(s["position"], np.radians(s["rotation_deg"]))
     pose = np.asarray(start, dtype=float)
     servo, image, dt = _session(d, world, law, pose, max_iterations)
-    rows: dict[str, list[Any]] = {"pose": [], "twist": [], "err": [], "found": []}
+    zooms = bool(d["camera"].get("zoom"))
+    rows: dict[str, list[Any]] = {"pose": [], "twist": [], "err": [], "found": [], "K": []}
     clock = {"render": 0.0, "servo": 0.0}
     while True:
         t0 = _time.perf_counter()
         step = servo.step(image)
         clock["servo"] += _time.perf_counter() - t0
         rows["pose"].append(pose.copy())
+        k = world.K
+        rows["K"].append((k.fku, k.fkv, k.u0, k.v0))
         rows["twist"].append(np.asarray(step.twist, dtype=float))
         rows["err"].append(float(step.telemetry.get("invariant_error", np.nan)))
         rows["found"].append(np.asarray(step.found).copy())
@@ -152,12 +164,14 @@ def _run(d: dict[str, Any], world: World, law: str | None, start: Any, max_itera
             break
         pose = pose @ geometry.exp_twist(rows["twist"][-1], dt)
         t0 = _time.perf_counter()
+        if zooms:  # the lens at the time of the next frame
+            world.set_K(_intrinsics(d, "camera", dt * len(rows["pose"])))
         image = world.render(pose)
         clock["render"] += _time.perf_counter() - t0
     n = len(rows["pose"])
     return MujocoRun(
         summary=_summary(d, servo, step, rows), time=dt * np.arange(n), pose=np.array(rows["pose"]),
-        twist=np.array(rows["twist"]), invariant_error=np.array(rows["err"]), found=np.array(rows["found"]),
+        twist=np.array(rows["twist"]), K=np.array(rows["K"]), invariant_error=np.array(rows["err"]), found=np.array(rows["found"]),
         last_image=image, seconds_per_iteration={k: v / n for k, v in clock.items()},
     )
 
