@@ -270,3 +270,74 @@ def test_a_zoom_during_the_servo_changes_the_rendered_K() -> None:
     assert run.K[0, 0] == pytest.approx(1200.0) and run.K[-1, 0] == pytest.approx(700.0)  # the run outlasts the zoom
     assert s["status"] == "converged", s["message"]
     assert 1e3 * s["final_translation_error"] < GOAL_MM and np.degrees(s["final_rotation_error"]) < GOAL_DEG, s
+
+
+# -- an arm with mass (issue 31, item 2) --------------------------------------------------------
+def _ur5(tmp_path: Path) -> Path:
+    path = tmp_path / "ur5.xml"
+    path.write_text(vm.ur5_mjcf())
+    return path
+
+
+def _site_pose(model, data, name: str) -> np.ndarray:
+    s = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)
+    pose = np.eye(4)
+    pose[:3, :3] = data.site_xmat[s].reshape(3, 3)
+    pose[:3, 3] = data.site_xpos[s]
+    return pose
+
+
+def test_the_ur5_with_mass_has_vsinvs_kinematics(tmp_path: Path) -> None:
+    """MuJoCo's UR5: the flange site is vsinv.kinematics.fk("ur5", q) (vsinv's URDF through its
+    own kinematics), MuJoCo's site Jacobian (mj_jacSite) is the finite difference of vsinv's fk,
+    the wrist camera's vsinv frame is the flange's; every link has its published mass."""
+    world = vm.World.from_mjcf(_ur5(tmp_path), camera="wrist", width=64, height=48)
+    m, d = world.model, world.data
+    np.testing.assert_allclose(m.body_mass[1:], [3.7, 8.393, 2.33, 1.219, 1.219, 0.1879])
+    s = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_SITE, "flange")
+    rng = np.random.default_rng(2)
+    for _ in range(5):
+        q = rng.uniform(-3, 3, 6)
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        fk = vsinv.kinematics.fk("ur5", q)
+        np.testing.assert_allclose(_site_pose(m, d, "flange"), fk, atol=1e-12)
+        np.testing.assert_allclose(world.camera_pose(), fk, atol=1e-9)
+        jp, jr = np.zeros((3, 6)), np.zeros((3, 6))
+        mujoco.mj_jacSite(m, d, jp, jr, s)
+        h = 1e-6
+        for i in range(6):
+            dq = np.zeros(6)
+            dq[i] = h
+            plus, minus = vsinv.kinematics.fk("ur5", q + dq), vsinv.kinematics.fk("ur5", q - dq)
+            np.testing.assert_allclose(jp[:, i], (plus[:3, 3] - minus[:3, 3]) / (2 * h), atol=1e-8)
+            skew = (plus[:3, :3] - minus[:3, :3]) / (2 * h) @ fk[:3, :3].T  # d R R^T = [w]x
+            np.testing.assert_allclose(jr[:, i], [skew[2, 1], skew[0, 2], skew[1, 0]], atol=1e-8)
+    world.close()
+
+
+def test_the_ur5s_velocity_actuators_track_under_gravity(tmp_path: Path) -> None:
+    """Gravity on, 500 Hz physics: with zero commands the arm holds its pose; commanded joint
+    velocities are reached within 2 % in 0.1 s; a command above the speed limit is clipped and
+    the torques stay within the effort limits."""
+    model = mujoco.MjModel.from_xml_path(str(_ur5(tmp_path)))
+    data = mujoco.MjData(model)
+    assert model.opt.timestep == pytest.approx(0.002) and model.opt.gravity[2] == pytest.approx(-9.81)
+    q0 = np.array([0.3, -1.2, 1.4, -0.5, 0.8, 0.1])
+    data.qpos[:] = q0
+    for _ in range(500):  # one second holding still
+        mujoco.mj_step(model, data)
+    assert np.abs(data.qpos - q0).max() < 1e-3, data.qpos - q0
+    command = np.array([0.4, -0.3, 0.5, 0.8, -0.6, 1.0])
+    data.ctrl[:] = command
+    for _ in range(50):
+        mujoco.mj_step(model, data)
+    np.testing.assert_allclose(data.qvel, command, rtol=0.02, atol=0.005)
+    data.ctrl[:] = 10.0
+    mujoco.mj_step(model, data)
+    assert (np.abs(data.actuator_force) <= [150.0] * 3 + [28.0] * 3).all(), data.actuator_force
+    for _ in range(200):
+        mujoco.mj_step(model, data)
+    # ctrl is clipped to the speed limit; the arm's coupling moves a joint up to 1 % past it
+    assert 3.0 < data.qvel.min() and data.qvel.max() < 3.15 * 1.02, data.qvel
