@@ -14,7 +14,11 @@ geometry is seen (it can occlude a target) but does not collide (contype 0).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+
+from .._core import InvalidInput
 
 # Standard DH (d, a, alpha) of the UR5, as robots/ur5.urdf.
 UR5_DH = ((0.089159, 0.0, np.pi / 2), (0.0, -0.425, 0.0), (0.0, -0.39225, 0.0),
@@ -100,3 +104,23 @@ def ur5_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
   </worldbody>
   <actuator>{actuators}</actuator>
 </mujoco>"""
+
+
+def joint_velocities(model: Any, data: Any, site: str, twist: Any, damping: float = 0.02) -> np.ndarray:
+    """Joint velocities (nv,) that move the site `site` by `twist` (6,: in the site's own frame,
+    as a camera twist when the camera's vsinv frame is the site's): MuJoCo's Jacobian of the site
+    (`mj_jacSite`, world frame) turned into the site's frame, then the kinematic arm's damped
+    least squares (`vsinv.kinematics.damped_least_squares`)."""
+    import mujoco
+
+    from ..kinematics import damped_least_squares
+
+    s = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
+    if s < 0:
+        raise InvalidInput(f"site: no site named {site!r} in the model")
+    jp, jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
+    mujoco.mj_kinematics(model, data)
+    mujoco.mj_comPos(model, data)
+    mujoco.mj_jacSite(model, data, jp, jr, s)
+    R = data.site_xmat[s].reshape(3, 3)
+    return np.asarray(damped_least_squares(np.vstack([R.T @ jp, R.T @ jr]), np.asarray(twist, dtype=float), damping))
