@@ -71,6 +71,7 @@ SLOW = {
     "test_mujoco_api.py::test_the_lens_change_converges_through_mujoco_images",
     "test_mujoco_api.py::test_ibvs_never_claims_converged_on_the_lens_change",
     "test_mujoco_api.py::test_a_zoom_during_the_servo_changes_the_rendered_K",
+    "test_mujoco_api.py::test_the_ur5_with_mass_servoes_through_its_wrist_camera",
     "test_robustness_threads.py::test_tag_tracker_from_threads",
     "test_robustness_vision.py::test_to_grey",
     "test_schema.py::test_scenario_is_converted_once_per_figure_set",
