@@ -332,3 +332,49 @@ impl CameraRobot for ArmRobot {
         })
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// A diagonal Jacobian with singular values `s`: the closed form of the damped least squares
+    /// is `dq_i = s_i v_i / (s_i^2 + mu^2)` with `mu^2 = max(d^2 - min s^2, 0)`.
+    fn closed_form(s: &[f64], v: &Vector6<f64>, d: f64) -> Vec<f64> {
+        let min = s.iter().cloned().fold(f64::INFINITY, f64::min);
+        let mu2 = (d * d - min * min).max(0.0);
+        s.iter().zip(v.iter()).map(|(s, v)| s * v / (s * s + mu2)).collect()
+    }
+
+    #[test]
+    fn damped_least_squares_is_the_closed_form_on_a_diagonal_jacobian() {
+        let v = Vector6::new(0.1, -0.2, 0.3, 0.05, -0.4, 0.25);
+        for (s, d) in [([2.0, 1.0, 0.5, 0.3, 0.2, 0.1], 0.02), ([2.0, 1.0, 0.5, 0.3, 0.2, 0.01], 0.05)] {
+            let jac = DMatrix::from_diagonal(&DVector::from_column_slice(&s));
+            let dq = damped_least_squares(&jac, &v, d, None).unwrap();
+            for (got, want) in dq.iter().zip(closed_form(&s, &v, d)) {
+                assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn damped_least_squares_refuses_bad_inputs_by_name() {
+        let v = Vector6::repeat(0.1);
+        let name = |r: Result<DVector<f64>>| match r {
+            Err(Error::InvalidParameter { name, .. }) => name.to_string(),
+            Err(Error::Shape { what, .. }) | Err(Error::NonFinite { what, .. }) => what.to_string(),
+            Err(Error::NonFinitePoint { what, .. }) => what.to_string(),
+            other => format!("{other:?}"),
+        };
+        let eye = DMatrix::<f64>::identity(6, 6);
+        assert_eq!(name(damped_least_squares(&DMatrix::identity(5, 6), &v, 0.02, None)), "jacobian");
+        assert_eq!(name(damped_least_squares(&eye, &v, 0.0, None)), "damping");
+        assert_eq!(name(damped_least_squares(&eye, &Vector6::repeat(f64::NAN), 0.02, None)), "twist");
+        let mut nan = eye.clone();
+        nan[(2, 3)] = f64::NAN;
+        assert_eq!(name(damped_least_squares(&nan, &v, 0.02, None)), "jacobian");
+        let seven = DMatrix::<f64>::identity(6, 7);
+        assert_eq!(name(damped_least_squares(&seven, &v, 0.02, Some(&DVector::zeros(6)))), "null_space");
+    }
+}
