@@ -75,7 +75,7 @@ KS = [None, (520.0, 470.0, 183.3, 161.8), (300.0, 300.0, 214.0, 139.5)]  # None:
 def test_K_is_what_mujoco_renders(tmp_path: Path, K) -> None:
     """Spheres at known points rendered by MuJoCo from vsinv poses: their centroids are where
     vsinv.geometry.project puts them with `world.K` (from MuJoCo's fovy, or set through its
-    camera intrinsics), within a fraction of a pixel and without bias."""
+    camera intrinsics), within 0.2 px (0.06-0.09 measured) and without bias."""
     with vm.World.from_mjcf(_spheres_mjcf(tmp_path / "spheres.xml"), camera="eye", width=400, height=300) as world:
         if K is not None:
             world.set_K(K)
@@ -92,8 +92,9 @@ def test_K_is_what_mujoco_renders(tmp_path: Path, K) -> None:
             for c in _centroids(image, len(POINTS)):
                 residuals.append(c - expected[np.argmin(np.linalg.norm(expected - c, axis=1))])
         residuals = np.array(residuals)
-        assert np.abs(residuals).max() < 0.35, residuals
-        assert np.abs(residuals.mean(axis=0)).max() < 0.1, residuals.mean(axis=0)  # a half pixel or a flip would show
+        print(f"K residuals: max {np.abs(residuals).max():.3f} px, mean {residuals.mean(axis=0).round(3)}")
+        assert np.abs(residuals).max() < 0.2, residuals  # measured 0.06-0.09 px
+        assert np.abs(residuals.mean(axis=0)).max() < 0.05, residuals.mean(axis=0)  # a half pixel or a flip would show
 
 
 def test_camera_frame_and_move_camera(tmp_path: Path) -> None:
