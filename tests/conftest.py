@@ -65,8 +65,13 @@ AREA_OF = {name: area for area, names in AREAS.items() for name in names}
 SLOW = {
     "test_arm.py::test_arm_figures",
     "test_docs.py::test_page_code_runs[getting-started.md]",
+    "test_docs.py::test_page_code_runs[guides/mujoco.md]",
     "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
     "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
+    "test_mujoco_api.py::test_the_lens_change_converges_through_mujoco_images",
+    "test_mujoco_api.py::test_ibvs_never_claims_converged_on_the_lens_change",
+    "test_mujoco_api.py::test_a_zoom_during_the_servo_changes_the_rendered_K",
+    "test_mujoco_api.py::test_the_ur5_with_mass_servoes_through_its_wrist_camera",
     "test_robustness_threads.py::test_tag_tracker_from_threads",
     "test_robustness_vision.py::test_to_grey",
     "test_schema.py::test_scenario_is_converted_once_per_figure_set",

@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import vsinv
-from robustness_harness import ANY, INVALID, V, arrays, call, choices, covers, fuzz, fuzz_settings, returned
+from robustness_harness import ANY, INVALID, V, arrays, call, choices, covers, floats, fuzz, fuzz_settings, returned
 
 Q = np.array([0.1, -1.2, 1.0, -0.5, 1.4, 0.3])
 SEED = Q + np.array([0.05, -0.04, 0.03, -0.02, 0.05, 0.01])
@@ -73,3 +73,24 @@ def test_ik_returns_or_refuses_any_pose(position: list[float], thetau: list[floa
     out = call(vsinv.kinematics.ik, "ur5", pose)
     if returned(out):
         check_solution(pose)(out)
+
+
+J_UR5 = np.array([[0.1, -0.3, 0.2, 0.0, 0.05, 0.0], [0.4, 0.0, 0.0, 0.1, 0.0, 0.02], [0.0, 0.4, 0.3, 0.1, 0.0, 0.0],
+                  [0.0, 0.0, 0.0, 0.0, 1.0, 0.0], [0.0, 1.0, 1.0, 1.0, 0.0, 0.3], [1.0, 0.0, 0.0, 0.0, 0.1, 0.9]])
+TWIST = np.array([0.05, -0.02, 0.03, 0.1, -0.2, 0.15])
+
+
+@covers("damped_least_squares")
+@fuzz_settings(100)
+@given(st.data())
+def test_damped_least_squares(data: Any) -> None:
+    args: dict[str, Any] = {"jacobian": J_UR5, "twist": TWIST, "damping": 0.02}
+    strategies = {
+        "jacobian": arrays(J_UR5, overrides={"fewer": INVALID, "empty": INVALID}),
+        "twist": arrays(TWIST, overrides={"fewer": INVALID, "empty": INVALID}),
+        "damping": floats(0.02),
+    }
+    ref = vsinv.kinematics.damped_least_squares(J_UR5, TWIST)
+    name, v, out = fuzz(data, vsinv.kinematics.damped_least_squares, args, strategies, ref=ref, rtol=1e-12)
+    if returned(out):
+        assert out.shape == (np.asarray(v.value).shape[1] if name == "jacobian" else 6,)

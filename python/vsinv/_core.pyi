@@ -130,6 +130,7 @@ __all__ = [
     "IkSolution",
     "fk",
     "ik",
+    "damped_least_squares",
     "HandEyeCalibration",
     "HandEyeAgreement",
     "calibrate_hand_eye",
@@ -1221,6 +1222,15 @@ def fk(arm: str, joints: _ArrayLike) -> _F64Array:
     ``panda_hand_tcp``) in the arm's base frame (its URDF root link: ``base_link``,
     ``panda_link0``) at ``joints`` (rad), one value per joint within the joint limits
     (InvalidInput naming the first joint outside)."""
+
+def damped_least_squares(
+    jacobian: _ArrayLike, twist: _ArrayLike, damping: float = ..., null_space: _ArrayLike | None = None
+) -> _F64Array:
+    """Joint velocities (n,) that give ``twist`` (6,: vx, vy, vz, wx, wy, wz) where the arm's
+    Jacobian is ``jacobian`` (6, n: rows in the twist's frame, a column per joint), by the
+    kinematic arm's damped least squares (``damping`` 0.02 by default): the damping grows as the smallest singular value of
+    the Jacobian falls below ``damping``; with more than six joints ``null_space`` (n,) is added
+    projected on the Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's ``mj_jacSite``)."""
 
 def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution:
     """Joints within the limits of the built-in ``arm`` ('ur5', 'panda') that put its

@@ -1,5 +1,6 @@
 //! Forward and inverse kinematics of the built-in arms in Python: `fk(arm, joints)` and
-//! `ik(arm, pose, seed=None)` with poses of the end-effector in the arm's base frame (4x4).
+//! `ik(arm, pose, seed=None)` with poses of the end-effector in the arm's base frame (4x4), and
+//! the kinematic arm's damped least squares for any Jacobian (`damped_least_squares`).
 
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
@@ -7,7 +8,7 @@ use pyo3::prelude::*;
 use super::arrays::{f64_array, from_matrix, vec1};
 use super::errors::invalid_argument;
 use crate::core::se3;
-use crate::sim::arm::{ArmModel, BUILTIN_ARMS, IkSolution};
+use crate::sim::arm::{ArmModel, BUILTIN_ARMS, DEFAULT_DAMPING, IkSolution};
 
 /// A built-in arm by name (its default end-effector).
 fn builtin_arm(arm: &Bound<'_, PyAny>) -> PyResult<ArmModel> {
@@ -132,9 +133,36 @@ fn ik(
     Ok(PyIkSolution { inner })
 }
 
-/// Adds `fk`, `ik` and `IkSolution`.
+/// Joint velocities (n,) that give `twist` (6,: vx, vy, vz, wx, wy, wz) where the arm's Jacobian
+/// is `jacobian` (6, n: rows in the twist's frame, a column per joint), by the kinematic arm's
+/// damped least squares: the damping grows as the smallest singular value of the Jacobian falls
+/// below `damping`; with more than six joints `null_space` (n,) is added projected on the
+/// Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's `mj_jacSite`).
+#[pyfunction]
+#[pyo3(signature = (jacobian, twist, damping = DEFAULT_DAMPING, null_space = None))]
+fn damped_least_squares<'py>(
+    py: Python<'py>,
+    jacobian: &Bound<'py, PyAny>,
+    twist: &Bound<'py, PyAny>,
+    damping: f64,
+    null_space: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let j = f64_array(jacobian, "jacobian", &[Some(6), None])?;
+    let n = j.shape()[1];
+    let jac = nalgebra::DMatrix::from_row_slice(6, n, j.as_slice()?);
+    let v = nalgebra::Vector6::from_column_slice(f64_array(twist, "twist", &[Some(6)])?.as_slice()?);
+    let z = match null_space {
+        Some(z) => Some(nalgebra::DVector::from_column_slice(f64_array(z, "null_space", &[Some(n)])?.as_slice()?)),
+        None => None,
+    };
+    let dq = crate::sim::arm::damped_least_squares(&jac, &v, damping, z.as_ref())?;
+    Ok(vec1(py, dq.as_slice()))
+}
+
+/// Adds `fk`, `ik`, `damped_least_squares` and `IkSolution`.
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyIkSolution>()?;
+    m.add_function(wrap_pyfunction!(damped_least_squares, m)?)?;
     m.add_function(wrap_pyfunction!(fk, m)?)?;
     m.add_function(wrap_pyfunction!(ik, m)?)?;
     Ok(())

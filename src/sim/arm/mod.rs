@@ -33,7 +33,7 @@ mod urdf_shape;
 
 pub use ik::{DampedLeastSquaresIk, IkSolution, InverseKinematics};
 pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
-pub use servo::{ArmRobot, ArmStep};
+pub use servo::{ArmRobot, ArmStep, DEFAULT_DAMPING, damped_least_squares};
 pub use urdf_shape::{MAX_URDF_DEPTH, MAX_URDF_NODES};
 
 use crate::error::{Error, Result};

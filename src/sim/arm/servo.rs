@@ -8,7 +8,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix6, Matrix6xX, V
 
 use super::{ArmLimits, ArmModel};
 use crate::core::se3::twist_transform;
-use crate::error::{Error, Result, Short, check_finite};
+use crate::error::{Error, Result, Short, check_finite, check_finite_matrix};
 use crate::sim::robot::{CameraRobot, RobotEvent, RobotMotion};
 
 /// Default largest damping factor of the least squares (see [`ArmRobot::damping`]).
@@ -153,20 +153,9 @@ impl ArmRobot {
     /// `dq = J^T (J J^T + mu^2 I)^-1 v + (I - J^T (J J^T + mu^2 I)^-1 J) z` (six joints or
     /// more); `(J^T J + mu^2 I)^-1 J^T v` below six.
     fn resolve(&self, jac: &Matrix6xX<f64>, q: &[f64], v: &Vector6<f64>) -> Result<DVector<f64>> {
-        let n = jac.ncols();
-        let j = DMatrix::from_column_slice(6, n, jac.as_slice());
-        let v = DVector::from_column_slice(v.as_slice());
-        if n < 6 {
-            return Ok(damped_cholesky(j.transpose() * &j, self.damping)?.solve(&(j.transpose() * v)));
-        }
-        let chol = damped_cholesky(&j * j.transpose(), self.damping)?;
-        let mut dq = j.transpose() * chol.solve(&v);
-        if n > 6 {
-            let z = self.centring(q);
-            let back = j.transpose() * chol.solve(&(&j * &z));
-            dq += z - back;
-        }
-        Ok(dq)
+        let j = DMatrix::from_column_slice(6, jac.ncols(), jac.as_slice());
+        let z = (jac.ncols() > 6).then(|| self.centring(q));
+        damped_least_squares(&j, v, self.damping, z.as_ref())
     }
 
     /// Minus the gradient of the joint-limit cost `1/2 sum ((q_i - mid_i) / half_i)^2`
@@ -235,15 +224,80 @@ impl ArmRobot {
 /// Cholesky factor of `G + mu^2 I` with `mu^2 = d^2 - sigma_min^2` when the smallest
 /// eigenvalue `sigma_min^2` of the Gram matrix `G` is below `d^2` (the factorised matrix's
 /// smallest eigenvalue is then `d^2`), else of `G` itself.
+/// Joint velocities `dq` that give the twist `v` where the Jacobian is `jac` (6 x n, in the
+/// twist's frame), by damped least squares with largest damping `damping` (see
+/// [`ArmRobot::damping`]): `dq = J^T (J J^T + mu^2 I)^-1 v` with six joints or more,
+/// `(J^T J + mu^2 I)^-1 J^T v` below six; with more than six, `null_space` (n joint velocities,
+/// the arm's joint-centring task) is added projected on the null space of `J`,
+/// `(I - J^T (J J^T + mu^2 I)^-1 J) z`. The kinematic arm's resolution, for a Jacobian from
+/// elsewhere (a physics engine's).
+pub fn damped_least_squares(
+    jac: &DMatrix<f64>,
+    v: &Vector6<f64>,
+    damping: f64,
+    null_space: Option<&DVector<f64>>,
+) -> Result<DVector<f64>> {
+    let n = jac.ncols();
+    if jac.nrows() != 6 || n == 0 {
+        return Err(Error::Shape {
+            what: "jacobian",
+            expected: "(6, n) with n >= 1".into(),
+            got: format!("({}, {n})", jac.nrows()),
+        });
+    }
+    let d2 = damping * damping;
+    if !(damping.is_finite() && damping > 0.0 && d2.is_normal()) {
+        let reason = format!("must be finite and > 0 with a finite, normal square, got {}", Short(damping));
+        return Err(Error::InvalidParameter { name: "damping", reason });
+    }
+    check_finite_matrix("jacobian", jac)?;
+    check_finite("twist", v.as_slice())?;
+    let v = DVector::from_column_slice(v.as_slice());
+    let dq = if n < 6 {
+        damped_cholesky(jac.transpose() * jac, damping)?.solve(&(jac.transpose() * v))
+    } else {
+        let chol = damped_cholesky(jac * jac.transpose(), damping)?;
+        let dq = jac.transpose() * chol.solve(&v);
+        with_null_space(jac, &chol, dq, null_space)?
+    };
+    if dq.iter().any(|x| !x.is_finite()) {
+        let reason = "the joint velocities overflow (a huge twist or Jacobian)".into();
+        return Err(Error::InvalidParameter { name: "twist", reason });
+    }
+    Ok(dq)
+}
+
+/// `dq + (I - J^T (J J^T + mu^2 I)^-1 J) z` for a redundant arm (more than six joints).
+fn with_null_space(
+    jac: &DMatrix<f64>,
+    chol: &Cholesky<f64, Dyn>,
+    mut dq: DVector<f64>,
+    null_space: Option<&DVector<f64>>,
+) -> Result<DVector<f64>> {
+    let n = jac.ncols();
+    if let Some(z) = null_space.filter(|_| n > 6) {
+        if z.len() != n {
+            return Err(Error::Shape {
+                what: "null_space",
+                expected: format!("({n},)"),
+                got: format!("({},)", z.len()),
+            });
+        }
+        check_finite("null_space", z.as_slice())?;
+        dq += z - jac.transpose() * chol.solve(&(jac * z));
+    }
+    Ok(dq)
+}
+
 fn damped_cholesky(mut gram: DMatrix<f64>, d: f64) -> Result<Cholesky<f64, Dyn>> {
-    check_finite("arm Jacobian", gram.as_slice())?;
+    check_finite("jacobian", gram.as_slice())?;
     let sigma2 = gram.clone().symmetric_eigenvalues().min().max(0.0);
     let mu2 = (d * d - sigma2).max(0.0);
     for i in 0..gram.nrows() {
         gram[(i, i)] += mu2;
     }
     gram.cholesky().ok_or(Error::InvalidParameter {
-        name: "robot.damping",
+        name: "damping",
         reason: "the damped least squares matrix is not positive definite".into(),
     })
 }
@@ -276,5 +330,51 @@ impl CameraRobot for ArmRobot {
             limited: step.limited,
             event: step.event,
         })
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use super::*;
+
+    /// A diagonal Jacobian with singular values `s`: the closed form of the damped least squares
+    /// is `dq_i = s_i v_i / (s_i^2 + mu^2)` with `mu^2 = max(d^2 - min s^2, 0)`.
+    fn closed_form(s: &[f64], v: &Vector6<f64>, d: f64) -> Vec<f64> {
+        let min = s.iter().cloned().fold(f64::INFINITY, f64::min);
+        let mu2 = (d * d - min * min).max(0.0);
+        s.iter().zip(v.iter()).map(|(s, v)| s * v / (s * s + mu2)).collect()
+    }
+
+    #[test]
+    fn damped_least_squares_is_the_closed_form_on_a_diagonal_jacobian() {
+        let v = Vector6::new(0.1, -0.2, 0.3, 0.05, -0.4, 0.25);
+        for (s, d) in [([2.0, 1.0, 0.5, 0.3, 0.2, 0.1], 0.02), ([2.0, 1.0, 0.5, 0.3, 0.2, 0.01], 0.05)] {
+            let jac = DMatrix::from_diagonal(&DVector::from_column_slice(&s));
+            let dq = damped_least_squares(&jac, &v, d, None).unwrap();
+            for (got, want) in dq.iter().zip(closed_form(&s, &v, d)) {
+                assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+            }
+        }
+    }
+
+    #[test]
+    fn damped_least_squares_refuses_bad_inputs_by_name() {
+        let v = Vector6::repeat(0.1);
+        let name = |r: Result<DVector<f64>>| match r {
+            Err(Error::InvalidParameter { name, .. }) => name.to_string(),
+            Err(Error::Shape { what, .. }) | Err(Error::NonFinite { what, .. }) => what.to_string(),
+            Err(Error::NonFinitePoint { what, .. }) => what.to_string(),
+            other => format!("{other:?}"),
+        };
+        let eye = DMatrix::<f64>::identity(6, 6);
+        assert_eq!(name(damped_least_squares(&DMatrix::identity(5, 6), &v, 0.02, None)), "jacobian");
+        assert_eq!(name(damped_least_squares(&eye, &v, 0.0, None)), "damping");
+        assert_eq!(name(damped_least_squares(&eye, &Vector6::repeat(f64::NAN), 0.02, None)), "twist");
+        let mut nan = eye.clone();
+        nan[(2, 3)] = f64::NAN;
+        assert_eq!(name(damped_least_squares(&nan, &v, 0.02, None)), "jacobian");
+        let seven = DMatrix::<f64>::identity(6, 7);
+        assert_eq!(name(damped_least_squares(&seven, &v, 0.02, Some(&DVector::zeros(6)))), "null_space");
     }
 }

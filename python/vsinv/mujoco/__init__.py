@@ -1,0 +1,16 @@
+"""MuJoCo worlds for vsinv (the optional extra ``mujoco``: ``pip install 'vsinv[mujoco]'``).
+
+:class:`World` puts a scenario's target and camera into a MuJoCo scene (or opens a user's MJCF
+file) and renders grey images in vsinv's conventions; :func:`run` closes the loop of a scenario
+through those images with :class:`vsinv.ImageServo`; :func:`ur5_mjcf` is a UR5 with mass
+(vsinv's kinematics, UR's masses, capsules, velocity actuators). Nothing else in vsinv imports this module.
+MuJoCo renders offscreen through EGL (``MUJOCO_GL=egl`` is set unless already set: import
+``vsinv.mujoco`` before ``mujoco``, which reads it once, or set it yourself).
+"""
+
+from ._arms import joint_velocities, ur5_mjcf
+from ._camera import FLIP, k_of_fovy, k_of_intrinsics
+from ._loop import MujocoRun, run
+from ._world import World, available
+
+__all__ = ["FLIP", "MujocoRun", "World", "available", "k_of_fovy", "k_of_intrinsics", "joint_velocities", "run", "ur5_mjcf"]

@@ -1,0 +1,214 @@
+"""`World`: a MuJoCo model, its data and renderers, and the camera vsinv servoes."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import geometry
+from .._core import Intrinsics, InvalidInput
+from ..sim import load_scenario
+from . import _camera, _scene
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # CPU rendering through EGL unless the user chose
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError as e:  # pragma: no cover - depends on the machine
+        raise ImportError(f"vsinv.mujoco needs MuJoCo ({e}): pip install 'vsinv[mujoco]'") from e
+    return mujoco
+
+
+def available() -> str | None:
+    """None when MuJoCo can render offscreen here, else why not (what to install)."""
+    try:
+        mujoco = _mujoco()
+    except ImportError as e:
+        return str(e)
+    try:
+        model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='.1'/></worldbody></mujoco>")
+        with mujoco.Renderer(model, 8, 8) as r:
+            r.update_scene(mujoco.MjData(model))
+            r.render()
+    except Exception as e:  # noqa: BLE001 - any failure to open a GL context means "cannot render"
+        return (
+            f"MuJoCo cannot render offscreen with MUJOCO_GL={os.environ.get('MUJOCO_GL')} ({type(e).__name__}: {e}); "
+            "on Debian/Ubuntu: apt-get install libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri"
+        )
+    return None
+
+
+def _k_of(d: dict[str, Any], key: str) -> tuple[tuple[float, float, float, float], int, int]:
+    c = d[key]
+    if abs(float(c.get("skew_deg", 90.0)) - 90.0) > 1e-9:
+        raise InvalidInput(f"scenario [{key}]: MuJoCo's cameras have no skew (skew_deg = 90), got {c['skew_deg']}")
+    return (float(c["fku"]), float(c["fkv"]), float(c["u0"]), float(c["v0"])), int(c["width"]), int(c["height"])
+
+
+class World:
+    """A MuJoCo scene seen by one camera, in vsinv's conventions.
+
+    Poses are 4x4 world-from-camera transforms with vsinv's camera frame (x right, y down, z
+    forward); MuJoCo's camera frame (y up, looking down -z) is turned by pi about x from it
+    (`vsinv.mujoco.FLIP`). For a world made from a scenario, the world frame is F* (the
+    reference camera's frame) and the target is where the scenario puts it.
+
+    `K` is the camera's intrinsics as MuJoCo renders them (fx, fy, cx, cy, pixel (0, 0) the
+    centre of the top-left pixel); `set_K` changes them (a zoom) through MuJoCo's camera
+    intrinsics (`sensorsize`, `focalpixel`, `principalpixel`).
+    """
+
+    def __init__(self, model: Any, camera: str, width: int, height: int, *, supersample: int = 1,
+                 target: str | None = None, target_points: Any = None, target_bodies: tuple[str, ...] = ()) -> None:
+        mujoco = _mujoco()
+        if not 1 <= int(supersample) <= 4:
+            raise InvalidInput(f"supersample: expected 1 to 4, got {supersample!r}")
+        if width < 1 or height < 1:
+            raise InvalidInput(f"width, height: expected positive sizes, got {width} x {height}")
+        self.model = model
+        self.data = mujoco.MjData(model)
+        self.camera = camera
+        self.camera_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, camera)
+        if self.camera_id < 0:
+            raise InvalidInput(f"camera: no camera named {camera!r} in the model")
+        self.width, self.height, self.supersample = int(width), int(height), int(supersample)
+        self.target = target
+        self.target_points = None if target_points is None else np.asarray(target_points, dtype=float)
+        for name in target_bodies:
+            if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name) < 0:
+                raise InvalidInput(f"target_bodies: no body named {name!r} in the model")
+        self.target_bodies = tuple(target_bodies)
+        self.scenario: dict[str, Any] | None = None  # the scenario's dict (from_scenario)
+        self._renderer = mujoco.Renderer(model, self.height * self.supersample, self.width * self.supersample)
+        mujoco.mj_forward(model, self.data)
+
+    # -- construction -----------------------------------------------------------------------
+    @classmethod
+    def from_scenario(cls, scenario: Any, *, supersample: int = 1) -> World:
+        """The scenario's target (dots as white discs facing F*, or its tag rig textured with the
+        tags' bit patterns) lit by two lights, and a free camera with the scenario's `[camera]`
+        resolution and K (10 um pixels). `scenario`: a `Scenario`, dict, built-in name or path."""
+        mujoco = _mujoco()
+        d = load_scenario(scenario).to_dict() if not isinstance(scenario, dict) else load_scenario(scenario).to_dict()
+        K, width, height = _k_of(d, "camera")
+        K_ref, w_ref, h_ref = _k_of(d, "reference_camera")
+        if (w_ref, h_ref) != (width, height):
+            raise InvalidInput(f"scenario: [reference_camera] is {w_ref} x {h_ref} and [camera] {width} x {height}; "
+                               "vsinv.mujoco renders both with one sensor")
+        xml, assets, kind, points = _scene.scene(d, width * supersample, height * supersample)
+        model = mujoco.MjModel.from_xml_string(xml, assets)
+        world = cls(model, _scene.CAMERA, width, height, supersample=supersample, target=kind, target_points=points)
+        world.scenario = d
+        world.set_K(K)
+        return world
+
+    @classmethod
+    def from_mjcf(cls, path: str | os.PathLike[str], camera: str, *, width: int = 640, height: int = 480,
+                  target_bodies: tuple[str, ...] = (), supersample: int = 1) -> World:
+        """A user's own MJCF file: `camera` names the camera vsinv sees through (a camera of the
+        world body can be moved by `render(pose)` and `move_camera`; one on a moving body follows
+        it), `target_bodies` the bodies that carry the target (checked to exist)."""
+        mujoco = _mujoco()
+        path = Path(path)
+        if not path.is_file():
+            raise InvalidInput(f"path: no MJCF file at {str(path)!r}")
+        spec = mujoco.MjSpec.from_file(str(path))
+        spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, width * supersample)
+        spec.visual.global_.offheight = max(spec.visual.global_.offheight, height * supersample)
+        model = spec.compile()
+        return cls(model, camera, width, height, supersample=supersample, target_bodies=target_bodies)
+
+    def close(self) -> None:
+        """Frees the renderer's GL context."""
+        self._renderer.close()
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.close()
+
+    # -- the camera -------------------------------------------------------------------------
+    @property
+    def K(self) -> Intrinsics:
+        """The intrinsics MuJoCo renders with (fx, fy, cx, cy) at `width` x `height`."""
+        m, c = self.model, self.camera_id
+        if np.all(m.cam_sensorsize[c] > 0):
+            k = _camera.k_of_intrinsics(m.cam_intrinsic[c], m.cam_sensorsize[c], self.width, self.height)
+        else:
+            k = _camera.k_of_fovy(float(m.cam_fovy[c]), self.width, self.height)
+        return Intrinsics(*k)
+
+    def set_K(self, K: Any) -> None:
+        """Renders from now on with K = (fx, fy, cx, cy) (an `Intrinsics` or 4 numbers): a zoom."""
+        fx, fy, cx, cy = (float(v) for v in (K if not isinstance(K, Intrinsics) else (K.fku, K.fkv, K.u0, K.v0)))
+        if not (fx > 0 and fy > 0 and np.isfinite([cx, cy]).all()):
+            raise InvalidInput(f"K: expected positive focal lengths and a finite principal point, got {(fx, fy, cx, cy)}")
+        intrinsic, sensor = _camera.intrinsics_of_k((fx, fy, cx, cy), self.width, self.height, _scene.PIXEL)
+        self.model.cam_intrinsic[self.camera_id] = intrinsic
+        self.model.cam_sensorsize[self.camera_id] = sensor
+
+    @property
+    def free_camera(self) -> bool:
+        """Whether the camera hangs from the world body (then `render(pose)` and `move_camera` place it)."""
+        return int(self.model.cam_bodyid[self.camera_id]) == 0
+
+    def camera_pose(self) -> np.ndarray:
+        """The camera's pose (4x4, vsinv's frame) in the world, after the model's kinematics."""
+        mujoco = _mujoco()
+        mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)  # the cameras' poses (mj_kinematics leaves them)
+        c = self.camera_id
+        return _camera.vsinv_pose(self.data.cam_xpos[c], self.data.cam_xmat[c])
+
+    def set_camera_pose(self, pose: Any) -> None:
+        """Places a free camera at `pose` (4x4, vsinv's frame)."""
+        pose = np.asarray(pose, dtype=float)
+        if pose.shape != (4, 4) or not np.isfinite(pose).all():
+            raise InvalidInput(f"pose: expected a finite 4x4 matrix, got shape {pose.shape}")
+        if not self.free_camera:
+            raise InvalidInput(f"pose: camera {self.camera!r} is carried by a body; move the body (data.qpos) instead")
+        mujoco = _mujoco()
+        position, rotation = _camera.mujoco_pose(pose)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation).reshape(9))
+        self.model.cam_pos[self.camera_id] = position
+        self.model.cam_quat[self.camera_id] = quat
+
+    def move_camera(self, twist: Any, dt: float) -> np.ndarray:
+        """Moves a free camera by `twist` (vx, vy, vz, wx, wy, wz in its own frame, m/s and rad/s)
+        held for `dt` seconds (pose <- pose exp(twist dt)); returns the new pose."""
+        pose = self.camera_pose() @ geometry.exp_twist(np.asarray(twist, dtype=float), float(dt))
+        self.set_camera_pose(pose)
+        return pose
+
+    def project(self, points: Any, pose: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """Pixels (n, 2) and depths (n,) of world points (n, 3) seen with `K` from `pose` (default: the camera's)."""
+        pose = self.camera_pose() if pose is None else np.asarray(pose, dtype=float)
+        cam = (np.asarray(points, dtype=float) - pose[:3, 3]) @ pose[:3, :3]
+        k = self.K
+        z = cam[:, 2]
+        return np.column_stack([k.fku * cam[:, 0] / z + k.u0, k.fkv * cam[:, 1] / z + k.v0]), z
+
+    # -- rendering --------------------------------------------------------------------------
+    def render(self, pose: Any = None) -> np.ndarray:
+        """The (height, width) uint8 grey image (Rec. 601 luma) the camera sees, from `pose`
+        (placing a free camera there first) or from where it is; with `supersample` k > 1 each
+        pixel is the mean of a k x k block rendered at k times the resolution."""
+        mujoco = _mujoco()
+        if pose is not None:
+            self.set_camera_pose(pose)
+        mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)
+        self._renderer.update_scene(self.data, camera=self.camera)
+        rgb = self._renderer.render().astype(np.float64)
+        grey = rgb[:, :, 0] * 0.299 + rgb[:, :, 1] * 0.587 + rgb[:, :, 2] * 0.114
+        k = self.supersample
+        if k > 1:
+            grey = grey.reshape(self.height, k, self.width, k).mean(axis=(1, 3))
+        return np.clip(np.rint(grey), 0, 255).astype(np.uint8)
