@@ -1228,7 +1228,7 @@ def damped_least_squares(
 ) -> _F64Array:
     """Joint velocities (n,) that give ``twist`` (6,: vx, vy, vz, wx, wy, wz) where the arm's
     Jacobian is ``jacobian`` (6, n: rows in the twist's frame, a column per joint), by the
-    kinematic arm's damped least squares (``damping`` 0.02 by default): the damping grows as the smallest singular value of
+    kinematic arm's damped least squares: the damping grows as the smallest singular value of
     the Jacobian falls below ``damping``; with more than six joints ``null_space`` (n,) is added
     projected on the Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's ``mj_jacSite``)."""
 
