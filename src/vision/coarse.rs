@@ -19,7 +19,7 @@
 //! is no higher there, so the coarser threshold, at least `min_contrast` above it, is not
 //! lower.
 
-use crate::vision::background::{flat, largest, lower_quartile, threshold};
+use crate::vision::tile_levels::{flat, largest, lower_quartile, threshold};
 
 /// The coarse levels, finest first, up to a single tile.
 #[derive(Debug, Clone, Default)]

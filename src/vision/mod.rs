@@ -18,6 +18,7 @@
 //! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
 //! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
 //! | the local threshold: a background model on tiles | [`background`] |
+//! | a tile's background, peak and threshold from the tiles around it | [`tile_levels`] |
 //! | each tile's median and peak, 32 bytes at a time | [`tile_stats`] |
 //! | coarser tiles, for dots wider than a tile's neighbourhood | [`coarse`] |
 //! | the runs of dot pixels of rows, from 32-bit masks | [`row_scan`] |
@@ -52,6 +53,7 @@ pub mod runs;
 pub mod tags;
 pub mod target;
 pub mod targets;
+pub mod tile_levels;
 pub mod tile_stats;
 pub mod tracker;
 

@@ -13,8 +13,19 @@
 //! widens the bytes to 32-bit lanes: measured). Tiles cut by the image's right edge, and every
 //! tile on other processors, build the mask byte by byte; both give the same runs (tested).
 
-use crate::vision::background::{TILE, TileThresholds};
-use crate::vision::runs::Run;
+use crate::vision::background::TileThresholds;
+use crate::vision::tile_levels::TILE;
+
+/// A horizontal run of dot pixels: row `v`, columns `u0..u1` (`u1` excluded).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Run {
+    /// Row.
+    pub v: u32,
+    /// First column.
+    pub u0: u32,
+    /// One past the last column.
+    pub u1: u32,
+}
 
 /// The runs of rows `rows` of a `width`-pixel-wide image `data`, appended to `out` in raster
 /// order; returns the smallest and largest grey level of those rows.

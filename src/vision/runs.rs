@@ -9,21 +9,11 @@ use rayon::prelude::*;
 
 use crate::vision::background::TileThresholds;
 use crate::vision::image::{GreyBuffer, Pixels};
+pub use crate::vision::row_scan::Run;
 use crate::vision::row_scan::scan_rows;
 
 /// Rows scanned by one parallel task.
 const BAND: usize = 64;
-
-/// A horizontal run of dot pixels: row `v`, columns `u0..u1` (`u1` excluded).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Run {
-    /// Row.
-    pub v: u32,
-    /// First column.
-    pub u0: u32,
-    /// One past the last column.
-    pub u1: u32,
-}
 
 /// A connected component: area, bounding box and moments of its pixels' centres.
 #[derive(Debug, Clone, Copy, PartialEq)]

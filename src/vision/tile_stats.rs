@@ -18,8 +18,8 @@
 
 use rayon::prelude::*;
 
-use crate::vision::background::TILE;
 use crate::vision::image::{GreyBuffer, Pixels};
+use crate::vision::tile_levels::TILE;
 
 /// The statistics of every tile, row-major.
 #[derive(Debug, Clone, Default)]
