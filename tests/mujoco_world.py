@@ -47,21 +47,13 @@ TAG_IDS = {"+x": 3, "+y": 7, "+z": 12}  # tag36h11 identities
 
 
 def available() -> str | None:
-    """None when MuJoCo can render offscreen here, else why not (for pytest.skip)."""
+    """None when MuJoCo can render offscreen here, else why not (for pytest.skip): the package's
+    own check (`vsinv.mujoco.available`)."""
     if _IMPORT_ERROR is not None:
         return _IMPORT_ERROR
-    try:
-        model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='.1'/></worldbody></mujoco>")
-        with mujoco.Renderer(model, 8, 8) as r:
-            r.update_scene(mujoco.MjData(model))
-            r.render()
-    except Exception as e:  # noqa: BLE001 - any failure to open a GL context means "cannot render"
-        gl = os.environ.get("MUJOCO_GL")
-        return (
-            f"MuJoCo cannot render offscreen with MUJOCO_GL={gl} ({type(e).__name__}: {e}); "
-            "on Debian/Ubuntu: apt-get install libegl1 libopengl0 libegl-mesa0 libgl1-mesa-dri"
-        )
-    return None
+    from vsinv.mujoco import available as package_available
+
+    return package_available()
 
 
 def look_at(eye: Any, target: Any, up: Any = (0.0, 0.0, 1.0)) -> np.ndarray:
