@@ -190,6 +190,29 @@ def test_bad_arguments_are_refused(tmp_path: Path) -> None:
         vm.World.from_scenario("lens-12-6", supersample=9)
 
 
+def test_hostile_mjcf_files_and_sizes_are_refused(tmp_path: Path) -> None:
+    """A file that is not MJCF, one too large, a FIFO, and image sizes past the bound: each an
+    InvalidInput naming the argument, the file's text never in the message."""
+    bad = tmp_path / "bad.xml"
+    bad.write_text("<mujoco><worldbody><body name='SECRET-TEXT'><geom size='x'/></body></mujoco>")
+    with pytest.raises(vsinv.InvalidInput, match="^path: MuJoCo could not load") as err:
+        vm.World.from_mjcf(bad, camera="eye")
+    assert "SECRET" not in str(err.value)
+    huge = tmp_path / "huge.xml"
+    with huge.open("wb") as f:
+        f.truncate(vm.MAX_MJCF_BYTES + 1)
+    with pytest.raises(vsinv.InvalidInput, match="^path: .* is larger than 16 MiB"):
+        vm.World.from_mjcf(huge, camera="eye")
+    fifo = tmp_path / "fifo.xml"
+    os.mkfifo(fifo)
+    with pytest.raises(vsinv.InvalidInput, match="^path: no MJCF file"):
+        vm.World.from_mjcf(fifo, camera="eye")
+    spheres = _spheres_mjcf(tmp_path / "s.xml")
+    for size in [(100_000, 480), (640, 0), (640.5, 480), (True, 480)]:
+        with pytest.raises(vsinv.InvalidInput, match="^width, height: expected"):
+            vm.World.from_mjcf(spheres, camera="eye", width=size[0], height=size[1])
+
+
 # -- the closed loop -------------------------------------------------------------------------
 # The lens change of sec. 5.2 (12 mm -> 6 mm, K_hat off) from the paper's start (290 mm, 80
 # degrees) and two others, with the issue's requirement as the stop tolerance. The invariant

@@ -11,6 +11,10 @@ MuJoCo renders offscreen through EGL (``MUJOCO_GL=egl`` is set unless already se
 from ._arms import joint_velocities, ur5_mjcf
 from ._camera import FLIP, k_of_fovy, k_of_intrinsics
 from ._loop import MujocoRun, run
-from ._world import World, available
+from ._world import MAX_MJCF_BYTES, MAX_RENDER_SIDE, World, available
 
-__all__ = ["FLIP", "MujocoRun", "World", "available", "k_of_fovy", "k_of_intrinsics", "joint_velocities", "run", "ur5_mjcf"]
+__all__ = [
+    "FLIP",
+    "MAX_MJCF_BYTES",
+    "MAX_RENDER_SIDE", "MujocoRun", "World", "available", "k_of_fovy", "k_of_intrinsics", "joint_velocities", "run", "ur5_mjcf",
+]

@@ -16,6 +16,25 @@ from . import _camera, _scene
 os.environ.setdefault("MUJOCO_GL", "egl")  # CPU rendering through EGL unless the user chose
 
 
+#: The largest MJCF file `World.from_mjcf` reads (bytes), and the largest side of a rendered
+#: image (pixels, after supersampling): bounds on what a call may allocate.
+MAX_MJCF_BYTES = 16 << 20
+MAX_RENDER_SIDE = 8192
+
+
+def _check_size(width: Any, height: Any, supersample: Any) -> None:
+    """The rendered image's size: whole numbers, at most `MAX_RENDER_SIDE` a side once supersampled."""
+    if not 1 <= int(supersample) <= 4:
+        raise InvalidInput(f"supersample: expected 1 to 4, got {supersample!r}")
+    if not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) for n in (width, height)):
+        raise InvalidInput(f"width, height: expected whole numbers, got {width!r} x {height!r}")
+    if not (1 <= width * int(supersample) <= MAX_RENDER_SIDE and 1 <= height * int(supersample) <= MAX_RENDER_SIDE):
+        raise InvalidInput(
+            f"width, height: expected 1 to {MAX_RENDER_SIDE} pixels a side once supersampled, "
+            f"got {width} x {height} (supersample {supersample})"
+        )
+
+
 def _mujoco() -> Any:
     try:
         import mujoco
@@ -66,10 +85,7 @@ class World:
     def __init__(self, model: Any, camera: str, width: int, height: int, *, supersample: int = 1,
                  target: str | None = None, target_points: Any = None, target_bodies: tuple[str, ...] = ()) -> None:
         mujoco = _mujoco()
-        if not 1 <= int(supersample) <= 4:
-            raise InvalidInput(f"supersample: expected 1 to 4, got {supersample!r}")
-        if width < 1 or height < 1:
-            raise InvalidInput(f"width, height: expected positive sizes, got {width} x {height}")
+        _check_size(width, height, supersample)
         self.model = model
         self.data = mujoco.MjData(model)
         self.camera = camera
@@ -114,13 +130,21 @@ class World:
         world body can be moved by `render(pose)` and `move_camera`; one on a moving body follows
         it), `target_bodies` the bodies that carry the target (checked to exist)."""
         mujoco = _mujoco()
+        _check_size(width, height, supersample)
         path = Path(path)
+        # A regular file only (not a device or a FIFO, which is_file refuses), of bounded size;
+        # MuJoCo's own message (which may quote the file) stays in the exception's cause.
         if not path.is_file():
             raise InvalidInput(f"path: no MJCF file at {str(path)!r}")
-        spec = mujoco.MjSpec.from_file(str(path))
-        spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, width * supersample)
-        spec.visual.global_.offheight = max(spec.visual.global_.offheight, height * supersample)
-        model = spec.compile()
+        if path.stat().st_size > MAX_MJCF_BYTES:
+            raise InvalidInput(f"path: {str(path)!r} is larger than {MAX_MJCF_BYTES >> 20} MiB")
+        try:
+            spec = mujoco.MjSpec.from_file(str(path))
+            spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, width * supersample)
+            spec.visual.global_.offheight = max(spec.visual.global_.offheight, height * supersample)
+            model = spec.compile()
+        except (ValueError, TypeError) as e:
+            raise InvalidInput(f"path: MuJoCo could not load {str(path)!r} as MJCF ({type(e).__name__})") from e
         return cls(model, camera, width, height, supersample=supersample, target_bodies=target_bodies)
 
     def close(self) -> None:
