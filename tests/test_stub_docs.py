@@ -14,6 +14,7 @@ from __future__ import annotations
 import ast
 import importlib.util
 import inspect
+import os
 import sys
 import types
 from pathlib import Path
@@ -171,3 +172,15 @@ def test_a_docstring_literal_reads_back_as_its_text(text):
     literal = stub_docs.literal(text, "    ")
     assert inspect.cleandoc(ast.literal_eval(literal)) == text
     assert "\n" not in text or "\n    " in literal
+
+
+def test_an_extension_older_than_the_rust_sources_is_warned_of(tmp_path):
+    """Regenerating from an extension built before the last Rust edit would write its old texts."""
+    built = tmp_path / "_core.abi3.so"
+    built.write_bytes(b"")
+    os.utime(built, (0, 0))
+    core = types.ModuleType("vsinv._core")
+    core.__file__ = str(built)
+    assert "rebuild the extension first" in (stub_docs.stale_warning(core) or "")
+    os.utime(built, None)
+    assert stub_docs.stale_warning(core) is None

@@ -248,6 +248,21 @@ def first_difference(stub: Optional[str], runtime: str) -> str:
     return f"the stub has {len(a)} lines, the extension {len(b)}"
 
 
+def stale_warning(core: types.ModuleType) -> Optional[str]:
+    """A warning when a Rust source is newer than the built extension (its texts may be old)."""
+    built = Path(getattr(core, "__file__", "") or "")
+    sources = list((ROOT / "src").rglob("*.rs"))
+    if not built.is_file() or not sources:
+        return None
+    newest = max(sources, key=lambda f: f.stat().st_mtime)
+    if newest.stat().st_mtime <= built.stat().st_mtime:
+        return None
+    return (
+        f"warning: {newest.relative_to(ROOT)} is newer than {built.name}: the texts may be the old build's; "
+        "rebuild the extension first (`pip install -e . --no-deps`; make stubs does)"
+    )
+
+
 def main(argv: Optional[list[str]] = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 naming each difference")
@@ -255,6 +270,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     args = parser.parse_args(argv)
     core = importlib.import_module(MODULE)
     source = args.stub.read_text(encoding="utf-8")
+    warning = stale_warning(core)
+    if warning:
+        print(warning, file=sys.stderr)
     out, changed, problems = generate(source, core)
     for item in changed:
         verb = "differs" if args.check else "regenerated"
