@@ -135,34 +135,36 @@ def test_a_docstring_in_the_stub_only_is_reported_not_removed(tmp_path, capsys):
     assert path.read_text() == stale
 
 
-def test_a_new_item_of_the_extension_is_named_and_its_docstring_filled_in(tmp_path, capsys):
+def test_a_new_item_of_the_extension_is_named_and_its_docstring_filled_in():
     """As when a binding adds a class: the check names it until the stub declares it, and then
-    regenerating writes its docstrings."""
+    regenerating writes its docstrings (non-ASCII text and names too: ast counts columns in
+    bytes)."""
     core = types.ModuleType("vsinv._core", _core.__doc__)
     vars(core).update({k: v for k, v in vars(_core).items() if k != "__doc__"})
 
     class Fisheye:
-        """A lens model.
+        """A lens model: r = f θ.
 
         Its second paragraph, with a backslash \\ and "quotes"."""
 
         @property
-        def theta(self) -> float:
+        def θ(self) -> float:
             """An angle."""
             return 0.0
 
     core.Fisheye = Fisheye
     _, problems = stub_docs.stub_items(ast.parse(SOURCE), core)
     assert problems == ["Fisheye: in the extension, not declared in the stub"]
-    declared = SOURCE + "\nclass Fisheye:\n    @property\n    def theta(self) -> float: ...\n"
+    declared = SOURCE + "\nclass Fisheye:\n    @property\n    def θ(self) -> float: ...\n"
     out, changed, problems = stub_docs.generate(declared, core)
-    assert ([i.name for i in changed], problems) == (["Fisheye", "Fisheye.theta"], [])
+    assert ([i.name for i in changed], problems) == (["Fisheye", "Fisheye.θ"], [])
     assert out == SOURCE + (
-        '\nclass Fisheye:\n    """A lens model.\n\n    Its second paragraph, with a backslash \\\\ and "quotes"."""\n'
-        '    @property\n    def theta(self) -> float:\n        """An angle."""\n'
+        '\nclass Fisheye:\n    """A lens model: r = f θ.\n\n    Its second paragraph, with a backslash \\\\ and "quotes"."""\n'
+        '    @property\n    def θ(self) -> float:\n        """An angle."""\n'
     )
-    tree = ast.parse(out)
-    assert ast.get_docstring(tree.body[-1]) == inspect.cleandoc(Fisheye.__doc__)
+    assert ast.get_docstring(ast.parse(out).body[-1]) == inspect.cleandoc(Fisheye.__doc__)
+    stale = out.replace('"""An angle."""', '"""An angle, old."""')
+    assert stub_docs.generate(stale, core)[0] == out
 
 
 @pytest.mark.parametrize(

@@ -165,7 +165,7 @@ def literal(text: str, indent: str) -> str:
 Edit = tuple[int, int, str]  # (start offset, end offset, new text) in the file's text
 
 
-def edit_for(item: Item, offsets: list[int], source: str) -> Optional[Edit]:
+def edit_for(item: Item, lines: Lines, source: str) -> Optional[Edit]:
     """The edit that makes the item's docstring the extension's; None when it already is, or
     when the extension has no text for it (reported instead)."""
     if item.runtime is None or item.stub == item.runtime:
@@ -173,24 +173,24 @@ def edit_for(item: Item, offsets: list[int], source: str) -> Optional[Edit]:
     new = literal(item.runtime, item.indent)
     if isinstance(item.node, ast.AnnAssign):  # an attribute's docstring: the string after it
         if item.attribute_doc is not None:
-            return _span(item.attribute_doc, offsets) + (new,)
-        end = _span(item.node, offsets)[1]
+            return _span(item.attribute_doc, lines) + (new,)
+        end = _span(item.node, lines)[1]
         return (end, end, "\n" + item.indent + new)
     body = item.node.body
     first = body[0] if body else None
     if first is not None and item.stub is not None:  # replace the docstring's span
-        return _span(first, offsets) + (new,)
+        return _span(first, lines) + (new,)
     if isinstance(item.node, ast.Module):
         return (0, 0, new + "\n\n")
     assert first is not None  # a def or class always has a body
-    start, end = _span(first, offsets)
+    start, end = _span(first, lines)
     if _is_ellipsis(first) and len(body) == 1:  # `def f() -> T: ...`: the body becomes the docstring
         if first.lineno == item.node.lineno or source[:start].rstrip(" ").endswith(":"):
             colon = len(source[:start].rstrip(" "))
             return (colon, end, "\n" + item.indent + new)
         return (start, end, new)
     first_line = min([first.lineno] + [d.lineno for d in getattr(first, "decorator_list", [])])
-    line_start = offsets[first_line - 1]
+    line_start = lines[first_line - 1]
     return (line_start, line_start, item.indent + new + "\n")
 
 
@@ -198,29 +198,35 @@ def _is_ellipsis(node: ast.stmt) -> bool:
     return isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant) and node.value.value is Ellipsis
 
 
-def _span(node: ast.stmt, offsets: list[int]) -> tuple[int, int]:
+class Lines:
+    """Offsets in the file's text of ast's positions: a line number and a column counted in
+    UTF-8 bytes from the line's start."""
+
+    def __init__(self, source: str):
+        self.source = source
+        self.starts = [0] + [i + 1 for i, c in enumerate(source) if c == "\n"]
+
+    def __getitem__(self, line_index: int) -> int:
+        """The offset of the start of line `line_index + 1`."""
+        return self.starts[line_index]
+
+    def offset(self, lineno: int, col: int) -> int:
+        start = self.starts[lineno - 1]
+        line = self.source[start : start + col]  # at least `col` bytes' worth of characters
+        return start + len(line.encode("utf-8")[:col].decode("utf-8"))
+
+
+def _span(node: ast.stmt, lines: Lines) -> tuple[int, int]:
     assert node.end_lineno is not None and node.end_col_offset is not None
-    return offsets[node.lineno - 1] + node.col_offset, offsets[node.end_lineno - 1] + node.end_col_offset
-
-
-def line_offsets(source: str) -> list[int]:
-    """The offset in `source` of each line's start (ast's columns are UTF-8 byte offsets: the
-    stub is ASCII, checked by `generate`)."""
-    out, pos = [], 0
-    for line in source.splitlines(keepends=True):
-        out.append(pos)
-        pos += len(line)
-    return out + [pos]
+    return lines.offset(node.lineno, node.col_offset), lines.offset(node.end_lineno, node.end_col_offset)
 
 
 def generate(source: str, core: types.ModuleType) -> tuple[str, list[Item], list[str]]:
     """The stub with every docstring the extension's, the items changed, and the problems (a
     stub docstring without an extension text, items declared on one side only)."""
-    if not source.isascii():
-        raise ValueError("the stub is not ASCII: ast's column offsets would not be character offsets")
     tree = ast.parse(source)
     items, problems = stub_items(tree, core)
-    offsets = line_offsets(source)
+    lines = Lines(source)
     edits: list[tuple[Edit, Item]] = []
     for item in items:
         if item.runtime is None and item.stub is not None:
@@ -228,7 +234,7 @@ def generate(source: str, core: types.ModuleType) -> tuple[str, list[Item], list
                 f"{item.name}: the stub has a docstring the extension lacks: move its text into the Rust `///` "
                 "comment (the class's for a constructor), rebuild, delete it from the stub, run make stubs"
             )
-        edit = edit_for(item, offsets, source)
+        edit = edit_for(item, lines, source)
         if edit is not None:
             edits.append((edit, item))
     out = source
