@@ -8,7 +8,7 @@ RUST_EXAMPLES := control_loop servo_loop simulation batch
 ROBUSTNESS_TESTS := robustness_camera robustness_invariants robustness_control robustness_planning robustness_files \
 	robustness_vision robustness_regressions
 
-.PHONY: docs wheels install install-run test test-fast test-rust test-builtins test-embedded test-examples test-python stubtest lint bench bench-quick soak fuzz run
+.PHONY: docs wheels install install-run test test-fast test-rust test-builtins test-embedded test-examples test-python stubtest stubs lint bench bench-quick soak fuzz run
 
 # No -q: the first install compiles the Rust extension in release mode (several minutes on
 # 2 cores); -v passes cargo's progress through, so the build is seen to move.
@@ -60,6 +60,16 @@ test-fast:
 stubtest:
 	$(PYTHON) -m mypy.stubtest vsinv._core
 	$(PYTHON) -m mypy python/vsinv
+	$(PYTHON) tools/stub_docs.py --check
+
+# The stub's docstrings (python/vsinv/_core.pyi) written from the extension's, the Rust `///`
+# comments of src/python/ (tools/stub_docs.py): the extension is rebuilt first (4 min on the
+# shared 2 cores even with nothing to compile), then every docstring of the stub is replaced by
+# its text, the rest of the file left as it is. With the extension already rebuilt,
+# `$(PYTHON) tools/stub_docs.py` alone does the second part in a second.
+stubs:
+	$(PIP) install -q -e . --no-deps
+	$(PYTHON) tools/stub_docs.py
 
 lint:
 	cargo fmt --all --check

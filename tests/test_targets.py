@@ -68,7 +68,7 @@ def test_the_stub_declares_every_argument():
             assert a["name"] in declared, f"ImageServo in _core.pyi does not declare {t['name']}'s {a['name']}"
             default = declared[a["name"]]
             assert isinstance(default, ast.Constant) and default.value is None, f"{a['name']}: unset is None"
-            assert f"``target=\"{t['name']}\"``" in (ast.get_docstring(cls) or ""), t["name"]
+            assert f"`target=\"{t['name']}\"`" in (ast.get_docstring(cls) or ""), t["name"]
 
 
 def _scene_showing(target: dict[str, Any]) -> str:

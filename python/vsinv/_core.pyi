@@ -1,4 +1,6 @@
-"""Type stubs for the compiled core (Rust, PyO3)."""
+"""The compiled core of vsinv (Rust, PyO3). Its names are imported from the package's levels,
+which re-export them: `vsinv`, `vsinv.laws`, `vsinv.vision`, `vsinv.sim`,
+`vsinv.calibration`, `vsinv.kinematics`, `vsinv.geometry` and `vsinv.errors`."""
 
 import array
 import os
@@ -34,12 +36,12 @@ TAG_FAMILIES: tuple[str, ...]
 LAW_OPTIONS: tuple[dict[str, Any], ...]
 
 def check_law_option(name: str, value: object) -> None:
-    """Checks a value of the law option `name` as `Servo` would: `InvalidInput` naming the option
-    (or its part, `adaptive_gain.at_infinity`) for a value of another kind or out of its range."""
+    """Checks a value of the law option `name` as `Servo` would: `InvalidInput` naming the option (or its part,
+    `adaptive_gain.at_infinity`) for a value of another kind or out of its range."""
 
 def law_options_markdown() -> str:
-    """The table of the laws' options as Markdown (name, laws, values, default, unit, scenario key,
-    meaning), for the reference pages of the docs."""
+    """The table of the laws' options as Markdown (name, laws, values, default, unit, scenario
+    key, meaning), for the reference pages of the docs."""
 
 #: The targets, declared once in the vision layer (Rust `vision::targets::TARGETS`): name (the
 #: `target` of `ImageServo`, `--target`, the ROS parameter `target`), meaning, the detector that
@@ -155,15 +157,9 @@ _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 class VsinvError(Exception):
     """Base class of every vsinv error.
 
-    The structured fields of the error are attributes, None where they do not apply (and on
-    exceptions raised by Python code); match on them rather than on the message.
-    """
+    The structured fields of the error are attributes, None where they do not apply (and on exceptions raised by Python code); match on them rather than on the message."""
     kind: str | None
-    """The kind of error, one of ERROR_KINDS: 'non_finite', 'non_finite_point', 'shape',
-    'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points',
-    'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate',
-    'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable',
-    'invalid_pose', 'degenerate_motion', 'not_ready'."""
+    """The kind of error, one of ERROR_KINDS: 'non_finite', 'non_finite_point', 'shape', 'invalid_intrinsics', 'invalid_parameter', 'invalid_argument', 'too_few_points', 'collinear_basis', 'point_behind_camera', 'degenerate_structure', 'degenerate_estimate', 'scenario', 'invalid_image', 'urdf', 'distortion', 'calibration', 'rz_singular', 'unreachable', 'invalid_pose', 'degenerate_motion', 'not_ready'."""
     argument: str | None
     """The argument or parameter at fault ('pixels', 'gain', ...; an image's file path)."""
     index: int | None
@@ -199,8 +195,7 @@ class VsinvError(Exception):
     key: str | None
     """The dotted scenario key at fault ('control.gain'); None for the whole document."""
     location: tuple[str | int, ...] | None
-    """Where the error is, as data: keys and indices from the input's root, as the message names
-    it (('control', 'gain'), ('pixels', 4, 1), ('object', 'points', 2); () for a whole scenario)."""
+    """Where the error is, as data: keys and indices from the input's root, as the message names it (('control', 'gain'), ('pixels', 4, 1), ('object', 'points', 2); () for a whole scenario)."""
     file: str | None
     """The file at fault (a scenario, calibration or URDF file)."""
     field: str | None
@@ -211,20 +206,18 @@ class VsinvError(Exception):
     """The smallest position residual (m) inverse kinematics reached for an unreachable pose."""
 
 class InvalidInput(VsinvError, ValueError):
-    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, a bad
-    scenario, image, URDF or calibration file."""
+    """Malformed input: NaN or infinity, wrong shape or dtype, invalid intrinsics or parameters, a bad scenario, image, URDF or calibration file."""
 
 class DegenerateGeometry(VsinvError, ValueError):
-    """Geometry the method cannot work with: collinear basis points, too few points, a planar object or
-    equal depth estimates, points at or behind the camera, robot motions that do not determine a
-    hand-eye calibration."""
+    """Geometry the method cannot work with: collinear basis points, too few points, a planar object or equal depth estimates, points at or behind the camera, robot motions that do not determine a hand-eye calibration."""
 
 class NotReady(VsinvError, RuntimeError):
     """A state read before it exists, e.g. a controller's eps before its first step (kind 'not_ready')."""
 
 @final
 class Intrinsics:
-    """Intrinsic parameters of eq. (4): `Intrinsics(fku, fkv, u0, v0, skew=pi/2)`, pixels and radians."""
+    """Intrinsic parameters of eq. (4): `Intrinsics(fku, fkv, u0, v0, skew=pi/2)`, pixels and
+    radians. `skew` is the angle theta between the image axes."""
 
     def __new__(cls, fku: float, fkv: float, u0: float, v0: float, skew: float = ...) -> Intrinsics: ...
     @staticmethod
@@ -249,25 +242,26 @@ class Intrinsics:
     def matrix(self) -> _F64Array:
         """K, a new (3, 3) array."""
     def __eq__(self, other: object, /) -> bool: ...
-    def __reduce__(self) -> tuple[type[Intrinsics], tuple[float, float, float, float, float]]: ...
+    def __reduce__(self) -> tuple[type[Intrinsics], tuple[float, float, float, float, float]]:
+        """Pickling: the five parameters, restored exactly."""
 
 _IntrinsicsLike = Union[Intrinsics, _ArrayLike]
 
 def project(points: _ArrayLike, K: _IntrinsicsLike) -> tuple[_F64Array, _F64Array]:
-    """Projects points (n, 3) given in the camera frame (metres) with intrinsics `K`
-    (eqs. 1-3): returns (pixels (n, 2), depths (n,))."""
+    """Projects points (n, 3) given in the camera frame (metres) with intrinsics `K` (eqs. 1-3): returns (pixels (n,
+    2), depths (n,))."""
 
 def invariant_points(pixels: _ArrayLike, basis: _Basis = (0, 1, 2)) -> _F64Array:
-    """The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array; Q is
-    built from the three `basis` points, so q does not depend on the intrinsics."""
+    """The invariant points q_k = Q^-1 p_k of all n points (sec. 2.3), an (n, 3) array; Q is built from the three
+    `basis` points, so q does not depend on the intrinsics."""
 
 def invariant_jacobian(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> _F64Array:
-    """The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths: the
-    motion of the non-basis invariant points per unit of (vx, vy, vz, wx, wy)."""
+    """The invariant Jacobian J (3(n-3), 5) of sec. 4.1 at the given pixels and depths: the motion of the non-basis
+    invariant points per unit of (vx, vy, vz, wx, wy)."""
 
 def structure_ratio(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike, basis: _Basis = (0, 1, 2)) -> float:
-    """sigma_5/sigma_1 of the depth-balanced invariant Jacobian: near 0 for a degenerate
-    structure (a planar object, equal depths), where the law cannot tell motions apart."""
+    """sigma_5/sigma_1 of the depth-balanced invariant Jacobian: near 0 for a degenerate structure (a planar object,
+    equal depths), where the law cannot tell motions apart."""
 
 def interaction_matrix(pixels: _ArrayLike, depths: _ArrayLike, K: _IntrinsicsLike) -> _F64Array:
     """Pixel interaction matrices (n, 2, 6) of the points: dp_k/dt = L_k (v, w) (Espiau et al.)."""
@@ -282,13 +276,15 @@ def rz_coefficients(
 
 def choose_basis(pixels: _ArrayLike) -> tuple[int, int, int]:
     """Three points well spread in the image (the widest triangle; among equal areas the first
-    (i, j, k) in index order), sorted. Refuses (`InvalidInput`, `pixels`) point sets with more
-    than 10,000 convex-hull vertices."""
+    (i, j, k) in index order), sorted. O(n log n); refuses (InvalidInput, `pixels`) point sets
+    with more than 10,000 convex-hull vertices. Runs without the GIL."""
 
 
 @final
 class InvariantController:
-    """The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24)."""
+    """The invariant visual-servoing law (sec. 4): eqs. (14), (17) and (24). Pickles with its
+    configuration, K_hat and s*(t); a copy's next twist is the original's, but the state of
+    the last step (eps, tau_11, ...) is not kept."""
 
     def __new__(
         cls,
@@ -305,19 +301,20 @@ class InvariantController:
         max_angular_speed: float | None = None,
     ) -> InvariantController: ...
     def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
-        """One control step from the current pixels (n, 2) and depth estimates (n,): the twist (vx, vy, vz,
-        wx, wy, wz) in the camera frame, m/s and rad/s. `visible`, a bool array (n,) (None: all), hides
-        points: their pixels and depths are ignored (may be NaN) and drop out of s and J_hat; the three
-        basis points and three more must be visible (else DegenerateGeometry)."""
+        """One control step from the current pixels (n, 2) and depth estimates (n,): the twist
+        (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s. `visible`, a bool array
+        (n,) (None: all), hides points: their pixels and depths are ignored (may be NaN) and
+        drop out of s and J_hat; the three basis points and three more must be visible (else
+        DegenerateGeometry)."""
     def set_k_hat(self, K_hat: _IntrinsicsLike) -> None:
-        """Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom read-out
-        during the servo; the next step uses them."""
+        """Replaces the estimated intrinsics K_hat (an Intrinsics or a 3x3 matrix), e.g. a zoom
+        read-out during the servo; the next step uses them."""
     def set_reference(self, s_star: _ArrayLike, rate: _ArrayLike | None = None) -> None:
-        """Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its derivative
-        ds*/dt (same shape) for the feed-forward term of eq. (17)."""
+        """Sets a time-varying reference s*(t) ((n-3, 3) invariant points) and optionally its
+        derivative ds*/dt (same shape) for the feed-forward term of eq. (17)."""
     def converged(self, invariant_tol: float = 1e-4, tau21_tol: float = 1e-4) -> bool:
-        """Stop rule for different cameras: ||s - s*|| < invariant_tol, |tau_21| < tau21_tol, tau_11 > 0
-        and tau_22 > 0 (the last two exclude the rz = pi equilibrium)."""
+        """Stop rule for different cameras: ||s - s*|| < invariant_tol, |tau_21| < tau21_tol,
+        tau_11 > 0 and tau_22 > 0 (the last two exclude the rz = pi equilibrium)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -327,13 +324,18 @@ class InvariantController:
         averaged_images: int = 1,
         visible: npt.ArrayLike | None = None,
     ) -> PoseUncertainty:
-        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the reference
-        image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with `depths` (n,), under
-        the invariant stop rule (s and tau_21) with this controller's reference image, basis and K_hat;
-        `averaged_images` current images were averaged."""
+        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the
+        reference image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with
+        `depths` (n,), under the invariant stop rule (s and tau_21) with this controller's
+        reference image, basis and K_hat; `averaged_images` current images were averaged.
+        First order; the translation is in the depths' scale and K_hat is taken as right."""
     def __reduce__(self) -> tuple[type[InvariantController], tuple[Any, ...], tuple[_F64Array, _F64Array | None]]:
-        """Pickling keeps the configuration and s*(t), not the state of the last step."""
-    def __setstate__(self, state: tuple[_ArrayLike, _ArrayLike | None]) -> None: ...
+        """Pickling: the constructor's arguments (reference pixels, K_hat, gains, basis,
+        feed-forward, min_structure_ratio, rz_task, adaptive gain, speed limits) and the
+        reference s*(t) with its rate as set by `set_reference`. The next twist of the copy is
+        that of the original; the state of the last step (eps, tau_11, ...) is not kept."""
+    def __setstate__(self, state: tuple[_ArrayLike, _ArrayLike | None]) -> None:
+        """Unpickling: restores the reference s*(t) and its rate, `(s_star, rate or None)`."""
     @property
     def k_hat(self) -> Intrinsics:
         """The estimated intrinsics K_hat used in the Jacobian."""
@@ -373,7 +375,9 @@ class InvariantController:
 
 @final
 class IbvsController:
-    """Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*)."""
+    """Classic pixel-space IBVS: v = -lambda L_hat^+ (p - p*). Pickles with its configuration;
+    a copy's next twist is the original's, but the last step's pixel_error, last_gain and
+    saturation are not kept."""
 
     def __new__(
         cls,
@@ -387,10 +391,10 @@ class IbvsController:
         max_angular_speed: float | None = None,
     ) -> IbvsController: ...
     def step(self, pixels: _ArrayLike, depths: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
-        """One control step from the current pixels (n, 2) and depths (n,): the twist (6,) in the camera
-        frame. `visible`, a bool array (n,) (None: all), keeps only the flagged points (hidden points'
-        pixels and depths are ignored and may be NaN); at least 4 must be visible (else
-        DegenerateGeometry)."""
+        """One control step from the current pixels (n, 2) and depths (n,): the twist (6,) in the
+        camera frame. `visible`, a bool array (n,) (None: all), keeps only the flagged points
+        (hidden points' pixels and depths are ignored and may be NaN); at least 4 must be
+        visible (else DegenerateGeometry)."""
     def pose_uncertainty(
         self,
         pixels: _ArrayLike,
@@ -400,12 +404,15 @@ class IbvsController:
         averaged_images: int = 1,
         visible: npt.ArrayLike | None = None,
     ) -> PoseUncertainty:
-        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the reference
-        image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with `depths` (n,), under
-        the pixel stop rule with this controller's reference image and K_hat (taken with the servo
-        camera); `averaged_images` current images were averaged."""
+        """The pose uncertainty that pixel noise of `pixel_sigma` pixels (per coordinate; the
+        reference image's `reference_sigma`, default the same) leaves at `pixels` (n, 2) with
+        `depths` (n,), under the pixel stop rule with this controller's reference image and
+        K_hat (taken with the servo camera); `averaged_images` current images were averaged.
+        First order; the translation is in the depths' scale and K_hat is taken as right."""
     def __reduce__(self) -> tuple[type[IbvsController], tuple[Any, ...]]:
-        """Pickling keeps the configuration, not the state of the last step."""
+        """Pickling: the constructor's arguments (reference pixels, K_hat, gain, interaction,
+        reference depths, adaptive gain, speed limits). The next twist of the copy is that of
+        the original; the last step's pixel_error, last_gain and saturation are not kept."""
     @property
     def pixel_error(self) -> float | None:
         """RMS pixel error at the last step (None before the first step)."""
@@ -419,18 +426,17 @@ class IbvsController:
 @final
 class Servo:
     """A servo session: the reference image, the law, the depth source and the stop rules; each
-    `step(pixels, visible, depths)` returns the twist to send and the verdict.
+    `step(pixels, depths, visible)` returns the twist to send and the verdict.
 
-    The keyword arguments are the session's (``reference_depths`` to ``dt``) and the laws' options
-    (``LAW_OPTIONS``: ``gain`` to ``max_angular_speed``; None or absent: the law's default).
-    Each ``step(pixels, visible, depths)`` returns the twist to send and the verdict: the
-    loop logic (stop rules certified by the pose uncertainty, lost features, the rz = pi
-    trap, the iteration limit, depth estimation, path following) that the simulator runs
-    too. Arguments of another law are refused by name. A stop is final: once a step has
-    returned one, every later step returns the same verdict with a zero twist.
+    The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
+    `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`: `gain` to
+    `max_angular_speed`; None or absent: the law's default); arguments of another law are refused
+    by name. A step runs the loop logic the simulator runs too: stop rules certified by the pose
+    uncertainty, lost features, the rz = pi trap, the iteration limit, depth estimation, path
+    following. A stop is final: once a step has returned one, every later step returns the same
+    verdict with a zero twist.
 
-    Works from several threads: each call holds the GIL, so calls take turns.
-    """
+    Works from several threads: each call holds the GIL, so calls take turns."""
 
     def __new__(
         cls,
@@ -459,9 +465,9 @@ class Servo:
         self, pixels: _ArrayLike, depths: _ArrayLike | None = None, visible: npt.ArrayLike | None = None
     ) -> ServoStep:
         """One step from the current pixels (n, 2): `depths` (n,) with `depths="per_step"` (None
-        otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a ServoStep:
-        the twist to send (zero when stopping), the verdict and the telemetry. After a stop, every
-        later step returns that stop again (zero twist)."""
+        otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a
+        ServoStep: the twist to send (zero when stopping), the verdict and the telemetry. After a
+        stop, every later step returns that stop again (zero twist)."""
     @property
     def iterations(self) -> int:
         """Control steps applied."""
@@ -484,26 +490,27 @@ class Servo:
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last images (None before three), pixels."""
     def certainty(self) -> dict[str, float | None] | None:
-        """What the images say about the pose (pixel_sigma, reference_pixel_sigma, translation_sigma,
-        translation_bound in metres, rotation_sigma, rotation_bound in radians, floor_pixel_sigma in
-        pixels: the disagreement floor, None with the stall rule off); None when it cannot be computed."""
+        """What the images say about the pose, a dict of pixel_sigma, reference_pixel_sigma,
+        translation_sigma, translation_bound in metres, rotation_sigma, rotation_bound in radians,
+        floor_pixel_sigma in pixels: the disagreement floor, None with the stall rule off; None
+        when it cannot be computed."""
 
 @disjoint_base
 class ServoStep:
-    """What one ``Servo.step`` returns."""
+    """What one `Servo.step` returns."""
 
     @property
     def twist(self) -> _F64Array:
-        """The twist to send (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero when the
-        verdict is to stop."""
+        """The twist to send (vx, vy, vz, wx, wy, wz) in the camera frame, m/s and rad/s; zero
+        when the verdict is to stop."""
     @property
     def verdict(
         self,
     ) -> Literal[
         "running", "converged", "settled", "lost_features", "rz_trap", "degenerate", "diverged", "max_iterations", "observed"
     ]:
-        """"running", or why to stop: "converged", "settled", "lost_features", "rz_trap", "degenerate",
-        "diverged", "max_iterations", "observed"."""
+        """"running", or why to stop: "converged", "settled", "lost_features", "rz_trap",
+        "degenerate", "diverged", "max_iterations", "observed"."""
     @property
     def reason(self) -> str | None:
         """Why the session stops, in words (None while running)."""
@@ -512,38 +519,35 @@ class ServoStep:
         """Whether the loop goes on."""
     @property
     def telemetry(self) -> dict[str, Any]:
-        """The figures of this step: a dict of iteration, invariant_error, image_error (pixels), tau
-        (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran, basis (the three point
-        indices in use) and basis_switches (how often a hidden basis point made the session change its
-        basis); NaN where a figure does not apply."""
+        """The figures of this step: a dict of iteration, invariant_error, image_error (pixels),
+        tau (tau_11, tau_21, tau_22), eps_z, eps (5,), tracking_error, law_ran, basis (the
+        three point indices in use) and basis_switches (how often a hidden basis point made
+        the session change its basis); NaN where a figure does not apply."""
 
 @final
 class ImageServo:
-    """The pipeline from image to twist: finds the target in the reference image (taken with any
-    camera: no K* needed), then each ``step(image)`` detects or tracks it, matches the points by
-    identity, undistorts them with ``K_hat`` and ``distortion`` and steps a ``Servo`` session.
+    """The pipeline from image to twist: finds the target in the reference image (taken with any camera: no K* needed),
+    then each `step(image)` detects or tracks it, matches the points by identity, undistorts them with `K_hat` and
+    `distortion` and steps a `Servo` session.
 
-    ``target`` is a name of ``TARGETS``, whose entry lists the keyword arguments it takes (another
-    target's are refused by name).
-    ``target="dots"``: ``reference_points`` (n, 2) are approximate pixels of the dots in the reference image,
-    ``first_points`` (n, 2) in the first frame (None: near those found in the reference image);
-    ``tracker`` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity.
-    ``target="tags"``: AprilTags of ``family``, decoded in every frame (searched near their last
-    corners first, the whole frame when one is lost), the corners of the tags ``tag_ids`` (None:
-    every tag decoded in the reference image), corner c of tag t under identity 4 t + c: no clicks,
-    correspondences by identity between any two cameras. ``decimation`` (1..=8, None: the
-    detector's default) is the quad search's, as in ``detect_tags``.
-    ``reference_K`` and ``reference_distortion`` undistort the reference points. Every other keyword
-    argument is the ``Servo`` session's (law, reference_depths, depths, basis, gain, ..., dt) and an
-    unknown one is refused by name. A point not found in a frame is not visible for that step.
-    The stall rule is on unless ``stop={"stall": False}``: real detections of one pose by two
-    lenses disagree, so the run ends when the error stopped decreasing and the camera is still,
-    ``converged`` if the bound (with the measured disagreement floor) is within the tolerance.
-    A first frame where no point is found (blank, dark) is the verdict ``lost_features`` with a
-    zero twist. As for ``Servo``, a stop is final.
+    `target` is a name of `vsinv._core.TARGETS`, whose entry lists the keyword arguments it takes (another
+    target's are refused by name). `target="dots"`: `reference_points` (n, 2) are approximate pixels of the dots in
+    the reference image, `first_points` (n, 2) in the first frame (None: near those found in the reference image);
+    `tracker` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity. `target="tags"`:
+    AprilTags of `family`, decoded in every frame (searched near their last corners first, the whole frame when
+    one is lost), the corners of the tags `tag_ids` (None: every tag decoded in the reference image), corner c of
+    tag t under identity 4 t + c: no clicks, correspondences by identity between any two cameras. `decimation`
+    (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`.
 
-    Works from several threads: their calls take turns (each waits with the GIL released).
-    """
+    `reference_K` and `reference_distortion` undistort the reference points. Every other keyword argument is the
+    `Servo` session's (law, reference_depths, depths, basis, gain, ..., dt) and an unknown one is refused by name.
+    A point not found in a frame is not visible for that step. The stall rule is on unless
+    `stop={"stall": False}`: real detections of one pose by two lenses disagree, so the run ends when the error
+    stopped decreasing and the camera is still, `converged` if the bound (with the measured disagreement floor) is
+    within the tolerance. A first frame where no point is found (blank, dark) is the verdict `lost_features` with a
+    zero twist. As for `Servo`, a stop is final.
+
+    Works from several threads: their calls take turns (each waits with the GIL released)."""
 
     def __new__(
         cls,
@@ -584,14 +588,14 @@ class ImageServo:
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last frames (None before three), pixels."""
     def certainty(self) -> dict[str, float | None] | None:
-        """What the frames say about the pose, as ``Servo.certainty()`` (pixel_sigma,
-        reference_pixel_sigma, translation_sigma, translation_bound in metres, rotation_sigma,
-        rotation_bound in radians: the accuracy ceiling, floor_pixel_sigma: the measured
-        disagreement between reference and frame detections, pixels); None when it cannot be computed."""
+        """What the frames say about the pose, as `Servo.certainty()` (pixel_sigma, reference_pixel_sigma,
+        translation_sigma, translation_bound in metres, rotation_sigma, rotation_bound in radians: the accuracy
+        ceiling, floor_pixel_sigma: the measured disagreement between reference and frame detections, pixels); None
+        when it cannot be computed."""
 
 @final
 class ImageStep(ServoStep):
-    """What one ``ImageServo.step`` returns: a ``ServoStep`` with the points found."""
+    """What one `ImageServo.step` returns: a `ServoStep` with the points found."""
 
     @property
     def found(self) -> npt.NDArray[np.bool_]:
@@ -602,14 +606,14 @@ class ImageStep(ServoStep):
     @property
     def stopped_early(self) -> bool:
         """Whether the detector's search of this frame stopped at its bound on its work (a frame
-        too cluttered to be searched whole, as ``Tags.stopped_early``): a point not found may be
+        too cluttered to be searched whole, as `Tags.stopped_early`): a point not found may be
         in view."""
 
 @final
 class PoseUncertainty:
-    """The camera displacement from the goal that the images still allow (first-order propagation of pixel
-    noise through the law's Jacobian), in the current camera frame: translation in metres (in the depth
-    estimates' scale), rotation in radians."""
+    """The camera displacement from the goal that the images still allow (first-order
+    propagation of pixel noise through the law's Jacobian), in the current camera frame:
+    translation in metres (in the depth estimates' scale), rotation in radians."""
 
     @property
     def covariance(self) -> _F64Array:
@@ -630,17 +634,18 @@ class PoseUncertainty:
 
 @final
 class PixelNoiseMeter:
-    """The pixel noise of an image stream, measured from the images themselves: the second difference of
-    each point over three consecutive images cancels motion linear in time, and E[d^2] = 6 sigma^2 for
-    independent noise."""
+    """The pixel noise of an image stream, measured from the images themselves: the second
+    difference of each point over three consecutive images cancels motion linear in time,
+    and E[d^2] = 6 sigma^2 for independent noise. `PixelNoiseMeter(capacity=32)`: a meter over
+    the last `capacity` images (3 to 4096)."""
 
     def __new__(cls, capacity: int = 32) -> PixelNoiseMeter: ...
     def push(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> None:
         """Adds an image's pixels (n, 2); another number of points starts the measurement again."""
     @property
     def sigma(self) -> float | None:
-        """The standard deviation of a pixel coordinate, pixels; None until a point was seen in three
-        consecutive images."""
+        """The standard deviation of a pixel coordinate, pixels; None until a point was seen in
+        three consecutive images."""
     def clear(self) -> None:
         """Forgets the images."""
     def __len__(self) -> int: ...
@@ -662,18 +667,16 @@ class StabilityReport:
     def eigenvalues(self) -> npt.NDArray[np.complex128]:
         """Eigenvalues of A: complex (5,) for one K, (m, 5) for a schedule of m matrices."""
     def tracking_bound(self, max_b: float) -> float:
-        """Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b; InvalidInput when Prop. 2 fails
-        (sigma <= 0: no bound)."""
+        """Prop. 3: the bound psi/phi on ||eps|| when ||b(t)|| <= max_b; InvalidInput when
+        Prop. 2 fails (sigma <= 0: no bound)."""
 
 def check_stability(K: _IntrinsicsLike, K_hat: _IntrinsicsLike, kappa: float = 1.0, gain: float = 1.0) -> StabilityReport:
-    """Props. 1-2 for the true intrinsics `K` (one camera, or a schedule of cameras), an
-    estimate `K_hat` (a 3x3 upper-triangular matrix or Intrinsics), the depth scale `kappa`
-    and the gain."""
+    """Props. 1-2 for the true intrinsics `K` (one camera, or a schedule of cameras), an estimate `K_hat` (a 3x3
+    upper-triangular matrix or Intrinsics), the depth scale `kappa` and the gain."""
 
 def tracking_bound(gain: float, sigma: float, max_b: float) -> float:
-    """The bound psi/phi = 2 max_b / (gain sigma) of Prop. 3 (eq. 20) on ||eps|| while
-    ||b(t)|| <= max_b; `InvalidInput` for gain <= 0, sigma <= 0 (Prop. 2 fails: no bound),
-    max_b < 0 or a bound that overflows."""
+    """The bound psi/phi = 2 max_b / (gain sigma) of Prop. 3 (eq. 20) on ||eps|| while ||b(t)|| <= max_b;
+    `InvalidInput` for gain <= 0, sigma <= 0 (Prop. 2 fails: no bound), max_b < 0 or a bound that overflows."""
 
 
 @final
@@ -686,8 +689,8 @@ class Scenario:
         `allow_outside_files`."""
     @staticmethod
     def from_dict(d: dict[str, Any], allow_outside_files: bool = False) -> Scenario:
-        """From a dictionary with the structure of a scenario file; the files it names must be in the
-        working directory unless `allow_outside_files`."""
+        """From a dictionary with the structure of a scenario file; the files it names must be in
+        the working directory unless `allow_outside_files`."""
     @property
     def name(self) -> str:
         """The name."""
@@ -716,12 +719,12 @@ class _SummaryField(TypedDict):
     description: str
 
 def recorded_columns() -> list[_Column]:
-    """The recorded columns (each a ``RunResult`` attribute and an ``.npz`` entry): name, unit
-    (SI, ``px``, ``1`` dimensionless, ``bool``), shape (axis lengths, or ``"N"`` rows, ``"n"``
-    points, ``"n_joints"`` joints), dtype, which runs record it, description."""
+    """The recorded columns (each a `RunResult` attribute and an `.npz` entry): name, unit (SI, `px`, `1`
+    dimensionless, `bool`), shape (axis lengths, or `"N"` rows, `"n"` points, `"n_joints"` joints), dtype, which
+    runs record it, description."""
 
 def summary_fields() -> list[_SummaryField]:
-    """The numbers of ``RunResult.summary`` (SI, ``px``, ``1``): name, unit, description."""
+    """The numbers of `RunResult.summary` (SI, `px`, `1`): name, unit, description."""
 
 _PlotKind = Literal[
     "image_trajectories", "errors", "task_functions", "velocities", "pose_errors", "path3d", "joints", "joint_velocities"
@@ -729,8 +732,8 @@ _PlotKind = Literal[
 
 @final
 class RunResult:
-    """The result of a run: `.summary` (a dict), the scenario, and the recorded columns (NumPy views of the
-    simulator's buffers, one row per iteration), one attribute each as declared in
+    """The result of a run: `.summary` (a dict), the scenario, and the recorded columns (NumPy
+    views of the simulator's buffers, one row per iteration), one attribute each as declared in
     `vsinv::sim::outcome::COLUMNS` (see `recorded_columns()`)."""
 
     columns: tuple[dict[str, Any], ...]
@@ -745,7 +748,7 @@ class RunResult:
     def arrays(self) -> dict[str, npt.NDArray[Any]]:
         """The recorded arrays by name (those this run recorded)."""
     def plot(self, kind: _PlotKind, ax: Any = None) -> Any:
-        """The figure `kind` (`vsinv.plots.PLOTS`) drawn into `ax` (a matplotlib Axes, or one
+        """The figure ``kind`` (``vsinv.plots.PLOTS``) drawn into ``ax`` (a matplotlib Axes, or one
         per panel) or a new figure; returns the matplotlib Figure."""
     @property
     def time(self) -> _F64Array:
@@ -755,8 +758,7 @@ class RunResult:
         """camera pose in F* (4x4, translation in metres) (m, shape (N, 4, 4))."""
     @property
     def twist(self) -> _F64Array:
-        """twist sent to the robot (vx, vy, vz, wx, wy, wz; NaN on the last row when no step followed)
-        (m/s, rad/s, shape (N, 6))."""
+        """twist sent to the robot (vx, vy, vz, wx, wy, wz; NaN on the last row when no step followed) (m/s, rad/s, shape (N, 6))."""
     @property
     def joints(self) -> _F64Array:
         """joint positions (x, y, z, theta-u for the free-flying camera) (m, rad, shape (N, n_joints))."""
@@ -771,8 +773,7 @@ class RunResult:
         """||s - s*||, to the reference image (1, shape (N,))."""
     @property
     def tracking_error(self) -> _F64Array:
-        """||s - s*(t)||, to the moving reference of a planned path (NaN outside the invariant law) (1,
-        shape (N,))."""
+        """||s - s*(t)||, to the moving reference of a planned path (NaN outside the invariant law) (1, shape (N,))."""
     @property
     def eps(self) -> _F64Array:
         """task function eps (NaN for IBVS) (m, rad, shape (N, 5))."""
@@ -790,27 +791,24 @@ class RunResult:
         """rotation angle from the reference pose (rad, shape (N,))."""
     @property
     def reference_pixels(self) -> _F64Array:
-        """reference pixels (with their noise, if any); one row per point, not per iteration (px, shape (n,
-        2))."""
+        """reference pixels (with their noise, if any); one row per point, not per iteration (px, shape (n, 2))."""
     @property
     def detection_error(self) -> _F64Array | None:
-        """distance of each tracked centroid from the true projection of its dot's centre (NaN where not
-        found) (px, shape (N, n); None without [vision])."""
+        """distance of each tracked centroid from the true projection of its dot's centre (NaN where not found) (px, shape (N, n); None without [vision])."""
     @property
     def joint_velocities(self) -> _F64Array | None:
-        """an arm's joint velocities after saturation (NaN on the last row) (m/s, rad/s, shape (N,
-        n_joints); None for robots other than an arm)."""
+        """an arm's joint velocities after saturation (NaN on the last row) (m/s, rad/s, shape (N, n_joints); None for robots other than an arm)."""
     @property
     def joint_limits(self) -> dict[str, Any] | None:
-        """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity`
-        (per second); None for the other robots."""
+        """An arm's joint `names` and limits `lower`, `upper` (rad or m) and `velocity` (per second); None for the
+        other robots."""
 
 def load_scenario(source: _ScenarioLike, allow_outside_files: bool = False) -> Scenario:
-    """Loads a scenario from a built-in name, a TOML file path or a dictionary. Scenario angles are degrees
-    and their keys say so (`rotation_deg`, `skew_deg`, `max_angular_speed_deg`; the older `rotation` is
-    read as degrees); the Python API itself is SI (radians). The files a scenario names (`calibration`,
-    `robot.urdf`) must be inside its folder (the working directory for a dict) unless
-    `allow_outside_files`."""
+    """Loads a scenario from a built-in name, a TOML file path or a dictionary. Scenario angles
+    are degrees and their keys say so (`rotation_deg`, `skew_deg`, `max_angular_speed_deg`; the
+    older `rotation` is read as degrees); the Python API itself is SI (radians). The files a
+    scenario names (`calibration`, `robot.urdf`) must be inside its folder (the working
+    directory for a dictionary) unless `allow_outside_files`."""
 def list_scenarios() -> list[tuple[str, str]]:
     """The built-in scenarios as (name, description) pairs."""
 def run_batch(
@@ -819,18 +817,19 @@ def run_batch(
     allow_outside_files: bool = False,
     progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, npt.NDArray[Any]]:
-    """Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths) in parallel
-    with the GIL released (recording off) and returns the table as a dict of NumPy arrays, one row per
-    scenario: status (str), iterations, the summary fields final_translation_error,
+    """Runs many scenarios (Scenario objects, dicts, JSON texts, built-in names or TOML paths)
+    in parallel with the GIL released (recording off) and returns the table as a dict of NumPy
+    arrays, one row per scenario: status (str), iterations, the summary fields final_translation_error,
     final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
-    observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where not
-    measured), prop1, prop2, within_tolerance, message (str).
+    observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where
+    not measured), prop1, prop2, within_tolerance, message (str). A scenario whose configuration
+    is invalid raises before anything runs; a run that fails on the way has status "error" and
+    its message.
 
-    ``progress``: None, or a callable ``progress(done, total)`` called from the calling thread
-    as runs finish (``done`` increasing to ``total``); ``vsinv.sim.run_batch`` draws a tqdm bar
-    instead for None, True or False. Ctrl-C or an exception of ``progress`` stops the batch
-    and is raised. Works in a process forked after earlier batches (the pools are rebuilt).
-    """
+    `progress`: None, or a callable `progress(done, total)` called from the calling thread as
+    runs finish (`done` increasing to `total`); `vsinv.sim.run_batch` draws a tqdm bar instead
+    for None, True or False. Ctrl-C or an exception of `progress` stops the batch and is raised.
+    Works in a process forked after earlier batches (the pools are rebuilt)."""
 def run_scenario(
     scenario: _ScenarioLike,
     record: bool = True,
@@ -866,8 +865,8 @@ class PlaneParallax:
 def estimate_plane_parallax(
     current_pixels: _ArrayLike, reference_pixels: _ArrayLike, basis: _Basis = (0, 1, 2)
 ) -> PlaneParallax:
-    """Eq. (9) from a current and a reference image of n >= 7 points (the linear method for
-    n >= 8, the minimal 7-point method otherwise)."""
+    """Eq. (9) from a current and a reference image (n >= 7 points; linear method for n >= 8,
+    minimal 7-point method otherwise)."""
 
 @final
 class InvariantPath:
@@ -894,14 +893,14 @@ def reference_depths(object_points: _ArrayLike, reference_pixels: _ArrayLike, K:
     Intrinsics)."""
 
 def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]:
-    """Eq. (26): the depths of the first image of a pure-translation pair (any camera), up to
-    one positive scale (mean 1). Returns (depths (n,), epipole (3,), residual)."""
+    """Eq. (26): depths of the first image of a pure-translation pair (any camera), up to one
+    positive scale (mean 1). Returns (depths (n,), epipole (3,), residual)."""
 
 
 @final
 class ResectionDepths:
-    """Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera against
-    the reconstruction from the translation pair."""
+    """Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera
+    against the reconstruction from the translation pair."""
 
     def __new__(
         cls,
@@ -911,8 +910,8 @@ class ResectionDepths:
         reference_mean_depth: float = 1.0,
     ) -> ResectionDepths: ...
     def estimate(self, pixels: _ArrayLike, visible: npt.ArrayLike | None = None) -> _F64Array:
-        """Depths (n,) of the current image up to kappa(t) > 0, from the pixels of the visible points (all
-        by default; at least 6, not coplanar)."""
+        """Depths (n,) of the current image up to kappa(t) > 0, from the pixels of the visible
+        points (all by default; at least 6, not coplanar)."""
 
 # An image: returned, a (height, width) uint8 grey array; as an argument, any uint8 array read
 # by the bindings' one image reader: grey (height, width) or (height, width, 1), colour
@@ -927,9 +926,9 @@ def render(
     time: float = 0.0,
     reference: bool = False,
 ) -> _U8Image:
-    """The image a scenario's camera sees: the servo camera K(time) at `pose` (a 4x4 camera frame in F*;
-    default the start pose), or the reference camera K* (default at F*) when `reference` is true;
-    rendered with the scenario's `[vision]` settings."""
+    """The image a scenario's camera sees: the servo camera K(time) at `pose` (a 4x4 camera
+    frame in F*; default the start pose), or the reference camera K* (default at F*) when
+    `reference` is true; rendered with the scenario's `[vision]` settings."""
 
 def render_view(
     scenario: _ScenarioLike,
@@ -937,8 +936,8 @@ def render_view(
     time: float = 0.0,
     reference: bool = False,
 ) -> tuple[_U8Image, _F64Array, npt.NDArray[np.bool_]]:
-    """`render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true projections of the
-    dots' centres and which dots are in the image."""
+    """`render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true
+    projections of the dots' centres and which dots are in the image."""
 
 @final
 class Dots:
@@ -965,38 +964,42 @@ def detect_dots(
     min_contrast: int = 20,
     max_ring_residual: float = 0.15,
 ) -> Dots:
-    """Bright dots on a dark background (`polarity="light"`), dark dots on a bright one (`"dark"`: the
-    bright dots of `255 - image`, threshold `t` standing for `255 - t`) or as the image shows
-    (`"auto"`): a local threshold (a pixel is a dot pixel when it stands out of the background of its
-    neighbourhood by half the contrast of the dots nearby and at least `min_contrast`; `threshold=` sets
-    one level for the whole image instead), 8-connected components with `min_area <= area <= max_area`
-    (pixels) and a fill ratio (area over that of the ellipse of its second moments) of at least
-    `min_fill` (less `0.2 / sqrt(area)`, the digitised outline's share), a mean contrast over the
-    background plane around it of at least `min_contrast` grey levels and a ring around it that fits
-    that plane (RMS residual at most `max_ring_residual` times the contrast), intensity-weighted
-    subpixel centroids over that plane.
+    """Bright dots on a dark background (`polarity="light"`), dark dots on a bright one
+    (`"dark"`: the bright dots of `255 - image`, threshold `t` standing for `255 - t`) or as the
+    image shows (`"auto"`): a local threshold (a pixel is a dot pixel when it stands out of the
+    background of its neighbourhood by half the contrast of the dots nearby and at least
+    `min_contrast`; `threshold=` sets one level for the whole image instead), 8-connected
+    components with `min_area <= area <= max_area` (pixels) and a fill ratio (area over that
+    of the ellipse of its second moments) of at least `min_fill` (less `0.2 / sqrt(area)`,
+    the digitised outline's share), a mean contrast over the background plane around it of at
+    least `min_contrast` grey levels and a ring around it that fits that plane (RMS residual at
+    most `max_ring_residual` times the contrast), intensity-weighted subpixel centroids over
+    that plane. A uniform image raises `InvalidInput`.
 
-    threshold: None (default) for the local threshold (per 32 px tile: half way between the
-    background of the neighbourhood and the brightest dot nearby, at least min_contrast above
-    the background), or one grey level for the whole image. A dot has min_area <= area <=
-    max_area pixels (default 8 and no limit), a fill ratio (area over that of the ellipse of
-    its second moments: 1 for a filled ellipse, 0.955 for a square) of at least min_fill in
-    [0, 1] (default 0.95, less 0.2 / sqrt(area): the digitised outline's share of a small
-    dot), a mean contrast over the background plane around it of at least
-    min_contrast grey levels in [0, 255] (default 20), and a plain ring around it: the RMS
-    residual of that plane on its bounding box's ring (grown by 2 px) at most
-    max_ring_residual >= 0 times its contrast (default 0.15; inf: no check).
-    """
+    `threshold`: None (default) for the local threshold (per 32 px tile: half way between the
+    background of the neighbourhood and the brightest dot nearby, at least `min_contrast` above
+    the background), or one grey level for the whole image. A dot has `min_area <= area <=
+    max_area` pixels (default 8 and no limit), a fill ratio (area over that of the ellipse of
+    its second moments: 1 for a filled ellipse, 0.955 for a square) of at least `min_fill` in
+    [0, 1] (default 0.95, less `0.2 / sqrt(area)`: the digitised outline's share of a small
+    dot), a mean contrast over the background plane around it of at least `min_contrast` grey
+    levels in [0, 255] (default 20), and a plain ring around it: the RMS residual of that plane
+    on its bounding box's ring (grown by 2 px) at most `max_ring_residual` >= 0 times its
+    contrast (default 0.15; inf: no check)."""
 
 @final
 class DotTracker:
     """Tracks dots through images: `DotTracker(image, initial_pixels (n, 2), search_radius=20.0,
-    max_search_radius=80.0, min_area=4, polarity="light", max_area_ratio=1.5)` finds each dot near its
-    click in the first image (a dot larger than the window too; `"dark"`: dark dots, `"auto"`: decided
-    on the first image); `track(image)` returns `(pixels (n, 2), found (n,) bool)`.
+    max_search_radius=80.0, min_area=4, polarity="light", max_area_ratio=1.5)` finds each dot
+    near its click in the first image (a dot larger than the window too; `"dark"`: dark dots,
+    `"auto"`: decided on the first image); `track(image)` returns `(pixels (n, 2), found (n,)
+    bool)`. The window follows each dot's size and motion; a dot whose area or shape changed
+    too much (merged with another region, say) is not found and keeps its last position with
+    `found` false; two dots are never swapped. Too much: a component whose area differs from
+    the dot's last area by more than `max_area_ratio` (beyond the boundary pixels), or whose
+    principal spreads differ by more than its square root, is not that dot.
 
-    Works from several threads: their calls take turns (each waits with the GIL released).
-    """
+    Works from several threads: their calls take turns (each waits with the GIL released)."""
 
     def __new__(
         cls,
@@ -1007,12 +1010,7 @@ class DotTracker:
         min_area: int = 4,
         polarity: Literal["light", "dark", "auto"] = "light",
         max_area_ratio: float = 1.5,
-    ) -> DotTracker:
-        """Starts on one approximate pixel per dot (a dot larger than search_radius too). The
-        search window follows each dot's size and motion; a component whose area differs from
-        the dot's last area by more than max_area_ratio (beyond the boundary pixels), or whose
-        principal spreads differ by more than its square root, is not that dot: the dot is
-        reported not found and keeps its last position."""
+    ) -> DotTracker: ...
     def track(self, image: _U8Image) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
         """Finds the dots in the next image: `(pixels (n, 2), found (n,) bool)`."""
     @property
@@ -1022,15 +1020,13 @@ class DotTracker:
 
 @final
 class TagTracker:
-    """AprilTags of ``family`` through a sequence of frames: after a frame, each tag is followed from
-    its last corners (its edges measured again near them, its bits read there, accepted only as the
-    same id: no quad search), else searched in a crop around its last corners (a margin of a
-    quarter of its side plus twice its last motion), and the whole frame is read when one is not
-    found there, when the size changes, and every ``refresh`` frames (0: only then) to pick up tags
-    coming into view. A tracked frame gives the corners ``detect_tags`` gives on it (within 0.02
-    px), for the tags tracked; ``reads`` says how each was read. ``follow=False`` skips the
-    following (the quad search in each crop every frame). ``decimation`` (1..=8, None: the detector's
-    default) is ``detect_tags``'s.
+    """AprilTags of `family` through a sequence of frames: after a frame, each tag is followed from its last corners
+    (its edges measured again near them, its bits read there, accepted only as the same id: no quad search), else
+    searched in a crop around its last corners (a margin of a quarter of its side plus twice its last motion), and
+    the whole frame is read when one is not found there, when the size changes, and every `refresh` frames (0: only
+    then) to pick up tags coming into view. A tracked frame gives the corners `detect_tags` gives on it (within
+    0.02 px), for the tags tracked; `reads` says how each was read. `follow=False` skips the following (the quad
+    search in each crop every frame). `decimation` (1..=8, None: the detector's default) is `detect_tags`'s.
 
     Works from several threads: their calls take turns (each waits with the GIL released)."""
 
@@ -1042,9 +1038,8 @@ class TagTracker:
         follow: bool = True,
     ) -> TagTracker: ...
     def track(self, image: npt.NDArray[np.uint8]) -> Tags:
-        """The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their
-        ``stopped_early`` says whether a quad search of this frame (whole or in a crop) stopped
-        early, as ``detect_tags``'s."""
+        """The tags in the next frame (an image: grey, or BGR/BGRA converted), sorted by id; their `stopped_early` says
+        whether a quad search of this frame (whole or in a crop) stopped early, as `detect_tags`'s."""
     def reset(self) -> None:
         """Forgets the last frame: the next one is read whole."""
     @property
@@ -1052,10 +1047,9 @@ class TagTracker:
         """Whether the last frame was read whole (not tracked in crops)."""
     @property
     def reads(self) -> list[str]:
-        """How each tag of the last frame was read, in the order of its ids: "edges" (followed from
-        its last corners, its edges measured again and its bits read there, no quad search),
-        "crop" (the quad search in a crop around them) or "whole" (the quad search in the whole
-        frame)."""
+        """How each tag of the last frame was read, in the order of its ids: "edges" (followed from its last corners,
+        its edges measured again and its bits read there, no quad search), "crop" (the quad search in a crop around
+        them) or "whole" (the quad search in the whole frame)."""
 
 @final
 class Tags:
@@ -1066,9 +1060,9 @@ class Tags:
         """Tag ids, `(m,)` int64."""
     @property
     def corners(self) -> _F64Array:
-        """Corners (u, v) of each tag's black square, (m, 4, 2): top-left, top-right,
-        bottom-right, bottom-left as OpenCV's aruco module orders them (clockwise in the image),
-        pixel (u, v) centred at integer coordinates (OpenCV's convention)."""
+        """Corners (u, v) of each tag's black square, (m, 4, 2): top-left, top-right, bottom-right, bottom-left as
+        OpenCV's aruco module orders them (clockwise in the image), pixel (u, v) centred at integer coordinates
+        (OpenCV's convention)."""
     @property
     def family(self) -> str:
         """The family searched for (`"tag36h11"`, ...)."""
@@ -1084,50 +1078,47 @@ def detect_tags(
     family: _TagFamily = "tag36h11",
     decimation: int | None = None,
 ) -> Tags:
-    """The AprilTags of `family` in an image (grey, or BGR/BGRA converted to grey), sorted by id, with the corners
-    of each black square in OpenCV's aruco order and pixel convention (the same numbers as
-    cv2.aruco.ArucoDetector with DICT_APRILTAG_36h11, within noise), measured on the square's
-    outer edges; a tag whose edges do not support its corners is left out. Quads are searched
-    in the image shrunk by `decimation` (1..=8: larger is faster, smaller finds smaller tags;
-    None: chosen per image, 1 below 960 pixels on the shorter side, 2 at 1920 x 1080) and on
-    the image halved again and again, so large tags are found too. An empty image raises
-    InvalidInput; an image without tags gives an empty result. Bounds: an image of at most 2^28
-    pixels (65536 a side, as every image argument), a decimation that leaves at most about 2^22
-    pixels to search (InvalidInput naming `decimation` and the one that fits otherwise; None
-    always fits: the detector takes some 70 bytes a searched pixel). The work per frame is bounded
-    too: a level of the search holding more regions (black or white, of the detector's
-    threshold) than is left of the frame's budget of 4,096 is not searched, and at most 512
-    decoded candidates have their corners measured (best first, one per id); the result's
-    `stopped_early` says when that happened (a cluttered frame: thousands of small squares or
-    tags), never on ordinary frames."""
+    """The AprilTags of `family` in an image (grey, or BGR/BGRA converted to grey), sorted by id, with the corners of
+    each black square in OpenCV's aruco order and pixel convention (the same numbers as cv2.aruco.ArucoDetector with
+    DICT_APRILTAG_36h11, within noise), measured on the square's outer edges; a tag whose edges do not support its
+    corners is left out. An empty image raises `InvalidInput`; an image without tags gives an empty result. Quads
+    are searched in the image shrunk by `decimation` (1..=8: larger is faster, smaller finds smaller tags; `None`:
+    chosen per image, 1 below 960 pixels on the shorter side, 2 at 1920 x 1080) and on the image halved again and
+    again, so large tags are found too; corners are measured at full size. Bounds: an image of at most 2^28 pixels
+    (65536 a side, as every image argument), a decimation that leaves at most about 2^22 pixels to search
+    (`InvalidInput` naming `decimation` and the one that fits otherwise; `None` always fits: the detector takes
+    some 70 bytes a searched pixel). The work per frame is bounded too: a level of the search holding more regions
+    (black or white, of the detector's threshold) than is left of the frame's budget of 4,096 is not searched, and
+    at most 512 decoded candidates have their corners measured (best first, one per id); the result's
+    `stopped_early` says when that happened (a cluttered frame: thousands of small squares or tags), never on
+    ordinary frames."""
 
 def load_image(path: str | os.PathLike[str]) -> _U8Image:
-    """Reads an image file (PNG, PGM/PPM, JPEG, or GIF's first frame) as a `(height, width)` uint8 array;
-    colour images are converted to grey with the Rec. 601 luma weights (0.299, 0.587, 0.114, as OpenCV),
-    16-bit images are refused. At most 64 MiB of file, 2^28 pixels (65536 a side) and 512 MiB to decode;
-    a PNG file's colour profile (iCCP) and text chunks are skipped unread."""
+    """Reads an image file (PNG, PGM/PPM, JPEG, or GIF's first frame) as a `(height, width)`
+    uint8 array; colour images are converted to grey with the Rec. 601 luma weights (0.299,
+    0.587, 0.114, as OpenCV), 16-bit images are refused. At most 64 MiB of file, 2^28 pixels
+    (65536 a side) and 512 MiB to decode; a PNG file's colour profile (iCCP) and text chunks are
+    skipped unread."""
 
 def save_image(image: _U8Image, path: str | os.PathLike[str]) -> None:
     """Writes an image as a grey PNG file (a colour array, BGR or BGRA, is written as its grey)."""
 
 def decode_image(data: bytes | bytearray | memoryview | array.array[int] | npt.NDArray[np.uint8],
                  format: Literal["png", "jpeg"] | None = None) -> _U8Image:
-    """The (height, width) uint8 grey image of PNG or JPEG bytes (a ROS
-    sensor_msgs/CompressedImage's data), in Rust with the GIL released: the declared size is
-    checked against the pixel limit (2^28, 65536 a side) before decoding, at most 64 MiB of data
-    and 512 MiB to decode; colour by Rec. 601 luma. ``format`` "png" or "jpeg" refuses the
-    other one (None: either). Empty, unknown, corrupt or truncated data, or 16-bit samples,
-    raise InvalidInput; another ``format`` InvalidInput naming it."""
+    """The (height, width) uint8 grey image of PNG or JPEG bytes (a ROS sensor_msgs/CompressedImage's data), in Rust
+    with the GIL released: the declared size is checked against the pixel limit (2^28, 65536 a side) before
+    decoding, at most 64 MiB of data and 512 MiB to decode; colour by Rec. 601 luma. `format` "png" or "jpeg"
+    refuses the other one (None: either). Empty, unknown, corrupt or truncated data, or 16-bit samples, raise
+    InvalidInput; another `format` InvalidInput naming it."""
 
 def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = None) -> _U8Image:
-    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or a
-    (height, width, 4) one with alpha last (ignored), whose colour channels are in ``order``
-    (None: ``"rgb"``), by Rec. 601 luma in integer arithmetic (OpenCV's COLOR_RGB2GRAY,
-    COLOR_BGR2GRAY, COLOR_RGBA2GRAY, COLOR_BGRA2GRAY to the bit), vectorised (AVX2 when the
-    processor has it), in Rust with the GIL released; a non-contiguous array is copied once, a
-    grey (height, width) or (height, width, 1) array is returned as a copy. Another shape or
-    dtype raises InvalidInput, another order InvalidInput naming ``order``. (Every function
-    that takes an image reads colour itself, in OpenCV's BGR order.)"""
+    """The (height, width) uint8 grey image of a (height, width, 3) uint8 colour image, or a (height, width, 4) one
+    with alpha last (ignored), whose colour channels are in `order` (None: `"rgb"`), by Rec. 601 luma in integer
+    arithmetic (OpenCV's COLOR_RGB2GRAY, COLOR_BGR2GRAY, COLOR_RGBA2GRAY, COLOR_BGRA2GRAY to the bit), vectorised
+    (AVX2 when the processor has it), in Rust with the GIL released; a non-contiguous array is copied once, a grey
+    (height, width) or (height, width, 1) array is returned as a copy. Another shape or dtype raises InvalidInput,
+    another order InvalidInput naming `order`. (Every function that takes an image reads colour itself, in OpenCV's
+    BGR order.)"""
 
 @final
 class Distortion:
@@ -1153,8 +1144,8 @@ def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _Distorti
 def undistort_points(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
 ) -> _F64Array:
-    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol`
-    pixels within `max_iter` iterations."""
+    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol` pixels within `max_iter`
+    iterations."""
 
 @final
 class Calibration:
@@ -1171,34 +1162,36 @@ class Calibration:
         """(width, height) in pixels, or None when the file does not give it."""
 
 def load_calibration(path: str | os.PathLike[str]) -> Calibration:
-    """Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML (a
-    regular file of at most 1 MiB; no YAML aliases)."""
+    """Reads a calibration file: ROS camera_info YAML, OpenCV FileStorage YAML or XML (a regular
+    file of at most 1 MiB; no YAML aliases)."""
 
 def exp_twist(twist: _ArrayLike, dt: float = 1.0) -> _F64Array:
-    """The 4x4 rigid motion of holding the camera twist `(vx, vy, vz, wx, wy, wz)` (camera frame) for `dt`
-    seconds: the next pose is `pose @ exp_twist(twist, dt)`."""
+    """The 4x4 rigid motion of holding the camera twist `(vx, vy, vz, wx, wy, wz)` (camera frame)
+    for `dt` seconds: the next pose is `pose @ exp_twist(twist, dt)`."""
 
 def pose_from_position_thetau(position: _ArrayLike, thetau: _ArrayLike) -> _F64Array:
-    """The 4x4 pose with camera centre `position` (metres, F*) and theta-u rotation `thetau` (radians, F*)."""
+    """The 4x4 pose with camera centre `position` (metres, F*) and theta-u rotation `thetau`
+    (radians, F*)."""
 
 def thetau_from_pose(pose: _ArrayLike) -> tuple[_F64Array, _F64Array]:
-    """`(position (3,), thetau (3,))` of a 4x4 pose: the camera centre and the theta-u rotation vector
-    (radians, theta in [0, pi])."""
+    """`(position (3,), thetau (3,))` of a 4x4 pose: the camera centre and the theta-u rotation
+    vector (radians, theta in [0, pi])."""
 
 def thetau_from_rotations(rotations: _ArrayLike) -> _F64Array:
-    """The theta-u vectors (rad, theta in [0, pi]) of rotation matrices ``(n, 3, 3)``, shape
-    ``(n, 3)`` (OpenCV's Rodrigues vectors); ``InvalidInput`` naming the matrix for one with
-    a non-finite entry or that is not a rotation (orthonormal, det +1, within 1e-6)."""
+    """The theta-u vectors (rad, theta in [0, pi]) of rotation matrices `(n, 3, 3)`, shape `(n, 3)` (OpenCV's Rodrigues
+    vectors); `InvalidInput` naming the matrix for one with a non-finite entry or that is not a rotation
+    (orthonormal, det +1, within 1e-6)."""
 
 def twist_adjoint(pose: _ArrayLike) -> _F64Array:
-    """The 6x6 twist transform (adjoint) of a pose `(R, t)` (4x4): a twist `(v, w)` in the pose's frame to
-    the same motion's twist in the parent frame, `(R v + t x R w, R w)`; for the camera's pose in the
-    end effector's frame, the camera twist as the end effector's."""
+    """The 6x6 twist transform (adjoint) of a pose `(R, t)` (4x4): a twist `(v, w)` in the pose's
+    frame to the same motion's twist in the parent frame, `(R v + t x R w, R w)`; for the
+    camera's pose in the end effector's frame, the camera twist as the end effector's. The
+    rotation block and translation are used as given; the last row is not read."""
 
 @final
 class IkSolution:
-    """A solution of [`ik`]: the joints (radians; metres for prismatic joints) and how far their pose is
-    from the target."""
+    """A solution of [`ik`]: the joints (radians; metres for prismatic joints) and how far their
+    pose is from the target."""
 
     @property
     def joints(self) -> _F64Array:
@@ -1214,34 +1207,31 @@ class IkSolution:
         """Iterations of the seed that converged."""
     @property
     def seed(self) -> int:
-        """The seed that converged: 0 for the given one (or the middle of the limits), then
-        the spread seeds in order."""
+        """The seed that converged: 0 for the given one (or the middle of the limits), then the
+        spread seeds in order."""
 
 def fk(arm: str, joints: _ArrayLike) -> _F64Array:
-    """The 4x4 pose of the end-effector of the built-in ``arm`` ('ur5': ``tool0``, 'panda':
-    ``panda_hand_tcp``) in the arm's base frame (its URDF root link: ``base_link``,
-    ``panda_link0``) at ``joints`` (rad), one value per joint within the joint limits
-    (InvalidInput naming the first joint outside)."""
+    """The 4x4 pose of the end-effector of the built-in `arm` ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
+    base frame (its URDF root link: `base_link`, `panda_link0`) at `joints` (rad), one value per joint within the
+    joint limits (InvalidInput naming the first joint outside)."""
 
 def damped_least_squares(
     jacobian: _ArrayLike, twist: _ArrayLike, damping: float = ..., null_space: _ArrayLike | None = None
 ) -> _F64Array:
-    """Joint velocities (n,) that give ``twist`` (6,: vx, vy, vz, wx, wy, wz) where the arm's
-    Jacobian is ``jacobian`` (6, n: rows in the twist's frame, a column per joint), by the
-    kinematic arm's damped least squares: the damping grows as the smallest singular value of
-    the Jacobian falls below ``damping``; with more than six joints ``null_space`` (n,) is added
-    projected on the Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's ``mj_jacSite``)."""
+    """Joint velocities (n,) that give `twist` (6,: vx, vy, vz, wx, wy, wz) where the arm's Jacobian
+    is `jacobian` (6, n: rows in the twist's frame, a column per joint), by the kinematic arm's
+    damped least squares: the damping grows as the smallest singular value of the Jacobian falls
+    below `damping`; with more than six joints `null_space` (n,) is added projected on the
+    Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's `mj_jacSite`)."""
 
 def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution:
-    """Joints within the limits of the built-in ``arm`` ('ur5', 'panda') that put its
-    end-effector at ``pose``: a 4x4 float64 rigid motion of the end-effector frame ('ur5':
-    ``tool0``, 'panda': ``panda_hand_tcp``) in the arm's base frame (the URDF root link), as
-    :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011) projected on
-    the joint limits, from ``seed`` (one value per joint; default the middle of the limits),
-    then from up to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A
-    redundant arm (the Panda) returns one of its solutions. Raises InvalidInput (kind
-    'unreachable', argument 'pose', ``residual`` the best position residual) when no seed
-    reaches the pose."""
+    """Joints within the limits of the built-in `arm` ('ur5', 'panda') that put its end-effector at `pose`: a 4x4
+    float64 rigid motion of the end-effector frame ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
+    frame (the URDF root link), as :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011)
+    projected on the joint limits, from `seed` (one value per joint; default the middle of the limits), then from up
+    to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A redundant arm (the Panda) returns one of its
+    solutions. Raises InvalidInput (kind 'unreachable', argument 'pose', `residual` the best position residual) when
+    no seed reaches the pose."""
 
 _HandEyeMethod = Literal["tsai", "park", "daniilidis"]
 
@@ -1260,16 +1250,16 @@ class HandEyeCalibration:
         """The method: 'tsai', 'park' or 'daniilidis'."""
     @property
     def residuals(self) -> _F64Array:
-        """(m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`): rotation
-        in degrees, translation in metres."""
+        """(m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`):
+        rotation in degrees, translation in metres."""
     @property
     def pairs(self) -> npt.NDArray[np.int64]:
         """(m, 2): the stations (i, j), i < j, of each residual row."""
     @property
     def axis_spread_deg(self) -> float:
-        """The spread of the rotation axes of the gripper motions, degrees: 2 atan(sqrt(l2/l1))
-        of the eigenvalues of the mean u u^T of their unit axes (the angle between the axes for
-        two motions; 0 when all are parallel, 90 for axes spread evenly)."""
+        """The spread of the rotation axes of the gripper motions, degrees: 2 atan(sqrt(l2/l1)) of the eigenvalues of
+        the mean u u^T of their unit axes (the angle between the axes for two motions; 0 when all are parallel, 90
+        for axes spread evenly)."""
     @property
     def axis_eigenvalues(self) -> _F64Array:
         """(3,): the eigenvalues of the mean u u^T of the motions' unit axes, descending, sum 1."""
@@ -1278,8 +1268,8 @@ class HandEyeCalibration:
         """The number of gripper motions that rotate by 0.1 degree or more."""
     @property
     def motions_used(self) -> int:
-        """The number of motions the method used (Tsai-Lenz leaves out those rotating outside
-        17.3-116.4 degrees, as OpenCV does)."""
+        """The number of motions the method used (Tsai-Lenz leaves out those rotating outside 17.3-116.4 degrees, as
+        OpenCV does)."""
     @property
     def rms_rotation_deg(self) -> float:
         """The RMS of the rotation residuals, degrees."""
@@ -1313,16 +1303,15 @@ class HandEyeAgreement:
 def calibrate_hand_eye(
     gripper_poses: _ArrayLike, target_poses: _ArrayLike, method: _HandEyeMethod | str = "tsai"
 ) -> HandEyeCalibration:
-    """The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and target-to-camera
-    `target_poses` (OpenCV's calibrateHandEye convention), by `method` ('tsai', 'park' or 'daniilidis').
+    """The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and
+    target-to-camera `target_poses` (OpenCV's calibrateHandEye convention), by `method`
+    ('tsai', 'park' or 'daniilidis').
 
-    ``gripper_poses``: (n, 4, 4) gripper-to-base poses reported by the robot;
-    ``target_poses``: (n, 4, 4) target-to-camera poses (e.g. from solvePnP); ``method``:
-    'tsai' (default), 'park' or 'daniilidis'. Raises InvalidInput for a pose that is not a
-    rigid transform (naming the argument and the pose) and DegenerateGeometry (kind
-    'degenerate_motion') for fewer than 3 poses, no rotation, or rotations about (nearly)
-    parallel axes only.
-    """
+    `gripper_poses`: (n, 4, 4) gripper-to-base poses reported by the robot; `target_poses`:
+    (n, 4, 4) target-to-camera poses (e.g. from solvePnP); `method`: 'tsai' (default), 'park' or
+    'daniilidis'. Raises InvalidInput for a pose that is not a rigid transform (naming the
+    argument and the pose) and DegenerateGeometry (kind 'degenerate_motion') for fewer than 3
+    poses, no rotation, or rotations about (nearly) parallel axes only."""
 
 def compare_hand_eye_methods(gripper_poses: _ArrayLike, target_poses: _ArrayLike) -> HandEyeAgreement:
     """Runs every method on the same poses: their calibrations and how far apart they are."""

@@ -26,6 +26,9 @@ fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<HandEyeMethod> {
 }
 
 /// A hand-eye calibration: the camera-to-gripper transform and its diagnostics.
+///
+/// For stations i < j the gripper motion A = G_j^-1 G_i and the camera motion B = C_j C_i^-1
+/// satisfy A X = X B; every pair is a motion (as in OpenCV).
 #[pyclass(name = "HandEyeCalibration", module = "vsinv._core", frozen)]
 pub struct PyHandEyeCalibration {
     inner: HandEyeCalibration,
@@ -168,6 +171,12 @@ impl PyHandEyeAgreement {
 /// The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and
 /// target-to-camera `target_poses` (OpenCV's calibrateHandEye convention), by `method`
 /// ('tsai', 'park' or 'daniilidis').
+///
+/// `gripper_poses`: (n, 4, 4) gripper-to-base poses reported by the robot; `target_poses`:
+/// (n, 4, 4) target-to-camera poses (e.g. from solvePnP); `method`: 'tsai' (default), 'park' or
+/// 'daniilidis'. Raises InvalidInput for a pose that is not a rigid transform (naming the
+/// argument and the pose) and DegenerateGeometry (kind 'degenerate_motion') for fewer than 3
+/// poses, no rotation, or rotations about (nearly) parallel axes only.
 #[pyfunction]
 #[pyo3(signature = (gripper_poses, target_poses, method = None), text_signature = "(gripper_poses, target_poses, method='tsai')")]
 pub fn calibrate_hand_eye(

@@ -113,9 +113,24 @@ fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageT
 
 /// The pipeline from image to twist: finds the target in the reference image (taken with any camera: no K* needed),
 /// then each `step(image)` detects or tracks it, matches the points by identity, undistorts them with `K_hat` and
-/// `distortion` and steps a `Servo` session. `target` is a name of `vsinv._core.TARGETS`, whose entry lists the
-/// keyword arguments it takes; the other keyword arguments are the `Servo` session's (law, depths, gain, stop,
-/// ...).
+/// `distortion` and steps a `Servo` session.
+///
+/// `target` is a name of `vsinv._core.TARGETS`, whose entry lists the keyword arguments it takes (another
+/// target's are refused by name). `target="dots"`: `reference_points` (n, 2) are approximate pixels of the dots in
+/// the reference image, `first_points` (n, 2) in the first frame (None: near those found in the reference image);
+/// `tracker` a dict of search_radius, max_search_radius, min_area, max_area_ratio, polarity. `target="tags"`:
+/// AprilTags of `family`, decoded in every frame (searched near their last corners first, the whole frame when
+/// one is lost), the corners of the tags `tag_ids` (None: every tag decoded in the reference image), corner c of
+/// tag t under identity 4 t + c: no clicks, correspondences by identity between any two cameras. `decimation`
+/// (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`.
+///
+/// `reference_K` and `reference_distortion` undistort the reference points. Every other keyword argument is the
+/// `Servo` session's (law, reference_depths, depths, basis, gain, ..., dt) and an unknown one is refused by name.
+/// A point not found in a frame is not visible for that step. The stall rule is on unless
+/// `stop={"stall": False}`: real detections of one pose by two lenses disagree, so the run ends when the error
+/// stopped decreasing and the camera is still, `converged` if the bound (with the measured disagreement floor) is
+/// within the tolerance. A first frame where no point is found (blank, dark) is the verdict `lost_features` with a
+/// zero twist. As for `Servo`, a stop is final.
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "ImageServo", module = "vsinv._core", frozen)]

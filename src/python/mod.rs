@@ -40,6 +40,9 @@ pub(crate) use args::BasisArg;
 pub(crate) use arrays::{depths_arg, pixels_arg};
 pub(crate) use camera::{PyIntrinsics, intrinsics, intrinsics_repr};
 
+/// The compiled core of vsinv (Rust, PyO3). Its names are imported from the package's levels,
+/// which re-export them: `vsinv`, `vsinv.laws`, `vsinv.vision`, `vsinv.sim`,
+/// `vsinv.calibration`, `vsinv.kinematics`, `vsinv.geometry` and `vsinv.errors`.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     errors::register(m)?;

@@ -63,8 +63,7 @@ pub fn thetau_from_pose<'py>(
 
 /// The theta-u vectors (rad, theta in [0, pi]) of rotation matrices `(n, 3, 3)`, shape `(n, 3)` (OpenCV's Rodrigues
 /// vectors); `InvalidInput` naming the matrix for one with a non-finite entry or that is not a rotation
-/// (orthonormal, det +1, within 1e-6). Each matrix must be finite and a rotation (orthonormal with determinant +1
-/// within 1e-6); the error names the matrix.
+/// (orthonormal, det +1, within 1e-6).
 #[pyfunction]
 pub fn thetau_from_rotations<'py>(
     py: Python<'py>,

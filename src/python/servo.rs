@@ -226,7 +226,17 @@ impl<'py> ServoOptions<'py> {
 }
 
 /// A servo session: the reference image, the law, the depth source and the stop rules; each
-/// `step(pixels, visible, depths)` returns the twist to send and the verdict.
+/// `step(pixels, depths, visible)` returns the twist to send and the verdict.
+///
+/// The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
+/// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`: `gain` to
+/// `max_angular_speed`; None or absent: the law's default); arguments of another law are refused
+/// by name. A step runs the loop logic the simulator runs too: stop rules certified by the pose
+/// uncertainty, lost features, the rz = pi trap, the iteration limit, depth estimation, path
+/// following. A stop is final: once a step has returned one, every later step returns the same
+/// verdict with a zero twist.
+///
+/// Works from several threads: each call holds the GIL, so calls take turns.
 #[pyclass(name = "Servo", module = "vsinv._core")]
 pub(super) struct PyServo {
     inner: Servo,
@@ -234,8 +244,6 @@ pub(super) struct PyServo {
 
 #[pymethods]
 impl PyServo {
-    /// The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
-    /// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`).
     #[new]
     #[allow(non_snake_case)]
     #[pyo3(
@@ -262,7 +270,8 @@ impl PyServo {
 
     /// One step from the current pixels (n, 2): `depths` (n,) with `depths="per_step"` (None
     /// otherwise), `visible` a bool array (n,) of the points found (None: all). Returns a
-    /// ServoStep: the twist to send (zero when stopping), the verdict and the telemetry.
+    /// ServoStep: the twist to send (zero when stopping), the verdict and the telemetry. After a
+    /// stop, every later step returns that stop again (zero twist).
     #[pyo3(signature = (pixels, depths = None, visible = None))]
     fn step(
         &mut self,
@@ -322,11 +331,10 @@ impl PyServo {
     fn pixel_sigma(&self) -> Option<f64> {
         self.inner.pixel_sigma()
     }
-    /// What the images say about the pose (pixel_sigma, reference_pixel_sigma, translation_sigma, translation_bound
-    /// in metres, rotation_sigma, rotation_bound in radians, floor_pixel_sigma in pixels: the disagreement floor,
-    /// None with the stall rule off); None when it cannot be computed. A dict of pixel_sigma, reference_pixel_sigma
-    /// (pixels), translation_sigma, translation_bound (metres), rotation_sigma, rotation_bound (radians); None when
-    /// it cannot be computed.
+    /// What the images say about the pose, a dict of pixel_sigma, reference_pixel_sigma,
+    /// translation_sigma, translation_bound in metres, rotation_sigma, rotation_bound in radians,
+    /// floor_pixel_sigma in pixels: the disagreement floor, None with the stall rule off; None
+    /// when it cannot be computed.
     fn certainty<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         certainty_dict(py, &self.inner)
     }

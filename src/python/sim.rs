@@ -142,9 +142,11 @@ pub fn scenario_arg_with(obj: &Bound<'_, PyAny>, access: FileAccess) -> PyResult
     Err(invalid_argument("scenario", msg))
 }
 
-/// Loads a scenario from a built-in name, a TOML file path or a dictionary. The files it
-/// names (`calibration`, `robot.urdf`) must be inside its folder (the working directory for
-/// a dictionary) unless `allow_outside_files`.
+/// Loads a scenario from a built-in name, a TOML file path or a dictionary. Scenario angles
+/// are degrees and their keys say so (`rotation_deg`, `skew_deg`, `max_angular_speed_deg`; the
+/// older `rotation` is read as degrees); the Python API itself is SI (radians). The files a
+/// scenario names (`calibration`, `robot.urdf`) must be inside its folder (the working
+/// directory for a dictionary) unless `allow_outside_files`.
 #[pyfunction]
 #[pyo3(signature = (source, allow_outside_files = false))]
 pub fn load_scenario(source: &Bound<'_, PyAny>, allow_outside_files: bool) -> PyResult<PyScenario> {
@@ -426,12 +428,14 @@ fn arm_limits<'py>(py: Python<'py>, arm: &ArmRobot) -> PyResult<Bound<'py, PyDic
 /// arrays, one row per scenario: status (str), iterations, the summary fields final_translation_error,
 /// final_rotation_error, final_image_error, final_invariant_error, max_line_deviation,
 /// observed_max_eps, pixel_sigma, translation_uncertainty, rotation_uncertainty (SI, NaN where
-/// not measured), prop1, prop2,
-/// within_tolerance, message (str). A scenario whose configuration is invalid raises before
-/// anything runs; a run that fails on the way has status "error" and its message.
-/// `progress`: None, or a callable `progress(done, total)` called from this thread as runs
-/// finish (`vsinv.sim.run_batch` makes a tqdm bar of None, True or False). Ctrl-C (or an exception
-/// of `progress`) stops the batch and is raised.
+/// not measured), prop1, prop2, within_tolerance, message (str). A scenario whose configuration
+/// is invalid raises before anything runs; a run that fails on the way has status "error" and
+/// its message.
+///
+/// `progress`: None, or a callable `progress(done, total)` called from the calling thread as
+/// runs finish (`done` increasing to `total`); `vsinv.sim.run_batch` draws a tqdm bar instead
+/// for None, True or False. Ctrl-C or an exception of `progress` stops the batch and is raised.
+/// Works in a process forked after earlier batches (the pools are rebuilt).
 #[pyfunction]
 #[pyo3(signature = (scenarios, threads = None, allow_outside_files = false, progress = None))]
 pub fn run_batch<'py>(

@@ -110,10 +110,16 @@ pub(super) fn decimation_arg(decimation: Option<i64>) -> PyResult<Option<u32>> {
 /// each black square in OpenCV's aruco order and pixel convention (the same numbers as cv2.aruco.ArucoDetector with
 /// DICT_APRILTAG_36h11, within noise), measured on the square's outer edges; a tag whose edges do not support its
 /// corners is left out. An empty image raises `InvalidInput`; an image without tags gives an empty result. Quads
-/// are searched in the image shrunk by `decimation` (1..=8; `None`: chosen per image, 1 below 960 pixels on the
-/// shorter side, 2 at 1920 x 1080) and on coarser levels; corners are measured at full size. The image is at most
-/// 2^28 pixels (65536 a side), and the decimation must leave at most about 2^22 pixels to search (the detector's
-/// memory, some 70 bytes a searched pixel; `None` chooses one that does).
+/// are searched in the image shrunk by `decimation` (1..=8: larger is faster, smaller finds smaller tags; `None`:
+/// chosen per image, 1 below 960 pixels on the shorter side, 2 at 1920 x 1080) and on the image halved again and
+/// again, so large tags are found too; corners are measured at full size. Bounds: an image of at most 2^28 pixels
+/// (65536 a side, as every image argument), a decimation that leaves at most about 2^22 pixels to search
+/// (`InvalidInput` naming `decimation` and the one that fits otherwise; `None` always fits: the detector takes
+/// some 70 bytes a searched pixel). The work per frame is bounded too: a level of the search holding more regions
+/// (black or white, of the detector's threshold) than is left of the frame's budget of 4,096 is not searched, and
+/// at most 512 decoded candidates have their corners measured (best first, one per id); the result's
+/// `stopped_early` says when that happened (a cluttered frame: thousands of small squares or tags), never on
+/// ordinary frames.
 #[pyfunction]
 #[pyo3(signature = (image, family = "tag36h11", decimation = None))]
 pub fn detect_tags(

@@ -119,7 +119,8 @@ impl<'py> UncertaintyArgs<'py> {
 
 /// The pixel noise of an image stream, measured from the images themselves: the second
 /// difference of each point over three consecutive images cancels motion linear in time,
-/// and E[d^2] = 6 sigma^2 for independent noise.
+/// and E[d^2] = 6 sigma^2 for independent noise. `PixelNoiseMeter(capacity=32)`: a meter over
+/// the last `capacity` images (3 to 4096).
 #[pyclass(name = "PixelNoiseMeter", module = "vsinv._core")]
 pub(super) struct PyPixelNoiseMeter {
     inner: PixelNoiseMeter,
@@ -127,14 +128,12 @@ pub(super) struct PyPixelNoiseMeter {
 
 #[pymethods]
 impl PyPixelNoiseMeter {
-    /// A meter over the last `capacity` images (3 to 4096).
     #[new]
     #[pyo3(signature = (capacity = 32))]
     fn new(#[pyo3(from_py_with = super::args::capacity)] capacity: usize) -> PyResult<Self> {
         Ok(Self { inner: PixelNoiseMeter::new(capacity)? })
     }
-    /// Adds an image's pixels (n, 2); another number of points starts the measurement again. Another number of
-    /// points than before starts the measurement again.
+    /// Adds an image's pixels (n, 2); another number of points starts the measurement again.
     #[pyo3(signature = (pixels, visible = None))]
     fn push(&mut self, pixels: &Bound<'_, PyAny>, visible: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
         let a = pixels_arg(pixels, "pixels")?;

@@ -120,11 +120,21 @@ fn dots_out(py: Python<'_>, dots: &[Dot]) -> PyResult<PyDots> {
 /// `min_contrast`; `threshold=` sets one level for the whole image instead), 8-connected
 /// components with `min_area <= area <= max_area` (pixels) and a fill ratio (area over that
 /// of the ellipse of its second moments) of at least `min_fill` (less `0.2 / sqrt(area)`,
-/// the digitised outline's share), a mean contrast over the
-/// background plane around it of at least `min_contrast` grey levels and a ring around it
-/// that fits that plane (RMS residual at most `max_ring_residual` times the contrast),
-/// intensity-weighted subpixel centroids over that plane. A uniform image raises
-/// `InvalidInput`.
+/// the digitised outline's share), a mean contrast over the background plane around it of at
+/// least `min_contrast` grey levels and a ring around it that fits that plane (RMS residual at
+/// most `max_ring_residual` times the contrast), intensity-weighted subpixel centroids over
+/// that plane. A uniform image raises `InvalidInput`.
+///
+/// `threshold`: None (default) for the local threshold (per 32 px tile: half way between the
+/// background of the neighbourhood and the brightest dot nearby, at least `min_contrast` above
+/// the background), or one grey level for the whole image. A dot has `min_area <= area <=
+/// max_area` pixels (default 8 and no limit), a fill ratio (area over that of the ellipse of
+/// its second moments: 1 for a filled ellipse, 0.955 for a square) of at least `min_fill` in
+/// [0, 1] (default 0.95, less `0.2 / sqrt(area)`: the digitised outline's share of a small
+/// dot), a mean contrast over the background plane around it of at least `min_contrast` grey
+/// levels in [0, 255] (default 20), and a plain ring around it: the RMS residual of that plane
+/// on its bounding box's ring (grown by 2 px) at most `max_ring_residual` >= 0 times its
+/// contrast (default 0.15; inf: no check).
 #[pyfunction]
 #[pyo3(signature = (
     image, threshold = None, min_area = 8, max_area = None, polarity = "light",
@@ -164,7 +174,9 @@ pub(super) fn polarity_arg(name: &str) -> PyResult<Polarity> {
 /// `"auto"`: decided on the first image); `track(image)` returns `(pixels (n, 2), found (n,)
 /// bool)`. The window follows each dot's size and motion; a dot whose area or shape changed
 /// too much (merged with another region, say) is not found and keeps its last position with
-/// `found` false; two dots are never swapped.
+/// `found` false; two dots are never swapped. Too much: a component whose area differs from
+/// the dot's last area by more than `max_area_ratio` (beyond the boundary pixels), or whose
+/// principal spreads differ by more than its square root, is not that dot.
 ///
 /// Works from several threads: their calls take turns (each waits with the GIL released).
 #[pyclass(name = "DotTracker", module = "vsinv._core", frozen)]
@@ -224,7 +236,9 @@ impl PyDotTracker {
 
 /// Reads an image file (PNG, PGM/PPM, JPEG, or GIF's first frame) as a `(height, width)`
 /// uint8 array; colour images are converted to grey with the Rec. 601 luma weights (0.299,
-/// 0.587, 0.114, as OpenCV), 16-bit images are refused.
+/// 0.587, 0.114, as OpenCV), 16-bit images are refused. At most 64 MiB of file, 2^28 pixels
+/// (65536 a side) and 512 MiB to decode; a PNG file's colour profile (iCCP) and text chunks are
+/// skipped unread.
 #[pyfunction]
 pub fn load_image<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<ImageArray<'py>> {
     let image = py.detach(|| load_image_file(&path))?;
