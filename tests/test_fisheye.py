@@ -261,3 +261,18 @@ def test_ros_camera_info_yaml(tmp_path):
     path.write_text(path.read_text().replace("cols: 4, data: [0.03,", "cols: 5, data: [0.0, 0.03,"))
     with pytest.raises(vsinv.InvalidInput, match=r"distortion_coefficients: wrong coefficient count: the equidistant model takes 4"):
         vsinv.calibration.load_calibration(path)
+
+
+def test_the_fisheye_builtin_servoes_to_a_pinhole_reference():
+    """lens-12-fisheye: a 12 mm pinhole reference image, a fisheye servo lens known from its
+    calibration; the invariant law converges, and the scenario keys round-trip."""
+    s = vsinv.load_scenario("lens-12-fisheye")
+    cam = s.to_dict()["camera"]
+    assert cam["distortion_model"] == "equidistant" and cam["distortion"] == [-0.04, 0.01, -0.003, 0.0005]
+    summary = vsinv.run_scenario(s, record=False).summary
+    assert summary["status"] == "converged", summary["message"]
+    assert summary["final_translation_error"] < 1e-3 and math.degrees(summary["final_rotation_error"]) < 0.1
+    bad = s.to_dict()
+    bad["camera"]["distortion"] = [-0.04, 0.01, -0.003, 0.0005, 0.0]
+    with pytest.raises(vsinv.InvalidInput, match=r"camera\.distortion.*equidistant model takes 4"):
+        vsinv.load_scenario(bad)

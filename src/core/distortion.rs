@@ -1,6 +1,6 @@
 //! Lens distortion: OpenCV's Brown-Conrady model (`plumb_bob` in ROS), its rational
 //! model (`rational_polynomial`) and its fisheye model (`equidistant`, Kannala-Brandt, module
-//! [`fisheye`](crate::core::fisheye) for its formula and range), with the coefficients in
+//! [`fisheye`] for its formula and range), with the coefficients in
 //! OpenCV's order.
 //!
 //! The distortion acts on normalised coordinates `m = (x, y)`, with `r^2 = x^2 + y^2`:
@@ -93,7 +93,7 @@ pub struct Distortion {
     /// `(k1, k2, p1, p2, k3, k4, k5, k6)`, the last three zero for `plumb_bob`;
     /// `(k1, k2, k3, k4, 0, 0, 0, 0)` for `equidistant`.
     c: [f64; 8],
-    /// The fisheye model's range (module [`fisheye`](crate::core::fisheye)), 90 degrees for
+    /// The fisheye model's range (module [`fisheye`]), 90 degrees for
     /// the others (in radians).
     max_angle: f64,
 }
@@ -163,7 +163,7 @@ impl Distortion {
 
     /// The largest angle from the optical axis (radians) the model images one-to-one, not
     /// included: for `equidistant` its fold or 180 degrees, whichever comes first (module
-    /// [`fisheye`](crate::core::fisheye)); 90 degrees for the others, whose normalised
+    /// [`fisheye`]); 90 degrees for the others, whose normalised
     /// coordinates cover the half-space in front of the camera (and whose fold depends on the
     /// direction, checked point by point).
     pub fn max_angle(&self) -> f64 {
@@ -407,7 +407,7 @@ fn beyond_range(theta: f64, d: &Distortion) -> String {
 
 /// The distorted pixels of rays `(X, Y, Z)` in the camera frame (any length but zero): for
 /// the fisheye model `K m_d` with `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)` (module
-/// [`fisheye`](crate::core::fisheye)), which images rays beyond 90 degrees from the axis
+/// [`fisheye`]), which images rays beyond 90 degrees from the axis
 /// where its range reaches; for the others `K d(X/Z, Y/Z)`, which needs `Z > 0`.
 ///
 /// Errors: [`Error::Distortion`] naming the first ray at or beyond [`Distortion::max_angle`]
@@ -452,7 +452,7 @@ pub fn distort_rays(rays: &[[f64; 3]], intrinsics: &Intrinsics, distortion: &Dis
 }
 
 /// The unit rays `(X, Y, Z)` of distorted pixels, the inverse of [`distort_rays`]: for the
-/// fisheye model Newton's method on `theta` (module [`fisheye`](crate::core::fisheye)),
+/// fisheye model Newton's method on `theta` (module [`fisheye`]),
 /// which gives rays beyond 90 degrees (`Z < 0`) where the range reaches; for the others
 /// [`undistort_points`]' normalised point `m`, as `(m, 1) / |(m, 1)|`.
 ///
