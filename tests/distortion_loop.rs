@@ -140,3 +140,80 @@ fn calibration_errors_name_the_key() {
     );
     assert!(key == "camera" && reason.contains("distortion"), "{key}: {reason}");
 }
+
+/// The fisheye camera table of `lens-12-fisheye` with other numbers.
+fn fisheye_table(extra: &str) -> String {
+    format!("[camera]\nfku = 300.0\nfkv = 300.0\nu0 = 416.0\nv0 = 312.0\nwidth = 832\nheight = 624\n{extra}")
+}
+
+#[test]
+fn a_fisheye_lens_known_converges_with_the_invariant_law() {
+    let scenario = builtin("lens-12-fisheye").unwrap();
+    let config = scenario.to_config().unwrap();
+    assert_eq!(config.camera.distortion.model(), vsinv::core::distortion::DistortionModel::Equidistant);
+    assert_eq!(config.estimate_distortion, config.camera.distortion);
+    let s = run(&scenario);
+    assert_eq!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.final_translation_error < 1e-3 && s.final_rotation_error.to_degrees() < 0.1);
+    // Fed the fisheye's pixels as if they were a pinhole's, the law settles centimetres away.
+    let text = scenario.to_toml().unwrap().replace(
+        "[start]",
+        "[estimate]\nfku = 300.0\nfkv = 300.0\nu0 = 416.0\nv0 = 312.0\ndistortion = [0.0, 0.0, 0.0, 0.0]\n\n[start]",
+    );
+    let s = run(&Scenario::from_toml(&text).unwrap());
+    assert_ne!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.final_translation_error > 5e-3, "{}", s.final_translation_error);
+}
+
+#[test]
+fn a_fisheye_lens_through_images_converges() {
+    // vision-12-6 with its servo camera a fisheye (f = 450 px, so that the 3 mm dots stay
+    // about 2 px wide): the simulator renders through the lens, the tracker follows the dots,
+    // and the session undistorts them with the calibration.
+    let text = without_table(&builtin("vision-12-6").unwrap().to_toml().unwrap(), "[estimate]");
+    let camera = "[camera]\nfku = 450.0\nfkv = 450.0\nu0 = 416.0\nv0 = 312.0\nwidth = 832\nheight = 624\n\
+                  distortion = [-0.04, 0.01, -0.003, 0.0005]\ndistortion_model = \"equidistant\"\n\n";
+    let text = without_table(&text, "[camera]").replacen("[start]", &format!("{camera}[start]"), 1);
+    let scenario = Scenario::from_toml(&text).unwrap();
+    assert_eq!(scenario.to_config().unwrap().camera.distortion.coefficients(), &[-0.04, 0.01, -0.003, 0.0005]);
+    let s = run(&scenario);
+    assert_eq!(s.status, Status::Converged, "{}", s.message);
+    assert!(s.final_translation_error < 2e-3 && s.final_rotation_error.to_degrees() < 0.2);
+}
+
+#[test]
+fn fisheye_keys_are_checked_naming_the_key() {
+    let dir = scratch("fisheye");
+    let key_of = |extra: &str| match with_camera_table(&dir, &fisheye_table(extra)) {
+        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
+        other => panic!("{other:?}"),
+    };
+    let (key, reason) = key_of("distortion = [0.1, 0.0, 0.0, 0.0, 0.0]\ndistortion_model = \"equidistant\"\n");
+    assert_eq!(key, "camera.distortion");
+    assert!(reason.contains("equidistant model takes 4"), "{reason}");
+    let (key, _) = key_of("distortion = [0.1, nan, 0.0, 0.0]\ndistortion_model = \"equidistant\"\n");
+    assert_eq!(key, "camera.distortion[1]");
+    let (key, reason) = key_of("distortion = [0.1, 0.0, 0.0, 0.0]\ndistortion_model = \"fisheye\"\n");
+    assert_eq!(key, "camera.distortion_model");
+    assert!(reason.contains("unknown distortion model \"fisheye\"") && reason.contains("equidistant"), "{reason}");
+    let (key, reason) = key_of("distortion_model = \"equidistant\"\n");
+    assert_eq!(key, "camera.distortion_model");
+    assert!(reason.contains("needs camera.distortion"), "{reason}");
+    let (key, _) = match with_camera_table(
+        &dir,
+        "[camera]\ncalibration = \"barrel.yaml\"\ndistortion_model = \"equidistant\"\n",
+    ) {
+        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(key, "camera.distortion_model");
+    // A fisheye calibration file is read as one.
+    std::fs::write(
+        dir.join("fisheye.yaml"),
+        "image_width: 832\nimage_height: 624\ncamera_matrix: {rows: 3, cols: 3, data: [300, 0, 416, 0, 300, 312, 0, 0, 1]}\n\
+         distortion_model: equidistant\ndistortion_coefficients: {rows: 1, cols: 4, data: [-0.04, 0.01, -0.003, 0.0005]}\n",
+    )
+    .unwrap();
+    let from_file = with_camera_table(&dir, "[camera]\ncalibration = \"fisheye.yaml\"\n").unwrap();
+    assert_eq!(from_file.to_config().unwrap().camera, builtin("lens-12-fisheye").unwrap().to_config().unwrap().camera);
+}

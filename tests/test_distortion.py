@@ -127,7 +127,7 @@ def test_distortion_object_and_models():
     with pytest.raises(vsinv.InvalidInput, match="distortion coefficients: non-finite value at index 1"):
         vsinv.vision.Distortion([0.1, math.nan, 0.0, 0.0, 0.0])
     with pytest.raises(vsinv.InvalidInput, match="unknown distortion model"):
-        vsinv.vision.Distortion([0.0] * 5, model="equidistant")
+        vsinv.vision.Distortion([0.0] * 5, model="fisheye")
     with pytest.raises(vsinv.InvalidInput, match="rational_polynomial model takes 8"):
         vsinv.vision.Distortion([0.0] * 5, model="rational_polynomial")
     k = vsinv.Intrinsics(800.0, 800.0, 320.0, 240.0)
@@ -263,7 +263,8 @@ XML = (FIXTURES / "opencv.xml").read_text() if (FIXTURES / "opencv.xml").exists(
         (".yaml", "data: [812.25, 0.0, 323.5", "data: [812.25, 2.5, 323.5", "camera_matrix", "skew"),
         (".yaml", "0.0, 0.0, 1.0]", "0.0, 0.0, 2.0]", "camera_matrix", "last row"),
         (".yaml", "data: [812.25", "data: [-812.25", "camera_matrix", "> 0"),
-        (".yaml", "distortion_model: plumb_bob", "distortion_model: equidistant", "distortion_model", "unknown distortion model"),
+        (".yaml", "distortion_model: plumb_bob", "distortion_model: fisheye", "distortion_model", "unknown distortion model"),
+        (".yaml", "distortion_model: plumb_bob", "distortion_model: equidistant", "distortion_coefficients", "equidistant model takes 4"),
         (".yaml", "distortion_model: plumb_bob", "distortion_model: rational_polynomial", "distortion_coefficients", "wrong coefficient count"),
         (".yaml", "cols: 5\n  data: [-0.3125,", "cols: 6\n  data: [0.0, -0.3125,", "distortion_coefficients", "wrong coefficient count"),
         (".yaml", "data: [-0.3125,", "data: [.nan,", "distortion_coefficients.data[0]", "non-finite"),

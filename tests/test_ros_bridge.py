@@ -212,8 +212,14 @@ def test_camera_info_gives_k_hat_and_distortion() -> None:
     assert lens_from_camera_info(camera_info(d=d8, distortion_model="rational_polynomial"))[1].model == "rational_polynomial"
     with pytest.raises(vsinv.InvalidInput, match=r"camera_info: K is all zeros \(an uncalibrated camera\): calibrate it, or set the K_hat parameter"):
         lens_from_camera_info(camera_info(k=[0.0] * 9))
-    with pytest.raises(vsinv.InvalidInput, match="distortion_model 'equidistant'"):
-        lens_from_camera_info(camera_info(distortion_model="equidistant", d=[0.1, 0.0, 0.0, 0.0]))
+    # OpenCV's fisheye: 4 coefficients, and zeros are the equidistant projection, not a pinhole.
+    k, d = lens_from_camera_info(camera_info(distortion_model="equidistant", d=[0.1, -0.02, 0.003, -0.0004]))
+    assert d.model == "equidistant" and d.coefficients.tolist() == [0.1, -0.02, 0.003, -0.0004]
+    assert lens_from_camera_info(camera_info(distortion_model="equidistant", d=[0.0] * 4))[1].model == "equidistant"
+    with pytest.raises(vsinv.InvalidInput, match=r"camera_info\.d: .*equidistant.*4"):
+        lens_from_camera_info(camera_info(distortion_model="equidistant", d=[0.1, 0.0, 0.0, 0.0, 0.0]))
+    with pytest.raises(vsinv.InvalidInput, match="distortion_model 'fisheye'"):
+        lens_from_camera_info(camera_info(distortion_model="fisheye", d=[0.1, 0.0, 0.0, 0.0]))
 
 
 def quaternion_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:

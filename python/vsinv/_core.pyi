@@ -123,6 +123,8 @@ __all__ = [
     "Calibration",
     "distort_points",
     "undistort_points",
+    "distort_rays",
+    "undistort_rays",
     "load_calibration",
     "exp_twist",
     "pose_from_position_thetau",
@@ -1122,30 +1124,55 @@ def to_grey(image: npt.NDArray[np.uint8], order: Literal["rgb", "bgr"] | None = 
 
 @final
 class Distortion:
-    """Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model,
-    "plumb_bob" (4 or 5 coefficients) or "rational_polynomial" (8)."""
+    """Lens distortion: OpenCV's coefficients and the model, "plumb_bob" (k1, k2, p1, p2[, k3]),
+    "rational_polynomial" (k1, k2, p1, p2, k3, k4, k5, k6) or "equidistant", OpenCV's fisheye
+    (cv2.fisheye, Kannala-Brandt: k1, k2, k3, k4). Without a model, 4 or 5 coefficients are
+    plumb_bob and 8 rational_polynomial: a fisheye needs model="equidistant"."""
 
     def __new__(
-        cls, coefficients: _ArrayLike, model: Literal["plumb_bob", "rational_polynomial"] | None = None
+        cls,
+        coefficients: _ArrayLike,
+        model: Literal["plumb_bob", "rational_polynomial", "equidistant"] | None = None,
     ) -> Distortion: ...
     @property
-    def model(self) -> Literal["plumb_bob", "rational_polynomial"]:
-        """"plumb_bob" or "rational_polynomial"."""
+    def model(self) -> Literal["plumb_bob", "rational_polynomial", "equidistant"]:
+        """"plumb_bob", "rational_polynomial" or "equidistant"."""
     @property
     def coefficients(self) -> _F64Array:
-        """The coefficients in OpenCV's order, a new (5,) or (8,) array."""
+        """The coefficients in OpenCV's order, a new (5,), (8,) or (4,) (equidistant) array."""
+    @property
+    def max_angle(self) -> float:
+        """The largest angle from the optical axis (radians) the model images one-to-one, not
+        included: for equidistant its fold (where d theta_d / d theta reaches 0) or pi,
+        whichever comes first; pi / 2 for the others (the half-space in front of the camera)."""
     def __eq__(self, other: object, /) -> bool: ...
 
 _DistortionLike = Union[Distortion, _ArrayLike]
 
 def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
-    """Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew."""
+    """Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew. Raises
+    for a point at or beyond an equidistant lens's fold."""
 
 def undistort_points(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
 ) -> _F64Array:
-    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol` pixels within `max_iter`
-    iterations."""
+    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol`
+    pixels within `max_iter` iterations (for equidistant, Newton's method on the angle theta).
+    Raises for a pixel beyond the image of the fold, and for an equidistant pixel whose ray is
+    90 degrees or more from the axis (no pinhole pixel: see `undistort_rays`)."""
+
+def distort_rays(rays: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
+    """Distorts rays (n, 3) of the camera frame into pixels (n, 2): for equidistant `K m_d` with
+    `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)`, `theta` the ray's angle from the axis, which
+    images rays beyond 90 degrees while `theta < max_angle`; for the others `K d(X/Z, Y/Z)`,
+    which needs `Z > 0`."""
+
+def undistort_rays(
+    pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
+) -> _F64Array:
+    """The unit rays (n, 3) of distorted pixels (n, 2), the inverse of `distort_rays`: for
+    equidistant Newton's method on theta (rays beyond 90 degrees have Z < 0); for the others
+    `undistort_points`' normalised point, normalised."""
 
 @final
 class Calibration:

@@ -15,12 +15,14 @@ from ._core import (
     detect_dots,
     detect_tags,
     distort_points,
+    distort_rays,
     load_image,
     render,
     render_view,
     save_image,
     to_grey,
     undistort_points,
+    undistort_rays,
 )
 from .sources import frames
 
@@ -38,6 +40,7 @@ __all__ = [
     "detect_dots",
     "detect_tags",
     "distort_points",
+    "distort_rays",
     "frames",
     "load_image",
     "render",
@@ -45,4 +48,5 @@ __all__ = [
     "save_image",
     "to_grey",
     "undistort_points",
+    "undistort_rays",
 ]

@@ -3,8 +3,8 @@
 //!
 //! | format | recognised by | entries read |
 //! |---|---|---|
-//! | ROS camera_info YAML | a `distortion_model` entry | `image_width`, `image_height`, `camera_matrix: {rows, cols, data}`, `distortion_model` (`plumb_bob` or `rational_polynomial`), `distortion_coefficients: {rows, cols, data}` |
-//! | OpenCV FileStorage YAML | otherwise | `image_width`, `image_height`, `camera_matrix: !!opencv-matrix {rows, cols, dt, data}`, `distortion_coefficients` (or `dist_coeffs`), the model from the number of coefficients (4, 5 or 8) |
+//! | ROS camera_info YAML | a `distortion_model` entry | `image_width`, `image_height`, `camera_matrix: {rows, cols, data}`, `distortion_model` (`plumb_bob`, `rational_polynomial`, or `equidistant` with 4 coefficients `k1, k2, k3, k4`), `distortion_coefficients: {rows, cols, data}` |
+//! | OpenCV FileStorage YAML | otherwise | `image_width`, `image_height`, `camera_matrix: !!opencv-matrix {rows, cols, dt, data}`, `distortion_coefficients` (or `dist_coeffs`), the model from an optional `distortion_model` entry (as ROS names it; XML) or else from the number of coefficients (4, 5 or 8: 4 is `plumb_bob`, as `cv2.calibrateCamera` writes; a `cv2.fisheye` calibration needs `distortion_model: equidistant`) |
 //! | OpenCV FileStorage XML | a first character `<` | the same entries under `<opencv_storage>`, matrices as `<rows>`, `<cols>`, `<data>` |
 //!
 //! OpenCV 4 writes the directive `%YAML:1.0`, which is not YAML (the directive is
@@ -159,10 +159,7 @@ impl Raw {
                     err(
                         file,
                         "distortion_model",
-                        format!(
-                            "unknown distortion model {}; expected \"plumb_bob\" or \"rational_polynomial\"",
-                            model_name(name)
-                        ),
+                        format!("unknown distortion model {}; expected {}", model_name(name), DistortionModel::NAMES),
                     )
                 })?;
                 Distortion::with_model(model, &dm.data)
@@ -547,6 +544,25 @@ dist_coeffs: !!opencv-matrix
     }
 
     #[test]
+    fn reads_fisheye_lenses() {
+        let ros = ROS.replace("plumb_bob", "equidistant").replace("cols: 5", "cols: 4").replace("0.002, 0]", "0.002]");
+        let c = parse_calibration(&ros, "fisheye.yaml").unwrap();
+        assert_eq!(c.distortion.model(), DistortionModel::Equidistant);
+        assert_eq!(c.distortion.coefficients(), &[-0.3, 0.1, 0.001, -0.002]);
+        let xml = XML.replace("<image_width>", "<distortion_model>equidistant</distortion_model>\n<image_width>");
+        let c = parse_calibration(&xml, "fisheye.xml").unwrap();
+        assert_eq!(c.distortion.model(), DistortionModel::Equidistant);
+        // Without the model's name, 4 coefficients are plumb_bob (cv2.calibrateCamera's).
+        assert_eq!(parse_calibration(XML, "cv.xml").unwrap().distortion.model(), DistortionModel::PlumbBob);
+        // equidistant takes 4 coefficients: 5 are refused, naming the entry.
+        let (f, r) = field_of(parse_calibration(&ROS.replace("plumb_bob", "equidistant"), "bad.yaml").unwrap_err());
+        assert_eq!(f, "distortion_coefficients");
+        assert!(r.contains("equidistant") && r.contains("got 5"), "{r}");
+        let (f, _) = field_of(parse_calibration(&ros.replace("-0.3,", ".nan,"), "bad.yaml").unwrap_err());
+        assert_eq!(f, "distortion_coefficients.data[0]");
+    }
+
+    #[test]
     fn malformed_files_name_the_field() {
         let cases: [(String, &str, &str); 9] = [
             (ROS.replace("image_width: 640\n", ""), "image_width", "missing (image_height is given"),
@@ -554,7 +570,7 @@ dist_coeffs: !!opencv-matrix
             (ROS.replace("cols: 3", "cols: 2"), "camera_matrix", "3x3"),
             (ROS.replace("800.5, 0, 320.25", "800.5, 0, abc"), "camera_matrix.data[2]", "non-numeric"),
             (ROS.replace("800.5, 0, 320.25", "800.5, 3, 320.25"), "camera_matrix", "skew"),
-            (ROS.replace("plumb_bob", "equidistant"), "distortion_model", "unknown"),
+            (ROS.replace("plumb_bob", "fisheye"), "distortion_model", "unknown"),
             (
                 ROS.replace("cols: 5", "cols: 6").replace("0.002, 0]", "0.002, 0, 0]"),
                 "distortion_coefficients",

@@ -1,5 +1,7 @@
-//! Lens distortion: OpenCV's Brown-Conrady model (`plumb_bob` in ROS) and its rational
-//! model (`rational_polynomial`), with the coefficients in OpenCV's order.
+//! Lens distortion: OpenCV's Brown-Conrady model (`plumb_bob` in ROS), its rational
+//! model (`rational_polynomial`) and its fisheye model (`equidistant`, Kannala-Brandt, module
+//! [`fisheye`] for its formula and range), with the coefficients in
+//! OpenCV's order.
 //!
 //! The distortion acts on normalised coordinates `m = (x, y)`, with `r^2 = x^2 + y^2`:
 //!
@@ -12,6 +14,10 @@
 //! y_d = y c + p1 (r^2 + 2 y^2) + 2 p2 x y
 //! ```
 //!
+//! The fisheye model maps `m` to `m_d = (theta_d / r) m` with `theta = atan(r)`; rays at 90
+//! degrees from the axis and beyond have no `m`, and only [`distort_rays`] and
+//! [`undistort_rays`] express them.
+//!
 //! Pixels map through the full K of eq. (4), skew included: a pixel `p` of the ideal pinhole
 //! image has `m = K^-1 p`, and its distorted pixel is `p_d = K d(m)`. With zero skew this is
 //! `cv2.projectPoints` (whose camera matrix has no skew term); with skew the distortion still
@@ -21,12 +27,14 @@
 //! Jacobian of [`Distortion::jacobian`], damped so that every iterate keeps a positive
 //! Jacobian determinant: the answer is the pre-image on the origin's side of the fold, the
 //! one a physical lens produces. A pixel beyond the image of the fold has no such pre-image,
-//! and [`undistort_points`] names it in an [`Error::Distortion`].
+//! and [`undistort_points`] names it in an [`Error::Distortion`]. The fisheye model is
+//! undistorted by Newton's method on the angle `theta` instead (one unknown), within its range.
 
 use nalgebra::{Matrix2, Vector2};
 
 use crate::core::camera::Intrinsics;
-use crate::error::{Error, Result, Short, check_finite, check_finite_points, check_overflow};
+use crate::core::fisheye;
+use crate::error::{Error, Result, Short, check_finite, check_finite_points, check_finite_rows, check_overflow};
 
 /// The distortion models OpenCV and ROS share.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -35,31 +43,40 @@ pub enum DistortionModel {
     PlumbBob,
     /// OpenCV's rational model, `(k1, k2, p1, p2, k3, k4, k5, k6)`: ROS's `rational_polynomial`.
     RationalPolynomial,
+    /// OpenCV's fisheye model (Kannala-Brandt, `cv2.fisheye`), `(k1, k2, k3, k4)`:
+    /// ROS's `equidistant`.
+    Equidistant,
 }
 
 impl DistortionModel {
-    /// The ROS name: `plumb_bob` or `rational_polynomial`.
+    /// The ROS name: `plumb_bob`, `rational_polynomial` or `equidistant`.
     pub fn name(self) -> &'static str {
         match self {
             DistortionModel::PlumbBob => "plumb_bob",
             DistortionModel::RationalPolynomial => "rational_polynomial",
+            DistortionModel::Equidistant => "equidistant",
         }
     }
 
-    /// The model of a ROS name, `None` for any other (`equidistant`, ...).
+    /// The model of a ROS name, `None` for any other.
     pub fn from_name(name: &str) -> Option<Self> {
         match name {
             "plumb_bob" => Some(DistortionModel::PlumbBob),
             "rational_polynomial" => Some(DistortionModel::RationalPolynomial),
+            "equidistant" => Some(DistortionModel::Equidistant),
             _ => None,
         }
     }
 
-    /// The number of coefficients the model has: 5 or 8.
+    /// The names [`DistortionModel::from_name`] knows, for error messages.
+    pub const NAMES: &'static str = "\"plumb_bob\", \"rational_polynomial\" or \"equidistant\"";
+
+    /// The number of coefficients the model has: 5, 8 or 4.
     pub fn len(self) -> usize {
         match self {
             DistortionModel::PlumbBob => 5,
             DistortionModel::RationalPolynomial => 8,
+            DistortionModel::Equidistant => 4,
         }
     }
 
@@ -73,8 +90,12 @@ impl DistortionModel {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Distortion {
     model: DistortionModel,
-    /// `(k1, k2, p1, p2, k3, k4, k5, k6)`, the last three zero for `plumb_bob`.
+    /// `(k1, k2, p1, p2, k3, k4, k5, k6)`, the last three zero for `plumb_bob`;
+    /// `(k1, k2, k3, k4, 0, 0, 0, 0)` for `equidistant`.
     c: [f64; 8],
+    /// The fisheye model's range (module [`fisheye`]), 90 degrees for
+    /// the others (in radians).
+    max_angle: f64,
 }
 
 impl Default for Distortion {
@@ -86,13 +107,14 @@ impl Default for Distortion {
 impl Distortion {
     /// No distortion (`plumb_bob` with all coefficients zero).
     pub fn none() -> Self {
-        Self { model: DistortionModel::PlumbBob, c: [0.0; 8] }
+        Self { model: DistortionModel::PlumbBob, c: [0.0; 8], max_angle: std::f64::consts::FRAC_PI_2 }
     }
 
     /// Coefficients in OpenCV's order, of a length OpenCV accepts for these models:
     /// 4 `(k1, k2, p1, p2)` and 5 (`+ k3`) give `plumb_bob`, 8 (`+ k4, k5, k6`) gives
     /// `rational_polynomial`. Other lengths (12 and 14 are OpenCV's thin-prism and tilted
-    /// models, not supported here) and non-finite values are errors.
+    /// models, not supported here) and non-finite values are errors. The fisheye model's 4
+    /// coefficients are told from `plumb_bob`'s by its name: [`Distortion::with_model`].
     pub fn from_coefficients(coefficients: &[f64]) -> Result<Self> {
         let model = match coefficients.len() {
             4 | 5 => DistortionModel::PlumbBob,
@@ -109,15 +131,21 @@ impl Distortion {
         Self::with_model(model, coefficients)
     }
 
-    /// Coefficients for a given model: `plumb_bob` takes 4 or 5, `rational_polynomial` 8.
+    /// Coefficients for a given model: `plumb_bob` takes 4 or 5, `rational_polynomial` 8,
+    /// `equidistant` 4 `(k1, k2, k3, k4)`.
     pub fn with_model(model: DistortionModel, coefficients: &[f64]) -> Result<Self> {
         let n = coefficients.len();
+        let want = match model {
+            DistortionModel::PlumbBob => "4 or 5",
+            DistortionModel::RationalPolynomial => "8",
+            DistortionModel::Equidistant => "4 (k1, k2, k3, k4)",
+        };
         let ok = match model {
             DistortionModel::PlumbBob => n == 4 || n == 5,
             DistortionModel::RationalPolynomial => n == 8,
+            DistortionModel::Equidistant => n == 4,
         };
         if !ok {
-            let want = if model == DistortionModel::PlumbBob { "4 or 5" } else { "8" };
             return Err(Error::InvalidParameter {
                 name: "distortion coefficients",
                 reason: format!("the {} model takes {want} values, got {n}", model.name()),
@@ -126,7 +154,32 @@ impl Distortion {
         check_finite("distortion coefficients", coefficients)?;
         let mut c = [0.0; 8];
         c[..n].copy_from_slice(coefficients);
-        Ok(Self { model, c })
+        let max_angle = match model {
+            DistortionModel::Equidistant => fisheye::max_angle(&[c[0], c[1], c[2], c[3]]),
+            _ => std::f64::consts::FRAC_PI_2,
+        };
+        Ok(Self { model, c, max_angle })
+    }
+
+    /// The largest angle from the optical axis (radians) the model images one-to-one, not
+    /// included: for `equidistant` its fold or 180 degrees, whichever comes first (module
+    /// [`fisheye`]); 90 degrees for the others, whose normalised
+    /// coordinates cover the half-space in front of the camera (and whose fold depends on the
+    /// direction, checked point by point).
+    pub fn max_angle(&self) -> f64 {
+        self.max_angle
+    }
+
+    /// The fisheye coefficients `(k1, k2, k3, k4)`.
+    #[inline]
+    fn kb(&self) -> [f64; 4] {
+        [self.c[0], self.c[1], self.c[2], self.c[3]]
+    }
+
+    /// True for the fisheye model.
+    #[inline]
+    fn is_fisheye(&self) -> bool {
+        self.model == DistortionModel::Equidistant
     }
 
     /// The model.
@@ -135,14 +188,15 @@ impl Distortion {
     }
 
     /// The coefficients in OpenCV's order: 5 for `plumb_bob` (`k3` = 0 when 4 were given),
-    /// 8 for `rational_polynomial`.
+    /// 8 for `rational_polynomial`, 4 for `equidistant`.
     pub fn coefficients(&self) -> &[f64] {
         &self.c[..self.model.len()]
     }
 
-    /// True when every coefficient is zero.
+    /// True when the lens is a pinhole: every coefficient zero, and not the fisheye model
+    /// (which with zero coefficients is the equidistant projection `theta_d = theta`).
     pub fn is_identity(&self) -> bool {
-        self.c.iter().all(|&v| v == 0.0)
+        !self.is_fisheye() && self.c.iter().all(|&v| v == 0.0)
     }
 
     /// The radial factor `c(r^2)`, its derivative `dc/d(r^2)` and the denominator
@@ -158,7 +212,9 @@ impl Distortion {
     }
 
     /// The distorted normalised coordinates `d(m)` (module docs); fails for a non-finite `m`
-    /// and where `d(m)` overflows (`|m|` beyond about 1e50 with a nonzero `k3`, 1e154 in any case).
+    /// and where `d(m)` overflows (`|m|` beyond about 1e50 with a nonzero `k3`, 1e154 in any
+    /// case). The fisheye model never overflows, and is evaluated here beyond its fold too
+    /// ([`Distortion::distort_valid`] is `None` there).
     pub fn distort(&self, m: [f64; 2]) -> Result<[f64; 2]> {
         check_finite("m", &m)?;
         if self.is_identity() {
@@ -172,6 +228,10 @@ impl Distortion {
     /// [`Distortion::distort`] without the checks.
     #[inline]
     pub(crate) fn distort_unchecked(&self, m: [f64; 2]) -> [f64; 2] {
+        if self.is_fisheye() {
+            let (s, _) = self.fisheye_scales(m);
+            return [s * m[0], s * m[1]];
+        }
         let [x, y] = m;
         let [_, _, p1, p2, ..] = self.c;
         let r2 = x * x + y * y;
@@ -186,8 +246,15 @@ impl Distortion {
     /// | 2 x y c' + 2 p1 x + 2 p2 y         c + 2 y^2 c' + 6 p1 y + 2 p2 x |
     /// ```
     ///
-    /// The model folds where its determinant is <= 0. Fails for a non-finite `m` and where an
-    /// entry overflows.
+    /// The model folds where its determinant is <= 0. For `equidistant`, with `u = m / r`,
+    /// `s = theta_d / r` and `theta_d' = d theta_d / d theta`:
+    ///
+    /// ```text
+    /// J = s (I - u u^T) + theta_d' / (1 + r^2) u u^T      (J = I at m = 0)
+    /// ```
+    ///
+    /// whose determinant `s theta_d' / (1 + r^2)` is <= 0 from the fold on. Fails for a
+    /// non-finite `m` and where an entry overflows.
     pub fn jacobian(&self, m: [f64; 2]) -> Result<Matrix2<f64>> {
         check_finite("m", &m)?;
         let j = self.jacobian_unchecked(m);
@@ -198,6 +265,13 @@ impl Distortion {
     /// [`Distortion::jacobian`] without the checks.
     #[inline]
     pub(crate) fn jacobian_unchecked(&self, m: [f64; 2]) -> Matrix2<f64> {
+        if self.is_fisheye() {
+            let (s, radial) = self.fisheye_scales(m);
+            let r = m[0].hypot(m[1]);
+            let (ux, uy) = if r > 0.0 { (m[0] / r, m[1] / r) } else { (0.0, 0.0) };
+            let g = radial - s;
+            return Matrix2::new(s + g * ux * ux, g * ux * uy, g * ux * uy, s + g * uy * uy);
+        }
         let [x, y] = m;
         let [_, _, p1, p2, ..] = self.c;
         let (c, dc, _) = self.radial(x * x + y * y);
@@ -212,11 +286,37 @@ impl Distortion {
 }
 
 impl Distortion {
+    /// The fisheye model's scales at `m`: the tangential `s = theta_d / r` and the radial
+    /// `d theta_d / d r = theta_d'(theta) / (1 + r^2)` (both 1 at `m = 0`).
+    #[inline]
+    fn fisheye_scales(&self, m: [f64; 2]) -> (f64, f64) {
+        let k = self.kb();
+        let r = m[0].hypot(m[1]);
+        let theta = r.atan();
+        // atan(r) / r is accurate for any r > 0: no cancellation.
+        let over_r = if r > 0.0 { theta / r } else { 1.0 };
+        let t2 = theta * theta;
+        let s = over_r * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3]))));
+        (s, fisheye::theta_d_slope(&k, theta) / (1.0 + r * r))
+    }
+
+    /// True where the model is one-to-one at `m` (the rational model's denominator and the
+    /// Jacobian determinant positive; the fisheye's angle below its range).
+    #[inline]
+    fn regular(&self, m: [f64; 2]) -> bool {
+        if self.is_fisheye() {
+            return m[0].hypot(m[1]).atan() < self.max_angle;
+        }
+        let (_, _, den) = self.radial(m[0] * m[0] + m[1] * m[1]);
+        den > 0.0 && self.jacobian_unchecked(m).determinant() > 0.0
+    }
+
     /// `d(m)` where `m` lies on the principal point's side of the model's fold: the rational
     /// model's denominator and the Jacobian determinant positive at `m` and at 32 points of
     /// the segment from the origin to `m` (past a fold the determinant can turn positive
     /// again). `None` beyond the fold, where a lens does not image the point where the
     /// model says, and for a non-finite `m` or `d(m)` (an overflow): `Some` is always finite.
+    /// The fisheye model: `Some` where `atan |m|` is below [`Distortion::max_angle`].
     #[inline]
     pub fn distort_valid(&self, m: [f64; 2]) -> Option<[f64; 2]> {
         if !(m[0].is_finite() && m[1].is_finite()) {
@@ -225,11 +325,10 @@ impl Distortion {
         if self.is_identity() {
             return Some(m);
         }
-        let regular = |s: f64| {
-            let p = [s * m[0], s * m[1]];
-            let (_, _, den) = self.radial(p[0] * p[0] + p[1] * p[1]);
-            den > 0.0 && self.jacobian_unchecked(p).determinant() > 0.0
-        };
+        if self.is_fisheye() {
+            return self.regular(m).then(|| self.distort_unchecked(m));
+        }
+        let regular = |s: f64| self.regular([s * m[0], s * m[1]]);
         let d = (1..=32).all(|i| regular(f64::from(i) / 32.0)).then(|| self.distort_unchecked(m))?;
         (d[0].is_finite() && d[1].is_finite()).then_some(d)
     }
@@ -262,8 +361,10 @@ fn to_pixel(k: &nalgebra::Matrix3<f64>, m: [f64; 2]) -> [f64; 2] {
 
 /// Distorts pixels of the ideal pinhole image: `p_d = K d(K^-1 p)` (module docs). With zero
 /// skew this is what `cv2.projectPoints` returns for the points `(K^-1 p)` at depth 1.
-/// Fails for a non-finite pixel, and for a point where the rational model's denominator
-/// `1 + k4 r^2 + k5 r^4 + k6 r^6` is not positive (the model is undefined there).
+/// Fails for a non-finite pixel, for a point where the rational model's denominator
+/// `1 + k4 r^2 + k5 r^4 + k6 r^6` is not positive (the model is undefined there), and for a
+/// point at or beyond the fisheye model's fold ([`Distortion::max_angle`]). For the fisheye
+/// model and zero skew this is `cv2.fisheye.distortPoints` of the points `K^-1 p`.
 pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: &Distortion) -> Result<Vec<[f64; 2]>> {
     check_finite_points("pixels", pixels)?;
     if distortion.is_identity() {
@@ -275,6 +376,9 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
         .enumerate()
         .map(|(index, &p)| {
             let m = intrinsics.normalise_unchecked(p);
+            if distortion.is_fisheye() && !distortion.regular(m) {
+                return Err(Error::Distortion { index, reason: beyond_range(m[0].hypot(m[1]).atan(), distortion) });
+            }
             let (_, _, den) = distortion.radial(m[0] * m[0] + m[1] * m[1]);
             if !(den > 0.0) {
                 return Err(Error::Distortion {
@@ -287,6 +391,104 @@ pub fn distort_points(pixels: &[[f64; 2]], intrinsics: &Intrinsics, distortion: 
                 return Err(Error::Distortion { index, reason: "the distorted pixel overflows (non-finite)".into() });
             }
             Ok(p)
+        })
+        .collect()
+}
+
+/// Why a ray at `theta` (radians) from the axis has no fisheye image.
+fn beyond_range(theta: f64, d: &Distortion) -> String {
+    let what = if d.max_angle() < std::f64::consts::PI { "the equidistant model's fold" } else { "180 degrees" };
+    format!(
+        "the ray is {:.4} deg from the optical axis, at or beyond {what} at {:.4} deg: the lens does not image it",
+        theta.to_degrees(),
+        d.max_angle().to_degrees()
+    )
+}
+
+/// The distorted pixels of rays `(X, Y, Z)` in the camera frame (any length but zero): for
+/// the fisheye model `K m_d` with `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)` (module
+/// [`fisheye`]), which images rays beyond 90 degrees from the axis
+/// where its range reaches; for the others `K d(X/Z, Y/Z)`, which needs `Z > 0`.
+///
+/// Errors: [`Error::Distortion`] naming the first ray at or beyond [`Distortion::max_angle`]
+/// (the fisheye's fold or 180 degrees; `Z <= 0` or beyond the fold for the others) or whose
+/// pixel overflows; [`Error::NonFinitePoint`] for a non-finite ray, [`Error::InvalidParameter`]
+/// for a zero one.
+pub fn distort_rays(rays: &[[f64; 3]], intrinsics: &Intrinsics, distortion: &Distortion) -> Result<Vec<[f64; 2]>> {
+    check_finite_rows("rays", rays)?;
+    let k = intrinsics.matrix();
+    rays.iter()
+        .enumerate()
+        .map(|(index, &[x, y, z])| {
+            let rho = x.hypot(y);
+            if rho == 0.0 && z == 0.0 {
+                return Err(Error::InvalidParameter { name: "rays", reason: format!("ray {index} is zero") });
+            }
+            let theta = rho.atan2(z);
+            let md = if distortion.is_fisheye() {
+                if !(theta < distortion.max_angle()) {
+                    return Err(Error::Distortion { index, reason: beyond_range(theta, distortion) });
+                }
+                let td = fisheye::theta_d(&distortion.kb(), theta);
+                if rho > 0.0 { [td * x / rho, td * y / rho] } else { [0.0, 0.0] }
+            } else {
+                let m = if z > 0.0 { Some([x / z, y / z]) } else { None };
+                m.and_then(|m| distortion.distort_valid(m)).ok_or_else(|| Error::Distortion {
+                    index,
+                    reason: format!(
+                        "the ray is {:.4} deg from the optical axis: the {} model images rays in front of the camera (Z > 0) on the principal point's side of its fold only",
+                        theta.to_degrees(),
+                        distortion.model().name()
+                    ),
+                })?
+            };
+            let p = to_pixel(&k, md);
+            if !(p[0].is_finite() && p[1].is_finite()) {
+                return Err(Error::Distortion { index, reason: "the distorted pixel overflows (non-finite)".into() });
+            }
+            Ok(p)
+        })
+        .collect()
+}
+
+/// The unit rays `(X, Y, Z)` of distorted pixels, the inverse of [`distort_rays`]: for the
+/// fisheye model Newton's method on `theta` (module [`fisheye`]),
+/// which gives rays beyond 90 degrees (`Z < 0`) where the range reaches; for the others
+/// [`undistort_points`]' normalised point `m`, as `(m, 1) / |(m, 1)|`.
+///
+/// Errors as [`undistort_points`]: [`Error::Distortion`] naming the first pixel beyond the
+/// image of the fold (or of 180 degrees) or that does not converge in `max_iter` iterations.
+pub fn undistort_rays(
+    pixels: &[[f64; 2]],
+    intrinsics: &Intrinsics,
+    distortion: &Distortion,
+    tol: f64,
+    max_iter: usize,
+) -> Result<Vec<[f64; 3]>> {
+    if !distortion.is_fisheye() {
+        let ideal = undistort_points(pixels, intrinsics, distortion, tol, max_iter)?;
+        return Ok(ideal
+            .iter()
+            .map(|&p| {
+                let [x, y] = intrinsics.normalise_unchecked(p);
+                let n = (x * x + y * y + 1.0).sqrt();
+                [x / n, y / n, 1.0 / n]
+            })
+            .collect());
+    }
+    check_undistort_args(pixels, tol, max_iter)?;
+    let k = distortion.kb();
+    pixels
+        .iter()
+        .enumerate()
+        .map(|(index, &p)| {
+            let md = intrinsics.normalise_unchecked(p);
+            let rd = md[0].hypot(md[1]);
+            let theta = fisheye::solve_theta(&k, distortion.max_angle(), rd, max_iter)
+                .map_err(|reason| Error::Distortion { index, reason })?;
+            let (sin, cos) = theta.sin_cos();
+            let u = if rd > 0.0 { [md[0] / rd, md[1] / rd] } else { [0.0, 0.0] };
+            Ok([sin * u[0], sin * u[1], cos])
         })
         .collect()
 }
@@ -319,6 +521,21 @@ pub fn undistort_points(
     tol: f64,
     max_iter: usize,
 ) -> Result<Vec<[f64; 2]>> {
+    check_undistort_args(pixels, tol, max_iter)?;
+    let k = intrinsics.matrix();
+    let k2 = k.fixed_view::<2, 2>(0, 0).into_owned();
+    pixels
+        .iter()
+        .enumerate()
+        .map(|(index, &p)| {
+            undistort_one(&k, &k2, intrinsics, distortion, p, tol, max_iter)
+                .map_err(|reason| Error::Distortion { index, reason })
+        })
+        .collect()
+}
+
+/// The pixels finite, `tol` finite and > 0, `max_iter` >= 1.
+fn check_undistort_args(pixels: &[[f64; 2]], tol: f64, max_iter: usize) -> Result<()> {
     check_finite_points("pixels", pixels)?;
     if !(tol > 0.0) || !tol.is_finite() {
         return Err(Error::InvalidParameter {
@@ -332,16 +549,7 @@ pub fn undistort_points(
     if max_iter == 0 {
         return Err(Error::InvalidParameter { name: "max_iter", reason: "must be >= 1".into() });
     }
-    let k = intrinsics.matrix();
-    let k2 = k.fixed_view::<2, 2>(0, 0).into_owned();
-    pixels
-        .iter()
-        .enumerate()
-        .map(|(index, &p)| {
-            undistort_one(&k, &k2, intrinsics, distortion, p, tol, max_iter)
-                .map_err(|reason| Error::Distortion { index, reason })
-        })
-        .collect()
+    Ok(())
 }
 
 /// Residual in normalised coordinates and its max norm in pixels (infinite where the model
@@ -369,10 +577,10 @@ fn undistort_one(
     if d.is_identity() {
         return Ok(p);
     }
-    let valid = |m: [f64; 2]| {
-        let (_, _, den) = d.radial(m[0] * m[0] + m[1] * m[1]);
-        den > 0.0 && d.jacobian_unchecked(m).determinant() > 0.0
-    };
+    if d.is_fisheye() {
+        return undistort_fisheye(k, k2, d, target, tol, max_iter);
+    }
+    let valid = |m: [f64; 2]| d.regular(m);
     // Start at the distorted point, moved towards the origin (where J = I) if the model folds there.
     let mut m = target;
     let mut shrink = 0;
@@ -436,6 +644,37 @@ fn undistort_one(
     Err(format!("did not converge in {max_iter} iterations (residual {err:.3e} px > tol {tol:.1e})"))
 }
 
+/// [`undistort_one`] for the fisheye model: `theta` by Newton's method, then
+/// `m = tan(theta) m_d / |m_d|`, checked against `tol` (pixels) by distorting it back.
+fn undistort_fisheye(
+    k: &nalgebra::Matrix3<f64>,
+    k2: &Matrix2<f64>,
+    d: &Distortion,
+    target: [f64; 2],
+    tol: f64,
+    max_iter: usize,
+) -> std::result::Result<[f64; 2], String> {
+    let rd = target[0].hypot(target[1]);
+    let theta = fisheye::solve_theta(&d.kb(), d.max_angle(), rd, max_iter)?;
+    if !(theta < std::f64::consts::FRAC_PI_2) {
+        return Err(format!(
+            "the ray is {:.4} deg from the optical axis (>= 90): behind the image plane, it has no pinhole pixel (undistort_rays gives it as a ray)",
+            theta.to_degrees()
+        ));
+    }
+    let scale = if rd > 0.0 { theta.tan() / rd } else { 1.0 };
+    let m = [scale * target[0], scale * target[1]];
+    let (_, err) = residual(d, k2, m, target);
+    if !(err <= tol) {
+        return Err(format!("the residual {err:.3e} px is above tol {tol:.1e} after Newton's method on theta"));
+    }
+    let p = to_pixel(k, m);
+    if !(p[0].is_finite() && p[1].is_finite()) {
+        return Err("the undistorted pixel overflows (non-finite): the ray is at 90 degrees from the axis".into());
+    }
+    Ok(p)
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
@@ -443,6 +682,15 @@ mod tests {
 
     fn barrel() -> Distortion {
         Distortion::from_coefficients(&[-0.35, 0.12, 0.001, -0.0015, -0.02]).unwrap()
+    }
+    /// A fisheye of about 190 degrees (a real lens's size of coefficients), without a fold
+    /// before 180 degrees.
+    fn fisheye() -> Distortion {
+        Distortion::with_model(DistortionModel::Equidistant, &[-0.02, 0.004, -0.0006, 0.00004]).unwrap()
+    }
+    /// A fisheye whose fold is at sqrt(1 / 0.3) rad = 104.6 degrees.
+    fn folding_fisheye() -> Distortion {
+        Distortion::with_model(DistortionModel::Equidistant, &[-0.1, 0.0, 0.0, 0.0]).unwrap()
     }
     fn rational() -> Distortion {
         Distortion::from_coefficients(&[0.8, -0.2, 0.0008, 0.0012, 0.05, 1.1, 0.05, 0.01]).unwrap()
@@ -462,14 +710,33 @@ mod tests {
         ));
         assert!(Distortion::with_model(DistortionModel::RationalPolynomial, &[0.0; 5]).is_err());
         assert_eq!(DistortionModel::from_name("plumb_bob"), Some(DistortionModel::PlumbBob));
-        assert_eq!(DistortionModel::from_name("equidistant"), None);
+        assert_eq!(DistortionModel::from_name("equidistant"), Some(DistortionModel::Equidistant));
+        assert_eq!(DistortionModel::from_name("fisheye"), None);
+        assert_eq!(fisheye().coefficients(), &[-0.02, 0.004, -0.0006, 0.00004]);
+        for n in [3, 5, 8] {
+            assert!(matches!(
+                Distortion::with_model(DistortionModel::Equidistant, &vec![0.0; n]),
+                Err(Error::InvalidParameter { .. })
+            ));
+        }
+        assert!(matches!(
+            Distortion::with_model(DistortionModel::Equidistant, &[0.0, 0.0, f64::NAN, 0.0]),
+            Err(Error::NonFinite { index: 2, .. })
+        ));
+        // Zero coefficients are the equidistant projection, not a pinhole.
+        let equi = Distortion::with_model(DistortionModel::Equidistant, &[0.0; 4]).unwrap();
+        assert!(!equi.is_identity());
+        assert!((equi.distort([1.0, 0.0]).unwrap()[0] - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
     }
 
     #[test]
     fn jacobian_matches_finite_differences() {
         let h = 1e-6;
-        for d in [barrel(), rational()] {
-            for m in [[0.3, -0.2], [-0.5, 0.4], [0.05, 0.6], [0.0, 0.0]] {
+        let near = [[0.3, -0.2], [-0.5, 0.4], [0.05, 0.6], [0.0, 0.0]];
+        let wide = [[0.3, -0.2], [-0.5, 0.4], [0.05, 0.6], [0.0, 0.0], [1e-7, -2e-7], [2.5, -1.5], [-8.0, 3.0]];
+        for (d, points) in [(barrel(), &near[..]), (rational(), &near), (fisheye(), &wide), (folding_fisheye(), &wide)]
+        {
+            for &m in points {
                 let j = d.jacobian(m).unwrap();
                 for c in 0..2 {
                     let (mut a, mut b) = (m, m);
@@ -491,7 +758,7 @@ mod tests {
             Intrinsics::pinhole(800.0, 780.0, 320.0, 240.0).unwrap(),
             Intrinsics::new(800.0, 780.0, 330.0, 250.0, 1.3).unwrap(),
         ] {
-            for d in [barrel(), rational(), Distortion::none()] {
+            for d in [barrel(), rational(), Distortion::none(), fisheye(), folding_fisheye()] {
                 let pixels: Vec<[f64; 2]> = (0..200)
                     .map(|i| {
                         let a = i as f64 * 0.37;
@@ -546,6 +813,67 @@ mod tests {
         let d = barrel();
         match undistort_points(&[[600.0, 400.0]], &k, &d, 1e-12, 1) {
             Err(Error::Distortion { index: 0, reason }) => assert!(reason.contains("converge"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn fisheye_rays_beyond_ninety_degrees_round_trip() {
+        let k = Intrinsics::new(300.0, 310.0, 640.0, 480.0, 1.5).unwrap();
+        for d in [fisheye(), folding_fisheye()] {
+            let rays: Vec<[f64; 3]> = (0..400)
+                .map(|i| {
+                    let theta = d.max_angle() * 0.9999 * f64::from(i) / 400.0;
+                    let phi = f64::from(i) * 2.4;
+                    [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]
+                })
+                .collect();
+            let px = distort_rays(&rays, &k, &d).unwrap();
+            let back = undistort_rays(&px, &k, &d, 1e-10, 50).unwrap();
+            for (a, b) in rays.iter().zip(&back) {
+                assert!((0..3).all(|c| (a[c] - b[c]).abs() < 1e-12), "{a:?} vs {b:?}");
+            }
+        }
+        // Beyond 90 degrees there is a ray but no pinhole pixel.
+        let d = fisheye();
+        let behind = distort_rays(&[[1.0, 0.0, -0.2]], &k, &d).unwrap();
+        match undistort_points(&behind, &k, &d, 1e-10, 50) {
+            Err(Error::Distortion { index: 0, reason }) => assert!(reason.contains("behind"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+        // Pinhole models: rays in front only.
+        assert!(matches!(distort_rays(&[[0.1, 0.0, -1.0]], &k, &barrel()), Err(Error::Distortion { index: 0, .. })));
+        let front = distort_rays(&[[0.1, 0.2, 1.0]], &k, &barrel()).unwrap();
+        let ray = undistort_rays(&front, &k, &barrel(), 1e-10, 50).unwrap()[0];
+        assert!((ray[0] / ray[2] - 0.1).abs() < 1e-12 && (ray[1] / ray[2] - 0.2).abs() < 1e-12);
+        assert!(matches!(distort_rays(&[[0.0, 0.0, 0.0]], &k, &d), Err(Error::InvalidParameter { name: "rays", .. })));
+    }
+
+    #[test]
+    fn fisheye_fold_is_an_error_naming_the_point() {
+        let k = Intrinsics::pinhole(300.0, 300.0, 320.0, 240.0).unwrap();
+        let d = folding_fisheye();
+        let fold = (1.0f64 / 0.3).sqrt();
+        assert!((d.max_angle() - fold).abs() < 1e-12);
+        let ray = |t: f64| [t.sin(), 0.0, t.cos()];
+        match distort_rays(&[ray(0.5), ray(fold + 1e-6)], &k, &d) {
+            Err(Error::Distortion { index: 1, reason }) => assert!(reason.contains("fold"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+        // A pixel beyond the image of the fold has no ray.
+        let edge = fisheye::theta_d(&[-0.1, 0.0, 0.0, 0.0], fold);
+        let far = [[320.0, 240.0], [320.0 + 300.0 * edge * 1.001, 240.0]];
+        match undistort_rays(&far, &k, &d, 1e-10, 50) {
+            Err(Error::Distortion { index: 1, reason }) => assert!(reason.contains("fold"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+        // In normalised coordinates the fold is beyond 90 degrees here: every m is valid.
+        assert!(d.distort_valid([1e6, 0.0]).is_some());
+        // A fold before 90 degrees: k1 = -0.2 folds at sqrt(1 / 0.6) rad = 73.97 degrees.
+        let d = Distortion::with_model(DistortionModel::Equidistant, &[-0.2, 0.0, 0.0, 0.0]).unwrap();
+        assert!(d.distort_valid([3.4, 0.0]).is_some() && d.distort_valid([3.5, 0.0]).is_none());
+        match distort_points(&[[320.0, 240.0], [320.0 + 1200.0, 240.0]], &k, &d) {
+            Err(Error::Distortion { index: 1, reason }) => assert!(reason.contains("fold"), "{reason}"),
             other => panic!("{other:?}"),
         }
     }

@@ -18,6 +18,7 @@
 //! | the depth estimator a servo session runs each step (appendix A's resection, or yours) | [`depth_estimator`] |
 //! | rigid motions, exact twist integration | [`se3`] |
 //! | lens distortion (OpenCV's plumb_bob and rational models), not in the paper | [`distortion`] |
+//! | OpenCV's fisheye lens (Kannala-Brandt, ROS's `equidistant`), not in the paper | [`fisheye`] |
 //! | pixel noise measured from an image stream, not in the paper | [`noise_meter`] |
 //! | pose uncertainty left by pixel noise (first-order propagation), not in the paper | [`uncertainty`] |
 //! | the widest triangle (basis choice, sec. 5.1) in `O(n log n)` | [`widest_triangle`] |
@@ -30,6 +31,7 @@ pub(crate) mod convex_hull;
 pub mod depth;
 pub mod depth_estimator;
 pub mod distortion;
+pub mod fisheye;
 pub mod ibvs;
 pub mod invariant;
 pub mod jacobian;

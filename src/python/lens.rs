@@ -1,23 +1,25 @@
-//! Lenses in Python: `Distortion`, `distort_points`, `undistort_points`, `Calibration` and
-//! `load_calibration`. The loops run in Rust, with the GIL released for large arrays.
+//! Lenses in Python: `Distortion`, `distort_points`, `undistort_points`, `distort_rays`,
+//! `undistort_rays`, `Calibration` and `load_calibration`. The loops run in Rust, with the GIL released for large arrays.
 
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, mat, points2, vec1};
+use super::arrays::{f64_array, mat, points2, points3, vec1};
 use super::errors::invalid_argument;
 use super::{PyIntrinsics, intrinsics, pixels_arg};
 use crate::calibration::Calibration;
 use crate::core::distortion::{
     DEFAULT_UNDISTORT_MAX_ITER, DEFAULT_UNDISTORT_TOL, Distortion, DistortionModel, distort_points as distort,
-    undistort_points as undistort,
+    distort_rays as distort_r, undistort_points as undistort, undistort_rays as undistort_r,
 };
 
 /// Arrays with at least this many points are processed with the GIL released.
 const DETACH_MIN_POINTS: usize = 512;
 
-/// Lens distortion: OpenCV's coefficients (k1, k2, p1, p2[, k3[, k4, k5, k6]]) and the model,
-/// "plumb_bob" (4 or 5 coefficients) or "rational_polynomial" (8).
+/// Lens distortion: OpenCV's coefficients and the model, "plumb_bob" (k1, k2, p1, p2[, k3]),
+/// "rational_polynomial" (k1, k2, p1, p2, k3, k4, k5, k6) or "equidistant", OpenCV's fisheye
+/// (cv2.fisheye, Kannala-Brandt: k1, k2, k3, k4). Without a model, 4 or 5 coefficients are
+/// plumb_bob and 8 rational_polynomial: a fisheye needs model="equidistant".
 #[pyclass(name = "Distortion", module = "vsinv._core", frozen, from_py_object)]
 #[derive(Clone)]
 pub struct PyDistortion {
@@ -36,9 +38,7 @@ impl PyDistortion {
                 let m = DistortionModel::from_name(name).ok_or_else(|| {
                     invalid_argument(
                         "model",
-                        format!(
-                            "model: unknown distortion model {name:?}; expected \"plumb_bob\" or \"rational_polynomial\""
-                        ),
+                        format!("model: unknown distortion model {name:?}; expected {}", DistortionModel::NAMES),
                     )
                 })?;
                 Distortion::with_model(m, c.as_slice()?)
@@ -46,12 +46,12 @@ impl PyDistortion {
         }?;
         Ok(Self { inner })
     }
-    /// "plumb_bob" or "rational_polynomial".
+    /// "plumb_bob", "rational_polynomial" or "equidistant".
     #[getter]
     fn model(&self) -> &'static str {
         self.inner.model().name()
     }
-    /// The coefficients in OpenCV's order, a new (5,) or (8,) array.
+    /// The coefficients in OpenCV's order, a new (5,), (8,) or (4,) (equidistant) array.
     #[getter]
     fn coefficients<'py>(&self, py: Python<'py>) -> Bound<'py, numpy::PyArray1<f64>> {
         vec1(py, self.inner.coefficients())
@@ -61,6 +61,13 @@ impl PyDistortion {
     }
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other.cast::<PyDistortion>().is_ok_and(|o| o.get().inner == self.inner)
+    }
+    /// The largest angle from the optical axis (radians) the model images one-to-one, not
+    /// included: for equidistant its fold (where d theta_d / d theta reaches 0) or pi,
+    /// whichever comes first; pi / 2 for the others (the half-space in front of the camera).
+    #[getter]
+    fn max_angle(&self) -> f64 {
+        self.inner.max_angle()
     }
 }
 
@@ -89,7 +96,8 @@ fn run_points<'py>(
     mat(py, out.len(), 2, out.into_flattened())
 }
 
-/// Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew.
+/// Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew. Raises for a point at or
+/// beyond an equidistant lens's fold.
 #[pyfunction]
 #[allow(non_snake_case)]
 pub fn distort_points<'py>(
@@ -105,7 +113,8 @@ pub fn distort_points<'py>(
 }
 
 /// Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol` pixels within `max_iter`
-/// iterations.
+/// iterations (for equidistant, Newton's method on the angle theta). Raises for a pixel beyond the image of the fold,
+/// and for an equidistant pixel whose ray is 90 degrees or more from the axis (no pinhole pixel: see `undistort_rays`).
 #[pyfunction]
 #[pyo3(signature = (pixels, K, distortion, tol = DEFAULT_UNDISTORT_TOL, max_iter = DEFAULT_UNDISTORT_MAX_ITER), text_signature = "(pixels, K, distortion, tol=1e-10, max_iter=50)")]
 #[allow(non_snake_case)]
@@ -121,6 +130,48 @@ pub fn undistort_points<'py>(
     let k = intrinsics(K, "K")?;
     let d = distortion_arg(distortion)?;
     run_points(py, points2(&a)?, |px| undistort(px, &k, &d, tol, max_iter))
+}
+
+/// Distorts rays (n, 3) of the camera frame into pixels (n, 2): for equidistant `K m_d` with
+/// `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)`, `theta` the ray's angle from the axis, which images rays beyond 90
+/// degrees while `theta < max_angle`; for the others `K d(X/Z, Y/Z)`, which needs `Z > 0`.
+#[pyfunction]
+#[allow(non_snake_case)]
+pub fn distort_rays<'py>(
+    py: Python<'py>,
+    rays: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    distortion: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = f64_array(rays, "rays", &[None, Some(3)])?;
+    let k = intrinsics(K, "K")?;
+    let d = distortion_arg(distortion)?;
+    let r = points3(&a)?;
+    let out = if r.len() >= DETACH_MIN_POINTS { py.detach(|| distort_r(r, &k, &d)) } else { distort_r(r, &k, &d) }?;
+    super::arrays::finite_out("rays, K, distortion", out.as_flattened())?;
+    mat(py, out.len(), 2, out.into_flattened())
+}
+
+/// The unit rays (n, 3) of distorted pixels (n, 2), the inverse of `distort_rays`: for equidistant Newton's method
+/// on theta (rays beyond 90 degrees have Z < 0); for the others `undistort_points`' normalised point, normalised.
+#[pyfunction]
+#[pyo3(signature = (pixels, K, distortion, tol = DEFAULT_UNDISTORT_TOL, max_iter = DEFAULT_UNDISTORT_MAX_ITER), text_signature = "(pixels, K, distortion, tol=1e-10, max_iter=50)")]
+#[allow(non_snake_case)]
+pub fn undistort_rays<'py>(
+    py: Python<'py>,
+    pixels: &Bound<'py, PyAny>,
+    K: &Bound<'py, PyAny>,
+    distortion: &Bound<'py, PyAny>,
+    tol: f64,
+    #[pyo3(from_py_with = super::args::max_iter)] max_iter: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let a = pixels_arg(pixels, "pixels")?;
+    let k = intrinsics(K, "K")?;
+    let d = distortion_arg(distortion)?;
+    let px = points2(&a)?;
+    let f = || undistort_r(px, &k, &d, tol, max_iter);
+    let out = if px.len() >= DETACH_MIN_POINTS { py.detach(f) } else { f() }?;
+    mat(py, out.len(), 3, out.into_flattened())
 }
 
 /// A camera calibration read from a file: intrinsics, distortion and image size.
@@ -176,6 +227,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyCalibration>()?;
     m.add_function(wrap_pyfunction!(distort_points, m)?)?;
     m.add_function(wrap_pyfunction!(undistort_points, m)?)?;
+    m.add_function(wrap_pyfunction!(distort_rays, m)?)?;
+    m.add_function(wrap_pyfunction!(undistort_rays, m)?)?;
     m.add_function(wrap_pyfunction!(load_calibration, m)?)?;
     Ok(())
 }

@@ -6,7 +6,8 @@ frame.
 
 Conventions: REP 103 / REP 105 (the camera optical frame: z forward, x right, y down, which is
 vsinv's camera frame), sensor_msgs/CameraInfo's K (3x3 row-major), D and distortion_model
-(plumb_bob, rational_polynomial: OpenCV's coefficient order), tf2's quaternion order
+(plumb_bob, rational_polynomial, equidistant: OpenCV's coefficient order; equidistant is
+cv2.fisheye's k1, k2, k3, k4), tf2's quaternion order
 (x, y, z, w).
 """
 
@@ -81,8 +82,10 @@ def compressed_to_grey(msg: Any) -> npt.NDArray[np.uint8]:
 
 def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics, Distortion]:
     """K_hat and the distortion of a sensor_msgs/CameraInfo: K and D (distortion_model
-    plumb_bob, rational_polynomial, or empty D), or with ``rectified`` the rectified camera's
-    P[:3, :3] and no distortion. An uncalibrated camera (K all zeros) is refused."""
+    plumb_bob, rational_polynomial, equidistant (OpenCV's fisheye, 4 coefficients), or empty
+    D), or with ``rectified`` the rectified camera's P[:3, :3] and no distortion. An
+    uncalibrated camera (K all zeros) is refused. An equidistant D of zeros is still a fisheye
+    (theta_d = theta), not a pinhole."""
     if rectified:
         p = np.asarray(msg.p if hasattr(msg, "p") else msg.P, dtype=float).reshape(3, 4)
         return intrinsics_from_numbers("camera_info.p", p[:, :3].ravel()), Distortion([0.0, 0.0, 0.0, 0.0])
@@ -92,12 +95,14 @@ def lens_from_camera_info(msg: Any, rectified: bool = False) -> tuple[Intrinsics
     intrinsics = intrinsics_from_numbers("camera_info.k", k)
     d = [float(x) for x in (msg.d if hasattr(msg, "d") else msg.D)]
     model = str(msg.distortion_model)
-    if not any(d):
+    if not d or (not any(d) and model != "equidistant"):
         return intrinsics, Distortion([0.0, 0.0, 0.0, 0.0])
-    if model not in ("plumb_bob", "rational_polynomial"):
-        raise InvalidInput(f"camera_info: distortion_model {model!r} is not read (plumb_bob or rational_polynomial)")
+    if model not in ("plumb_bob", "rational_polynomial", "equidistant"):
+        raise InvalidInput(
+            f"camera_info: distortion_model {model!r} is not read (plumb_bob, rational_polynomial or equidistant)"
+        )
     try:
-        return intrinsics, Distortion(d, cast(Literal["plumb_bob", "rational_polynomial"], model))
+        return intrinsics, Distortion(d, cast(Literal["plumb_bob", "rational_polynomial", "equidistant"], model))
     except InvalidInput as e:
         raise InvalidInput(f"camera_info.d: {e}") from None
 

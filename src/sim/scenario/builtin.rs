@@ -9,6 +9,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("lens-12-12", include_str!("../../../scenarios/lens-12-12.toml")),
     ("lens-12-6", include_str!("../../../scenarios/lens-12-6.toml")),
     ("lens-12-6-barrel", include_str!("../../../scenarios/lens-12-6-barrel.toml")),
+    ("lens-12-fisheye", include_str!("../../../scenarios/lens-12-fisheye.toml")),
     ("lens-25-12", include_str!("../../../scenarios/lens-25-12.toml")),
     ("lens-6-12", include_str!("../../../scenarios/lens-6-12.toml")),
     ("ibvs-12-12", include_str!("../../../scenarios/ibvs-12-12.toml")),

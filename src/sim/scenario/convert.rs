@@ -444,8 +444,14 @@ fn law_of(c: &ControlSpec) -> Result<Law> {
 /// `[depth_estimation]`: the pure-translation image pair of appendix A.
 fn translation_pair(d: &DepthEstimationSpec) -> Result<TranslationPairDepths> {
     let c = &d.camera;
-    let extra =
-        [c.zoom.is_some(), c.width.is_some(), c.height.is_some(), c.distortion.is_some(), c.calibration.is_some()];
+    let extra = [
+        c.zoom.is_some(),
+        c.width.is_some(),
+        c.height.is_some(),
+        c.distortion.is_some(),
+        c.distortion_model.is_some(),
+        c.calibration.is_some(),
+    ];
     if extra.into_iter().any(|given| given) {
         return Err(scenario_error("depth_estimation.camera", "takes fku, fkv, u0, v0 and skew_deg only"));
     }

@@ -132,9 +132,15 @@ pub struct CameraSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height: Option<f64>,
     /// Lens distortion coefficients in OpenCV's order: 4 or 5 (plumb_bob) or 8
-    /// (rational_polynomial).
+    /// (rational_polynomial); with `distortion_model = "equidistant"`, OpenCV's fisheye
+    /// (Kannala-Brandt, `cv2.fisheye`) `k1, k2, k3, k4`: 4 values.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub distortion: Option<Vec<f64>>,
+    /// The model of `distortion`, as ROS names it: `"plumb_bob"`, `"rational_polynomial"` or
+    /// `"equidistant"` (the fisheye). Default: from the number of coefficients (4 or 5
+    /// plumb_bob, 8 rational_polynomial).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion_model: Option<String>,
     /// Zoom schedule (servo camera only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub zoom: Option<Zoom>,

@@ -5,7 +5,7 @@
 use super::{MAX_IMAGE_SIDE, MAX_MAGNITUDE, check_positive, first_given};
 use crate::calibration::load_calibration;
 use crate::core::camera::Intrinsics;
-use crate::core::distortion::Distortion;
+use crate::core::distortion::{Distortion, DistortionModel};
 use crate::error::{Result, Short};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::scenario::schema::CameraSpec;
@@ -42,6 +42,7 @@ impl CameraSpec {
             ("width", self.width.is_some()),
             ("height", self.height.is_some()),
             ("distortion", self.distortion.is_some()),
+            ("distortion_model", self.distortion_model.is_some()),
         ];
         if let Some(name) = first_given(given) {
             let reason = format!("given with {key}.calibration, which sets it: give one or the other");
@@ -107,7 +108,25 @@ impl CameraSpec {
     }
 
     fn distortion_of(&self, key: &str) -> Result<Distortion> {
-        let Some(c) = &self.distortion else { return Ok(Distortion::none()) };
+        let model = match &self.distortion_model {
+            None => None,
+            Some(name) => Some(DistortionModel::from_name(name).ok_or_else(|| {
+                let plain =
+                    name.len() <= 32 && name.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+                let shown = if plain { format!("{name:?}") } else { format!("a name of {} bytes", name.len()) };
+                scenario_error(
+                    &format!("{key}.distortion_model"),
+                    format!("unknown distortion model {shown}; expected {}", DistortionModel::NAMES),
+                )
+            })?),
+        };
+        let Some(c) = &self.distortion else {
+            if model.is_some() {
+                let reason = format!("needs {key}.distortion, the model's coefficients");
+                return Err(scenario_error(&format!("{key}.distortion_model"), reason));
+            }
+            return Ok(Distortion::none());
+        };
         let key = format!("{key}.distortion");
         if let Some(i) = c.iter().position(|v| !(v.abs() <= MAX_MAGNITUDE)) {
             return Err(scenario_error(
@@ -115,7 +134,11 @@ impl CameraSpec {
                 format!("must be finite and within +-1e6, got {}", Short(c[i])),
             ));
         }
-        Distortion::from_coefficients(c).map_err(|e| scenario_error(&key, e.to_string()))
+        match model {
+            Some(m) => Distortion::with_model(m, c),
+            None => Distortion::from_coefficients(c),
+        }
+        .map_err(|e| scenario_error(&key, e.to_string()))
     }
 
     /// The camera of a run: the table's lens with its zoom schedule.
