@@ -1150,29 +1150,26 @@ class Distortion:
 _DistortionLike = Union[Distortion, _ArrayLike]
 
 def distort_points(pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
-    """Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew. Raises
-    for a point at or beyond an equidistant lens's fold."""
+    """Distorts pixels (n, 2) of the ideal pinhole image: `K d(K^-1 p)`; K may have skew. Raises for a point at or
+    beyond an equidistant lens's fold."""
 
 def undistort_points(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
 ) -> _F64Array:
-    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol`
-    pixels within `max_iter` iterations (for equidistant, Newton's method on the angle theta).
-    Raises for a pixel beyond the image of the fold, and for an equidistant pixel whose ray is
-    90 degrees or more from the axis (no pinhole pixel: see `undistort_rays`)."""
+    """Undistorts pixels (n, 2) by Newton's method, the inverse of `distort_points`, to `tol` pixels within `max_iter`
+    iterations (for equidistant, Newton's method on the angle theta). Raises for a pixel beyond the image of the fold,
+    and for an equidistant pixel whose ray is 90 degrees or more from the axis (no pinhole pixel: see `undistort_rays`)."""
 
 def distort_rays(rays: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike) -> _F64Array:
     """Distorts rays (n, 3) of the camera frame into pixels (n, 2): for equidistant `K m_d` with
-    `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)`, `theta` the ray's angle from the axis, which
-    images rays beyond 90 degrees while `theta < max_angle`; for the others `K d(X/Z, Y/Z)`,
-    which needs `Z > 0`."""
+    `m_d = theta_d (X, Y) / sqrt(X^2 + Y^2)`, `theta` the ray's angle from the axis, which images rays beyond 90
+    degrees while `theta < max_angle`; for the others `K d(X/Z, Y/Z)`, which needs `Z > 0`."""
 
 def undistort_rays(
     pixels: _ArrayLike, K: _IntrinsicsLike, distortion: _DistortionLike, tol: float = 1e-10, max_iter: int = 50
 ) -> _F64Array:
-    """The unit rays (n, 3) of distorted pixels (n, 2), the inverse of `distort_rays`: for
-    equidistant Newton's method on theta (rays beyond 90 degrees have Z < 0); for the others
-    `undistort_points`' normalised point, normalised."""
+    """The unit rays (n, 3) of distorted pixels (n, 2), the inverse of `distort_rays`: for equidistant Newton's method
+    on theta (rays beyond 90 degrees have Z < 0); for the others `undistort_points`' normalised point, normalised."""
 
 @final
 class Calibration:
