@@ -138,6 +138,39 @@ def test_distortion_round_trip_against_opencv(pts: list[tuple[float, float]], co
         np.testing.assert_allclose(back, px, atol=1e-6)
 
 
+
+FISHEYE = vsinv.vision.Distortion([-0.04, 0.01, -0.003, 0.0005], "equidistant")
+FISH_K = K  # k_variants() vary the harness's K
+FISH_RAYS = np.array([[0.1, -0.2, 1.0], [1.0, 0.5, 0.2], [0.6, -0.3, -0.25], [0.0, 0.0, 1.0]])  # two beyond 90 deg
+
+
+@covers("distort_rays", "undistort_rays", "Distortion.max_angle")
+@fuzz_settings(120)
+@given(st.data())
+def test_fisheye_rays(data: Any) -> None:
+    """Rays (n, 3) through a fisheye lens, some beyond 90 degrees, and their pixels back: every
+    bad variant of an argument is refused naming it, a harmless one gives the same answer."""
+    top = call(getattr, FISHEYE, "max_angle", _api="Distortion.max_angle")
+    assert math.radians(100) < top <= math.pi
+    which = data.draw(st.sampled_from(["distort_rays", "undistort_rays"]))
+    fn = getattr(vsinv.vision, which)
+    first = FISH_RAYS if which == "distort_rays" else vsinv.vision.distort_rays(FISH_RAYS, FISH_K, FISHEYE)
+    args: dict[str, Any] = {"rays" if which == "distort_rays" else "pixels": first, "K": FISH_K, "distortion": FISHEYE}
+    strategies: dict[str, Any] = {"K": k_variants(), "distortion": st.just(V(FISHEYE, SAME, "Distortion"))}
+    name = "rays" if which == "distort_rays" else "pixels"
+    strategies[name] = arrays(first, overrides={"lead_axis": INVALID})
+    if which == "undistort_rays":
+        args.update(tol=1e-10, max_iter=50)
+        strategies.update(tol=floats(1e-10, overrides={"zero": INVALID, "negative": INVALID, "neginf": INVALID}),
+                          max_iter=ints(50))
+    ref = fn(**args)
+    if which == "undistort_rays":
+        np.testing.assert_allclose(ref, FISH_RAYS / np.linalg.norm(FISH_RAYS, axis=1, keepdims=True), atol=1e-9)
+    width = 2 if which == "distort_rays" else 3
+    fuzz(data, fn, args, strategies, names={name: (name, "points", "rays", "point")}, ref=ref, rtol=1e-12,
+         check=lambda out: out.shape[1:] == (width,) or pytest.fail(str(out.shape)))
+
+
 CAL_FIXTURES = Path(__file__).parent / "fixtures" / "calibration"
 CAL_FILES = sorted(p for p in CAL_FIXTURES.iterdir() if p.suffix in (".yaml", ".xml"))
 @covers("load_calibration", "Calibration", "Calibration.intrinsics", "Calibration.distortion", "Calibration.image_size")
