@@ -42,7 +42,7 @@
 //! }
 //! let calibration = calibrate_hand_eye(&gripper, &target, HandEyeMethod::ParkMartin)?;
 //! assert!((calibration.transform.to_homogeneous() - x.to_homogeneous()).amax() < 1e-9);
-//! # Ok::<(), vsinv::Error>(())
+//! # Ok::<(), vsinv::calibration::CalibrationError>(())
 //! ```
 
 mod daniilidis;
