@@ -256,7 +256,7 @@ fn vision(c: &mut Criterion) {
     let settings = config.vision.expect("vision-12-6 has a [vision] table");
     let renderer = Renderer::new(settings).expect("renderer");
     let scene = &config.scene;
-    let discs: vsinv::Result<Vec<Disc>> = match scene.normals() {
+    let discs: Result<Vec<Disc>, vsinv::vision::VisionError> = match scene.normals() {
         Some(normals) => {
             scene.points().iter().zip(normals).map(|(&p, &n)| Disc::new(p, n, settings.dot_radius)).collect()
         }
@@ -313,7 +313,7 @@ fn vision(c: &mut Criterion) {
 fn dots_view(config: &SimulationConfig) -> Dots {
     let radius = config.vision.expect("[vision]").dot_radius;
     let scene = &config.scene;
-    let discs: vsinv::Result<Vec<Disc>> = match scene.normals() {
+    let discs: Result<Vec<Disc>, vsinv::vision::VisionError> = match scene.normals() {
         Some(normals) => scene.points().iter().zip(normals).map(|(&p, &n)| Disc::new(p, n, radius)).collect(),
         None => scene.points().iter().map(|&p| Disc::facing_reference(p, radius)).collect(),
     };

@@ -9,7 +9,7 @@ use vsinv::sim::Status;
 use vsinv::sim::batch::run_batch;
 use vsinv::sim::scenario::builtin;
 
-fn main() -> vsinv::Result<()> {
+fn main() -> Result<(), vsinv::sim::SimError> {
     let base = builtin("lens-12-6")?;
     let errors = [-0.5, -0.25, 0.0, 0.5, 1.0, 2.0];
     let mut configs = Vec::new();
@@ -38,7 +38,7 @@ fn main() -> vsinv::Result<()> {
         );
     }
     if !all_converged {
-        return Err(vsinv::Error::InvalidParameter { name: "example", reason: "a run did not converge".into() });
+        return Err(vsinv::Error::InvalidParameter { name: "example", reason: "a run did not converge".into() }.into());
     }
     Ok(())
 }

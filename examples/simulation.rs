@@ -19,7 +19,7 @@ fn print(name: &str, s: &Summary) {
     );
 }
 
-fn main() -> vsinv::Result<()> {
+fn main() -> Result<(), vsinv::sim::SimError> {
     let scenario = builtin("lens-12-6")?;
     let outcome = simulate(&scenario.to_config()?, &mut |_, _| true)?;
     print("invariant law", &outcome.summary);
@@ -32,7 +32,9 @@ fn main() -> vsinv::Result<()> {
 
     let s = &outcome.summary;
     if s.status != Status::Converged || s.final_translation_error > 1e-3 || s.final_rotation_error.to_degrees() > 0.1 {
-        return Err(vsinv::Error::InvalidParameter { name: "example", reason: "lens-12-6 did not converge".into() });
+        return Err(
+            vsinv::Error::InvalidParameter { name: "example", reason: "lens-12-6 did not converge".into() }.into()
+        );
     }
     Ok(())
 }

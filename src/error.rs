@@ -1,10 +1,26 @@
-//! The crate's one error type. The core's variants are always there; those of a higher layer
-//! (scenarios, URDF files and arms, images, calibration files and hand-eye motions) exist only
-//! with that layer's feature, so that the control core (`--no-default-features`) speaks only
-//! of its own inputs. A higher layer words a core error in its own terms where it reports one
-//! (the remedy of [`Error::DegenerateStructure`], see [`degenerate_structure_text`]).
+//! The core's error type, [`enum@Error`], and what every layer's error shares ([`Located`]).
 //!
-//! An error about one position of its input says where as data, [`Error::location`] (a
+//! Each layer has its own error, in its own file, and its functions return it:
+//!
+//! | layer | error | file |
+//! |---|---|---|
+//! | the control core, and the servo session (`servo`), which adds no error of its own | [`enum@Error`] | `src/error.rs` |
+//! | images (`vision`) | `vision::VisionError` | `src/vision/error.rs` |
+//! | calibration files and hand-eye calibration (`calibration`) | `calibration::CalibrationError` | `src/calibration/error.rs` |
+//! | the simulator (`sim`, with `sim::batch`) | `sim::SimError` | `src/sim/error.rs` |
+//!
+//! [`enum@Error`] holds the core's variants only, whatever the features: the core speaks only of
+//! its own inputs (arrays, intrinsics, parameters, the scene's geometry). A higher layer's
+//! error holds that layer's own variants and wraps the error of each layer below it that it
+//! calls in a transparent variant (`VisionError::Core(Error)`, `SimError::Vision(VisionError)`):
+//! `?` converts a lower error (`From`), and the wrapped error's message, location and family
+//! are the wrapper's. The Python bindings map any layer's error to the package's exception
+//! classes through [`Located`].
+//!
+//! A higher layer words a core error in its own terms where it reports one (the remedy of
+//! [`Error::DegenerateStructure`], see [`degenerate_structure_text`]).
+//!
+//! An error about one position of its input says where as data, [`Located::location`] (a
 //! [`Location`]: keys and indices, the core's vocabulary), rendered in its message as
 //! `control.gain`, `object.points[2][1]` or `[3].camera.fku`; Python sees it as `err.location`.
 
@@ -12,7 +28,8 @@ use thiserror::Error;
 
 pub use crate::location::{Location, Step};
 
-/// Everything that can go wrong in `vsinv`.
+/// Everything that can go wrong in the control core (and the servo session): the error of
+/// `vsinv` with `default-features = false`, and the one every higher layer's error wraps.
 ///
 /// The variants fall into two families, which the Python bindings map to
 /// `vsinv.InvalidInput` and `vsinv.DegenerateGeometry` (see [`Error::is_degenerate`]).
@@ -111,42 +128,6 @@ pub enum Error {
         /// What usually causes it.
         hint: &'static str,
     },
-    /// A scenario file or dictionary that does not describe a valid run; `key` names the
-    /// offending entry (e.g. `control.gain`).
-    #[error("scenario: {}{reason}", if key.is_empty() { String::new() } else { format!("{key}: ") })]
-    ///
-    /// Of the simulator's scenarios: only with the feature `sim`.
-    #[cfg(feature = "sim")]
-    Scenario {
-        /// The key at fault (`control.gain`, `object.points[2][1]`; empty for the whole
-        /// document).
-        key: Location,
-        /// What is wrong.
-        reason: String,
-    },
-    /// An image that cannot be used: wrong size, empty, unreadable file, nothing to detect.
-    #[error("{what}: {reason}")]
-    ///
-    /// Of the vision layer: only with the feature `vision`.
-    #[cfg(feature = "vision")]
-    InvalidImage {
-        /// Which image (argument name or file path).
-        what: String,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A robot description (URDF) that cannot be read or does not describe a serial arm;
-    /// `message` names the link or joint at fault.
-    #[error("URDF {file}: {message}")]
-    ///
-    /// Of the simulator's arms: only with the feature `sim`.
-    #[cfg(feature = "sim")]
-    Urdf {
-        /// The file path, `builtin:<name>` or `<string>`.
-        file: String,
-        /// What is wrong.
-        message: String,
-    },
     /// Lens distortion without an answer at one point: undistortion that does not converge,
     /// a pixel beyond the image of the fold (the model folds back there), or a rational model
     /// whose denominator is not positive.
@@ -157,76 +138,12 @@ pub enum Error {
         /// What happened.
         reason: String,
     },
-    /// A camera calibration file (ROS camera_info YAML, OpenCV FileStorage YAML or XML) that
-    /// cannot be read or is malformed; `field` names the entry at fault.
-    #[error("calibration file {file}: {}{reason}", if field.is_empty() { String::new() } else { format!("{field}: ") })]
-    ///
-    /// Of the calibration layer: only with the feature `calibration`.
-    #[cfg(feature = "calibration")]
-    Calibration {
-        /// The file path.
-        file: String,
-        /// The entry at fault (e.g. `camera_matrix.data`; empty for the whole file).
-        field: Location,
-        /// What is wrong.
-        reason: String,
-    },
-    /// A pose (a 4x4 homogeneous matrix) that is not a rigid motion: a non-finite entry, a
-    /// last row other than `(0, 0, 0, 1)`, or a rotation block that is not orthonormal with
-    /// determinant +1.
-    #[error("{what}[{index}]: not a rigid transform: {reason}")]
-    ///
-    /// Of the calibration layer (hand-eye): only with the feature `calibration`.
-    #[cfg(feature = "calibration")]
-    InvalidPose {
-        /// Which input (e.g. `gripper_poses`).
-        what: &'static str,
-        /// The pose at fault.
-        index: usize,
-        /// What is wrong.
-        reason: String,
-    },
-    /// Robot motions that do not determine the hand-eye transform (AX = XB): too few poses,
-    /// no rotation, or rotations about (nearly) parallel axes only.
-    #[error("degenerate hand-eye motions ({poses} poses): {reason}")]
-    ///
-    /// Of the calibration layer (hand-eye): only with the feature `calibration`.
-    #[cfg(feature = "calibration")]
-    DegenerateMotion {
-        /// The number of poses given.
-        poses: usize,
-        /// What is missing and how to fix it.
-        reason: String,
-    },
     /// The coefficient `a_hat` of eq. (23) vanishes (rotation about the optical axis near
     /// +-90 degrees), so the rz law (24) is undefined.
     #[error("rz law singular: a_hat = {a_hat:.3e} (rotation about the optical axis near +-90 degrees)")]
     RzSingular {
         /// The estimated coefficient.
         a_hat: f64,
-    },
-    /// Inverse kinematics found no joints within the limits that reach a pose: the best
-    /// residual over every seed is reported.
-    #[error(
-        "pose: unreachable by {arm} within its joint limits (position {} m, theta-u {} deg): the best of {seeds} seeds stops {position_residual:.3e} m and {rotation_residual:.3e} rad away",
-        Triple(*position), Triple(*thetau_deg)
-    )]
-    ///
-    /// Of the simulator's arms: only with the feature `sim`.
-    #[cfg(feature = "sim")]
-    Unreachable {
-        /// The arm's name.
-        arm: String,
-        /// The target position, metres (base frame).
-        position: [f64; 3],
-        /// The target orientation as theta-u, degrees (base frame).
-        thetau_deg: [f64; 3],
-        /// The smallest position residual reached, metres.
-        position_residual: f64,
-        /// The rotation residual of that solution, radians.
-        rotation_residual: f64,
-        /// How many seeds were tried.
-        seeds: usize,
     },
 }
 
@@ -236,18 +153,6 @@ pub fn degenerate_structure_text(ratio: f64, threshold: f64, remedy: &str) -> St
     format!(
         "degenerate structure: sigma_5/sigma_1 of the depth-balanced invariant Jacobian is {ratio:.3e} (< {threshold:.1e}); the object is planar or the depth estimates are all equal, and the invariant error cannot control five dof; with a constant-depth guess, pass the reference depths zeta* or estimated depths (appendix A: depths_from_translation, ResectionDepths{remedy}) instead"
     )
-}
-
-/// Three numbers as `[a, b, c]`, each printed by [`Short`] to four significant digits.
-#[cfg(feature = "sim")]
-struct Triple([f64; 3]);
-
-#[cfg(feature = "sim")]
-impl std::fmt::Display for Triple {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let [a, b, c] = self.0.map(|v| Short((v * 1e4).round() / 1e4));
-        write!(f, "[{a}, {b}, {c}]")
-    }
 }
 
 impl Error {
@@ -262,9 +167,10 @@ impl Error {
     }
 
     /// Where in its input the error is, as data: the argument and its row and column
-    /// (`pixels[4][1]`), the scenario key (`control.gain`), the calibration file's entry, the
-    /// image's argument; `None` for errors about no one position (intrinsics, a collinear basis,
-    /// a planar object). Its `Display` is the text the message shows.
+    /// (`pixels[4][1]`), the parameter (`gain`), the point of a distortion; `None` for errors
+    /// about no one position (intrinsics, a collinear basis, a planar object). Its `Display` is
+    /// the text the message shows. (The higher layers' errors answer for their own variants, a
+    /// scenario key or a calibration file's entry, through [`Located::location`].)
     pub fn location(&self) -> Option<Location> {
         match self {
             Error::NonFinite { what, index } => Some(Location::key(*what).then_index(*index)),
@@ -274,33 +180,61 @@ impl Error {
             Error::Shape { what, .. } => Some(Location::key(*what)),
             Error::InvalidParameter { name, .. } => Some(Location::key(*name)),
             Error::Distortion { index, .. } => Some(Location::root().then_index(*index)),
-            #[cfg(feature = "sim")]
-            Error::Scenario { key, .. } => Some(key.clone()),
-            #[cfg(feature = "vision")]
-            Error::InvalidImage { what, .. } => Some(Location::key(what.as_str())),
-            #[cfg(feature = "calibration")]
-            Error::Calibration { field, .. } => Some(field.clone()),
-            #[cfg(feature = "calibration")]
-            Error::InvalidPose { what, index, .. } => Some(Location::key(*what).then_index(*index)),
             _ => None,
         }
     }
 
     /// True for errors caused by the scene geometry (collinear basis, planar object,
-    /// points behind the camera, too few points, degenerate robot motions) rather than by
-    /// malformed input.
+    /// points behind the camera, too few points, an estimate the data do not determine) rather
+    /// than by malformed input. (Degenerate hand-eye motions are the calibration layer's:
+    /// [`Located::is_degenerate`].)
     pub fn is_degenerate(&self) -> bool {
-        match self {
+        matches!(
+            self,
             Error::TooFewPoints { .. }
-            | Error::CollinearBasis { .. }
-            | Error::PointBehindCamera { .. }
-            | Error::DegenerateStructure { .. }
-            | Error::DegenerateEstimate { .. }
-            | Error::RzSingular { .. } => true,
-            #[cfg(feature = "calibration")]
-            Error::DegenerateMotion { .. } => true,
-            _ => false,
-        }
+                | Error::CollinearBasis { .. }
+                | Error::PointBehindCamera { .. }
+                | Error::DegenerateStructure { .. }
+                | Error::DegenerateEstimate { .. }
+                | Error::RzSingular { .. }
+        )
+    }
+}
+
+/// What every layer's error tells about itself, whatever layer raised it: where in its input
+/// it is and which family it belongs to. The core's [`enum@Error`] implements it, and so does the
+/// error of each higher layer (`VisionError`, `CalibrationError`, `SimError`), answering for
+/// its own variants and delegating to the lower error it wraps; the Python bindings map any of
+/// them to the package's exception classes through it.
+pub trait Located: std::error::Error {
+    /// The core error this error is or wraps (through any number of layers); `None` for a
+    /// layer's own variant.
+    fn core(&self) -> Option<&Error>;
+
+    /// Where in its input the error is, as data (see [`Error::location`]); `None` for errors
+    /// about no one position.
+    fn location(&self) -> Option<Location> {
+        self.core().and_then(Error::location)
+    }
+
+    /// True for errors caused by the scene geometry rather than by malformed input (see
+    /// [`Error::is_degenerate`]).
+    fn is_degenerate(&self) -> bool {
+        self.core().is_some_and(Error::is_degenerate)
+    }
+}
+
+impl Located for Error {
+    fn core(&self) -> Option<&Error> {
+        Some(self)
+    }
+
+    fn location(&self) -> Option<Location> {
+        Error::location(self)
+    }
+
+    fn is_degenerate(&self) -> bool {
+        Error::is_degenerate(self)
     }
 }
 
@@ -460,8 +394,9 @@ pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
-    use super::{Error, Short};
+    use super::{Error, Located, Short};
 
     /// The core words its own remedies; a layer adds its own (the scenario key) and gets the
     /// message the crate gave before the split, to the letter.
@@ -480,6 +415,68 @@ mod tests {
         assert_eq!(e.message_with_remedy(layer), before);
         let other = Error::RzSingular { a_hat: 1e-9 };
         assert_eq!(other.message_with_remedy(layer), other.to_string());
+    }
+
+    /// One value of every variant, named (an exhaustive match: a variant added under a
+    /// feature, or only without one, fails to compile here with one feature set or the other).
+    fn every_variant() -> Vec<(&'static str, Error)> {
+        let all = vec![
+            Error::NonFinite { what: "pixels", index: 3 },
+            Error::NonFinitePoint { what: "pixels", row: 4, column: 1 },
+            Error::Shape { what: "depths", expected: "12 values".into(), got: "11 values".into() },
+            Error::InvalidIntrinsics { reason: "fku must be > 0".into() },
+            Error::InvalidParameter { name: "gain", reason: "must be > 0".into() },
+            Error::TooFewPoints { needed: 6, got: 5, why: "five dof" },
+            Error::CollinearBasis { basis: [0, 1, 2], image: "current", ratio: 1e-9 },
+            Error::PointBehindCamera { index: 2, depth: -0.5 },
+            Error::DegenerateStructure { ratio: 1e-5, threshold: 1e-3 },
+            Error::DegenerateEstimate { what: "plane", ratio: 0.0, hint: "no translation" },
+            Error::Distortion { index: 7, reason: "no convergence".into() },
+            Error::RzSingular { a_hat: 1e-9 },
+        ];
+        all.into_iter()
+            .map(|e| {
+                let name = match &e {
+                    Error::NonFinite { .. } => "NonFinite",
+                    Error::NonFinitePoint { .. } => "NonFinitePoint",
+                    Error::Shape { .. } => "Shape",
+                    Error::InvalidIntrinsics { .. } => "InvalidIntrinsics",
+                    Error::InvalidParameter { .. } => "InvalidParameter",
+                    Error::TooFewPoints { .. } => "TooFewPoints",
+                    Error::CollinearBasis { .. } => "CollinearBasis",
+                    Error::PointBehindCamera { .. } => "PointBehindCamera",
+                    Error::DegenerateStructure { .. } => "DegenerateStructure",
+                    Error::DegenerateEstimate { .. } => "DegenerateEstimate",
+                    Error::Distortion { .. } => "Distortion",
+                    Error::RzSingular { .. } => "RzSingular",
+                };
+                (name, e)
+            })
+            .collect()
+    }
+
+    /// The core's error has no variant of a feature (its declaration has no `cfg`), and its
+    /// messages use none of a higher layer's words: scenarios, URDF files, images, calibration
+    /// files, hand-eye poses are the layers' own errors.
+    #[test]
+    fn the_core_error_is_the_cores_alone() {
+        let source = include_str!("error.rs");
+        let start = source.find("pub enum Error {").unwrap_or(0);
+        let end = start + source[start..].find("\n}\n").unwrap_or(0);
+        assert!(end > start, "the declaration of Error");
+        let declaration = &source[start..end];
+        assert!(!declaration.contains("#[cfg"), "a feature-gated variant in the core's Error");
+        let variants = declaration.lines().filter(|l| l.starts_with("    ") && l.trim_end().ends_with('{')).count();
+        let all = every_variant();
+        assert_eq!(variants, all.len(), "every_variant lists every variant");
+        for (name, e) in all {
+            let text = e.to_string().to_lowercase();
+            for word in ["scenario", "urdf", "image:", "calibration", "hand-eye", "rigid transform", "toml"] {
+                assert!(!text.contains(word), "{name}: {text}");
+            }
+            assert!(e.core() == Some(&e) && Located::location(&e) == e.location());
+            assert_eq!(Located::is_degenerate(&e), e.is_degenerate(), "{name}");
+        }
     }
 
     #[test]

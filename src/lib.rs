@@ -9,7 +9,7 @@
 //! | layer | module | Cargo feature | dependencies |
 //! |---|---|---|---|
 //! | the control core: the paper's mathematics | [`core`] | always | nalgebra, thiserror |
-//! | the one error type | [`error`] | always | |
+//! | errors: the core's, and the trait of every layer's (each layer declares its own in its `error.rs`) | [`error`] | always | |
 //! | where an error is (keys and indices) | [`location`] | always | |
 //! | the servo session: stop rules, depth sources, path following, verdicts | `servo` | `servo` | |
 //! | simulator: scene, robots, closed loop, scenario files | `sim` | `sim` (default) | rapier3d-f64, serde, toml, rand |
@@ -104,5 +104,5 @@ pub use crate::core::stability::{StabilityReport, a_matrix, check_stability, tra
 pub use crate::core::uncertainty::{
     ImageNoise, Measurement, PoseUncertainty, invariant_pose_uncertainty, pixel_pose_uncertainty,
 };
-pub use error::{Error, Result};
+pub use error::{Error, Located, Result};
 pub use location::Location;

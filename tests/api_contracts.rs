@@ -245,7 +245,10 @@ fn error_messages_print_short_numbers() {
         #[cfg(feature = "sim")]
         {
             let toml = format!("[control]\ngain = {x:e}\ndt = {:e}\n", x.abs());
-            keep(vsinv::sim::Scenario::from_toml(&toml).map(drop));
+            keep(vsinv::sim::Scenario::from_toml(&toml).map(drop).map_err(|e| match e {
+                vsinv::sim::SimError::Core(core) => core,
+                other => vsinv::Error::InvalidParameter { name: "scenario", reason: other.to_string() },
+            }));
         }
     }
     assert!(messages.len() > 60, "{} errors", messages.len());

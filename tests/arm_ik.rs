@@ -7,8 +7,8 @@
 use crate::common::Lcg;
 use nalgebra::{Isometry3, Matrix4};
 use serde::Deserialize;
-use vsinv::Error;
 use vsinv::core::se3::{pose_error, pose_from_matrix, thetau_from_pose};
+use vsinv::sim::SimError;
 use vsinv::sim::arm::{ArmModel, DampedLeastSquaresIk, InverseKinematics};
 use vsinv::sim::robot::Robot;
 use vsinv::sim::scenario::{Scenario, StartSpec, builtin};
@@ -82,7 +82,7 @@ fn joint_limits_are_respected() {
     (limits.lower[0], limits.upper[0]) = (1.0, 1.2);
     let solver = DampedLeastSquaresIk { seeds: 8, ..Default::default() };
     let err = solver.solve(&ur5, &limits, &ur5.fk(&q).unwrap(), None).unwrap_err();
-    assert!(matches!(err, Error::Unreachable { .. }), "{err}");
+    assert!(matches!(err, SimError::Unreachable { .. }), "{err}");
 }
 
 #[test]
@@ -93,7 +93,7 @@ fn unreachable_poses_name_the_pose_and_the_residual() {
     let text = err.to_string();
     assert!(text.starts_with("pose: unreachable by panda"), "{text}");
     assert!(text.contains("position [0, 2, 0.3] m"), "{text}");
-    let Error::Unreachable { position_residual, seeds, .. } = err else { unreachable!() };
+    let SimError::Unreachable { position_residual, seeds, .. } = err else { unreachable!() };
     assert!(position_residual > 0.8 && seeds == 64, "{text}");
     // Bad seeds are refused by name.
     let err = arm.ik(&far, Some(&[0.0; 6])).unwrap_err().to_string();
@@ -190,7 +190,7 @@ fn an_arm_scenario_is_placed_by_the_camera_pose() {
 
 fn key_error(s: &Scenario) -> (String, String) {
     match s.to_config() {
-        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }

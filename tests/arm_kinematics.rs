@@ -7,6 +7,7 @@ use crate::common::Lcg;
 use nalgebra::{Isometry3, Matrix4, Matrix6xX, Vector3};
 use serde::Deserialize;
 use vsinv::Error;
+use vsinv::sim::SimError;
 use vsinv::sim::arm::{ArmModel, BUILTIN_ARMS, JointKind, builtin_urdf};
 
 #[derive(Deserialize)]
@@ -168,9 +169,9 @@ const TWO_LINKS: &str = r#"<robot name="two">
     <origin xyz="1 0 0"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" velocity="1"/></joint>
 </robot>"#;
 
-fn urdf_message(result: Result<ArmModel, Error>) -> String {
+fn urdf_message(result: Result<ArmModel, SimError>) -> String {
     match result {
-        Err(Error::Urdf { message, .. }) => message,
+        Err(SimError::Urdf { message, .. }) => message,
         other => panic!("expected a URDF error, got {other:?}"),
     }
 }
@@ -179,7 +180,7 @@ fn urdf_message(result: Result<ArmModel, Error>) -> String {
 fn arm_bad_urdf_is_an_error() {
     for text in ["", "not xml", "<robot name=\"x\"><link name=\"a\"></robot>", "<robot><joint name=\"j\"/></robot>"] {
         let err = ArmModel::from_urdf_str(text, "a").unwrap_err();
-        assert!(matches!(err, Error::Urdf { ref file, .. } if file == "<string>"), "{text:?}: {err}");
+        assert!(matches!(err, SimError::Urdf { ref file, .. } if file == "<string>"), "{text:?}: {err}");
     }
     for (from, to) in
         [(r#"xyz="1 0 0""#, r#"xyz="1 0""#), (r#"xyz="1 0 0""#, r#"xyz="a b c""#), ("\"revolute\"", "\"hinge\"")]
@@ -200,24 +201,30 @@ fn arm_bad_urdf_is_an_error() {
     let cycle = TWO_LINKS.replacen(r#"<parent link="a"/>"#, r#"<parent link="c"/>"#, 1);
     assert!(urdf_message(ArmModel::from_urdf_str(&cycle, "c")).contains("cycle"));
     let missing = ArmModel::from_urdf_file("/nonexistent/arm.urdf", "tool0").unwrap_err();
-    assert!(matches!(missing, Error::Urdf { ref file, .. } if file == "/nonexistent/arm.urdf"), "{missing}");
+    assert!(matches!(missing, SimError::Urdf { ref file, .. } if file == "/nonexistent/arm.urdf"), "{missing}");
     let unknown = ArmModel::builtin("puma").unwrap_err();
-    assert!(matches!(unknown, Error::InvalidParameter { name: "arm", .. }), "{unknown}");
+    assert!(matches!(unknown, SimError::Core(Error::InvalidParameter { name: "arm", .. })), "{unknown}");
 }
 
 #[test]
 fn arm_bad_joints_are_errors() {
     let arm = ArmModel::builtin("ur5").unwrap();
     let short = [0.0; 5];
-    assert!(matches!(arm.fk(&short), Err(Error::Shape { what: "joint positions", .. })));
-    assert!(matches!(arm.jacobian_base(&[0.0; 7]), Err(Error::Shape { .. })));
-    assert!(matches!(arm.jacobian_end_effector(&short), Err(Error::Shape { .. })));
-    assert!(matches!(arm.manipulability(&short), Err(Error::Shape { .. })));
-    assert!(matches!(arm.check_limits(&short), Err(Error::Shape { .. })));
+    assert!(matches!(arm.fk(&short), Err(SimError::Core(Error::Shape { what: "joint positions", .. }))));
+    assert!(matches!(arm.jacobian_base(&[0.0; 7]), Err(SimError::Core(Error::Shape { .. }))));
+    assert!(matches!(arm.jacobian_end_effector(&short), Err(SimError::Core(Error::Shape { .. }))));
+    assert!(matches!(arm.manipulability(&short), Err(SimError::Core(Error::Shape { .. }))));
+    assert!(matches!(arm.check_limits(&short), Err(SimError::Core(Error::Shape { .. }))));
     let nan = [0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0];
-    assert_eq!(arm.fk(&nan).unwrap_err(), Error::NonFinite { what: "joint positions", index: 2 });
-    assert!(matches!(arm.jacobian_base(&nan), Err(Error::NonFinite { index: 2, .. })));
-    assert!(matches!(arm.fk_link(&[f64::INFINITY; 6], "tool0"), Err(Error::NonFinite { index: 0, .. })));
+    assert_eq!(arm.fk(&nan).unwrap_err(), SimError::Core(Error::NonFinite { what: "joint positions", index: 2 }));
+    assert!(matches!(arm.jacobian_base(&nan), Err(SimError::Core(Error::NonFinite { index: 2, .. }))));
+    assert!(matches!(
+        arm.fk_link(&[f64::INFINITY; 6], "tool0"),
+        Err(SimError::Core(Error::NonFinite { index: 0, .. }))
+    ));
     let err = arm.fk_link(&[0.0; 6], "panda_link8").unwrap_err();
-    assert!(matches!(err, Error::InvalidParameter { name: "link", .. }) && err.to_string().contains("base_link"));
+    assert!(
+        matches!(err, SimError::Core(Error::InvalidParameter { name: "link", .. }))
+            && err.to_string().contains("base_link")
+    );
 }

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
-use vsinv::Error;
+use vsinv::sim::SimError;
 use vsinv::sim::arm::{ArmModel, ArmRobot};
 use vsinv::sim::robot::Robot;
 use vsinv::sim::scenario::{Scenario, builtin};
@@ -176,7 +176,7 @@ fn a_start_near_a_singularity_ends_singular() {
 
 fn key_error(s: &Scenario) -> (String, String) {
     match s.to_config() {
-        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }

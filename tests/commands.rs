@@ -6,9 +6,10 @@ use crate::common::*;
 use nalgebra::{Isometry3, Vector6};
 use vsinv::core::adaptive_gain::AdaptiveGain;
 use vsinv::core::saturation::TwistLimits;
+use vsinv::sim::SimError;
 use vsinv::sim::scenario::{Scenario, builtin};
 use vsinv::sim::{Status, simulate};
-use vsinv::{Error, IbvsController, Interaction, InvariantController, InvariantControllerConfig};
+use vsinv::{IbvsController, Interaction, InvariantController, InvariantControllerConfig};
 
 /// The reference image with a 12 mm lens, the current one from the paper's start with 6 mm.
 fn lens_change() -> (Vec<[f64; 2]>, Vec<[f64; 2]>, Vec<f64>) {
@@ -125,7 +126,7 @@ fn scenario_limits_and_gains_are_checked_with_their_keys() {
         let text = base.replacen(old, new, 1);
         let err = Scenario::from_toml(&text).and_then(|s| s.to_config());
         match err {
-            Err(Error::Scenario { key: k, .. }) => assert!(k.to_string().starts_with(key), "{new}: key {k}"),
+            Err(SimError::Scenario { key: k, .. }) => assert!(k.to_string().starts_with(key), "{new}: key {k}"),
             other => panic!("{new}: {other:?}"),
         }
     }

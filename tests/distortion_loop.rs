@@ -3,6 +3,7 @@
 //! files.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use vsinv::sim::SimError;
 use vsinv::sim::scenario::{Scenario, builtin};
 use vsinv::sim::{Status, Summary, simulate};
 
@@ -93,7 +94,7 @@ distortion_coefficients: !!opencv-matrix
 
 /// `lens-12-6-barrel` with its `[camera]` table replaced by `camera_table`, written next to
 /// the calibration file.
-fn with_camera_table(dir: &std::path::Path, camera_table: &str) -> vsinv::Result<Scenario> {
+fn with_camera_table(dir: &std::path::Path, camera_table: &str) -> Result<Scenario, SimError> {
     std::fs::write(dir.join("barrel.yaml"), BARREL_OPENCV_YAML).unwrap();
     let text = without_table(&builtin("lens-12-6-barrel").unwrap().to_toml().unwrap(), "[camera]");
     let path = dir.join("scenario.toml");
@@ -118,7 +119,7 @@ fn a_calibration_file_gives_the_same_run_as_its_numbers() {
 fn calibration_errors_name_the_key() {
     let dir = scratch("errors");
     let key_of = |table: &str| match with_camera_table(&dir, table) {
-        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("{other:?}"),
     };
     let (key, reason) = key_of("[camera]\ncalibration = \"barrel.yaml\"\nfku = 600.0\n");

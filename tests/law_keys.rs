@@ -3,7 +3,7 @@
 //! scenario still parses.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use vsinv::Error;
+use vsinv::sim::SimError;
 use vsinv::sim::scenario::{BUILTIN, COMMON_CONTROL_KEYS, LAW_KEYS, LawName, Scenario, builtin, law_keys};
 
 /// A valid value of each law-specific `[control]` key, as TOML.
@@ -66,7 +66,7 @@ fn a_key_of_another_law_is_refused_by_name() {
         for key in all_law_keys().into_iter().filter(|k| !law_keys(*law).contains(k)) {
             let text = scenario_text(*law, &format!("{key} = {}", sample(key)));
             let (at, reason) = match Scenario::from_toml(&text) {
-                Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
+                Err(SimError::Scenario { key, reason }) => (key.to_string(), reason),
                 other => panic!("control.{key} under {law:?}: expected a scenario error, got {other:?}"),
             };
             assert_eq!(at, format!("control.{key}"), "{reason}");
@@ -106,7 +106,7 @@ fn common_keys_and_scenarios_built_in_code() {
     let mut s = builtin("vision-12-6").unwrap();
     s.control.law = LawName::Ibvs;
     match s.to_config() {
-        Err(Error::Scenario { key, .. }) => assert_eq!(key.to_string(), "control.gain_rz"),
+        Err(SimError::Scenario { key, .. }) => assert_eq!(key.to_string(), "control.gain_rz"),
         other => panic!("expected control.gain_rz to be refused, got {other:?}"),
     }
     s.control.remove_option("gain_rz");

@@ -4,11 +4,11 @@
 //! new entry of the table is tested as it is added.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use vsinv::Error;
 use vsinv::servo::Law;
 use vsinv::servo::law::options::{
     LAW_OPTIONS, LawOptions, OptionDefault, OptionKind, OptionSpec, OptionValue, ScenarioKey,
 };
+use vsinv::sim::SimError;
 use vsinv::sim::scenario::{BUILTIN, Scenario};
 
 /// A value in the option's range (TOML text, and the value in the option's own unit).
@@ -70,7 +70,7 @@ fn every_scenario_key_takes_its_range_and_reaches_the_law() {
             assert_eq!(law_given, Law::from_options(law, &expected).unwrap(), "{key} = {text} under {law}");
             for bad in invalid(o) {
                 match Scenario::from_toml(&scenario_text(law, &format!("{key} = {bad}"))) {
-                    Err(Error::Scenario { key: at, reason }) => {
+                    Err(SimError::Scenario { key: at, reason }) => {
                         assert!(at.to_string().starts_with(&format!("control.{key}")), "{key} = {bad}: {at}: {reason}")
                     }
                     other => panic!("{key} = {bad} under {law}: expected a scenario error, got {other:?}"),

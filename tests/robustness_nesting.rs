@@ -9,8 +9,9 @@
 
 use std::time::{Duration, Instant};
 
-use vsinv::Error;
+use vsinv::calibration::CalibrationError;
 use vsinv::calibration::load_calibration;
+use vsinv::sim::SimError;
 use vsinv::sim::arm::{ArmModel, MAX_URDF_DEPTH, MAX_URDF_NODES};
 use vsinv::sim::scenario::Scenario;
 
@@ -26,14 +27,14 @@ fn nested_urdf(levels: usize) -> String {
 }
 
 /// Runs `f` on a thread of a 2 MiB stack; its error's text and the seconds taken.
-fn refused<T: Send + 'static>(f: impl FnOnce() -> vsinv::Result<T> + Send + 'static) -> (Error, Duration) {
+fn refused<T: Send + 'static, E: Send + 'static>(f: impl FnOnce() -> Result<T, E> + Send + 'static) -> (E, Duration) {
     let t = Instant::now();
     let out = std::thread::Builder::new().stack_size(2 << 20).spawn(f).unwrap().join().unwrap();
     let Err(e) = out else { panic!("accepted") };
     (e, t.elapsed())
 }
 
-fn assert_refused(e: &Error, took: Duration, needle: &str) {
+fn assert_refused(e: &impl std::fmt::Display, took: Duration, needle: &str) {
     let text = e.to_string();
     assert!(text.contains(needle), "{text}");
     assert!(!text.contains(SECRET), "the error quotes the file: {text}");
@@ -45,7 +46,7 @@ fn deeply_nested_urdf_is_refused_at_every_size() {
     for levels in [MAX_URDF_DEPTH, 20_000, 200_000] {
         let text = nested_urdf(levels);
         let (e, took) = refused(move || ArmModel::from_urdf_str(&text, "base"));
-        assert!(matches!(e, Error::Urdf { .. }), "{e}");
+        assert!(matches!(e, SimError::Urdf { .. }), "{e}");
         // Past the node limit, the node count is what refuses it first.
         let limit = if 2 * levels + 4 > MAX_URDF_NODES as usize { "XML nodes" } else { "nested more than 64 deep" };
         assert_refused(&e, took, limit);
@@ -108,7 +109,7 @@ fn calibration_readers_refuse_deep_nesting() {
         let text: String = text.chars().take(1 << 20).collect(); // within the size limit
         let path = temp_file(name, &text);
         let (e, took) = refused(move || load_calibration(&path));
-        assert!(matches!(e, Error::Calibration { .. }), "{name}: {e}");
+        assert!(matches!(e, CalibrationError::File { .. }), "{name}: {e}");
         assert_refused(&e, took, name);
     }
 }

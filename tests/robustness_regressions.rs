@@ -14,14 +14,14 @@ use nalgebra::Vector3;
 use vsinv::core::depth::{ResectionDepths, depths_from_translation, resect};
 use vsinv::core::planning::{InvariantPath, estimate_plane_parallax};
 use vsinv::{
-    Distortion, IbvsController, Interaction, Intrinsics, InvariantController, Result, check_stability, distort_points,
+    Distortion, IbvsController, Interaction, Intrinsics, InvariantController, check_stability, distort_points,
     invariant_jacobian, project_points, rz_coefficients, tracking_bound,
 };
 
 // ---------------------------------------------------------------------------------------------
 // Regressions: the faults the properties of tests/robustness_*.rs found, one deterministic case each.
 
-fn message<T: std::fmt::Debug>(r: Result<T>) -> String {
+fn message<T: std::fmt::Debug, E: std::fmt::Display>(r: std::result::Result<T, E>) -> String {
     r.expect_err("an error").to_string()
 }
 

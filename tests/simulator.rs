@@ -3,6 +3,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use vsinv::Error;
+use vsinv::sim::SimError;
 use vsinv::sim::scenario::{BUILTIN, Scenario, builtin};
 use vsinv::sim::{Outcome, Status, simulate};
 
@@ -235,7 +236,7 @@ fn recording_shapes() {
 
 fn scenario_error(text: &str) -> (String, String) {
     match Scenario::from_toml(text) {
-        Err(Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("expected a scenario error, got {other:?}"),
     }
 }
@@ -294,7 +295,7 @@ fn depth_estimator_interface() {
     }
     struct ScaledFactory;
     impl DepthEstimatorFactory for ScaledFactory {
-        fn start(&self, scene: &Scene, _: &[[f64; 2]]) -> vsinv::Result<Box<dyn DepthEstimator>> {
+        fn start(&self, scene: &Scene, _: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>, SimError> {
             Ok(Box::new(Scaled(scene.points().iter().map(|p| 3.0 * p[2]).collect())))
         }
     }
@@ -306,7 +307,7 @@ fn depth_estimator_interface() {
     }
     struct FailingFactory;
     impl DepthEstimatorFactory for FailingFactory {
-        fn start(&self, _: &Scene, _: &[[f64; 2]]) -> vsinv::Result<Box<dyn DepthEstimator>> {
+        fn start(&self, _: &Scene, _: &[[f64; 2]]) -> Result<Box<dyn DepthEstimator>, SimError> {
             Ok(Box::new(Failing))
         }
     }
@@ -368,7 +369,7 @@ fn rotation_deg_is_the_key_and_the_older_rotation_is_read_as_degrees() {
     assert_eq!(a.to_config().unwrap().start, b.to_config().unwrap().start);
     let both = text.replace("rotation_deg = [", "rotation = [0.0, 0.0, 0.0]\nrotation_deg = [");
     match Scenario::from_toml(&both) {
-        Err(vsinv::Error::Scenario { key, reason }) => {
+        Err(SimError::Scenario { key, reason }) => {
             assert!(key.to_string().starts_with("start") && reason.contains("duplicate"), "{key}: {reason}")
         }
         other => panic!("{other:?}"),
@@ -384,10 +385,10 @@ fn the_law_refuses_what_it_cannot_do() {
     config.law =
         vsinv::sim::Law::Ibvs { gain: 1.0, interaction: Interaction::Current, adaptive_gain: None, twist_limits: None };
     let err = simulate(&config, &mut |_, _| true).unwrap_err();
-    assert!(matches!(err, Error::InvalidParameter { name: "path", .. }), "{err}");
+    assert!(matches!(err, SimError::Core(Error::InvalidParameter { name: "path", .. })), "{err}");
     let mut config = builtin("lens-12-6").unwrap().to_config().unwrap();
     let points: Vec<[f64; 3]> = config.scene.points().iter().take(5).copied().collect();
     config.scene = vsinv::sim::scene::Scene::new(points, Vec::new()).unwrap();
     let err = simulate(&config, &mut |_, _| true).unwrap_err();
-    assert!(matches!(err, Error::TooFewPoints { needed: 6, got: 5, .. }), "{err}");
+    assert!(matches!(err, SimError::Core(Error::TooFewPoints { needed: 6, got: 5, .. })), "{err}");
 }

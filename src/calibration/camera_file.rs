@@ -13,7 +13,7 @@
 //!
 //! The camera matrix must be `[[fx, 0, cx], [0, fy, cy], [0, 0, 1]]`: OpenCV's and ROS's
 //! models have no skew, so a file with `K[0,1] != 0` is refused rather than read differently
-//! from the tools that wrote it. Every error is an [`Error::Calibration`] naming the file and
+//! from the tools that wrote it. Every error is a [`CalibrationError::File`] naming the file and
 //! the entry at fault and never the file's contents: a text where a number was expected is
 //! described by its length only (a scenario can point at any file, and its strings may be
 //! secrets); only a distortion model name that looks like one (lower-case letters, digits and `_`, at
@@ -43,9 +43,10 @@ use yaml_rust2::parser::{Event, MarkedEventReceiver, Parser};
 use yaml_rust2::scanner::Marker;
 use yaml_rust2::{Yaml, YamlLoader};
 
+use crate::calibration::error::{CalibrationError, Result};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, DistortionModel};
-use crate::error::{Error, Result};
+use crate::error::Error;
 pub use crate::input_file::MAX_CALIBRATION_BYTES;
 use crate::input_file::read_text;
 
@@ -101,8 +102,12 @@ struct Raw {
     model: Option<String>,
 }
 
-fn err(file: &str, field: impl Into<String>, reason: impl Into<String>) -> Error {
-    Error::Calibration { file: file.to_string(), field: crate::Location::parse(&field.into()), reason: reason.into() }
+fn err(file: &str, field: impl Into<String>, reason: impl Into<String>) -> CalibrationError {
+    CalibrationError::File {
+        file: file.to_string(),
+        field: crate::Location::parse(&field.into()),
+        reason: reason.into(),
+    }
 }
 
 impl Raw {
@@ -516,9 +521,9 @@ dist_coeffs: !!opencv-matrix
 </opencv_storage>
 "#;
 
-    fn field_of(e: Error) -> (String, String) {
+    fn field_of(e: CalibrationError) -> (String, String) {
         match e {
-            Error::Calibration { field, reason, .. } => (field.to_string(), reason),
+            CalibrationError::File { field, reason, .. } => (field.to_string(), reason),
             other => panic!("{other:?}"),
         }
     }

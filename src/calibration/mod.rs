@@ -10,12 +10,14 @@
 //! `vsinv::calibration::calibrate_hand_eye`).
 
 pub mod camera_file;
+pub mod error;
 pub mod hand_eye;
 
 pub use camera_file::{
     Calibration, MAX_CALIBRATION_BYTES, MAX_DISTORTION_COEFFICIENT, MAX_INTRINSIC_PIXELS, MAX_XML_NODES,
     load_calibration, parse_calibration,
 };
+pub use error::CalibrationError;
 pub use hand_eye::{
     AxisSpread, HandEyeAgreement, HandEyeCalibration, HandEyeMethod, PairResidual, calibrate_hand_eye,
     compare_hand_eye_methods,

@@ -23,7 +23,7 @@ pub fn run_reporting(
     threads: Option<usize>,
     access: FileAccess,
     reporter: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Vec<crate::Result<Summary>>> {
+) -> PyResult<Vec<crate::sim::error::Result<Summary>>> {
     let total = texts.len();
     let pool = crate::parallel::pool(threads)?;
     let watch = BatchWatch::default();

@@ -10,7 +10,7 @@ use crate::input_file::MAX_IMAGE_BYTES;
 use crate::vision::compressed::{Compression, decode_compressed};
 
 fn invalid(reason: String) -> PyErr {
-    crate::Error::InvalidImage { what: "data".to_string(), reason }.into()
+    crate::vision::VisionError::InvalidImage { what: "data".to_string(), reason }.into()
 }
 
 /// The (height, width) uint8 grey image of PNG or JPEG bytes (a ROS sensor_msgs/CompressedImage's data), in Rust

@@ -2,21 +2,27 @@
 //! `VsinvError(Exception)`, `InvalidInput(VsinvError, ValueError)`,
 //! `DegenerateGeometry(VsinvError, ValueError)` and `NotReady(VsinvError, RuntimeError)`.
 //!
-//! The only place that maps errors to Python exceptions: `impl From<crate::Error> for PyErr`
-//! (so `?` converts a core error in any binding) and the binding-level [`PyError`] for input
-//! refused before the core sees it. Like pydantic-core's errors, every exception carries the
-//! structured fields of the error as attributes (`kind`, `argument`, `index`, `row`, `key`,
-//! ...; the table [`ATTRIBUTES`]), `None` where a field does not apply; the message is the
-//! error's `Display` text.
+//! The only place that maps errors to Python exceptions: `impl From<E> for PyErr` for the error
+//! of every layer (the core's `Error`, `VisionError`, `CalibrationError`, `SimError`; so `?`
+//! converts any of them in any binding), all through one function, `py_error`, which takes the
+//! class, the location and the message from the error's [`Located`] answers and the kind and
+//! attributes from its layer's `describe_*` (a wrapped lower error is described by its own
+//! layer's); and the binding-level [`PyError`] for input refused before the core sees it.
+//! Like pydantic-core's errors, every exception carries the structured fields of the error as
+//! attributes (`kind`, `argument`, `index`, `row`, `key`, ...; the table [`ATTRIBUTES`]),
+//! `None` where a field does not apply; the message is the error's `Display` text.
 
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::Error;
+use crate::calibration::CalibrationError;
+use crate::error::{Error, Located};
 use crate::location::Step;
+use crate::sim::SimError;
 use crate::sim::scenario::DEPTHS_REMEDY;
+use crate::vision::VisionError;
 
 static VSINV_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static INVALID_INPUT: PyOnceLock<Py<PyType>> = PyOnceLock::new();
@@ -361,11 +367,13 @@ impl From<PyError> for PyErr {
     }
 }
 
+/// The kind and attributes of an error.
+type Described = (&'static str, Vec<(&'static str, Value)>);
+
 /// The kind and attributes of a core error (every variant: a new one fails to compile here).
-fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
+fn describe(err: &Error) -> Described {
     use Value::{Basis, Float, Int, Str};
     let s = |x: &str| Str(x.to_string());
-    let opt = |x: &str| if x.is_empty() { None } else { Some(Str(x.to_string())) };
     match err {
         Error::NonFinite { what, index } => ("non_finite", vec![("argument", s(what)), ("index", Int(*index))]),
         Error::NonFinitePoint { what, row, column } => {
@@ -393,44 +401,123 @@ fn describe(err: &Error) -> (&'static str, Vec<(&'static str, Value)>) {
         Error::DegenerateEstimate { what, ratio, hint } => {
             ("degenerate_estimate", vec![("estimate", s(what)), ("ratio", Float(*ratio)), ("hint", s(hint))])
         }
-        Error::Scenario { key, reason } => {
-            ("scenario", opt(&key.to_string()).map(|k| ("key", k)).into_iter().chain([("reason", s(reason))]).collect())
-        }
-        Error::InvalidImage { what, reason } => ("invalid_image", vec![("argument", s(what)), ("reason", s(reason))]),
-        Error::Urdf { file, message } => ("urdf", vec![("file", s(file)), ("reason", s(message))]),
         Error::Distortion { index, reason } => ("distortion", vec![("index", Int(*index)), ("reason", s(reason))]),
-        Error::Calibration { file, field, reason } => {
+        Error::RzSingular { a_hat } => ("rz_singular", vec![("a_hat", Float(*a_hat))]),
+    }
+}
+
+/// The kind and attributes of a vision error: its own variant, the core error's otherwise.
+fn describe_vision(err: &VisionError) -> Described {
+    let s = |x: &str| Value::Str(x.to_string());
+    match err {
+        VisionError::InvalidImage { what, reason } => {
+            ("invalid_image", vec![("argument", s(what)), ("reason", s(reason))])
+        }
+        VisionError::Core(e) => describe(e),
+    }
+}
+
+/// The kind and attributes of a calibration error: its own variants, the core error's otherwise.
+fn describe_calibration(err: &CalibrationError) -> Described {
+    use Value::{Int, Str};
+    let s = |x: &str| Str(x.to_string());
+    let opt = |x: &str| if x.is_empty() { None } else { Some(Str(x.to_string())) };
+    match err {
+        CalibrationError::File { file, field, reason } => {
             let field = opt(&field.to_string()).map(|f| ("field", f));
             ("calibration", [("file", s(file))].into_iter().chain(field).chain([("reason", s(reason))]).collect())
         }
-        Error::RzSingular { a_hat } => ("rz_singular", vec![("a_hat", Float(*a_hat))]),
-        Error::Unreachable { position_residual, .. } => {
-            ("unreachable", vec![("argument", s("pose")), ("residual", Float(*position_residual))])
-        }
-        Error::InvalidPose { what, index, reason } => {
+        CalibrationError::InvalidPose { what, index, reason } => {
             ("invalid_pose", vec![("argument", s(what)), ("index", Int(*index)), ("reason", s(reason))])
         }
-        Error::DegenerateMotion { poses, reason } => {
+        CalibrationError::DegenerateMotion { poses, reason } => {
             ("degenerate_motion", vec![("count", Int(*poses)), ("reason", s(reason))])
         }
+        CalibrationError::Core(e) => describe(e),
     }
+}
+
+/// The kind and attributes of a simulator error: its own variants, the lower error's otherwise.
+fn describe_sim(err: &SimError) -> Described {
+    use Value::{Float, Str};
+    let s = |x: &str| Str(x.to_string());
+    let opt = |x: &str| if x.is_empty() { None } else { Some(Str(x.to_string())) };
+    match err {
+        SimError::Scenario { key, reason } => {
+            ("scenario", opt(&key.to_string()).map(|k| ("key", k)).into_iter().chain([("reason", s(reason))]).collect())
+        }
+        SimError::Urdf { file, message } => ("urdf", vec![("file", s(file)), ("reason", s(message))]),
+        SimError::Unreachable { position_residual, .. } => {
+            ("unreachable", vec![("argument", s("pose")), ("residual", Float(*position_residual))])
+        }
+        SimError::Core(e) => describe(e),
+        SimError::Vision(e) => describe_vision(e),
+        SimError::Calibration(e) => describe_calibration(e),
+    }
+}
+
+/// The exception of an error of any layer: the class from [`Located::is_degenerate`], the
+/// location from [`Located::location`], the kind and attributes `described` (each layer's
+/// `describe_*`), the message the error's `Display` (with the scenario key among a core
+/// error's remedies, [`Error::message_with_remedy`]).
+fn py_error<E: Located>(err: &E, described: Described) -> PyError {
+    let class = if err.is_degenerate() { Class::Degenerate } else { Class::InvalidInput };
+    let (kind, mut attributes) = described;
+    attributes.extend(err.location().map(|at| ("location", Value::Location(at))));
+    // Python users pass depths to scenarios too: the remedy names the scenario key.
+    let message = err.core().map_or_else(|| err.to_string(), |core| core.message_with_remedy(DEPTHS_REMEDY));
+    PyError { class, message, kind: Some(kind), attributes }
 }
 
 impl From<&Error> for PyError {
     fn from(err: &Error) -> Self {
-        let class = if err.is_degenerate() { Class::Degenerate } else { Class::InvalidInput };
-        let (kind, mut attributes) = describe(err);
-        attributes.extend(err.location().map(|at| ("location", Value::Location(at))));
-        // Python users pass depths to scenarios too: the remedy names the scenario key.
-        let message = err.message_with_remedy(DEPTHS_REMEDY);
-        Self { class, message, kind: Some(kind), attributes }
+        py_error(err, describe(err))
     }
 }
 
-/// `DegenerateGeometry` for scene geometry ([`Error::is_degenerate`]), `InvalidInput`
+impl From<&VisionError> for PyError {
+    fn from(err: &VisionError) -> Self {
+        py_error(err, describe_vision(err))
+    }
+}
+
+impl From<&CalibrationError> for PyError {
+    fn from(err: &CalibrationError) -> Self {
+        py_error(err, describe_calibration(err))
+    }
+}
+
+impl From<&SimError> for PyError {
+    fn from(err: &SimError) -> Self {
+        py_error(err, describe_sim(err))
+    }
+}
+
+/// `DegenerateGeometry` for scene geometry ([`Located::is_degenerate`]), `InvalidInput`
 /// otherwise, with the error's fields as attributes: `?` on a `crate::Result` in a binding.
 impl From<Error> for PyErr {
     fn from(err: Error) -> PyErr {
+        PyError::from(&err).into()
+    }
+}
+
+/// As a core error's: `?` on a vision `Result` in a binding.
+impl From<VisionError> for PyErr {
+    fn from(err: VisionError) -> PyErr {
+        PyError::from(&err).into()
+    }
+}
+
+/// As a core error's: `?` on a calibration `Result` in a binding.
+impl From<CalibrationError> for PyErr {
+    fn from(err: CalibrationError) -> PyErr {
+        PyError::from(&err).into()
+    }
+}
+
+/// As a core error's: `?` on a simulator's `Result` in a binding.
+impl From<SimError> for PyErr {
+    fn from(err: SimError) -> PyErr {
         PyError::from(&err).into()
     }
 }

@@ -18,9 +18,9 @@ use crate::vision::image::{GreyBuffer, GreyImage, check_dimensions, view};
 const EXPECTED: &str = "a uint8 NumPy array: grey (height, width) or (height, width, 1), colour (height, width, 3) \
                         or (height, width, 4) with alpha";
 
-/// `InvalidInput("{what}: {reason}")`, the core's `Error::InvalidImage` (kind `invalid_image`).
+/// `InvalidInput("{what}: {reason}")`, the vision layer's `VisionError::InvalidImage` (kind `invalid_image`).
 pub(super) fn image_error(what: &str, reason: String) -> PyErr {
-    crate::Error::InvalidImage { what: what.to_string(), reason }.into()
+    crate::vision::VisionError::InvalidImage { what: what.to_string(), reason }.into()
 }
 
 /// A grey image read from Python: the array itself (C-contiguous grey) or its conversion.

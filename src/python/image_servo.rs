@@ -106,7 +106,9 @@ fn split_options<'py>(
 /// target's names the argument.
 fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageTargetKind>> {
     (spec.image)(args).map_err(|e| match e {
-        crate::Error::InvalidParameter { name, reason } => invalid_argument(name, format!("{name}: {reason}")),
+        crate::vision::VisionError::Core(crate::Error::InvalidParameter { name, reason }) => {
+            invalid_argument(name, format!("{name}: {reason}"))
+        }
         other => other.into(),
     })
 }
@@ -196,7 +198,7 @@ impl PyImageServo {
         let image = image.buffer("image")?;
         let (step, found, pixels, stopped_early) = self.inner.detached(py, |pipeline| {
             let step = pipeline.step(&image)?;
-            Ok::<_, crate::Error>((
+            Ok::<_, crate::vision::VisionError>((
                 step,
                 pipeline.found().to_vec(),
                 pipeline.pixels().to_vec(),

@@ -104,7 +104,9 @@ fn fk<'py>(
     let q = joints_arg(joints, "joints", &model)?;
     // Within the joint limits (1e300 rad is no pose of the arm).
     model.check_limits(&q).map_err(|e| match e {
-        crate::Error::InvalidParameter { reason, .. } => invalid_argument("joints", format!("joints: {reason}")),
+        crate::sim::SimError::Core(crate::Error::InvalidParameter { reason, .. }) => {
+            invalid_argument("joints", format!("joints: {reason}"))
+        }
         e => e.into(),
     })?;
     from_matrix(py, &model.fk(&q)?.to_homogeneous())

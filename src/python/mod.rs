@@ -3,7 +3,8 @@
 //! exception hierarchy; no panic crosses into Python.
 //!
 //! Each binding file covers one area and adds its classes and functions to the module with
-//! its `register`; errors convert with `?` (`impl From<crate::Error> for PyErr` in `errors`).
+//! its `register`; errors convert with `?` (`impl From<E> for PyErr` in `errors`, for the error
+//! of every layer).
 
 mod args;
 mod arrays;

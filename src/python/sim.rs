@@ -83,7 +83,7 @@ fn scenario_value(d: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
 /// [`scenario_value`] of the item `index` of a batch: keys as the batch's validation names
 /// them (`[3].control.gain`).
 fn scenario_value_at(d: &Bound<'_, PyAny>, index: Option<usize>) -> PyResult<serde_json::Value> {
-    let at = |key: crate::Location, reason: String| crate::Error::Scenario {
+    let at = |key: crate::Location, reason: String| crate::sim::SimError::Scenario {
         key: match index {
             Some(i) => key.under_index(i),
             None => key,
@@ -94,7 +94,7 @@ fn scenario_value_at(d: &Bound<'_, PyAny>, index: Option<usize>) -> PyResult<ser
     // and 300 MB to be refused as too much text).
     if let Ok(n) = d.get_item("object").and_then(|o| o.get_item("points")).and_then(|p| p.len()) {
         check_point_count(n).map_err(|e| match e {
-            crate::Error::Scenario { key, reason } => at(key, reason),
+            crate::sim::SimError::Scenario { key, reason } => at(key, reason),
             other => other,
         })?;
     }
@@ -549,7 +549,7 @@ impl BatchTable {
     }
 
     /// A run's row: its summary, or status "error" and the message.
-    fn push(&mut self, result: &crate::Result<crate::sim::outcome::Summary>) {
+    fn push(&mut self, result: &crate::sim::error::Result<crate::sim::outcome::Summary>) {
         let s = match result {
             Ok(s) => s,
             Err(e) => return self.push_error(e),
@@ -566,7 +566,7 @@ impl BatchTable {
     }
 
     /// A run that failed on the way: status "error" and its message.
-    fn push_error(&mut self, e: &crate::Error) {
+    fn push_error(&mut self, e: &crate::sim::SimError) {
         self.status.push("error".to_string());
         self.message.push(e.to_string());
         self.iterations.push(0);

@@ -8,7 +8,7 @@ use numpy::{PyArray1, PyArray3, PyArrayMethods};
 use pyo3::prelude::*;
 
 use super::image_arg::image_arg;
-use crate::error::Result;
+use crate::vision::error::Result;
 use crate::vision::image::{GreyBuffer, Pixels};
 use crate::vision::tags::{MAX_DECIMATION, Tag, TagDecoder, TagFamily, TagReport};
 

@@ -8,8 +8,9 @@ use std::time::Duration;
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::parallel::pool;
+use crate::sim::error::{Result, SimError};
 use crate::sim::scenario::{FileAccess, Scenario};
 use crate::sim::{SimulationConfig, Summary, simulate};
 
@@ -76,8 +77,8 @@ fn json_batch_on_pool(
             .find_map_first(|(i, t)| Scenario::config_from_json_with(t, access).err().map(|e| (i, e)));
         if let Some((i, err)) = first_error {
             return Err(match err {
-                Error::Scenario { key, reason } => Error::Scenario { key: key.under_index(i), reason },
-                other => Error::Scenario { key: crate::Location::root().then_index(i), reason: other.to_string() },
+                SimError::Scenario { key, reason } => SimError::Scenario { key: key.under_index(i), reason },
+                other => SimError::Scenario { key: crate::Location::root().then_index(i), reason: other.to_string() },
             });
         }
         Ok(texts.par_iter().map(|t| run_one(t, access, watch)).collect())
@@ -86,7 +87,7 @@ fn json_batch_on_pool(
 
 fn run_one(text: &str, access: FileAccess, watch: &BatchWatch) -> Result<Summary> {
     if watch.is_cancelled() {
-        return Err(cancelled());
+        return Err(cancelled().into());
     }
     match Scenario::config_from_json_with(text, access) {
         Ok(config) => run_config(config, watch),
@@ -99,7 +100,7 @@ fn run_one(text: &str, access: FileAccess, watch: &BatchWatch) -> Result<Summary
 
 fn run_config(mut config: SimulationConfig, watch: &BatchWatch) -> Result<Summary> {
     if watch.is_cancelled() {
-        return Err(cancelled());
+        return Err(cancelled().into());
     }
     config.record = false;
     let result = simulate(&config, &mut |_, _| !watch.is_cancelled()).map(|o| o.summary);
@@ -190,7 +191,7 @@ mod tests {
         let mut bad = texts.clone();
         bad[1] = bad[1].replace("\"gain\":1.0", "\"gain\":-1.0");
         match run_json_batch(&bad, None) {
-            Err(Error::Scenario { key, .. }) => assert_eq!(key.to_string(), "[1].control.gain"),
+            Err(SimError::Scenario { key, .. }) => assert_eq!(key.to_string(), "[1].control.gain"),
             other => panic!("{other:?}"),
         }
     }

@@ -5,7 +5,8 @@ use nalgebra::Matrix3;
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, check_finite};
+use crate::sim::error::Result;
 use crate::sim::scene::ImageSize;
 
 /// A piecewise-linear schedule of the intrinsics in time (a zoom; `zoom = { ... }` in a
@@ -70,10 +71,12 @@ impl CameraModel {
         if let Some(s) = self.image
             && !(s.width.is_finite() && s.height.is_finite() && s.width > 0.0 && s.height > 0.0)
         {
-            return Err(Error::InvalidParameter { name: "camera", reason: "width and height must be > 0".into() });
+            return Err(
+                Error::InvalidParameter { name: "camera", reason: "width and height must be > 0".into() }.into()
+            );
         }
         let Some(z) = &self.zoom else { return Ok(()) };
-        let bad = |reason: String| Err(Error::InvalidParameter { name: "camera.zoom", reason });
+        let bad = |reason: String| Err(Error::InvalidParameter { name: "camera.zoom", reason }.into());
         if !self.distortion.is_identity() {
             return bad(
                 "a zoom lens's distortion changes with the focal length: give distortion or zoom, not both".into()
@@ -100,13 +103,13 @@ impl CameraModel {
     fn at_knot(&self, i: usize) -> Result<Intrinsics> {
         let k = &self.intrinsics;
         let Some(z) = &self.zoom else { return Ok(*k) };
-        Intrinsics::new(
+        Ok(Intrinsics::new(
             z.fku[i],
             z.fkv[i],
             z.u0.as_ref().map_or(k.u0(), |u| u[i]),
             z.v0.as_ref().map_or(k.v0(), |v| v[i]),
             k.theta(),
-        )
+        )?)
     }
 
     /// The intrinsics at time `t`.
@@ -114,13 +117,13 @@ impl CameraModel {
         let k = &self.intrinsics;
         let Some(z) = &self.zoom else { return Ok(*k) };
         let f = |v: &[f64]| interpolate(&z.times, v, t);
-        Intrinsics::new(
+        Ok(Intrinsics::new(
             f(&z.fku),
             f(&z.fkv),
             z.u0.as_deref().map_or(k.u0(), f),
             z.v0.as_deref().map_or(k.v0(), f),
             k.theta(),
-        )
+        )?)
     }
 
     /// The intrinsics at every knot of the schedule (one matrix without zoom).

@@ -6,7 +6,8 @@ use nalgebra::{Isometry3, Vector3};
 use crate::core::camera::Intrinsics;
 use crate::core::depth::{ResectionDepths, depths_from_translation};
 pub use crate::core::depth_estimator::DepthEstimator;
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::sim::error::Result;
 use crate::sim::scene::{Observation, Scene};
 
 /// Builds a fresh [`DepthEstimator`] for each run, from the scene and the reference image.
@@ -40,7 +41,8 @@ impl DepthEstimatorFactory for TranslationPairDepths {
                 return Err(Error::InvalidParameter {
                     name: "depth_estimation",
                     reason: format!("point {i} is not seen by the translation pair (behind the camera or occluded)"),
-                });
+                }
+                .into());
             }
         }
         let in_pair = |e: Error| Error::InvalidParameter {

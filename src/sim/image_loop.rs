@@ -9,7 +9,8 @@ use nalgebra::Isometry3;
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::sim::error::Result;
 use crate::sim::scene::{ImageSize, Observation, Scene};
 use crate::vision::GreyImage;
 use crate::vision::detector::{Detection, Detector, Expected};
@@ -32,7 +33,7 @@ pub(crate) fn scene_object(scene: &Scene) -> SceneObject<'_> {
 /// The target of a scene and a fresh detector for it: the entry of [`TARGETS`](crate::vision::TARGETS)
 /// that shows the scene's object.
 pub(crate) fn scene_vision(scene: &Scene, config: &RenderConfig) -> Result<SceneVision> {
-    targets::scene_vision(&scene_object(scene), config)
+    Ok(targets::scene_vision(&scene_object(scene), config)?)
 }
 
 /// What tracking gives the run, per point.
@@ -87,8 +88,11 @@ impl ImageLoop {
             match (hit, obs.pixels.get_mut(i)) {
                 (Some(d), Some(pixel)) if d.found => *pixel = d.pixel,
                 _ => {
-                    let e = Error::InvalidImage { what: "reference".into(), reason: format!("point {i} not found") };
-                    return Err(reference_error(&e));
+                    let e = crate::vision::VisionError::InvalidImage {
+                        what: "reference".into(),
+                        reason: format!("point {i} not found"),
+                    };
+                    return Err(reference_error(&e).into());
                 }
             }
         }
@@ -157,7 +161,7 @@ fn per_point<'a>(points: &[TargetPoint], detections: &'a [Detection]) -> Vec<Opt
     points.iter().map(|p| by_id.get(&p.id).copied()).collect()
 }
 
-fn reference_error(e: &Error) -> Error {
+fn reference_error(e: &dyn std::fmt::Display) -> Error {
     Error::InvalidParameter { name: "vision", reason: format!("the reference image's dots cannot be detected: {e}") }
 }
 
@@ -208,13 +212,13 @@ mod tests {
     }
 
     impl Detector for Scripted {
-        fn start(&mut self, _: &GreyView<'_>, expected: &[Expected]) -> Result<Vec<Detection>> {
+        fn start(&mut self, _: &GreyView<'_>, expected: &[Expected]) -> crate::vision::error::Result<Vec<Detection>> {
             self.calls.lock().unwrap().0 += 1;
             self.expected = expected.to_vec();
             self.detect_all()
         }
 
-        fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
+        fn detect(&mut self, image: &GreyView<'_>) -> crate::vision::error::Result<Vec<Detection>> {
             assert_eq!(image.dimensions(), (320, 240));
             self.calls.lock().unwrap().1 += 1;
             self.detect_all()
@@ -222,7 +226,7 @@ mod tests {
     }
 
     impl Scripted {
-        fn detect_all(&self) -> Result<Vec<Detection>> {
+        fn detect_all(&self) -> crate::vision::error::Result<Vec<Detection>> {
             let moved =
                 |e: &Expected| Detection { id: e.id, pixel: [e.pixel[0] + 0.3, e.pixel[1] + 0.4], found: e.id != 1 };
             let mut out: Vec<Detection> = self.expected.iter().rev().map(moved).collect();

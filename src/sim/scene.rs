@@ -6,7 +6,8 @@ use rapier3d_f64::prelude::{ColliderBuilder, PhysicsWorld, QueryFilter, Ray, Rig
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, distort_normalised};
-use crate::error::{Error, Result, check_finite};
+use crate::error::{Error, check_finite};
+use crate::sim::error::Result;
 
 /// A rigid body that can hide feature points (a plate or box carrying the dots, a ball, a
 /// cylinder), fixed in F*.
@@ -106,7 +107,8 @@ impl Scene {
                 return Err(Error::InvalidParameter {
                     name: "object.bodies",
                     reason: format!("body {i}: sizes must be finite and > 0 and its pose finite"),
-                });
+                }
+                .into());
             }
         }
         Ok(Self::build(points, bodies))
@@ -142,13 +144,15 @@ impl Scene {
                 what: "normals",
                 expected: format!("one per point ({})", self.points.len()),
                 got: normals.len().to_string(),
-            });
+            }
+            .into());
         }
         if let Some(i) = normals.iter().position(|n| !n.iter().all(|v| v.is_finite()) || n.iter().all(|&v| v == 0.0)) {
             return Err(Error::InvalidParameter {
                 name: "normals",
                 reason: format!("normal {i} must be finite and non-zero"),
-            });
+            }
+            .into());
         }
         self.normals = Some(normals);
         Ok(self)
@@ -165,7 +169,8 @@ impl Scene {
                 what: "tags",
                 expected: format!("the scene's {} points as the tags' corners", self.points.len()),
                 got: format!("{} corners", tags.points().len()),
-            });
+            }
+            .into());
         }
         self.tags = Some(tags);
         Ok(self)

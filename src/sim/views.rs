@@ -6,8 +6,9 @@
 
 use nalgebra::Isometry3;
 
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Short};
 use crate::sim::config::SimulationConfig;
+use crate::sim::error::Result;
 use crate::sim::image_loop::{pixel_size, scene_vision};
 use crate::sim::scene::Observation;
 use crate::vision::{CameraView, GreyImage, Renderer};
@@ -45,7 +46,8 @@ pub fn render_view(config: &SimulationConfig, shot: Shot, pose: Option<&Isometry
                 return Err(Error::InvalidParameter {
                     name: "time",
                     reason: format!("must be >= 0 s, got {}", Short(time)),
-                });
+                }
+                .into());
             }
             // The simulator's image of iteration i is frame i + 1.
             let frame = (time / config.dt).round() as u64 + 1;

@@ -4,8 +4,8 @@
 //! is decoded, the decoder's memory bounded, a truncated JPEG refused, colour by Rec. 601
 //! luma), but only PNG or JPEG, and only the one the message says when it says one.
 
-use crate::error::{Error, Result};
 use crate::input_file::MAX_IMAGE_BYTES;
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyImage, decode_image};
 
 /// The compression of a frame.
@@ -55,8 +55,8 @@ pub fn decode_compressed(what: &str, bytes: &[u8], expected: Option<Compression>
     decode_image(what, bytes)
 }
 
-fn invalid(what: &str, reason: String) -> Error {
-    Error::InvalidImage { what: what.to_string(), reason }
+fn invalid(what: &str, reason: String) -> VisionError {
+    VisionError::InvalidImage { what: what.to_string(), reason }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ pub mod dot_tracking;
 mod tag_regions;
 pub mod tags;
 
-use crate::error::Result;
+use crate::vision::error::Result;
 use crate::vision::image::GreyView;
 
 /// Where a point is expected in the first image: its identity and a pixel near it.

@@ -14,9 +14,10 @@
 use imageproc::region_labelling::{Connectivity, connected_components};
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::vision::background::TileThresholds;
 use crate::vision::centroid::{MARGIN, RingFit, Weighted, weighted_centroid};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, GreyImage, MAX_IMAGE_PIXELS, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 use crate::vision::runs::{Component, label};
@@ -127,7 +128,7 @@ pub fn detect_dots<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> R
     check_image("image", image)?;
     let pixels = u64::from(image.width()) * u64::from(image.height());
     if pixels > MAX_DOT_PIXELS {
-        return Err(Error::InvalidImage {
+        return Err(VisionError::InvalidImage {
             what: "image".into(),
             reason: format!(
                 "{} x {} pixels: too large for the dot detector (at most {MAX_DOT_PIXELS} pixels, 2^26: \
@@ -154,7 +155,7 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Ve
     if let [lo, hi] = labelling.range
         && lo == hi
     {
-        return Err(Error::InvalidImage {
+        return Err(VisionError::InvalidImage {
             what: "image".into(),
             reason: format!("uniform image (every pixel is {lo}): no dot can stand out"),
         });
@@ -189,17 +190,18 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Ve
 
 fn check_config(config: &DetectConfig) -> Result<()> {
     if config.max_area.is_some_and(|m| m < config.min_area) {
-        return Err(Error::InvalidParameter { name: "max_area", reason: "must be >= min_area".into() });
+        return Err(Error::InvalidParameter { name: "max_area", reason: "must be >= min_area".into() }.into());
     }
     if !(0.0..=1.0).contains(&config.min_fill) {
         return Err(Error::InvalidParameter {
             name: "min_fill",
             reason: format!("must be in [0, 1], got {:?}", config.min_fill),
-        });
+        }
+        .into());
     }
     if config.max_ring_residual.is_nan() || config.max_ring_residual < 0.0 {
         let reason = format!("must be >= 0, got {:?}", config.max_ring_residual);
-        return Err(Error::InvalidParameter { name: "max_ring_residual", reason });
+        return Err(Error::InvalidParameter { name: "max_ring_residual", reason }.into());
     }
     Ok(())
 }
@@ -422,7 +424,7 @@ mod tests {
     #[test]
     fn empty_and_uniform_images_are_errors() {
         let black = GreyImage::new(40, 30);
-        assert!(matches!(detect_dots(&black, &DetectConfig::default()), Err(Error::InvalidImage { .. })));
+        assert!(matches!(detect_dots(&black, &DetectConfig::default()), Err(VisionError::InvalidImage { .. })));
         let grey = GreyImage::from_pixel(40, 30, image::Luma([128]));
         assert!(detect_dots(&grey, &DetectConfig::default()).is_err());
         let mut one = black.clone();
@@ -561,7 +563,7 @@ mod tests {
         assert_eq!(found(DetectConfig::default()), vec![20]);
         for bad in [-0.1, 1.5, f64::NAN] {
             let e = detect_dots(&image, &DetectConfig { min_fill: bad, ..Default::default() }).unwrap_err();
-            assert!(matches!(e, Error::InvalidParameter { name: "min_fill", .. }), "{e}");
+            assert!(matches!(e, VisionError::Core(Error::InvalidParameter { name: "min_fill", .. })), "{e}");
         }
     }
 

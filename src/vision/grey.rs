@@ -14,7 +14,7 @@
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyImage, check_dimensions};
 
 /// The order of the colour channels of a pixel (an alpha channel, if any, comes last).
@@ -154,8 +154,8 @@ fn luma(px: [u8; 3], [a, b, c]: [u32; 3]) -> u8 {
     ((l + (1 << 14)) >> 15) as u8
 }
 
-fn invalid(what: &str, reason: String) -> Error {
-    Error::InvalidImage { what: what.to_string(), reason }
+fn invalid(what: &str, reason: String) -> VisionError {
+    VisionError::InvalidImage { what: what.to_string(), reason }
 }
 #[cfg(test)]
 #[allow(clippy::unwrap_used, clippy::expect_used)]

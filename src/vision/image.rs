@@ -5,7 +5,7 @@ mod png_file;
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::vision::error::{Result, VisionError};
 
 /// An 8-bit grey image, row-major: pixel `(u, v)` is `data[v * width + u]`.
 pub type GreyImage = ::image::GrayImage;
@@ -72,8 +72,8 @@ pub fn check_dimensions(what: &str, width: u64, height: u64) -> Result<()> {
     Ok(())
 }
 
-fn image_error(what: &str, reason: impl Into<String>) -> Error {
-    Error::InvalidImage { what: what.to_string(), reason: reason.into() }
+fn image_error(what: &str, reason: impl Into<String>) -> VisionError {
+    VisionError::InvalidImage { what: what.to_string(), reason: reason.into() }
 }
 
 /// A grey image from row-major data; `what` names the argument in errors.

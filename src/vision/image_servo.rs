@@ -7,11 +7,12 @@
 
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::{Distortion, undistort_point};
-use crate::error::{Error, Result, check_finite_points};
+use crate::error::{Error, check_finite_points};
 use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, ServoStep};
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, GreyView, Pixels, view_of};
 use crate::vision::tags::{TagDecoder, TagFamily};
 use crate::vision::tracker::TrackerConfig;
@@ -114,7 +115,7 @@ impl ImageTargetKind for ImageTarget {
     fn select(&self, found: Vec<Detection>) -> Result<Vec<Detection>> {
         let ImageTarget::Tags { ids: Some(ids), .. } = self else { return Ok(found) };
         if let Some(missing) = ids.iter().find(|&&t| !found.iter().any(|d| d.id / 4 == t)) {
-            return Err(Error::InvalidImage {
+            return Err(VisionError::InvalidImage {
                 what: "reference_image".into(),
                 reason: format!("tag {missing} (of the target's ids) is not decoded in it"),
             });
@@ -133,7 +134,8 @@ impl ImageTargetKind for ImageTarget {
                 what: "first_points",
                 expected: format!("{} points (one per reference point)", reference_points.len()),
                 got: format!("{} points", first.len()),
-            });
+            }
+            .into());
         }
         Ok(())
     }
@@ -237,7 +239,7 @@ impl ImageServo {
             // none can: a first frame without the target (blank, dark, out of focus) is a lost
             // target, no point found, and the servo's verdict lost_features with a zero twist.
             let d = match self.detector.start(&image, &self.first) {
-                Err(Error::InvalidImage { what, .. }) if what == "initial_pixels" => Vec::new(),
+                Err(VisionError::InvalidImage { what, .. }) if what == "initial_pixels" => Vec::new(),
                 other => other.map_err(|e| hints_named(e, "first_points"))?,
             };
             self.started = true;
@@ -250,7 +252,7 @@ impl ImageServo {
                 self.found[i] = true;
             }
         }
-        self.servo.step(&self.pixels, Some(&self.found), None)
+        Ok(self.servo.step(&self.pixels, Some(&self.found), None)?)
     }
 
     /// The points' identities, in the session's order.
@@ -282,13 +284,13 @@ impl ImageServo {
 
 /// A detector's error about its hints (the tracker's `initial_pixels`) under the name the
 /// pipeline's caller gave them.
-fn hints_named(error: Error, name: &'static str) -> Error {
+fn hints_named(error: VisionError, name: &'static str) -> VisionError {
     match error {
-        Error::InvalidImage { what, reason } if what == "initial_pixels" => {
-            Error::InvalidImage { what: name.into(), reason }
+        VisionError::InvalidImage { what, reason } if what == "initial_pixels" => {
+            VisionError::InvalidImage { what: name.into(), reason }
         }
-        Error::NonFinitePoint { what: "initial_pixels", row, column } => {
-            Error::NonFinitePoint { what: name, row, column }
+        VisionError::Core(Error::NonFinitePoint { what: "initial_pixels", row, column }) => {
+            Error::NonFinitePoint { what: name, row, column }.into()
         }
         other => other,
     }
@@ -298,7 +300,7 @@ fn hints_named(error: Error, name: &'static str) -> Error {
 fn reference_points(image: &GreyView<'_>, detector: &mut dyn Detector, hints: &[Expected]) -> Result<Vec<Detection>> {
     let found: Vec<Detection> = detector.start(image, hints)?.into_iter().filter(|d| d.found).collect();
     if found.is_empty() {
-        return Err(Error::InvalidImage {
+        return Err(VisionError::InvalidImage {
             what: "reference_image".into(),
             reason: "the target was not found in it".into(),
         });
@@ -311,7 +313,7 @@ fn distinct_ids(reference: &[Detection]) -> Result<Vec<u32>> {
     let ids: Vec<u32> = reference.iter().map(|d| d.id).collect();
     for (i, id) in ids.iter().enumerate() {
         if ids[..i].contains(id) {
-            return Err(Error::InvalidImage {
+            return Err(VisionError::InvalidImage {
                 what: "reference_image".into(),
                 reason: format!("point identity {id} found twice (point {i} and an earlier one)"),
             });
@@ -465,7 +467,7 @@ mod tests {
             config,
             ServoDepths::Constant(0.5),
         );
-        assert!(matches!(err, Err(Error::InvalidImage { .. })));
+        assert!(matches!(err, Err(VisionError::InvalidImage { .. })));
     }
 
     /// Tags: the reference's corners by identity, no clicks; a tag left out of a frame drops
@@ -524,7 +526,7 @@ mod tests {
         for bad in [0, 9] {
             let target = ImageTarget::Tags { family, ids: None, decimation: Some(bad) };
             let err = ImageServo::new(&reference, &target, config(), ServoDepths::Constant(0.5)).unwrap_err();
-            assert!(matches!(err, Error::InvalidParameter { name: "decimation", .. }), "{err}");
+            assert!(matches!(err, VisionError::Core(Error::InvalidParameter { name: "decimation", .. })), "{err}");
         }
     }
 }

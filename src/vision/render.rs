@@ -27,7 +27,8 @@ use self::noise::{Noise, frame_seed, quantised_pool};
 use self::raster::{Paint, gaussian_kernel};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Short};
+use crate::vision::error::Result;
 use crate::vision::image::GreyImage;
 use crate::vision::polarity::Polarity;
 
@@ -77,7 +78,7 @@ impl Default for RenderConfig {
 impl RenderConfig {
     /// Checks the values.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name, reason: String| Err(Error::InvalidParameter { name, reason });
+        let bad = |name, reason: String| Err(Error::InvalidParameter { name, reason }.into());
         if !(self.dot_radius.is_finite() && self.dot_radius > 0.0) {
             return bad("dot_radius", format!("must be > 0 metres, got {}", Short(self.dot_radius)));
         }
@@ -155,7 +156,7 @@ impl Renderer {
         let (width, height) = view.size;
         if width == 0 || height == 0 || u64::from(width) * u64::from(height) > MAX_RENDER_PIXELS {
             let reason = format!("{width} x {height}: at least 1 x 1 and at most {MAX_RENDER_PIXELS} pixels (2^28)");
-            return Err(Error::InvalidParameter { name: "image size", reason });
+            return Err(Error::InvalidParameter { name: "image size", reason }.into());
         }
         let n = target.point_count();
         check_flags("visible", visible.map_or(n, <[bool]>::len), n)?;
@@ -199,7 +200,8 @@ fn check_flags(what: &'static str, got: usize, expected: usize) -> Result<()> {
     if got == expected {
         return Ok(());
     }
-    Err(Error::Shape { what, expected: format!("{expected} flags (one per point)"), got: format!("{got} flags") })
+    Err(Error::Shape { what, expected: format!("{expected} flags (one per point)"), got: format!("{got} flags") }
+        .into())
 }
 
 #[cfg(test)]

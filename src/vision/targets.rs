@@ -36,10 +36,11 @@
 //! schema has each key, the image loop builds each target, `ImageServo`, `vsinv replay`, the
 //! ROS parameters and the stub take each name): they fail until the files agree.
 
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::vision::detector::Detector;
 use crate::vision::detector::dot_tracking::DotTracking;
 use crate::vision::detector::tags::TagDetector;
+use crate::vision::error::Result;
 use crate::vision::image_servo::{ImageTarget, ImageTargetKind};
 use crate::vision::render::{Disc, RenderConfig};
 use crate::vision::tags::{MAX_DECIMATION, TagFamily};
@@ -126,7 +127,7 @@ impl TargetArgs {
         match self.get(name) {
             None => Ok(None),
             Some(ArgValue::Points(p)) => Ok(Some(p.clone())),
-            Some(_) => Err(expected(name, "approximate pixels (n, 2)")),
+            Some(_) => Err(expected(name, "approximate pixels (n, 2)").into()),
         }
     }
 }
@@ -327,7 +328,7 @@ fn dots_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
     let tracker = match args.get("tracker") {
         None => TrackerConfig::default(),
         Some(ArgValue::Tracker(t)) => *t,
-        Some(_) => return Err(expected("tracker", "the tracker's settings")),
+        Some(_) => return Err(expected("tracker", "the tracker's settings").into()),
     };
     Ok(Box::new(ImageTarget::Dots { reference_points, first_points, tracker }))
 }
@@ -339,16 +340,16 @@ fn tags_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
             let names = TagFamily::NAMES.map(|n| format!("{n:?}")).join(", ");
             Error::InvalidParameter { name: "family", reason: format!("expected one of {names}, got {name:?}") }
         })?,
-        Some(_) => return Err(expected("family", "a family's name")),
+        Some(_) => return Err(expected("family", "a family's name").into()),
     };
     let ids = match args.get("tag_ids") {
         None => None,
         Some(ArgValue::Ids(ids)) if ids.is_empty() => {
             let reason = "empty (None: every tag in the reference image)".into();
-            return Err(Error::InvalidParameter { name: "tag_ids", reason });
+            return Err(Error::InvalidParameter { name: "tag_ids", reason }.into());
         }
         Some(ArgValue::Ids(ids)) => Some(ids.clone()),
-        Some(_) => return Err(expected("tag_ids", "a sequence of tag ids (non-negative integers)")),
+        Some(_) => return Err(expected("tag_ids", "a sequence of tag ids (non-negative integers)").into()),
     };
     let decimation = match args.get("decimation") {
         None => None,
@@ -358,7 +359,7 @@ fn tags_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
                 Error::InvalidParameter { name: "decimation", reason }
             })?)
         }
-        Some(_) => return Err(expected("decimation", "an integer")),
+        Some(_) => return Err(expected("decimation", "an integer").into()),
     };
     Ok(Box::new(ImageTarget::Tags { family, ids, decimation }))
 }

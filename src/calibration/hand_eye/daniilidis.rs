@@ -17,7 +17,7 @@ use nalgebra::{SMatrix, SymmetricEigen, Vector3, Vector4};
 use super::Solution;
 use super::motions::{Motion, Rigid};
 use super::rotation::{quaternion, quaternion_product, rotation_from_quaternion, vector_part};
-use crate::error::{Error, Result};
+use crate::calibration::error::{CalibrationError, Result};
 
 /// The unit dual quaternion `(q, q')` of a rigid motion: `q` its rotation (`w >= 0`),
 /// `q' = (0, t) q / 2`.
@@ -48,7 +48,8 @@ fn normal_matrix(motions: &[Motion]) -> SMatrix<f64, 8, 8> {
 
 /// The camera-to-gripper transform by Daniilidis; `poses` is the number of stations.
 pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
-    let degenerate = |reason: &str| Error::DegenerateMotion { poses, reason: format!("Daniilidis: {reason}") };
+    let degenerate =
+        |reason: &str| CalibrationError::DegenerateMotion { poses, reason: format!("Daniilidis: {reason}") };
     let eigen = SymmetricEigen::new(normal_matrix(motions));
     let mut order: Vec<usize> = (0..8).collect();
     order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));

@@ -9,7 +9,8 @@ use nalgebra::{Matrix3, SymmetricEigen};
 use super::motions::{Motion, Rigid};
 use super::rotation::{rotation_angle, rotation_vector};
 use super::{HandEyeCalibration, HandEyeMethod};
-use crate::error::{Error, Result, Short};
+use crate::calibration::error::{CalibrationError, Result};
+use crate::error::Short;
 
 /// A gripper motion rotating less than this has no usable axis, degrees.
 pub const MIN_MOTION_ROTATION_DEG: f64 = 0.1;
@@ -79,14 +80,14 @@ impl AxisSpread {
                 "no gripper motion rotates by {MIN_MOTION_ROTATION_DEG} degrees or more (largest {} degrees): pure translations do not determine the camera's rotation on the flange; rotate the gripper between poses, about at least two different axes",
                 Short(self.max_rotation_deg)
             );
-            return Err(Error::DegenerateMotion { poses, reason });
+            return Err(CalibrationError::DegenerateMotion { poses, reason });
         }
         if !(self.spread_deg >= MIN_AXIS_SPREAD_DEG) {
             let reason = format!(
                 "the rotation axes of the gripper motions are (nearly) parallel: spread {:.3} degrees < {MIN_AXIS_SPREAD_DEG} degree; rotations about one axis leave the translation along it undetermined; rotate about at least two different axes",
                 self.spread_deg
             );
-            return Err(Error::DegenerateMotion { poses, reason });
+            return Err(CalibrationError::DegenerateMotion { poses, reason });
         }
         Ok(())
     }

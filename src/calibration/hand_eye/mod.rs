@@ -23,10 +23,10 @@
 //! | residuals, axis spread, agreement of the methods | `diagnostics.rs` | |
 //!
 //! **Refused.** Target poses not one per gripper pose ([`Error::Shape`]); a pose that is
-//! not a rigid transform within [`RIGID_TOLERANCE`] ([`Error::InvalidPose`], naming the
+//! not a rigid transform within [`RIGID_TOLERANCE`] ([`CalibrationError::InvalidPose`], naming the
 //! argument and the pose); fewer than 3 poses, no gripper motion rotating by
 //! [`MIN_MOTION_ROTATION_DEG`], or rotation axes spread by less than [`MIN_AXIS_SPREAD_DEG`]
-//! ([`Error::DegenerateMotion`]): rotations about one axis leave the translation along it
+//! ([`CalibrationError::DegenerateMotion`]): rotations about one axis leave the translation along it
 //! undetermined.
 //!
 //! ```
@@ -42,7 +42,7 @@
 //! }
 //! let calibration = calibrate_hand_eye(&gripper, &target, HandEyeMethod::ParkMartin)?;
 //! assert!((calibration.transform.to_homogeneous() - x.to_homogeneous()).amax() < 1e-9);
-//! # Ok::<(), vsinv::Error>(())
+//! # Ok::<(), vsinv::calibration::CalibrationError>(())
 //! ```
 
 mod daniilidis;
@@ -60,7 +60,8 @@ pub use motions::{MAX_POSE_TRANSLATION_M, MAX_POSES, RIGID_TOLERANCE};
 use motions::{Motion, Rigid, motions, rigid_poses};
 pub use tsai::TSAI_BAND;
 
-use crate::error::{Error, Result};
+use crate::calibration::error::{CalibrationError, Result};
+use crate::error::Error;
 
 /// A hand-eye calibration method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -103,7 +104,8 @@ impl HandEyeMethod {
                     "unknown hand-eye method {:?}: expected 'tsai', 'park' or 'daniilidis'",
                     name.chars().take(40).collect::<String>()
                 ),
-            }),
+            }
+            .into()),
         }
     }
 }
@@ -159,15 +161,17 @@ fn prepare(gripper_poses: &[Matrix4<f64>], target_poses: &[Matrix4<f64>]) -> Res
     let n = gripper_poses.len();
     if target_poses.len() != n {
         let expected = format!("{n} poses (one per gripper pose)");
-        return Err(Error::Shape { what: "target_poses", expected, got: format!("{} poses", target_poses.len()) });
+        return Err(
+            Error::Shape { what: "target_poses", expected, got: format!("{} poses", target_poses.len()) }.into()
+        );
     }
     if n > MAX_POSES {
         let expected = format!("at most {MAX_POSES} poses");
-        return Err(Error::Shape { what: "gripper_poses", expected, got: format!("{n} poses") });
+        return Err(Error::Shape { what: "gripper_poses", expected, got: format!("{n} poses") }.into());
     }
     if n < 3 {
         let reason = "at least 3 poses are needed (two motions about different axes)".to_string();
-        return Err(Error::DegenerateMotion { poses: n, reason });
+        return Err(CalibrationError::DegenerateMotion { poses: n, reason });
     }
     let (g, c) = (rigid_poses("gripper_poses", gripper_poses)?, rigid_poses("target_poses", target_poses)?);
     let motions = motions(&g, &c);
@@ -185,7 +189,7 @@ fn solve(method: HandEyeMethod, motions: &[Motion], spread: AxisSpread, poses: u
     let x = solution.x;
     if !(x.r.iter().chain(x.t.iter()).all(|v| v.is_finite())) {
         let reason = format!("{}: the solution is not finite", method.name());
-        return Err(Error::DegenerateMotion { poses, reason });
+        return Err(CalibrationError::DegenerateMotion { poses, reason });
     }
     let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(x.r));
     let transform = Isometry3::from_parts(Translation3::from(x.t), rotation);

@@ -6,7 +6,8 @@
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
-use crate::error::{Error, Result, Short};
+use crate::calibration::error::{CalibrationError, Result};
+use crate::error::Short;
 
 /// The largest deviation from a rigid transform a pose may have: `max |R^T R - I|` and the
 /// last row's distance to `(0, 0, 0, 1)` (float64 poses are orthonormal to ~1e-15; poses
@@ -58,7 +59,7 @@ pub(crate) fn rigid_poses(what: &'static str, poses: &[Matrix4<f64>]) -> Result<
 }
 
 fn rigid(what: &'static str, index: usize, m: &Matrix4<f64>) -> Result<Rigid> {
-    let bad = |reason: String| Error::InvalidPose { what, index, reason };
+    let bad = |reason: String| CalibrationError::InvalidPose { what, index, reason };
     for row in 0..4 {
         for column in 0..4 {
             if !m[(row, column)].is_finite() {

@@ -10,7 +10,7 @@ use super::Solution;
 use super::motions::{Motion, Rigid};
 use super::rotation::rotation_vector;
 use super::translation::solve_translation;
-use crate::error::{Error, Result};
+use crate::calibration::error::{CalibrationError, Result};
 
 /// The camera-to-gripper transform by Park-Martin; `poses` is the number of stations.
 pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
@@ -20,7 +20,10 @@ pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
     }
     let svd = m.transpose().svd(true, true);
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return Err(Error::DegenerateMotion { poses, reason: "Park-Martin: the SVD of M did not converge".into() });
+        return Err(CalibrationError::DegenerateMotion {
+            poses,
+            reason: "Park-Martin: the SVD of M did not converge".into(),
+        });
     };
     let s = svd.singular_values;
     // Rank 2 suffices (the third axis follows from the other two); parallel axes give rank 1.
@@ -29,7 +32,7 @@ pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
             "Park-Martin: M = sum beta alpha^T has rank 1 (sigma_2 / sigma_1 = {:.3e}): the rotation axes are parallel",
             if s[0] > 0.0 { s[1] / s[0] } else { 0.0 }
         );
-        return Err(Error::DegenerateMotion { poses, reason });
+        return Err(CalibrationError::DegenerateMotion { poses, reason });
     }
     // Singular values sorted descending: the sign goes on the smallest.
     let sign = (u * v_t).determinant().signum();

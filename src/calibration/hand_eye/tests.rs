@@ -4,6 +4,8 @@
 use nalgebra::{Isometry3, Matrix4, Vector3};
 
 use super::*;
+use crate::calibration::error::CalibrationError;
+use crate::error::Located;
 
 /// The true camera-to-gripper transform of the tests.
 fn truth() -> Isometry3<f64> {
@@ -90,9 +92,9 @@ fn axis_spread_is_the_angle_between_two_axes() {
 fn too_few_and_mismatched_poses_are_refused() {
     let (g, c) = stations(5, &truth());
     let err = calibrate_hand_eye(&g[..2], &c[..2], HandEyeMethod::TsaiLenz).unwrap_err();
-    assert!(matches!(err, Error::DegenerateMotion { poses: 2, .. }) && err.is_degenerate(), "{err}");
+    assert!(matches!(err, CalibrationError::DegenerateMotion { poses: 2, .. }) && err.is_degenerate(), "{err}");
     let err = calibrate_hand_eye(&g, &c[..4], HandEyeMethod::TsaiLenz).unwrap_err();
-    assert!(matches!(err, Error::Shape { what: "target_poses", .. }), "{err}");
+    assert!(matches!(err, CalibrationError::Core(Error::Shape { what: "target_poses", .. })), "{err}");
 }
 
 #[test]
@@ -110,7 +112,7 @@ fn non_rigid_poses_are_refused_naming_argument_and_index() {
         spoil(if what == "gripper_poses" { &mut g[index] } else { &mut c[index] });
         let err = calibrate_hand_eye(&g, &c, HandEyeMethod::ParkMartin).unwrap_err();
         match &err {
-            Error::InvalidPose { what: w, index: i, reason } => {
+            CalibrationError::InvalidPose { what: w, index: i, reason } => {
                 assert_eq!((*w, *i), (what, index));
                 assert!(reason.contains(words), "{err}");
             }
@@ -133,7 +135,10 @@ fn rotations_about_one_axis_are_refused() {
     }
     for method in HandEyeMethod::ALL {
         let err = calibrate_hand_eye(&g, &c, method).unwrap_err();
-        assert!(matches!(&err, Error::DegenerateMotion { poses: 6, reason } if reason.contains("parallel")), "{err}");
+        assert!(
+            matches!(&err, CalibrationError::DegenerateMotion { poses: 6, reason } if reason.contains("parallel")),
+            "{err}"
+        );
     }
 }
 
@@ -149,7 +154,7 @@ fn pure_translations_are_refused() {
     }
     let err = compare_hand_eye_methods(&g, &c).unwrap_err();
     assert!(
-        matches!(&err, Error::DegenerateMotion { reason, .. } if reason.contains("no gripper motion rotates")),
+        matches!(&err, CalibrationError::DegenerateMotion { reason, .. } if reason.contains("no gripper motion rotates")),
         "{err}"
     );
 }
@@ -168,7 +173,7 @@ fn tsai_without_motions_in_its_band_is_refused_and_the_others_still_compare() {
         c.push(((p * x).inverse() * target_in_base).to_homogeneous());
     }
     let err = calibrate_hand_eye(&g, &c, HandEyeMethod::TsaiLenz).unwrap_err();
-    assert!(matches!(&err, Error::DegenerateMotion { reason, .. } if reason.contains("Tsai-Lenz")), "{err}");
+    assert!(matches!(&err, CalibrationError::DegenerateMotion { reason, .. } if reason.contains("Tsai-Lenz")), "{err}");
     let agreement = compare_hand_eye_methods(&g, &c).unwrap();
     assert_eq!(agreement.calibrations.len(), 2);
     assert_eq!(agreement.failures[0].0, HandEyeMethod::TsaiLenz);
@@ -183,5 +188,8 @@ fn method_names() {
         assert_eq!(HandEyeMethod::from_name(method.name()), Ok(method));
     }
     assert_eq!(HandEyeMethod::from_name("Tsai_Lenz"), Ok(HandEyeMethod::TsaiLenz));
-    assert!(matches!(HandEyeMethod::from_name("horaud"), Err(Error::InvalidParameter { name: "method", .. })));
+    assert!(matches!(
+        HandEyeMethod::from_name("horaud"),
+        Err(CalibrationError::Core(Error::InvalidParameter { name: "method", .. }))
+    ));
 }

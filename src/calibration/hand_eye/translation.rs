@@ -5,7 +5,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::motions::Motion;
-use crate::error::{Error, Result};
+use crate::calibration::error::{CalibrationError, Result};
 
 /// Solves `(R_A - I) t = R_X t_B - t_A` over `motions` in least squares.
 pub(crate) fn solve_translation<'a>(
@@ -34,7 +34,7 @@ pub(crate) fn least_squares(
     let (largest, smallest) = (svd.singular_values[0], svd.singular_values[2]);
     // The normal matrix squares the condition number: 1e-12 here is 1e-6 on the motions.
     if !(smallest > 1e-12 * largest) {
-        return Err(Error::DegenerateMotion {
+        return Err(CalibrationError::DegenerateMotion {
             poses,
             reason: format!(
                 "the motions do not determine {what} (singular-value ratio {:.3e} of the normal equations); rotate about at least two different axes",
@@ -42,6 +42,8 @@ pub(crate) fn least_squares(
             ),
         });
     }
-    let x = svd.solve(rhs, 0.0).map_err(|reason| Error::DegenerateMotion { poses, reason: reason.to_string() })?;
+    let x = svd
+        .solve(rhs, 0.0)
+        .map_err(|reason| CalibrationError::DegenerateMotion { poses, reason: reason.to_string() })?;
     Ok(x)
 }

@@ -15,7 +15,7 @@ use super::Solution;
 use super::motions::{Motion, Rigid};
 use super::rotation::{quaternion, rotation_from_quaternion, vector_part};
 use super::translation::{least_squares, solve_translation};
-use crate::error::{Error, Result};
+use crate::calibration::error::{CalibrationError, Result};
 
 /// The range of `|P| = 2 sin(theta/2)` of the motions that the method uses: rotations of
 /// about 17.3 to 116.4 degrees.
@@ -50,7 +50,7 @@ pub(crate) fn solve(motions: &[Motion], poses: usize) -> Result<Solution> {
             "Tsai-Lenz: {} motion(s) rotate between 17.3 and 116.4 degrees (gripper and camera), 2 are needed; include larger rotations between poses, or use Park-Martin",
             used.len()
         );
-        return Err(Error::DegenerateMotion { poses, reason });
+        return Err(CalibrationError::DegenerateMotion { poses, reason });
     }
     let p_prime = least_squares(&normal, &rhs, poses, "the rotation")?;
     let p = p_prime * (2.0 / (1.0 + p_prime.norm_squared()).sqrt());

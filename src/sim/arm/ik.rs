@@ -15,7 +15,7 @@
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
 use super::{ArmLimits, ArmModel, ArmRobot};
-use crate::error::{Error, Result};
+use crate::sim::error::{Result, SimError};
 
 /// A solution: joints and how far their pose is from the target.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,7 +36,7 @@ pub struct IkSolution {
 /// An inverse kinematics solver.
 pub trait InverseKinematics {
     /// Joints within `limits` putting the end-effector of `model` at `target` (base frame),
-    /// starting from `seed` (one value per joint) when given; [`Error::Unreachable`] when no
+    /// starting from `seed` (one value per joint) when given; [`SimError::Unreachable`] when no
     /// seed converges.
     fn solve(
         &self,
@@ -239,7 +239,7 @@ impl InverseKinematics for DampedLeastSquaresIk {
             }
         }
         let (position_residual, rotation_residual) = best.map_or((f64::NAN, f64::NAN), |(_, e)| residuals(&e));
-        Err(Error::Unreachable {
+        Err(SimError::Unreachable {
             arm: model.name().to_string(),
             position: target.translation.vector.into(),
             thetau_deg: crate::core::se3::thetau_from_pose(target).map(f64::to_degrees),
@@ -292,7 +292,7 @@ mod tests {
         let far = Isometry3::translation(3.0, 0.0, 0.5);
         let solver = DampedLeastSquaresIk { seeds: 4, ..Default::default() };
         let err = solver.solve(&arm, &arm.limits(), &far, None).unwrap_err();
-        let Error::Unreachable { position_residual, .. } = err.clone() else { panic!("{err}") };
+        let SimError::Unreachable { position_residual, .. } = err.clone() else { panic!("{err}") };
         // The UR5 reaches about 0.95 m from the shoulder: at least 2 m short.
         assert!(position_residual > 1.9, "{err}");
         assert!(err.to_string().starts_with("pose: unreachable by ur5"), "{err}");

@@ -9,7 +9,7 @@
 use nalgebra::{Isometry3, Matrix6xX, Vector3};
 
 use super::model::{ArmModel, JointKind};
-use crate::error::Result;
+use crate::sim::error::Result;
 
 impl ArmModel {
     /// Pose of the end-effector link in the base frame at joint positions `q`.

@@ -22,7 +22,7 @@
 //! assert!(pose.translation.vector.norm() < 1.0 && arm.manipulability(&q)? > 0.0);
 //! let back = arm.ik(&pose, None)?; // joints within the limits reaching the same pose
 //! assert!(back.position_residual < 1e-9 && back.rotation_residual < 1e-9);
-//! # Ok::<(), vsinv::Error>(())
+//! # Ok::<(), vsinv::sim::SimError>(())
 //! ```
 
 mod ik;
@@ -36,7 +36,8 @@ pub use model::{ArmJoint, ArmLimits, ArmModel, JointKind};
 pub use servo::{ArmRobot, ArmStep, DEFAULT_DAMPING, damped_least_squares};
 pub use urdf_shape::{MAX_URDF_DEPTH, MAX_URDF_NODES};
 
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::sim::error::Result;
 
 /// Names of the built-in arms.
 pub const BUILTIN_ARMS: [&str; 2] = ["ur5", "panda"];
@@ -53,10 +54,10 @@ pub fn builtin_urdf(name: &str) -> Result<&'static str> {
 }
 
 fn builtin_entry(name: &str) -> Result<(&'static str, &'static str, &'static str)> {
-    BUILTIN.into_iter().find(|(n, _, _)| *n == name).ok_or_else(|| Error::InvalidParameter {
+    Ok(BUILTIN.into_iter().find(|(n, _, _)| *n == name).ok_or_else(|| Error::InvalidParameter {
         name: "arm",
         reason: format!("unknown built-in arm `{name}` (built-in: {})", BUILTIN_ARMS.join(", ")),
-    })
+    })?)
 }
 
 impl ArmModel {

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Short};
+use crate::sim::error::{Result, SimError};
 
 /// How an actuated joint moves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,8 +105,8 @@ pub struct ArmModel {
     pub(super) links: Vec<ChainLink>,
 }
 
-fn urdf_error(file: &str, message: String) -> Error {
-    Error::Urdf { file: file.to_string(), message }
+fn urdf_error(file: &str, message: String) -> SimError {
+    SimError::Urdf { file: file.to_string(), message }
 }
 
 impl ArmModel {
@@ -211,7 +212,8 @@ impl ArmModel {
                     Short(j.lower),
                     Short(j.upper)
                 ),
-            }),
+            }
+            .into()),
             None => Ok(()),
         }
     }
@@ -223,17 +225,18 @@ impl ArmModel {
                 what: "joint positions",
                 expected: format!("{} values (one per joint of {})", self.dof(), self.name),
                 got: format!("{} values", q.len()),
-            });
+            }
+            .into());
         }
-        crate::error::check_finite("joint positions", q)
+        Ok(crate::error::check_finite("joint positions", q)?)
     }
 
     /// The chain link called `name`.
     pub(super) fn link(&self, name: &str) -> Result<&ChainLink> {
-        self.links.iter().find(|l| l.name == name).ok_or_else(|| Error::InvalidParameter {
+        Ok(self.links.iter().find(|l| l.name == name).ok_or_else(|| Error::InvalidParameter {
             name: "link",
             reason: format!("`{name}` is not on the chain {} of {}", self.link_names().join(" -> "), self.source),
-        })
+        })?)
     }
 }
 

@@ -8,7 +8,8 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn, Isometry3, Matrix6, Matrix6xX, V
 
 use super::{ArmLimits, ArmModel};
 use crate::core::se3::twist_transform;
-use crate::error::{Error, Result, Short, check_finite, check_finite_matrix};
+use crate::error::{Error, Short, check_finite, check_finite_matrix};
+use crate::sim::error::Result;
 use crate::sim::robot::{CameraRobot, RobotEvent, RobotMotion};
 
 /// Default largest damping factor of the least squares (see [`ArmRobot::damping`]).
@@ -84,7 +85,7 @@ impl ArmRobot {
 
     /// Checks the limits, the damping, the threshold and the start joints.
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &'static str, reason: String| Err(Error::InvalidParameter { name, reason });
+        let bad = |name: &'static str, reason: String| Err(Error::InvalidParameter { name, reason }.into());
         let (n, l) = (self.dof(), &self.limits);
         if l.lower.len() != n || l.upper.len() != n || l.velocity.len() != n {
             return bad("robot limits", format!("one value per joint: {n}"));
@@ -117,12 +118,12 @@ impl ArmRobot {
             let (lo, hi) = (self.limits.lower[i], self.limits.upper[i]);
             let reason =
                 format!("{} = {} is outside its limits [{}, {}]", self.name(i), Short(q[i]), Short(lo), Short(hi));
-            return Err(Error::InvalidParameter { name: "robot.joints", reason });
+            return Err(Error::InvalidParameter { name: "robot.joints", reason }.into());
         }
         let w = self.model.manipulability(q)?;
         if w < self.min_manipulability {
             let reason = format!("manipulability {w:.3e} at the start is below robot.min_manipulability");
-            return Err(Error::InvalidParameter { name: "robot.joints", reason });
+            return Err(Error::InvalidParameter { name: "robot.joints", reason }.into());
         }
         Ok(())
     }
@@ -243,12 +244,13 @@ pub fn damped_least_squares(
             what: "jacobian",
             expected: "(6, n) with n >= 1".into(),
             got: format!("({}, {n})", jac.nrows()),
-        });
+        }
+        .into());
     }
     let d2 = damping * damping;
     if !(damping.is_finite() && damping > 0.0 && d2.is_normal()) {
         let reason = format!("must be finite and > 0 with a finite, normal square, got {}", Short(damping));
-        return Err(Error::InvalidParameter { name: "damping", reason });
+        return Err(Error::InvalidParameter { name: "damping", reason }.into());
     }
     check_finite_matrix("jacobian", jac)?;
     check_finite("twist", v.as_slice())?;
@@ -262,7 +264,7 @@ pub fn damped_least_squares(
     };
     if dq.iter().any(|x| !x.is_finite()) {
         let reason = "the joint velocities overflow (a huge twist or Jacobian)".into();
-        return Err(Error::InvalidParameter { name: "twist", reason });
+        return Err(Error::InvalidParameter { name: "twist", reason }.into());
     }
     Ok(dq)
 }
@@ -281,7 +283,8 @@ fn with_null_space(
                 what: "null_space",
                 expected: format!("({n},)"),
                 got: format!("({},)", z.len()),
-            });
+            }
+            .into());
         }
         check_finite("null_space", z.as_slice())?;
         dq += z - jac.transpose() * chol.solve(&(jac * z));
@@ -296,10 +299,13 @@ fn damped_cholesky(mut gram: DMatrix<f64>, d: f64) -> Result<Cholesky<f64, Dyn>>
     for i in 0..gram.nrows() {
         gram[(i, i)] += mu2;
     }
-    gram.cholesky().ok_or(Error::InvalidParameter {
-        name: "damping",
-        reason: "the damped least squares matrix is not positive definite".into(),
-    })
+    gram.cholesky().ok_or(
+        Error::InvalidParameter {
+            name: "damping",
+            reason: "the damped least squares matrix is not positive definite".into(),
+        }
+        .into(),
+    )
 }
 
 /// The arm behind the robots' one interface: its joints are its state.
@@ -314,7 +320,7 @@ impl CameraRobot for ArmRobot {
         let (dt, dr) = crate::core::se3::pose_error(&self.camera_pose(&self.start)?, pose);
         if dt > 1e-9 || dr > 1e-9 {
             let reason = format!("the start pose is {dt:.3e} m, {dr:.3e} rad from the camera pose at the arm's joints");
-            return Err(Error::InvalidParameter { name: "start", reason });
+            return Err(Error::InvalidParameter { name: "start", reason }.into());
         }
         Ok((self.start.clone(), Some(self.model.manipulability(&self.start)?)))
     }
@@ -337,6 +343,7 @@ impl CameraRobot for ArmRobot {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
+    use crate::sim::error::SimError;
 
     /// A diagonal Jacobian with singular values `s`: the closed form of the damped least squares
     /// is `dq_i = s_i v_i / (s_i^2 + mu^2)` with `mu^2 = max(d^2 - min s^2, 0)`.
@@ -362,9 +369,11 @@ mod tests {
     fn damped_least_squares_refuses_bad_inputs_by_name() {
         let v = Vector6::repeat(0.1);
         let name = |r: Result<DVector<f64>>| match r {
-            Err(Error::InvalidParameter { name, .. }) => name.to_string(),
-            Err(Error::Shape { what, .. }) | Err(Error::NonFinite { what, .. }) => what.to_string(),
-            Err(Error::NonFinitePoint { what, .. }) => what.to_string(),
+            Err(SimError::Core(Error::InvalidParameter { name, .. })) => name.to_string(),
+            Err(SimError::Core(Error::Shape { what, .. })) | Err(SimError::Core(Error::NonFinite { what, .. })) => {
+                what.to_string()
+            }
+            Err(SimError::Core(Error::NonFinitePoint { what, .. })) => what.to_string(),
             other => format!("{other:?}"),
         };
         let eye = DMatrix::<f64>::identity(6, 6);

@@ -6,7 +6,8 @@
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::core::se3::exp_twist;
-use crate::error::{Error, Result, Short, check_finite};
+use crate::error::{Error, Short, check_finite};
+use crate::sim::error::Result;
 use crate::sim::robot::{CameraRobot, RobotMotion};
 
 /// Joint limits of the Cartesian robot: `q = (x, y, z, a, b, c)` with the camera centre at
@@ -39,7 +40,7 @@ impl JointLimits {
     /// singularity at +-90 degrees.
     pub fn validate(&self) -> Result<()> {
         check_finite("joint limits", &[self.min, self.max, self.velocity].concat())?;
-        let bad = |reason: String| Err(Error::InvalidParameter { name: "robot limits", reason });
+        let bad = |reason: String| Err(Error::InvalidParameter { name: "robot limits", reason }.into());
         if let Some(i) = (0..6).find(|&i| self.min[i] >= self.max[i]) {
             return bad(format!("joint {i}: min {} must be below max {}", Short(self.min[i]), Short(self.max[i])));
         }
@@ -138,7 +139,8 @@ impl CameraRobot for CartesianRobot {
                     Short(limits.min[i]),
                     Short(limits.max[i])
                 ),
-            });
+            }
+            .into());
         }
         Ok((q.to_vec(), None))
     }

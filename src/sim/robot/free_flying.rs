@@ -3,7 +3,8 @@
 use nalgebra::{Isometry3, Vector6};
 
 use crate::core::se3::exp_twist;
-use crate::error::{Result, check_finite};
+use crate::error::check_finite;
+use crate::sim::error::Result;
 use crate::sim::robot::{CameraRobot, RobotMotion};
 
 /// The free-flying camera: its joints are `(x, y, z, theta-u)` of the pose.

@@ -10,8 +10,9 @@ use std::sync::Arc;
 
 use nalgebra::{Isometry3, Vector6};
 
-use crate::error::{Result, Short};
+use crate::error::Short;
 use crate::sim::arm::ArmRobot;
+use crate::sim::error::Result;
 
 pub use self::cartesian::{
     CartesianRobot, JointLimits, cartesian_joint_velocities, cartesian_joints, cartesian_pose, cartesian_twist,

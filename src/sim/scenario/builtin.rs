@@ -1,7 +1,7 @@
 //! The built-in scenarios reproducing the paper's experiments (files in `scenarios/`).
 
 use super::{Scenario, scenario_error};
-use crate::error::Result;
+use crate::sim::error::Result;
 
 /// The built-in scenarios: (name, TOML text).
 pub const BUILTIN: &[(&str, &str)] = &[

@@ -10,10 +10,11 @@ use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::core::ibvs::IBVS_MIN_POINTS;
 use crate::core::jacobian::MIN_POINTS;
-use crate::error::{Result, Short};
+use crate::error::Short;
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::{Law, SimulationConfig};
 use crate::sim::depth_source::{DepthSource, TranslationPairDepths};
+use crate::sim::error::Result;
 use crate::sim::robot::{CartesianRobot, JointLimits, Robot};
 use crate::sim::scene::{Body, MIN_DEPTH, Scene};
 

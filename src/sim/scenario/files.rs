@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 
 use super::scenario_error;
-use crate::error::Result;
+use crate::sim::error::Result;
 
 /// Which files a scenario may name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -77,11 +77,11 @@ impl FileScope<'_> {
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
-    use crate::error::Error;
+    use crate::sim::error::SimError;
 
     fn key_and_reason(r: Result<PathBuf>) -> (String, String) {
         match r.unwrap_err() {
-            Error::Scenario { key, reason } => (key.to_string(), reason),
+            SimError::Scenario { key, reason } => (key.to_string(), reason),
             other => panic!("{other:?}"),
         }
     }

@@ -9,8 +9,8 @@ use std::sync::LazyLock;
 
 use super::scenario_error;
 use super::schema::{ControlSpec, LawName};
-use crate::error::Result;
 use crate::servo::law::options::LAW_OPTIONS;
+use crate::sim::error::Result;
 
 /// The `[control]` keys of every law: which law, and the period between images (a
 /// stationary camera, `law = "none"`, takes one every `dt` too).

@@ -17,8 +17,8 @@ pub(crate) use files::FileScope;
 pub use law_keys::{COMMON_CONTROL_KEYS, LAW_KEYS, law_keys};
 pub use schema::*;
 
-use crate::error::{Error, Result};
 use crate::sim::config::SimulationConfig;
+use crate::sim::error::{Result, SimError};
 
 /// The largest scenario file, bytes.
 pub use crate::input_file::MAX_SCENARIO_BYTES;
@@ -71,9 +71,9 @@ fn shorten_quotes(message: &str) -> String {
     out
 }
 
-pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> Error {
+pub(crate) fn scenario_error(key: &str, reason: impl Into<String>) -> SimError {
     // serde_path_to_error names the document root "." ([`Location::parse`] reads it as the root).
-    Error::Scenario { key: crate::Location::parse(key), reason: reason.into() }
+    SimError::Scenario { key: crate::Location::parse(key), reason: reason.into() }
 }
 
 /// Scenario text (TOML, or JSON: a batch's items) is held to the file limit,

@@ -11,11 +11,12 @@ mod run;
 use nalgebra::Isometry3;
 
 use crate::core::distortion::undistort_point;
-use crate::error::{Error, Result, check_positive};
+use crate::error::{Error, check_positive};
 use crate::servo::{Servo, ServoConfig, ServoDepths, ServoReference, StopRule};
 use crate::sim::camera_model::CameraModel;
 use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
+use crate::sim::error::Result;
 use crate::sim::image_loop::{ImageLoop, pixel_size};
 use crate::sim::outcome::Outcome;
 use crate::sim::scene::Observation;
@@ -43,7 +44,9 @@ fn validate(config: &SimulationConfig) -> Result<()> {
     config.reference_camera.validate()?;
     config.camera.validate()?;
     if !(config.noise.pixel_sigma.is_finite() && config.noise.pixel_sigma >= 0.0) {
-        return Err(Error::InvalidParameter { name: "noise.pixel_sigma", reason: "must be finite and >= 0".into() });
+        return Err(
+            Error::InvalidParameter { name: "noise.pixel_sigma", reason: "must be finite and >= 0".into() }.into()
+        );
     }
     config.stop.validate()?;
     config.robot.check_reachable(&config.start)?;
@@ -60,7 +63,7 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
     config.scene.observe_through(&Isometry3::identity(), &k_star, &camera.distortion, camera.image, &mut obs);
     let n = obs.depths.len();
     if let Some(i) = (0..n).find(|&i| obs.depths[i] <= 0.0) {
-        return Err(Error::PointBehindCamera { index: i, depth: obs.depths[i] });
+        return Err(Error::PointBehindCamera { index: i, depth: obs.depths[i] }.into());
     }
     if let Some(i) = (0..n).find(|&i| !obs.visible[i]) {
         return Err(Error::InvalidParameter {
@@ -69,7 +72,8 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
                 "point {i} is not visible in the reference image: outside the reference_camera's image \
                  or occluded (check object.points[{i}] and the reference_camera table)"
             ),
-        });
+        }
+        .into());
     }
     if let Some(vision) = config.vision {
         let size = pixel_size(config.reference_camera.image, "reference_camera")?;
@@ -121,5 +125,5 @@ fn start_servo(config: &SimulationConfig, pixels: Vec<[f64; 2]>, reference_depth
         DepthSource::Estimated(factory) => ServoDepths::Estimated(factory.start(&config.scene, &pixels)?),
     };
     let reference = ServoReference { pixels, depths: Some(reference_depths.to_vec()) };
-    Servo::new(servo_config, reference, depths)
+    Ok(Servo::new(servo_config, reference, depths)?)
 }

@@ -4,7 +4,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::sim::error::Result;
 
 /// Gaussian pixel noise (seeded: runs are reproducible).
 pub(super) struct PixelNoise {

@@ -6,10 +6,11 @@ use nalgebra::{Isometry3, Vector3, Vector6};
 use crate::core::camera::Intrinsics;
 use crate::core::se3::pose_error;
 use crate::core::stability::stability_verdicts;
-use crate::error::{Result, fixed_or_short};
+use crate::error::fixed_or_short;
 use crate::servo::{Servo, ServoStep};
 use crate::sim::config::SimulationConfig;
 use crate::sim::depth_source::DepthSource;
+use crate::sim::error::Result;
 use crate::sim::image_loop::{ImageLoop, Tracked, pixel_size};
 use crate::sim::outcome::{Outcome, Recording, Status, Summary};
 use crate::sim::record_budget::RecordBudget;
@@ -136,7 +137,7 @@ impl<'a> Run<'a> {
             }
         }
         let depths = matches!(self.config.depths, DepthSource::True).then_some(self.obs.depths.as_slice());
-        self.servo.observe(&self.pixels, Some(&self.visible), depths)
+        Ok(self.servo.observe(&self.pixels, Some(&self.visible), depths)?)
     }
 
     fn record_observation(&mut self, t: f64) {

@@ -1,8 +1,9 @@
 //! Today's detector: the [`DotTracker`], started on the expected pixels (its clicks), each
 //! dot reported under the identity it was expected with.
 
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::error::Result;
 use crate::vision::image::GreyView;
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
@@ -75,7 +76,7 @@ impl Detector for DotTracking {
 
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
         let Some(tracker) = self.tracker.as_mut() else {
-            return Err(Error::InvalidParameter { name: "detector", reason: "detect before start".into() });
+            return Err(Error::InvalidParameter { name: "detector", reason: "detect before start".into() }.into());
         };
         let tracked = tracker.track(image)?;
         Ok(self.detections(&tracked.pixels, |i| tracked.found[i]))

@@ -7,9 +7,10 @@
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::vision::detector::tag_regions::{Region, merged};
 use crate::vision::detector::{Detection, Detector, Expected};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, GreyView, Pixels, view};
 use crate::vision::tags::{Tag, TagDecoder, TagFamily, TagFollower, automatic_decimation};
 
@@ -348,8 +349,8 @@ fn crop_decoder(
     crops.get_mut(k).map(|(_, d)| d).ok_or_else(|| crop_error("no decoder"))
 }
 
-fn crop_error(reason: &str) -> Error {
-    Error::InvalidImage { what: "image".to_string(), reason: format!("tag tracking failed: {reason}") }
+fn crop_error(reason: &str) -> VisionError {
+    VisionError::InvalidImage { what: "image".to_string(), reason: format!("tag tracking failed: {reason}") }
 }
 
 impl Detector for TagDetector {

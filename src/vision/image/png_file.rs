@@ -11,7 +11,7 @@ use ::image::{DynamicImage, ImageBuffer};
 use png::{BitDepth, ColorType, DecodingError, Transformations};
 
 use super::{MAX_IMAGE_ALLOC, check_dimensions, image_error};
-use crate::error::Result;
+use crate::vision::error::Result;
 
 /// The first frame of a PNG file as 8-bit samples (palettes and grey levels below 8 bits
 /// expanded); 16-bit samples are refused. The declared size is checked against

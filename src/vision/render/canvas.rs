@@ -10,7 +10,8 @@ use super::conic::ImageEllipse;
 use super::lens::Warp;
 use super::polygon::{ImagePolygon, ImagePolygons};
 use super::raster::{Paint, paint};
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Short};
+use crate::vision::error::Result;
 use crate::vision::image::GreyImage;
 
 /// A white disc in the object frame (F*).
@@ -38,12 +39,13 @@ impl Disc {
             return Err(Error::InvalidParameter {
                 name: "dot_radius",
                 reason: format!("must be > 0, got {}", Short(radius)),
-            });
+            }
+            .into());
         }
         let normal = Vector3::from(normal);
         let largest = normal.amax();
         if !(largest > 1e-12) {
-            return Err(Error::InvalidParameter { name: "normal", reason: "must not be zero".into() });
+            return Err(Error::InvalidParameter { name: "normal", reason: "must not be zero".into() }.into());
         }
         // Scaled first: the norm of a normal of 1e300 overflows.
         let normal = normal / largest;
@@ -64,7 +66,7 @@ impl Polygon {
         crate::error::check_finite("polygon", vertices.as_flattened())?;
         if vertices.len() < 3 {
             let reason = format!("at least 3 vertices, got {}", vertices.len());
-            return Err(Error::InvalidParameter { name: "polygon", reason });
+            return Err(Error::InvalidParameter { name: "polygon", reason }.into());
         }
         Ok(Self { vertices: vertices.into_iter().map(Point3::from).collect() })
     }

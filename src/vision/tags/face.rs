@@ -20,7 +20,8 @@ use std::sync::OnceLock;
 use kornia_apriltag::family::TagFamily as Layout;
 
 use super::TagFamily;
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::vision::error::Result;
 
 /// The family data of each [`TagFamily`], built once (and repaired: [`repaired`]). The
 /// decoder reads this same data (`TagDecoder`), so the faces drawn are the codes it decodes.
@@ -30,7 +31,9 @@ pub(super) fn layout(family: TagFamily) -> Result<&'static Layout> {
     let index = TagFamily::ALL.iter().position(|f| *f == family).unwrap_or(0);
     let cached =
         LAYOUTS[index].get_or_init(|| Layout::try_from(&family.kind()).map_err(|e| e.to_string()).and_then(repaired));
-    cached.as_ref().map_err(|e| Error::InvalidParameter { name: "family", reason: format!("{}: {e}", family.name()) })
+    Ok(cached
+        .as_ref()
+        .map_err(|e| Error::InvalidParameter { name: "family", reason: format!("{}: {e}", family.name()) })?)
 }
 
 /// A layout whose bit positions are those of an AprilTag layout: `nbits` of each, and turned
@@ -93,7 +96,7 @@ impl TagFace {
         let l = layout(family)?;
         let Some(&code) = l.code_data.get(id as usize) else {
             let reason = format!("a {} id is in 0..{}, got {id}", family.name(), l.code_data.len());
-            return Err(Error::InvalidParameter { name: "id", reason });
+            return Err(Error::InvalidParameter { name: "id", reason }.into());
         };
         let (total, border) = (l.total_width, l.width_at_border);
         let mut white = vec![vec![false; total]; total];

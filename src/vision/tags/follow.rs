@@ -17,7 +17,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::edge_search;
 use super::edges::{self, Border};
 use super::{TAG_CORNERS_IN_LAYOUT, Tag, TagFamily, decoder_error};
-use crate::error::Result;
+use crate::vision::error::Result;
 use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];

@@ -44,7 +44,8 @@ use kornia_image::{Image, ImageSize};
 
 pub use follow::TagFollower;
 
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
 
 /// The tag families [`detect_tags`] reads, declared once (`FAMILIES`): AprilTag 3's nine
@@ -268,7 +269,8 @@ fn check_search(width: u32, height: u32, decimation: u32) -> Result<()> {
             "{decimation} leaves {searched} pixels of this {height} x {width} image to search, at most \
              {MAX_SEARCH_PIXELS} are searched (the detector's memory): use decimation >= {fits}"
         ),
-    })
+    }
+    .into())
 }
 /// The largest decimation accepted.
 pub const MAX_DECIMATION: u32 = 8;
@@ -285,8 +287,8 @@ impl std::fmt::Debug for TagDecoder {
     }
 }
 
-fn decoder_error(reason: impl std::fmt::Display) -> Error {
-    Error::InvalidImage { what: "image".to_string(), reason: format!("tag detection failed: {reason}") }
+fn decoder_error(reason: impl std::fmt::Display) -> VisionError {
+    VisionError::InvalidImage { what: "image".to_string(), reason: format!("tag detection failed: {reason}") }
 }
 
 /// The smallest side the detector reads: its adaptive threshold works on 4 x 4 tiles of the
@@ -312,7 +314,8 @@ impl TagDecoder {
             return Err(Error::InvalidParameter {
                 name: "decimation",
                 reason: format!("must be in 1..={MAX_DECIMATION}, got {decimation}"),
-            });
+            }
+            .into());
         }
         Ok(Self { family, decimation: Some(decimation), levels: Vec::new() })
     }
@@ -645,7 +648,7 @@ mod tests {
     #[test]
     fn empty_images_are_refused_and_small_or_blank_ones_have_no_tags() {
         let err = detect_tags(&GreyImage::new(0, 0), TagFamily::Tag36h11).unwrap_err();
-        assert!(matches!(err, Error::InvalidImage { .. }), "{err}");
+        assert!(matches!(err, VisionError::InvalidImage { .. }), "{err}");
         assert!(err.to_string().contains("image"), "{err}");
         assert!(detect_tags(&GreyImage::new(5, 0), TagFamily::Tag36h11).is_err());
         for (w, h) in [(1, 1), (2, 3), (7, 100), (100, 7), (8, 8), (9, 13), (1000, 1), (1, 1000), (640, 480)] {
@@ -690,7 +693,7 @@ mod tests {
         let image = GreyImage::new(16_000, 16_000);
         let err = TagDecoder::with_decimation(TagFamily::Tag36h11, 1).unwrap().detect(&image).unwrap_err();
         let text = err.to_string();
-        assert!(matches!(err, Error::InvalidParameter { name: "decimation", .. }), "{text}");
+        assert!(matches!(err, VisionError::Core(Error::InvalidParameter { name: "decimation", .. })), "{text}");
         assert!(text.contains("use decimation >= 8") && text.contains(&MAX_SEARCH_PIXELS.to_string()), "{text}");
         assert!(check_search(2048, 2048, 1).is_ok() && check_search(2049, 2100, 1).is_err());
     }

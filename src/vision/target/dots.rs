@@ -1,6 +1,6 @@
 //! Today's target: one white disc per point (a radius, a normal), the point its centre.
 
-use crate::error::Result;
+use crate::vision::error::Result;
 use crate::vision::render::{Canvas, Disc};
 use crate::vision::target::{Target, TargetPoint, shown};
 

@@ -16,7 +16,8 @@
 
 use nalgebra::{Isometry3, Point3};
 
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Short};
+use crate::vision::error::Result;
 use crate::vision::render::{Canvas, Polygon};
 use crate::vision::tags::{TagFace, TagFamily};
 use crate::vision::target::{Target, TargetPoint, shown};
@@ -140,7 +141,7 @@ impl TagRig {
     /// poses.
     pub fn new(family: TagFamily, tags: Vec<RigTag>) -> Result<Self> {
         let bad = |i: usize, reason: String| {
-            Err(Error::InvalidParameter { name: "tags", reason: format!("tag {i}: {reason}") })
+            Err(Error::InvalidParameter { name: "tags", reason: format!("tag {i}: {reason}") }.into())
         };
         let mut cells = Vec::with_capacity(tags.len());
         for (i, tag) in tags.iter().enumerate() {

@@ -30,8 +30,9 @@ pub use self::start::MAX_START_PIXELS;
 
 use self::shape::Shape;
 use self::window_search::{Component, Level, WindowSearch};
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::vision::dots::{MAX_DOT_PIXELS, Window};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 
@@ -81,7 +82,8 @@ impl TrackerConfig {
             Err(Error::InvalidParameter {
                 name: "tracker",
                 reason: "need 2 <= search_radius <= max_search_radius (finite) and max_area_ratio > 1 (finite)".into(),
-            })
+            }
+            .into())
         }
     }
 }
@@ -136,7 +138,7 @@ impl DotTracker {
         config.validate()?;
         check_image("image", image)?;
         if initial_pixels.is_empty() {
-            return Err(Error::TooFewPoints { needed: 1, got: 0, why: "the tracker needs one pixel per dot" });
+            return Err(Error::TooFewPoints { needed: 1, got: 0, why: "the tracker needs one pixel per dot" }.into());
         }
         check_auto_polarity(image, config.polarity)?;
         let dark = config.polarity.dark_dots(image);
@@ -183,7 +185,7 @@ impl DotTracker {
     /// they hold one entry per dot).
     pub fn track_into<C: Pixels>(&mut self, image: &GreyBuffer<C>, out: &mut TrackResult) -> Result<()> {
         if image.dimensions() != self.size {
-            return Err(Error::InvalidImage {
+            return Err(VisionError::InvalidImage {
                 what: "image".into(),
                 reason: format!(
                     "{} x {} (height x width), the tracker was started on {} x {}",
@@ -367,13 +369,14 @@ fn check_auto_polarity<C: Pixels>(image: &GreyBuffer<C>, polarity: Polarity) -> 
             "\"auto\" reads the whole image (some 10 bytes a pixel), at most {MAX_DOT_PIXELS} pixels (2^26); this \
              one has {pixels}: give \"dark\" or \"light\""
         ),
-    })
+    }
+    .into())
 }
 
 fn check_distinct(dots: &[TrackedDot]) -> Result<()> {
     for (i, a) in dots.iter().enumerate() {
         if let Some(j) = dots[i + 1..].iter().position(|b| distance(a.position, b.position) < 0.5) {
-            return Err(Error::InvalidImage {
+            return Err(VisionError::InvalidImage {
                 what: "initial_pixels".into(),
                 reason: format!("points {i} and {} found the same dot", i + 1 + j),
             });

@@ -7,7 +7,8 @@
 //! [`TrackerConfig::set`] (a test checks every entry is set by name to its default).
 
 use super::TrackerConfig;
-use crate::error::{Error, Result};
+use crate::error::Error;
+use crate::vision::error::Result;
 use crate::vision::polarity::Polarity;
 
 /// The kind of value a setting takes.
@@ -120,7 +121,7 @@ impl TrackerConfig {
     pub fn set(&mut self, name: &str, value: SettingValue) -> Result<()> {
         let wrong = |reason: String| Error::InvalidParameter { name: "tracker", reason: format!("{name}: {reason}") };
         let Some(setting) = tracker_setting(name) else {
-            return Err(wrong(format!("unknown key; known: {}", tracker_setting_names())));
+            return Err(wrong(format!("unknown key; known: {}", tracker_setting_names())).into());
         };
         match (setting.name, value) {
             ("search_radius", SettingValue::Number(x)) => self.search_radius = x,
@@ -135,7 +136,7 @@ impl TrackerConfig {
                     ))
                 })?;
             }
-            (_, other) => return Err(wrong(format!("expected a {}, got {other:?}", setting.kind.name()))),
+            (_, other) => return Err(wrong(format!("expected a {}, got {other:?}", setting.kind.name())).into()),
         }
         Ok(())
     }

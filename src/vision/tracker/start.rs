@@ -7,8 +7,9 @@
 use super::shape::Shape;
 use super::window_search::{Component, Level, WindowSearch};
 use super::{TrackedDot, TrackerConfig, distance};
-use crate::error::{Error, Result, Short, fixed_or_short};
+use crate::error::{Error, Short, fixed_or_short};
 use crate::vision::dots::{DIGITISATION_SLACK, Window};
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, Pixels};
 
 /// Grey levels by which a dot must stand out from its background.
@@ -43,9 +44,10 @@ pub(super) fn initial_dot<C: Pixels>(
             what: "initial_pixels",
             row: i,
             column: usize::from(click[0].is_finite()),
-        });
+        }
+        .into());
     }
-    let not_found = |reason: &str| Error::InvalidImage {
+    let not_found = |reason: &str| VisionError::InvalidImage {
         what: "initial_pixels".into(),
         reason: format!("point {i} at ({}, {}): {reason}", fixed_or_short(click[0], 1), fixed_or_short(click[1], 1)),
     };

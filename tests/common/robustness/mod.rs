@@ -19,7 +19,8 @@ use crate::common::{Lcg, lens, object_points, random_intrinsics, random_pose, vi
 use nalgebra::{Isometry3, Translation3, Vector3};
 use proptest::prelude::*;
 use proptest::test_runner::{RngSeed, TestCaseError, TestRunner};
-use vsinv::{Intrinsics, Result, invariant_points};
+use std::result::Result;
+use vsinv::{Intrinsics, invariant_points};
 
 pub type Prop = std::result::Result<(), TestCaseError>;
 
@@ -42,7 +43,11 @@ pub fn finite<'a>(values: impl IntoIterator<Item = &'a f64>) -> bool {
 
 /// Records the outcome; an `Ok` must pass `valid` (finite, and correct where cheap), an `Err`
 /// must have a message.
-pub fn check<T>(api: &'static str, r: &Result<T>, valid: impl FnOnce(&T) -> bool) -> Prop {
+pub fn check<T, E: std::fmt::Display + std::fmt::Debug>(
+    api: &'static str,
+    r: &Result<T, E>,
+    valid: impl FnOnce(&T) -> bool,
+) -> Prop {
     record(api, r.is_ok());
     match r {
         Ok(v) => prop_assert!(valid(v), "{api}: Ok with a non-finite or wrong output"),
@@ -52,9 +57,9 @@ pub fn check<T>(api: &'static str, r: &Result<T>, valid: impl FnOnce(&T) -> bool
 }
 
 /// `check`, and when the input had a located fault, an `Err` whose message has every needle.
-pub fn check_located<T: std::fmt::Debug>(
+pub fn check_located<T: std::fmt::Debug, E: std::fmt::Display + std::fmt::Debug>(
     api: &'static str,
-    r: &Result<T>,
+    r: &Result<T, E>,
     fault: Option<Vec<String>>,
     valid: impl FnOnce(&T) -> bool,
 ) -> Prop {

@@ -5,8 +5,9 @@
 use std::sync::Arc;
 
 use super::{check_values, pose_of};
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
+use crate::sim::error::{Result, SimError};
 use crate::sim::robot::Robot;
 use crate::sim::scenario::schema::{PoseSpec, RobotSpec, StartSpec};
 use crate::sim::scenario::{FileScope, scenario_error};
@@ -42,7 +43,9 @@ pub(super) fn robot(r: &RobotSpec, start: Option<&StartSpec>, files: FileScope<'
         arm.start = start_joints(&arm, s, r.ik_seed.as_deref(), &units)?;
     }
     arm.validate().map_err(|e| match e {
-        Error::InvalidParameter { name, reason } if name.starts_with("robot.") => scenario_error(name, reason),
+        SimError::Core(Error::InvalidParameter { name, reason }) if name.starts_with("robot.") => {
+            scenario_error(name, reason)
+        }
         other => scenario_error("robot", other.to_string()),
     })?;
     Ok(Robot::Arm(Arc::new(arm)))

@@ -3,7 +3,7 @@
 //! OpenCV aruco's order).
 
 use super::{check_positive, check_values, pose_of};
-use crate::error::Result;
+use crate::sim::error::Result;
 use crate::sim::scenario::scenario_error;
 use crate::sim::scenario::schema::ObjectSpec;
 use crate::vision::TagFamily;

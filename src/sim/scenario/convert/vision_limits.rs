@@ -6,8 +6,9 @@
 use nalgebra::Point3;
 
 use crate::core::camera::Intrinsics;
-use crate::error::{Result, Short};
+use crate::error::Short;
 use crate::sim::camera_model::CameraModel;
+use crate::sim::error::Result;
 use crate::sim::scenario::scenario_error;
 use crate::vision::TagRig;
 use crate::vision::render::MAX_RENDER_PIXELS;

@@ -12,8 +12,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{DepthsName, LawName};
 use crate::core::adaptive_gain::AdaptiveGain;
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::servo::law::options::{LAW_OPTIONS, LawOptions, OptionKind, OptionSpec, OptionValue, ScenarioKey};
+use crate::sim::error::{Result, SimError};
 
 fn default_dt() -> f64 {
     0.04
@@ -96,7 +97,7 @@ impl ControlSpec {
 }
 
 /// An option's error under its scenario key.
-fn keyed(spec: &OptionSpec, e: Error) -> Error {
+fn keyed(spec: &OptionSpec, e: Error) -> SimError {
     let key = spec.scenario_key().unwrap_or(spec.name);
     match e {
         Error::InvalidParameter { name, reason } => {
