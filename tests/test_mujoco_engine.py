@@ -219,3 +219,22 @@ def test_a_two_frame_latency_still_converges() -> None:
     np.testing.assert_allclose(r.pose, _integrated(r, 2), atol=1e-9)
     np.testing.assert_array_equal(r.pose[0], r.pose[2])  # nothing applied before frame 2
     assert s["status"] == "converged", s["message"]
+
+
+@needs_mujoco
+def test_record_and_progress_as_for_a_kinematic_run() -> None:
+    """`record=False` keeps the summary and no rows (as the simulator does), `progress(done,
+    total)` follows the frames up to `[stop] max_iterations`, and a run stopped by its limit
+    says `max_iterations` in the same schema."""
+    d = _scenario()
+    d["stop"]["max_iterations"] = 5
+    calls: list[tuple[int, int]] = []
+    r = vsinv.run_scenario(d, record=False, progress=lambda done, total: calls.append((done, total)))
+    k = vsinv.run_scenario(vsinv.load_scenario("lens-12-6").to_dict() | {"vision": {}, "stop": d["stop"]}, record=False)
+    assert r.summary["status"] == k.summary["status"] == "max_iterations"
+    assert r.summary["iterations"] == 5 and list(r.summary) == list(k.summary)
+    assert {n: a.shape for n, a in r.arrays.items() if n != "reference_pixels"} == {
+        n: a.shape for n, a in k.arrays.items() if n != "reference_pixels"}
+    assert calls == [(i, 5) for i in range(1, 7)]
+    with pytest.raises(TypeError, match="progress"):
+        vsinv.run_scenario(d, progress="abc")
