@@ -64,6 +64,23 @@ def test_bad_world_keys_are_refused_by_name(world: dict, key: str, words: str) -
     assert key in str(e.value) and words in str(e.value), str(e.value)
 
 
+@pytest.mark.parametrize(
+    ("table", "value", "key"),
+    [("noise", {"pixel_sigma": 0.5}, "noise.pixel_sigma"), ("path", {"samples": 100}, "path"),
+     ("control", {"depths": "true"}, "control.depths"), ("camera", {"distortion": [0.1, 0.0, 0.0, 0.0]}, "camera.distortion")],
+)
+def test_what_the_mujoco_loop_does_not_simulate_is_refused(table: str, value: dict, key: str) -> None:
+    """A key the MuJoCo loop would ignore (pixel noise, a planned path, true depths, a lens
+    distortion) is refused by name when the scenario is loaded, not silently dropped."""
+    d = _scenario()
+    d[table] = {**(d.get(table) or {}), **value}
+    with pytest.raises(vsinv.InvalidInput) as e:
+        vsinv.sim.Scenario.from_dict(d)
+    assert key in str(e.value) and "not simulated" in str(e.value), str(e.value)
+    d["world"]["engine"] = "kinematic"
+    vsinv.sim.Scenario.from_dict(d)  # the kinematic simulator takes it
+
+
 def test_the_rust_runner_refuses_mujoco_by_name() -> None:
     """The Rust simulator (`_core.run_scenario`, batches) does not run a MuJoCo scenario: a
     Scenario error naming world.engine that says where it runs."""

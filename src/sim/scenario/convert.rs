@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use super::schema::{BodySpec, ControlSpec, DepthEstimationSpec, DepthsName, Engine, LawName, RobotKind};
+use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, DepthsName, Engine, LawName, RobotKind};
 use super::{FileScope, Scenario, scenario_error};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
@@ -118,6 +118,31 @@ impl Scenario {
             let reason =
                 "a latency is applied by the \"mujoco\" engine only (world.engine); the kinematic simulator has none";
             return Err(scenario_error("world.latency_frames", reason));
+        }
+        if w.engine == Engine::Mujoco { self.check_mujoco() } else { Ok(()) }
+    }
+
+    /// What the `mujoco` engine's loop (a free camera servoed through MuJoCo's pinhole renders
+    /// with the reference depths) does not do is refused by its key, rather than ignored.
+    fn check_mujoco(&self) -> Result<()> {
+        let refuse = |key: &str, what: &str| {
+            Err(scenario_error(key, format!("{what} is not simulated by the \"mujoco\" engine (world.engine)")))
+        };
+        let distorted = |c: &CameraSpec| c.distortion.is_some() || c.calibration.is_some();
+        if self.robot.kind != RobotKind::Free {
+            return refuse("robot.kind", "an arm or a Cartesian robot (the camera flies free there)");
+        }
+        if self.control.depths.is_some_and(|d| d != DepthsName::Reference) {
+            return refuse("control.depths", "depths other than \"reference\"");
+        }
+        if self.noise.pixel_sigma > 0.0 {
+            return refuse("noise.pixel_sigma", "pixel noise (its images carry their own)");
+        }
+        if self.path.is_some() {
+            return refuse("path", "a planned path");
+        }
+        if distorted(&self.reference_camera) || self.camera.as_ref().is_some_and(distorted) {
+            return refuse("camera.distortion", "a lens distortion or a calibration file (MuJoCo renders a pinhole)");
         }
         Ok(())
     }

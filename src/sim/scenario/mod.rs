@@ -231,6 +231,15 @@ mod tests {
         assert!(e.to_string().contains("mujoco extra"), "{e}");
         let e = Scenario::from_toml(&format!("{text}\n[world]\nlatency_frames = 1\n")).unwrap_err();
         assert!(e.to_string().contains("world.latency_frames: a latency"), "{e}");
+        // What the MuJoCo loop does not simulate is refused by its key, not ignored.
+        for (table, key) in [
+            ("[noise]\npixel_sigma = 0.5", "noise.pixel_sigma"),
+            ("[path]\nsamples = 100", "path"),
+            ("[robot]\nkind = \"cartesian\"", "robot.kind"),
+        ] {
+            let e = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\n{table}\n")).unwrap_err();
+            assert!(e.to_string().contains(&format!("{key}: ")) && e.to_string().contains("not simulated"), "{e}");
+        }
         let plain = Scenario::from_toml(text).unwrap();
         assert!(plain.world.is_default() && !plain.to_toml().unwrap().contains("[world]"));
     }
