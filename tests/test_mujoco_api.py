@@ -244,7 +244,7 @@ def _start(s) -> np.ndarray:
 def _runs(law: str, supersample: int) -> list[vm.MujocoRun]:
     d = _lens_change()
     with vm.World.from_scenario(d, supersample=supersample) as world:
-        return [vm.run(d, law=law, world=world, start=None if s is None else _start(s)) for s in STARTS]
+        return [vm.run_loop(d, law=law, world=world, start=None if s is None else _start(s)) for s in STARTS]
 
 
 def _table(runs: list[vm.MujocoRun]) -> str:
@@ -287,7 +287,7 @@ def test_a_zoom_during_the_servo_changes_the_rendered_K() -> None:
     and ends within 1 mm and 0.2 degrees of F*."""
     d = vsinv.load_scenario("zoom-servo").to_dict()
     zoom = d["camera"]["zoom"]
-    run = vm.run(d)
+    run = vm.run_loop(d)
     s = run.summary
     expected = np.interp(run.time, zoom["times"], zoom["fku"])
     np.testing.assert_allclose(run.K[:, 0], expected, rtol=1e-6)

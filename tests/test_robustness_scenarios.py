@@ -75,7 +75,7 @@ def scenario_names(path: Optional[tuple[Any, ...]]) -> tuple[str, ...]:
     return tuple(str(p) for p in path if isinstance(p, str)) + ("scenario",)
 
 
-@covers("Scenario", "Scenario.from_dict", "Scenario.from_toml", "Scenario.name", "Scenario.description", "Scenario.to_dict",
+@covers("Scenario", "Scenario.engine", "Scenario.from_dict", "Scenario.from_toml", "Scenario.name", "Scenario.description", "Scenario.to_dict",
         "Scenario.to_toml", "load_scenario", "list_scenarios")
 @fuzz_settings(200)
 @given(st.data())
@@ -112,6 +112,7 @@ def test_scenarios(data: Any) -> None:
     if returned(s):
         assert isinstance(call(getattr, s, "name", _api="Scenario.name"), str)
         assert isinstance(call(getattr, s, "description", _api="Scenario.description"), str)
+        assert call(getattr, s, "engine", _api="Scenario.engine") in ("kinematic", "mujoco")
         dd = call(s.to_dict, _api="Scenario.to_dict", _finite=False)
         again = vsinv.sim.Scenario.from_dict(dd).to_dict()
         assert again == dd, [(k, dd[k], again.get(k)) for k in dd if dd[k] != again.get(k)]
@@ -160,6 +161,33 @@ def test_run_scenario(data: Any) -> None:
     for name in ("detection_error", "joint_velocities", "joint_limits"):
         call(getattr, r, name, _api=f"RunResult.{name}", _finite=False)
     assert (r.detection_error is None) == ("vision" not in r.scenario.to_dict() or r.scenario.to_dict().get("vision") is None)
+
+
+@covers("RunResult.from_recording")
+@fuzz_settings(40)
+@given(st.data())
+def test_run_result_from_recording(data: Any) -> None:
+    """A kinematic run's summary and columns with one part replaced by a mutant: the same
+    RunResult back, or InvalidInput naming the summary or arrays (never another exception)."""
+    r = lens_run()
+    summary, arrays = dict(r.summary), dict(r.arrays)
+    part = data.draw(st.sampled_from(["summary", "arrays", "none"]), label="part")
+    target = summary if part == "summary" else arrays
+    key = data.draw(st.sampled_from([*target, "extra"]), label="key") if part != "none" else None
+    if key is not None:
+        how = data.draw(st.sampled_from(["drop", "replace"]), label="how")
+        if how == "drop":
+            target.pop(key, None)
+        else:
+            target[key] = data.draw(st.sampled_from([*MUTANTS, np.zeros((2, 2)), np.array([True])]), label="value")
+    out = call(vsinv.RunResult.from_recording, r.scenario, summary, arrays, _api="RunResult.from_recording",
+               _expect=ANY, _names=("summary", "arrays"), _finite=False)
+    if returned(out):
+        assert list(out.summary) == list(r.summary)
+        assert set(out.arrays) <= set(vsinv.RunResult.from_recording(r.scenario, dict(r.summary), dict(r.arrays)).arrays)
+    for bad in (None, 3, "abc"):
+        call(vsinv.RunResult.from_recording, r.scenario, bad, arrays, _api="RunResult.from_recording", _expect=TYPE,
+             _names=("summary",), _finite=False)
 
 
 @covers("recorded_columns", "summary_fields", "RunResult.columns", "RunResult.plot")

@@ -699,6 +699,10 @@ class Scenario:
     @property
     def description(self) -> str:
         """The description."""
+    @property
+    def engine(self) -> Literal["kinematic", "mujoco"]:
+        """The world that runs it (`[world] engine`): "kinematic" (vsinv's simulator) or "mujoco"
+        (`vsinv.mujoco`, the mujoco extra)."""
     def to_dict(self) -> dict[str, Any]:
         """The scenario as a dictionary (every default filled in); edit it and pass it back to
         `run_scenario` or `Scenario.from_dict`."""
@@ -740,6 +744,20 @@ class RunResult:
 
     columns: tuple[dict[str, Any], ...]
     """The declaration of the recorded columns (as `recorded_columns()`)."""
+    @staticmethod
+    def from_recording(
+        scenario: _ScenarioLike,
+        summary: dict[str, Any],
+        arrays: dict[str, Any],
+        joint_limits: dict[str, Any] | None = None,
+    ) -> RunResult:
+        """A run recorded outside the Rust simulator (`vsinv.mujoco.run`) as a `RunResult` of the
+        same schema: `summary` with exactly the keys of a kinematic run's (each checked: a
+        status of the simulator's, the scenario's name, numbers or None), `arrays` the recorded
+        columns by name (every column that all runs record, shapes as declared with N rows from
+        `time`, n points from `reference_pixels`, `n_joints` from `joints`; copied), and an
+        arm's `joint_limits` (names, lower, upper, velocity) or None. Raises InvalidInput naming
+        the key or column at fault."""
     @property
     def summary(self) -> dict[str, Any]:
         """The run's summary (status, iterations, final errors, ...), a dict."""

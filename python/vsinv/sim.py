@@ -3,7 +3,8 @@ batches in parallel, parameter sweeps (:mod:`vsinv.sweep` holds their parts), an
 declarations of the recorded columns and the summary's numbers."""
 
 from ._batch import run_batch
-from ._core import RunResult, Scenario, list_scenarios, load_scenario, recorded_columns, run_scenario, summary_fields
+from ._core import RunResult, Scenario, list_scenarios, load_scenario, recorded_columns, summary_fields
+from ._run import run_scenario
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
 __all__ = [

@@ -4,7 +4,8 @@ for dots tracked through image files. A tag rig's views also show each tag's out
 four detected corners) and id.
 
 The views are rendered again from the recorded poses (``vsinv.vision.render`` is deterministic: the
-same pose, time and seed give the simulator's image).
+same pose, time and seed give the simulator's image; a ``[world] engine = "mujoco"`` run's views
+are MuJoCo's renders, ``vsinv.mujoco.Views``).
 """
 
 from __future__ import annotations
@@ -146,6 +147,32 @@ def _gif_frame(grey: npt.NDArray[np.uint8], tracked: npt.NDArray[np.float64], re
     return frame
 
 
+class _Renderer:
+    """The views of a run's scenario: vsinv's renderer, or MuJoCo's for ``[world] engine =
+    "mujoco"`` (the images that run saw), one world kept open while the figures are drawn."""
+
+    def __init__(self, scenario: Any) -> None:
+        self.scenario, self.views = scenario, None
+        if getattr(scenario, "engine", "kinematic") == "mujoco":
+            from .mujoco import Views
+
+            self.views = Views(scenario)
+
+    def __call__(self, pose: Any = None, time: float = 0.0, reference: bool = False) -> npt.NDArray[np.uint8]:
+        if self.views is not None:
+            return self.views.render(pose=pose, time=time, reference=reference)
+        if reference:
+            return render(self.scenario, reference=True)
+        return render(self.scenario, pose=pose, time=time)
+
+    def __enter__(self) -> _Renderer:
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        if self.views is not None:
+            self.views.close()
+
+
 def save_servo_gif(result: RunResult, path: _PathLike, frame_ms: int = 80) -> Path:
     """An animated GIF of the camera view during the servo: up to :data:`GIF_FRAMES` frames
     evenly spaced over the run at half resolution, each stamped with its time and iteration,
@@ -156,8 +183,9 @@ def save_servo_gif(result: RunResult, path: _PathLike, frame_ms: int = 80) -> Pa
     ids = _tag_ids(scenario)
     last = len(times) - 1
     frames = []
-    for k in _frame_indices(len(times)):
-        grey = _half(render(scenario, pose=poses[k], time=float(times[k])))
+    with _Renderer(scenario) as view:
+        greys = [(k, _half(view(pose=poses[k], time=float(times[k])))) for k in _frame_indices(len(times))]
+    for k, grey in greys:
         stamp = f"t = {float(times[k]):.2f} s  iteration {k}/{last}"
         frames.append(_gif_frame(grey, result.pixels[k] / 2, result.reference_pixels / 2, ids, stamp))
     out = Path(path)
@@ -171,11 +199,12 @@ def save_view_figures(result: RunResult, out_dir: _PathLike) -> list[Path]:
     out = Path(out_dir)
     sc, last = result.scenario, len(result.time) - 1
     ref = result.reference_pixels
-    views = [
-        (render(sc, reference=True), ref, "reference view (K* at F*), detected centroids"),
-        (render(sc, pose=result.pose[0], time=float(result.time[0])), result.pixels[0], "first camera view"),
-        (render(sc, pose=result.pose[last], time=float(result.time[last])), result.pixels[last], "last camera view"),
-    ]
+    with _Renderer(sc) as view:
+        views = [
+            (view(reference=True), ref, "reference view (K* at F*), detected centroids"),
+            (view(pose=result.pose[0], time=float(result.time[0])), result.pixels[0], "first camera view"),
+            (view(pose=result.pose[last], time=float(result.time[last])), result.pixels[last], "last camera view"),
+        ]
     paths = []
     ids = _tag_ids(sc)
     for (image, tracked, what), name in zip(views, VIEW_FIGURES):

@@ -23,6 +23,7 @@ mod law_options;
 mod lens;
 mod logs;
 mod planning;
+mod run_record;
 mod se3;
 mod servo;
 mod shared;

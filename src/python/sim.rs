@@ -50,6 +50,12 @@ impl PyScenario {
     fn description(&self) -> &str {
         &self.inner.description
     }
+    /// The world that runs it (`[world] engine`): "kinematic" (vsinv's simulator) or "mujoco"
+    /// (`vsinv.mujoco`, the mujoco extra).
+    #[getter]
+    fn engine(&self) -> &'static str {
+        self.inner.world.engine.name()
+    }
     /// The scenario as a dictionary (every default filled in); edit it and pass it back to
     /// `run_scenario` or `Scenario.from_dict`.
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -190,6 +196,35 @@ impl PyRunResult {
             }
         }
         Ok(d)
+    }
+    /// A run recorded outside the Rust simulator (`vsinv.mujoco.run`) as a `RunResult` of the
+    /// same schema: `summary` with exactly the keys of a kinematic run's (each checked: a
+    /// status of the simulator's, the scenario's name, numbers or None), `arrays` the recorded
+    /// columns by name (every column that all runs record, shapes as declared with N rows from
+    /// `time`, n points from `reference_pixels`, `n_joints` from `joints`; copied), and an
+    /// arm's `joint_limits` (names, lower, upper, velocity) or None. Raises InvalidInput naming
+    /// the key or column at fault.
+    #[staticmethod]
+    #[pyo3(signature = (scenario, summary, arrays, joint_limits = None))]
+    fn from_recording(
+        py: Python<'_>,
+        scenario: &Bound<'_, PyAny>,
+        summary: &Bound<'_, PyDict>,
+        arrays: &Bound<'_, PyDict>,
+        joint_limits: Option<Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let scenario = scenario_arg(scenario)?;
+        let (columns, points) = super::run_record::columns_of(arrays)?;
+        let summary = super::run_record::summary_of(summary, &scenario.name, points)?;
+        if let Some(limits) = &joint_limits {
+            super::run_record::check_joint_limits(limits)?;
+        }
+        Ok(Self {
+            summary: summary.unbind(),
+            scenario: Py::new(py, PyScenario { inner: scenario })?,
+            columns,
+            joint_limits: joint_limits.map(Bound::unbind),
+        })
     }
     /// The declaration of the recorded columns (as `recorded_columns()`).
     #[classattr]

@@ -1,17 +1,19 @@
 """`run`: a scenario's closed loop through MuJoCo's images (`ImageServo` on each render, its
-twist moving the free camera), with a summary in `RunResult.summary`'s schema where it applies."""
+twist moving the free camera, `[world] latency_frames` frames later), recorded in
+`RunResult`'s schema (`RunResult.from_recording`): the same summary keys and columns as a
+kinematic run with images in the loop."""
 
 from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
 from .. import geometry
-from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput
-from ..sim import load_scenario, summary_fields
+from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability
+from ..sim import load_scenario
 from ._world import World
 
 # [stop] keys the image session reads (the others are the kinematic simulator's own).
@@ -21,19 +23,31 @@ _STOP_KEYS = ("max_iterations", "pixel_error", "invariant_error", "tau21", "wind
 
 @dataclass
 class MujocoRun:
-    """A run through MuJoCo's images: `summary` (the keys of `RunResult.summary` this loop can
-    fill; the others are None), and per iteration `time` (s), `pose` (N, 4, 4: camera in F*),
-    `twist` (N, 6), `K` (N, 4: fku, fkv, u0, v0 of the frame, which a `[camera] zoom` changes), `invariant_error` (N,), `found` (N, n) and the last image."""
+    """A run through MuJoCo's images (`run_loop`): `result`, the `RunResult` (`run` returns it),
+    and what only this loop records per frame: `K` (N, 4: fku, fkv, u0, v0 of the frame, which a
+    `[camera] zoom` changes), `found` (N, n), the last image and the mean seconds per iteration
+    of rendering and of the servo step."""
 
-    summary: dict[str, Any]
-    time: np.ndarray
-    pose: np.ndarray
-    twist: np.ndarray
+    result: RunResult
     K: np.ndarray
-    invariant_error: np.ndarray
     found: np.ndarray
     last_image: np.ndarray = field(repr=False)
     seconds_per_iteration: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """`result.summary`."""
+        return self.result.summary
+
+    @property
+    def pose(self) -> np.ndarray:
+        """`result.pose` (N, 4, 4: the camera in F*)."""
+        return self.result.pose
+
+    @property
+    def time(self) -> np.ndarray:
+        """`result.time` (N,), seconds."""
+        return self.result.time
 
 
 def pose_error(pose: np.ndarray) -> tuple[float, float]:
@@ -61,43 +75,65 @@ def session_options(d: dict[str, Any], law: str | None) -> dict[str, Any]:
     return out
 
 
-def _reference_depths(world: World, servo_ids: np.ndarray, reference: np.ndarray, K_ref: Intrinsics) -> np.ndarray:
-    """The true depths in F* of the session's points: dots in order; a tag corner 4 t + c the
-    depth of the corner of tag t nearest to where it was detected in the reference image."""
+def _truth_indices(world: World, servo_ids: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """For each of the session's points, its row of `world.target_points`: dots in order; a
+    tag corner 4 t + c the corner of tag t nearest to where it was detected in the reference
+    image."""
     points, scenario = world.target_points, world.scenario
     if points is None or scenario is None:
         raise InvalidInput("world: expected a World.from_scenario")
     if world.target == "dots":
-        return points[:, 2].copy()
+        return np.arange(len(points))
     from .. import vision
 
     tags = vision.detect_tags(reference)
     corners = {int(i): c for i, c in zip(tags.ids, tags.corners)}
     truth = {int(t["id"]): k for k, t in enumerate(scenario["object"]["tags"])}
-    depths = []
+    rows = []
     for ident in servo_ids:
         tag, c = divmod(int(ident), 4)
-        block = points[4 * truth[tag] : 4 * truth[tag] + 4]
-        px, z = world.project(block, np.eye(4))
-        depths.append(z[int(np.argmin(np.linalg.norm(px - corners[tag][c], axis=1)))])
-    return np.array(depths)
+        px, _ = world.project(points[4 * truth[tag] : 4 * truth[tag] + 4], np.eye(4))
+        rows.append(4 * truth[tag] + int(np.argmin(np.linalg.norm(px - corners[tag][c], axis=1))))
+    return np.array(rows, dtype=int)
 
 
 def run(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int = 1,
-        max_iterations: int | None = None, world: World | None = None) -> MujocoRun:
-    """Runs `scenario` (a `Scenario`, dict, built-in name or path) through MuJoCo's images: the
-    reference image rendered at F* with `[reference_camera]`'s K, the servo camera with
+        max_iterations: int | None = None, world: World | None = None, record: bool = True,
+        progress: Callable[[int, int], object] | None = None) -> RunResult:
+    """Runs `scenario` (a `Scenario`, dict, built-in name or path) through MuJoCo's images and
+    returns its `RunResult` (what `vsinv.run_scenario` returns for `[world] engine = "mujoco"`):
+    the reference image rendered at F* with `[reference_camera]`'s K, the servo camera with
     `[camera]`'s, `ImageServo` with `[estimate]` as K_hat and `[control]`/`[stop]` as its
-    session, from `start` (4x4; default the scenario's `[start]`). `law` overrides
-    `[control] law`; `world` reuses a `World.from_scenario` of the same scenario."""
-    d = load_scenario(scenario).to_dict()
+    session, from `start` (4x4; default the scenario's `[start]`), the twist of frame k applied
+    after frame k + `[world] latency_frames`. `law` overrides `[control] law`; `world` reuses a
+    `World.from_scenario` of the same scenario; `record=False` keeps no rows (the summary
+    only); `progress(done, total)` is called after each frame."""
+    return run_loop(scenario, law=law, start=start, supersample=supersample, max_iterations=max_iterations,
+                    world=world, record=record, progress=progress).result
+
+
+def run_loop(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int = 1,
+             max_iterations: int | None = None, world: World | None = None, record: bool = True,
+             progress: Callable[[int, int], object] | None = None) -> MujocoRun:
+    """`run`, with what only the MuJoCo loop records (`MujocoRun`: K per frame, timings)."""
+    loaded = load_scenario(scenario)
+    d = loaded.to_dict()
     own = world is None
     w = World.from_scenario(d, supersample=supersample) if world is None else world
     try:
-        return _run(d, w, law, start, max_iterations)
+        return _run(loaded, d, w, _Options(law, start, max_iterations, record, progress))
     finally:
         if own:
             w.close()
+
+
+@dataclass
+class _Options:
+    law: str | None
+    start: Any
+    max_iterations: int | None
+    record: bool
+    progress: Callable[[int, int], object] | None
 
 
 def _intrinsics(d: dict[str, Any], key: str, t: float = 0.0) -> Intrinsics:
@@ -113,8 +149,17 @@ def _intrinsics(d: dict[str, Any], key: str, t: float = 0.0) -> Intrinsics:
     return Intrinsics(*k)
 
 
-def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray, max_iterations: int | None) -> tuple[Any, np.ndarray, float]:
-    """The `ImageServo` on the reference image (K* at F*), the first frame (K at `pose`) and dt."""
+@dataclass
+class _Session:
+    servo: Any
+    first_image: np.ndarray
+    dt: float
+    truth: np.ndarray  # per session point, its row of world.target_points
+
+
+def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray, max_iterations: int | None) -> _Session:
+    """The `ImageServo` on the reference image (K* at F*), the first frame (K at `pose`), dt
+    and which scene point each of the session's points is."""
     target: Any = world.target
     points = world.target_points
     if target not in ("dots", "tags") or points is None or world.scenario is None:
@@ -128,78 +173,166 @@ def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray,
     args: dict[str, Any] = {}
     if target == "dots":  # the clicks a user would make: near the dots' true pixels
         args["reference_points"], _ = world.project(points, np.eye(4))
-    elif d["object"].get("family") is not None:
-        args["family"] = d["object"]["family"]
+    elif d["object"].get("tag_family") is not None:
+        args["family"] = d["object"]["tag_family"]
+    probe = ImageServo(reference, target, K_hat, **args, law="none", depths=1.0) if target == "tags" else None
+    truth = _truth_indices(world, probe.ids if probe is not None else np.arange(len(points)), reference)
     if options.get("depths", "reference") == "reference":
-        probe = ImageServo(reference, target, K_hat, **args, law="none", depths=1.0) if target == "tags" else None
-        ids = probe.ids if probe is not None else np.arange(len(points))
-        args["reference_depths"] = _reference_depths(world, ids, reference, K_ref)
+        args["reference_depths"] = points[truth, 2].copy()  # F* is the world frame: depth is z
     world.set_K(K)
     if target == "dots":
         args["first_points"], _ = world.project(points, pose)
     servo = ImageServo(reference, target, K_hat, **args, **options)
-    return servo, world.render(pose), float(options["dt"])
+    return _Session(servo, world.render(pose), float(options["dt"]), truth)
 
 
-def _run(d: dict[str, Any], world: World, law: str | None, start: Any, max_iterations: int | None) -> MujocoRun:
+def _run(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> MujocoRun:
+    start = o.start
     if start is None:
         s = d["start"]
         start = geometry.pose_from_position_thetau(s["position"], np.radians(s["rotation_deg"]))
     pose = np.asarray(start, dtype=float)
-    servo, image, dt = _session(d, world, law, pose, max_iterations)
+    session = _session(d, world, o.law, pose, o.max_iterations)
+    servo, image, dt = session.servo, session.first_image, session.dt
+    latency = int(d.get("world", {}).get("latency_frames", 0))
+    pending = [np.zeros(6)] * latency  # twists computed, not yet applied (oldest first)
+    total = int(d.get("stop", {}).get("max_iterations") if o.max_iterations is None else o.max_iterations)
     zooms = bool(d["camera"].get("zoom"))
-    rows: dict[str, list[Any]] = {"pose": [], "twist": [], "err": [], "found": [], "K": []}
+    rows: dict[str, list[Any]] = {k: [] for k in ("pose", "twist", "found", "K", "pixels", "telemetry", "truth")}
     clock = {"render": 0.0, "servo": 0.0}
     while True:
         t0 = _time.perf_counter()
         step = servo.step(image)
         clock["servo"] += _time.perf_counter() - t0
-        rows["pose"].append(pose.copy())
-        k = world.K
-        rows["K"].append((k.fku, k.fkv, k.u0, k.v0))
-        rows["twist"].append(np.asarray(step.twist, dtype=float))
-        rows["err"].append(float(step.telemetry.get("invariant_error", np.nan)))
-        rows["found"].append(np.asarray(step.found).copy())
+        _record(rows, world, pose, step, session.truth)
+        if o.progress is not None:
+            o.progress(len(rows["pose"]), total)
         if not step.running:
             break
-        pose = pose @ geometry.exp_twist(rows["twist"][-1], dt)
+        pending.append(rows["twist"][-1])
+        pose = pose @ geometry.exp_twist(pending.pop(0), dt)
         t0 = _time.perf_counter()
         if zooms:  # the lens at the time of the next frame
             world.set_K(_intrinsics(d, "camera", dt * len(rows["pose"])))
         image = world.render(pose)
         clock["render"] += _time.perf_counter() - t0
     n = len(rows["pose"])
-    return MujocoRun(
-        summary=_summary(d, servo, step, rows), time=dt * np.arange(n), pose=np.array(rows["pose"]),
-        twist=np.array(rows["twist"]), K=np.array(rows["K"]), invariant_error=np.array(rows["err"]), found=np.array(rows["found"]),
-        last_image=image, seconds_per_iteration={k: v / n for k, v in clock.items()},
-    )
+    summary = _summary(d, o.law or d.get("control", {}).get("law", "invariant"), servo, step, rows)
+    result = RunResult.from_recording(loaded, summary, _arrays(rows, servo, dt, o.record))
+    return MujocoRun(result=result, K=np.array(rows["K"]), found=np.array(rows["found"]), last_image=image,
+                     seconds_per_iteration={k: v / n for k, v in clock.items()})
 
 
-def _summary(d: dict[str, Any], servo: Any, step: Any, rows: dict[str, list[Any]]) -> dict[str, Any]:
-    """`RunResult.summary`'s keys: those the loop knows filled, the others None (`within_tolerance`
-    is the scene's truth against `[stop]`'s tolerances)."""
-    start_t, start_r = pose_error(rows["pose"][0])
-    final_t, final_r = pose_error(rows["pose"][-1])
+def _record(rows: dict[str, list[Any]], world: World, pose: np.ndarray, step: Any, truth: np.ndarray) -> None:
+    """One frame's row: the pose, K, the law's twist, what was found and where, the telemetry,
+    and the true pixels of the session's points."""
+    points = world.target_points
+    assert points is not None  # a World.from_scenario (checked by _session)
+    rows["pose"].append(pose.copy())
+    k = world.K
+    rows["K"].append((k.fku, k.fkv, k.u0, k.v0))
+    rows["twist"].append(np.asarray(step.twist, dtype=float))
+    found = np.asarray(step.found, dtype=bool).copy()
+    rows["found"].append(found)
+    rows["pixels"].append(np.where(found[:, None], np.asarray(step.pixels, dtype=float), np.nan))
+    rows["telemetry"].append(step.telemetry)
+    rows["truth"].append(world.project(points[truth], pose)[0])
+
+
+def _arrays(rows: dict[str, list[Any]], servo: Any, dt: float, record: bool) -> dict[str, np.ndarray]:
+    """The recorded columns (`vsinv.sim.recorded_columns`) of the rows; none kept unless `record`."""
+    pose = np.array(rows["pose"])
+    tel = rows["telemetry"]
+    twist = np.array(rows["twist"])
+    twist[-1] = np.nan  # no step followed the last frame
+    pixels = np.array(rows["pixels"])
+    t_err, r_err = np.array([pose_error(p) for p in pose]).T
+    out = {
+        "time": dt * np.arange(len(pose)), "pose": pose, "twist": twist,
+        "joints": np.array([np.concatenate(geometry.thetau_from_pose(p)) for p in pose]).reshape(-1, 6),
+        "pixels": pixels, "visible": np.array(rows["found"]),
+        "invariant_error": np.array([t["invariant_error"] for t in tel], dtype=float),
+        "tracking_error": np.array([t["tracking_error"] for t in tel], dtype=float),
+        "eps": np.array([t["eps"] for t in tel], dtype=float).reshape(-1, 5),
+        "eps_z": np.array([t["eps_z"] for t in tel], dtype=float),
+        "image_error": np.array([t["image_error"] for t in tel], dtype=float),
+        "translation_error": t_err, "rotation_error": r_err,
+        "detection_error": np.linalg.norm(pixels - np.array(rows["truth"]), axis=2),
+    }
+    if not record:
+        out = {k: v[:0] for k, v in out.items()}
+    out["reference_pixels"] = np.asarray(servo.reference_pixels, dtype=float)
+    return out
+
+
+def _stability(d: dict[str, Any], servo_gain: float) -> tuple[bool, bool]:
+    """Props. 1-2 for K_hat against K(t) at the zoom's knots (kappa = 1), as the simulator's."""
+    zoom = d["camera"].get("zoom")
+    times = zoom["times"] if zoom else [0.0]
+    schedule = np.array([_matrix(_intrinsics(d, "camera", t)) for t in times])
+    report = check_stability(schedule, _intrinsics(d, "estimate"), 1.0, servo_gain)
+    return bool(report.prop1), bool(report.prop2)
+
+
+def _matrix(k: Intrinsics) -> np.ndarray:
+    return np.array([[k.fku, 0.0, k.u0], [0.0, k.fkv, k.v0], [0.0, 0.0, 1.0]])
+
+
+def _summary(d: dict[str, Any], law: str, servo: Any, step: Any, rows: dict[str, list[Any]]) -> dict[str, Any]:
+    """`RunResult.summary` as the simulator fills it for a free camera with images in the loop
+    (`within_tolerance` is the scene's truth against `[stop]`'s tolerances)."""
+    poses = np.array(rows["pose"])
+    start_t, start_r = pose_error(poses[0])
+    final_t, final_r = pose_error(poses[-1])
     twists = np.array(rows["twist"][:-1]).reshape(-1, 6)
+    last = rows["telemetry"][-1]
     certainty = servo.certainty() or {}
-    summary: dict[str, Any] = {key["name"]: None for key in summary_fields()}
-    summary.update({
-        "name": d.get("name"), "engine": "mujoco", "status": step.verdict, "message": step.reason,
-        "iterations": servo.iterations, "basis": list(servo.basis), "basis_switches": servo.basis_switches,
-        "final_translation_error": final_t, "final_rotation_error": final_r, "final_invariant_error": rows["err"][-1],
+    detection = np.linalg.norm(np.array(rows["pixels"]) - np.array(rows["truth"]), axis=2)
+    detection = detection[np.isfinite(detection)]
+    control, stop = d.get("control", {}), d.get("stop", {})
+    prop1, prop2 = _stability(d, float(control.get("gain", 1.0)))
+    tau = [float(t) for t in last["tau"]]
+    summary: dict[str, Any] = {
+        "name": d["name"], "status": step.verdict, "message": step.reason or "",
+        "iterations": int(servo.iterations), "stop_rule": _stop_rule(d, law),
+        "prop1": prop1, "prop2": prop2, "within_tolerance": bool(
+            final_t <= stop.get("max_translation_uncertainty", 0.005)
+            and np.degrees(final_r) <= stop.get("max_rotation_uncertainty_deg", 0.5)),
+        "basis": [int(i) for i in servo.basis], "basis_switches": int(servo.basis_switches),
+        "final_translation_error": final_t, "final_rotation_error": final_r,
+        "final_image_error": float(last["image_error"]), "final_invariant_error": float(last["invariant_error"]),
+        "final_tau_11": tau[0], "final_tau_21": tau[1], "final_tau_22": tau[2],
         "start_translation_error": start_t, "start_rotation_error": start_r,
+        "max_line_deviation": _line_deviation(poses[:, :3, 3]),
         "peak_linear_speed": float(np.linalg.norm(twists[:, :3], axis=1).max(initial=0.0)),
         "peak_angular_speed": float(np.linalg.norm(twists[:, 3:], axis=1).max(initial=0.0)),
+        "detection_error_median": float(np.median(detection)) if detection.size else None,
+        "detection_error_max": float(detection.max()) if detection.size else None,
         "translation_uncertainty": certainty.get("translation_bound"),
         "rotation_uncertainty": certainty.get("rotation_bound"),
-    })
-    stop = d.get("stop", {})
-    summary["within_tolerance"] = bool(
-        final_t <= stop.get("max_translation_uncertainty", 0.005) and np.degrees(final_r) <= stop.get("max_rotation_uncertainty_deg", 0.5)
-    )
-    summary["stop_rule"] = d.get("control", {}).get("stop_rule")  # None: the session's default
-    summary["prop1"] = summary["prop2"] = None  # the simulator's verdicts on K(t); not computed here
+    }
+    for key in ("path_duration", "plane_parallax_residual", "tracking_sigma", "tracking_psi", "tracking_phi",
+                "tracking_bound", "observed_max_eps", "min_manipulability"):
+        summary[key] = None  # no planned path, no arm
     for key in ("pixel_sigma", "reference_pixel_sigma", "translation_sigma", "rotation_sigma", "floor_pixel_sigma"):
         summary[key] = certainty.get(key)
     return summary
+
+
+def _stop_rule(d: dict[str, Any], law: str) -> str:
+    """The image rule that applied: `[control] stop_rule`, or the law's default (pixels for
+    IBVS, the invariant error otherwise)."""
+    rule = d.get("control", {}).get("stop_rule")
+    if rule is not None:
+        return str(rule)
+    return "pixel" if law == "ibvs" else "invariant"
+
+
+def _line_deviation(positions: np.ndarray) -> float:
+    """Largest distance of the camera centre from the segment between the start and F*'s origin."""
+    a = positions[0]
+    length2 = float(a @ a)
+    if length2 == 0.0:
+        return float(np.linalg.norm(positions, axis=1).max())
+    s = np.clip(positions @ a / length2, 0.0, 1.0)
+    return float(np.linalg.norm(positions - s[:, None] * a, axis=1).max())

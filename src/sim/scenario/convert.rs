@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
-use super::schema::{BodySpec, ControlSpec, DepthEstimationSpec, DepthsName, LawName, RobotKind};
+use super::schema::{BodySpec, CameraSpec, ControlSpec, DepthEstimationSpec, DepthsName, Engine, LawName, RobotKind};
 use super::{FileScope, Scenario, scenario_error};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
@@ -50,6 +50,9 @@ const MAX_ITERATIONS: usize = 10_000_000;
 /// The most object points of a scenario.
 pub const MAX_OBJECT_POINTS: usize = 10_000;
 
+/// The largest `[world] latency_frames`: 1000 frames (40 s at 25 Hz).
+pub const MAX_LATENCY_FRAMES: u32 = 1000;
+
 /// Refuses more than [`MAX_OBJECT_POINTS`] object points, naming `object.points` (also
 /// checked on a Python dictionary before it is written as JSON).
 pub fn check_point_count(n: usize) -> Result<()> {
@@ -85,12 +88,68 @@ impl Scenario {
 
     /// Checks everything that the schema alone cannot: counts, signs, that the object is in
     /// front of the reference camera and of the start pose.
+    /// Every engine's scenario is checked as the kinematic simulator reads it.
     pub fn validate(&self) -> Result<()> {
-        self.to_config().map(|_| ())
+        self.check_world()?;
+        self.simulation().map(|_| ())
     }
 
-    /// The simulation this scenario describes.
+    /// The simulation this scenario describes: the kinematic simulator's (`[world] engine =
+    /// "mujoco"` is refused, naming `world.engine`: that world runs in Python).
     pub fn to_config(&self) -> Result<SimulationConfig> {
+        self.check_world()?;
+        if self.world.engine == Engine::Mujoco {
+            return Err(scenario_error(
+                "world.engine",
+                "\"mujoco\" is not run by the Rust simulator: run the scenario from Python \
+                 (vsinv.run_scenario or the vsinv command) with the mujoco extra, pip install 'vsinv[mujoco]'",
+            ));
+        }
+        self.simulation()
+    }
+
+    /// `[world]`: a latency only where a world applies it, within [`MAX_LATENCY_FRAMES`].
+    fn check_world(&self) -> Result<()> {
+        let w = &self.world;
+        if w.latency_frames > MAX_LATENCY_FRAMES {
+            let reason = format!("{} frames, more than {MAX_LATENCY_FRAMES}", w.latency_frames);
+            return Err(scenario_error("world.latency_frames", reason));
+        }
+        if w.latency_frames > 0 && w.engine == Engine::Kinematic {
+            let reason =
+                "a latency is applied by the \"mujoco\" engine only (world.engine); the kinematic simulator has none";
+            return Err(scenario_error("world.latency_frames", reason));
+        }
+        if w.engine == Engine::Mujoco { self.check_mujoco() } else { Ok(()) }
+    }
+
+    /// What the `mujoco` engine's loop (a free camera servoed through MuJoCo's pinhole renders
+    /// with the reference depths) does not do is refused by its key, rather than ignored.
+    fn check_mujoco(&self) -> Result<()> {
+        let refuse = |key: &str, what: &str| {
+            Err(scenario_error(key, format!("{what} is not simulated by the \"mujoco\" engine (world.engine)")))
+        };
+        let distorted = |c: &CameraSpec| c.distortion.is_some() || c.calibration.is_some();
+        if self.robot.kind != RobotKind::Free {
+            return refuse("robot.kind", "an arm or a Cartesian robot (the camera flies free there)");
+        }
+        if self.control.depths.is_some_and(|d| d != DepthsName::Reference) {
+            return refuse("control.depths", "depths other than \"reference\"");
+        }
+        if self.noise.pixel_sigma > 0.0 {
+            return refuse("noise.pixel_sigma", "pixel noise (its images carry their own)");
+        }
+        if self.path.is_some() {
+            return refuse("path", "a planned path");
+        }
+        if distorted(&self.reference_camera) || self.camera.as_ref().is_some_and(distorted) {
+            return refuse("camera.distortion", "a lens distortion or a calibration file (MuJoCo renders a pinhole)");
+        }
+        Ok(())
+    }
+
+    /// The kinematic simulation of the scenario, whatever its engine.
+    fn simulation(&self) -> Result<SimulationConfig> {
         // The law first: it decides which `[control]` keys are read, and how many points.
         super::law_keys::check_law_keys(&self.control)?;
         let scene = self.scene()?;

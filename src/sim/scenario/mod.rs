@@ -6,7 +6,7 @@
 
 mod builtin;
 mod convert;
-pub use convert::{MAX_OBJECT_POINTS, MIN_TAG_SIDE_PIXELS, check_point_count};
+pub use convert::{MAX_LATENCY_FRAMES, MAX_OBJECT_POINTS, MIN_TAG_SIDE_PIXELS, check_point_count};
 mod files;
 mod law_keys;
 pub mod schema;
@@ -217,5 +217,30 @@ mod tests {
         let e = Scenario::from_toml(&value).unwrap_err().to_string();
         assert!(e.contains("control.gain") && e.contains("AKIA") && !e.contains(marker), "{e}");
         assert_eq!(shorten_quotes(r#"a "b\"c" d"#), r#"a "b\\\"c" d"#);
+    }
+
+    /// `[world] engine = "mujoco"` parses and validates as any scenario, and the Rust
+    /// simulator refuses to run it naming `world.engine`; a latency is the MuJoCo loop's only.
+    #[test]
+    fn the_mujoco_engine_is_refused_by_the_rust_runner() {
+        let text = include_str!("../../../scenarios/lens-12-6.toml");
+        let s = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\nlatency_frames = 2\n")).unwrap();
+        assert_eq!((s.world.engine, s.world.latency_frames), (Engine::Mujoco, 2));
+        let e = s.to_config().unwrap_err();
+        assert!(matches!(&e, Error::Scenario { key, .. } if key.to_string() == "world.engine"), "{e}");
+        assert!(e.to_string().contains("mujoco extra"), "{e}");
+        let e = Scenario::from_toml(&format!("{text}\n[world]\nlatency_frames = 1\n")).unwrap_err();
+        assert!(e.to_string().contains("world.latency_frames: a latency"), "{e}");
+        // What the MuJoCo loop does not simulate is refused by its key, not ignored.
+        for (table, key) in [
+            ("[noise]\npixel_sigma = 0.5", "noise.pixel_sigma"),
+            ("[path]\nsamples = 100", "path"),
+            ("[robot]\nkind = \"cartesian\"", "robot.kind"),
+        ] {
+            let e = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\n{table}\n")).unwrap_err();
+            assert!(e.to_string().contains(&format!("{key}: ")) && e.to_string().contains("not simulated"), "{e}");
+        }
+        let plain = Scenario::from_toml(text).unwrap();
+        assert!(plain.world.is_default() && !plain.to_toml().unwrap().contains("[world]"));
     }
 }

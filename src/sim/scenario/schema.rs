@@ -308,6 +308,47 @@ pub struct DepthEstimationSpec {
     pub reference_mean_depth: f64,
 }
 
+/// The world a scenario runs in (`[world] engine`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    /// vsinv's own simulator: a kinematic camera or robot, images drawn by vsinv (this crate).
+    #[default]
+    Kinematic,
+    /// MuJoCo's physics and renders: run from Python, `vsinv.mujoco.run` (the `mujoco` extra).
+    Mujoco,
+}
+
+impl Engine {
+    /// The name a scenario file gives the engine.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Kinematic => "kinematic",
+            Self::Mujoco => "mujoco",
+        }
+    }
+}
+
+/// `[world]`: which world runs the scenario, and what it adds to the loop.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorldSpec {
+    /// `"kinematic"` (default: this crate's simulator) or `"mujoco"` (Python's `vsinv.mujoco`).
+    #[serde(default)]
+    pub engine: Engine,
+    /// Frames between an image and the twist computed from it being applied: the twist of
+    /// frame k moves the camera after frame k + N (default 0; the `mujoco` engine only).
+    #[serde(default)]
+    pub latency_frames: u32,
+}
+
+impl WorldSpec {
+    /// Whether every key has its default (the table is then not written).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}
+
 /// A scenario: one simulated servoing run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -352,6 +393,9 @@ pub struct Scenario {
     /// The translation pair for `control.depths = "estimated"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub depth_estimation: Option<DepthEstimationSpec>,
+    /// The world that runs the scenario (default: the kinematic simulator).
+    #[serde(default, skip_serializing_if = "WorldSpec::is_default")]
+    pub world: WorldSpec,
     /// The directory of the scenario file, if any: relative `calibration` and `robot.urdf`
     /// paths start there.
     #[serde(skip)]
