@@ -186,7 +186,7 @@ fn a_fisheye_lens_through_images_converges() {
 fn fisheye_keys_are_checked_naming_the_key() {
     let dir = scratch("fisheye");
     let key_of = |extra: &str| match with_camera_table(&dir, &fisheye_table(extra)) {
-        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(vsinv::sim::SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("{other:?}"),
     };
     let (key, reason) = key_of("distortion = [0.1, 0.0, 0.0, 0.0, 0.0]\ndistortion_model = \"equidistant\"\n");
@@ -204,7 +204,7 @@ fn fisheye_keys_are_checked_naming_the_key() {
         &dir,
         "[camera]\ncalibration = \"barrel.yaml\"\ndistortion_model = \"equidistant\"\n",
     ) {
-        Err(vsinv::Error::Scenario { key, reason }) => (key.to_string(), reason),
+        Err(vsinv::sim::SimError::Scenario { key, reason }) => (key.to_string(), reason),
         other => panic!("{other:?}"),
     };
     assert_eq!(key, "camera.distortion_model");

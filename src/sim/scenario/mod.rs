@@ -227,7 +227,7 @@ mod tests {
         let s = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\nlatency_frames = 2\n")).unwrap();
         assert_eq!((s.world.engine, s.world.latency_frames), (Engine::Mujoco, 2));
         let e = s.to_config().unwrap_err();
-        assert!(matches!(&e, Error::Scenario { key, .. } if key.to_string() == "world.engine"), "{e}");
+        assert!(matches!(&e, SimError::Scenario { key, .. } if key.to_string() == "world.engine"), "{e}");
         assert!(e.to_string().contains("mujoco extra"), "{e}");
         let e = Scenario::from_toml(&format!("{text}\n[world]\nlatency_frames = 1\n")).unwrap_err();
         assert!(e.to_string().contains("world.latency_frames: a latency"), "{e}");
