@@ -47,3 +47,25 @@ def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
     sin = np.linalg.norm([r[2, 1] - r[1, 2], r[0, 2] - r[2, 0], r[1, 0] - r[0, 1]]) / 2
     angle = np.degrees(np.arctan2(sin, (np.trace(r) - 1) / 2))
     return float(angle), float(np.linalg.norm(found[:3, 3] - truth[:3, 3]))
+
+
+def eye_to_hand_stations(rng: np.random.Generator, n: int, noise: tuple[float, float] = (0.0, 0.0)):
+    """``n`` eye-to-hand stations: a camera fixed in the base frame (camera-to-base ``Y``, about
+    1.1 m in front of the base looking back at the workspace), a target on the flange
+    (target-to-flange ``T``, 0.1 m beyond it), the gripper poses of ``stations`` (tilted up to 40
+    degrees about random axes), and what the camera sees, ``C_i = Y^-1 G_i T``, perturbed as in
+    ``stations``. Returns (G, C, Y, T)."""
+    y = rigid(np.array([0.0, -np.pi / 2, 0.0]) + random_rotvec(rng, 0.3), np.array([1.3, 0.0, 0.4]) + rng.uniform(-0.1, 0.1, 3))
+    t = rigid(random_rotvec(rng, rng.uniform(0.0, 0.5)), np.array([0.0, 0.0, 0.1]) + rng.uniform(-0.03, 0.03, 3))
+    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
+    g, c = [], []
+    for _ in range(n):
+        tilt = rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
+        gi = looking_down @ tilt
+        ci = np.linalg.inv(y) @ gi @ t
+        rot_sd, trans_sd = noise
+        if rot_sd > 0 or trans_sd > 0:
+            ci = ci @ rigid(rng.normal(0.0, np.radians(rot_sd), 3), rng.normal(0.0, trans_sd, 3))
+        g.append(gi)
+        c.append(ci)
+    return np.array(g), np.array(c), y, t

@@ -100,6 +100,14 @@ assert agreement.max_rotation_deg < 1e-6 and agreement.max_translation_m < 1e-9
 """
 
 
+EYE_TO_HAND_CHECK = """
+assert cal.setup == "eye_to_hand" and np.abs(cal.matrix - Y).max() < 1e-9
+assert cal.rms_rotation_deg < 1e-6 and cal.rms_translation_m < 1e-9 and 20 < cal.axis_spread_deg <= 90
+wrong = vsinv.calibration.calibrate_hand_eye(gripper_poses, target_poses, method="park")
+assert wrong.setup == "eye_in_hand" and wrong.rms_rotation_deg > 1.0
+"""
+
+
 def check_replay(out: str) -> None:
     """Every dot in every frame (the block's recording: three copies of vision-12-6's start
     view), and the table and figure written."""
@@ -230,7 +238,9 @@ BLOCKS: list[Entry] = [
     Entry("python", "ctl = vsinv.laws.InvariantController(", RUN, check="assert twist.shape == (6,) and report.prop1, report"),
     Entry("python", "try:\n    vsinv.run_scenario(d)", RUN, check="print('no exception escaped')", output="fix the gain:"),
     Entry("python", "cal = vsinv.calibration.load_calibration", RUN, check=CALIBRATION_CHECK),
-    Entry("python", "cal = vsinv.calibration.calibrate_hand_eye", RUN, check=HAND_EYE_CHECK),
+    Entry("python", "cal = vsinv.calibration.calibrate_hand_eye(gripper_poses, target_poses, method=\"park\")", RUN,
+          check=HAND_EYE_CHECK),
+    Entry("python", "setup=\"eye_to_hand\")", RUN, check=EYE_TO_HAND_CHECK),
     Entry("sh", "vsinv list", RUN, check=check_exit_only),
     Entry("python", "result = vsinv.run_scenario", RUN, check=SIMULATOR_CHECK),
     Entry("toml", 'name = "my-run"', RUN, "loaded and run: the outcome stated under the block"),

@@ -158,7 +158,7 @@ def pose_variants(valid: np.ndarray) -> st.SearchStrategy[V]:
 def hand_eye_digest(out: Any) -> Any:
     if isinstance(out, vsinv.calibration.HandEyeAgreement):
         return {k: hand_eye_digest(v) for k, v in out.calibrations.items()}
-    return (out.matrix, out.residuals, out.pairs, out.axis_spread_deg, out.method)
+    return (out.matrix, out.residuals, out.pairs, out.axis_spread_deg, out.method, out.setup)
 
 
 def check_hand_eye(out: Any) -> None:
@@ -172,14 +172,16 @@ def check_hand_eye(out: Any) -> None:
         assert cal.rotating_motions >= 1 and cal.motions_used >= 1 and repr(cal)
     if isinstance(out, vsinv.calibration.HandEyeAgreement):
         assert out.max_rotation_deg >= 0 and out.max_translation_m >= 0 and isinstance(out.failures, dict)
+        assert out.setup in ("eye_in_hand", "eye_to_hand")
+        assert all(cal.setup == out.setup for cal in out.calibrations.values())
         assert repr(out)
 
 
 HAND_EYE_MEMBERS = [
-    f"HandEyeCalibration.{m}" for m in ("matrix", "method", "residuals", "pairs", "axis_spread_deg", "axis_eigenvalues",
+    f"HandEyeCalibration.{m}" for m in ("matrix", "method", "setup", "residuals", "pairs", "axis_spread_deg", "axis_eigenvalues",
                                          "rotating_motions", "motions_used", "rms_rotation_deg", "rms_translation_m",
                                          "max_rotation_deg", "max_translation_m")
-] + [f"HandEyeAgreement.{m}" for m in ("calibrations", "failures", "max_rotation_deg", "max_translation_m")]
+] + [f"HandEyeAgreement.{m}" for m in ("calibrations", "failures", "setup", "max_rotation_deg", "max_translation_m")]
 
 
 @covers("calibrate_hand_eye", "compare_hand_eye_methods", "HandEyeCalibration", "HandEyeAgreement", *HAND_EYE_MEMBERS)
@@ -194,6 +196,9 @@ def test_hand_eye_inputs(data: Any) -> None:
         args["method"] = "park"
         strategies["method"] = choices(["tsai", "park", "daniilidis", "Park_Martin", "TSAI"],
                                        ["horaud", "", 3, 1.5, b"tsai", ["tsai"]])
+    args["setup"] = "eye_in_hand"
+    strategies["setup"] = choices(["eye_in_hand", "eye_to_hand", "Eye-To-Hand", "EYE_IN_HAND", None],
+                                  ["eye_on_hand", "", "in_hand", 0, b"eye_in_hand", ["eye_to_hand"]])
     fn = getattr(vsinv.calibration, which)
     ref = fn(**args)
     fuzz(data, fn, args, strategies, ref=ref, digest=hand_eye_digest, check=check_hand_eye)

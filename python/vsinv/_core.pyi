@@ -1276,24 +1276,32 @@ def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution
     no seed reaches the pose."""
 
 _HandEyeMethod = Literal["tsai", "park", "daniilidis"]
+_HandEyeSetup = Literal["eye_in_hand", "eye_to_hand"]
 
 @final
 class HandEyeCalibration:
-    """A hand-eye calibration: the camera-to-gripper transform and its diagnostics.
+    """A hand-eye calibration: the camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand)
+    transform and its diagnostics.
 
     For stations i < j the gripper motion A = G_j^-1 G_i and the camera motion B = C_j C_i^-1
-    satisfy A X = X B; every pair is a motion (as in OpenCV)."""
+    satisfy A X = X B; every pair is a motion (as in OpenCV). Eye-to-hand: the gripper poses
+    are inverted first, A = G_j G_i^-1."""
 
     @property
     def matrix(self) -> _F64Array:
-        """The 4x4 camera-to-gripper transform X (the camera frame in the gripper frame)."""
+        """The 4x4 transform X: camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand),
+        the camera frame in the gripper frame or in the base frame."""
+    @property
+    def setup(self) -> _HandEyeSetup:
+        """Where the camera is: 'eye_in_hand' (on the flange; `matrix` is camera-to-gripper) or
+        'eye_to_hand' (fixed in the base frame; `matrix` is camera-to-base)."""
     @property
     def method(self) -> _HandEyeMethod:
         """The method: 'tsai', 'park' or 'daniilidis'."""
     @property
     def residuals(self) -> _F64Array:
         """(m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`):
-        rotation in degrees, translation in metres."""
+        rotation in degrees, translation in metres (eye_to_hand: A = G_j G_i^-1, in the base frame)."""
     @property
     def pairs(self) -> npt.NDArray[np.int64]:
         """(m, 2): the stations (i, j), i < j, of each residual row."""
@@ -1336,6 +1344,9 @@ class HandEyeAgreement:
     def failures(self) -> dict[str, str]:
         """{method: reason} of the methods that refused the poses."""
     @property
+    def setup(self) -> _HandEyeSetup:
+        """Where the camera is: 'eye_in_hand' or 'eye_to_hand' (what every calibration's `matrix` is)."""
+    @property
     def max_rotation_deg(self) -> float:
         """The largest rotation between two methods' transforms, degrees."""
     @property
@@ -1343,17 +1354,28 @@ class HandEyeAgreement:
         """The largest distance between two methods' translations, metres."""
 
 def calibrate_hand_eye(
-    gripper_poses: _ArrayLike, target_poses: _ArrayLike, method: _HandEyeMethod | str = "tsai"
+    gripper_poses: _ArrayLike,
+    target_poses: _ArrayLike,
+    method: _HandEyeMethod | str = "tsai",
+    setup: _HandEyeSetup | str = "eye_in_hand",
 ) -> HandEyeCalibration:
-    """The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and
-    target-to-camera `target_poses` (OpenCV's calibrateHandEye convention), by `method`
-    ('tsai', 'park' or 'daniilidis').
+    """The camera-to-gripper (setup='eye_in_hand': camera on the flange, target fixed) or
+    camera-to-base (setup='eye_to_hand': camera fixed, target on the flange) transform from
+    (n, 4, 4) gripper-to-base `gripper_poses` and target-to-camera `target_poses` (OpenCV's
+    calibrateHandEye convention), by `method` ('tsai', 'park' or 'daniilidis').
 
-    `gripper_poses`: (n, 4, 4) gripper-to-base poses reported by the robot; `target_poses`:
-    (n, 4, 4) target-to-camera poses (e.g. from solvePnP); `method`: 'tsai' (default), 'park' or
-    'daniilidis'. Raises InvalidInput for a pose that is not a rigid transform (naming the
-    argument and the pose) and DegenerateGeometry (kind 'degenerate_motion') for fewer than 3
-    poses, no rotation, or rotations about (nearly) parallel axes only."""
+    ``gripper_poses``: (n, 4, 4) gripper-to-base poses reported by the robot;
+    ``target_poses``: (n, 4, 4) target-to-camera poses (e.g. from solvePnP); ``method``:
+    'tsai' (default), 'park' or 'daniilidis'; ``setup``: 'eye_in_hand' (default) or
+    'eye_to_hand' (the gripper poses are inverted, base-to-gripper, and the same method runs).
+    Raises InvalidInput for a pose that is not a
+    rigid transform (naming the argument and the pose), an unknown method or setup, and DegenerateGeometry (kind
+    'degenerate_motion') for fewer than 3 poses, no rotation, or rotations about (nearly)
+    parallel axes only.
+    """
 
-def compare_hand_eye_methods(gripper_poses: _ArrayLike, target_poses: _ArrayLike) -> HandEyeAgreement:
-    """Runs every method on the same poses: their calibrations and how far apart they are."""
+def compare_hand_eye_methods(
+    gripper_poses: _ArrayLike, target_poses: _ArrayLike, setup: _HandEyeSetup | str = "eye_in_hand"
+) -> HandEyeAgreement:
+    """Runs every method on the same poses, for `setup` 'eye_in_hand' or 'eye_to_hand': their
+    calibrations and how far apart they are."""

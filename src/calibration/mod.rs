@@ -4,7 +4,7 @@
 //! | concept | module |
 //! |---|---|
 //! | camera calibration files: ROS `camera_info` YAML, OpenCV `FileStorage` YAML and XML | [`camera_file`] |
-//! | hand-eye calibration: the camera's mount on the flange from robot and target poses (AX = XB) | [`hand_eye`] |
+//! | hand-eye calibration: the camera's mount on the flange, or its place beside the robot, from robot and target poses (AX = XB) | [`hand_eye`] |
 //!
 //! The names of both are re-exported here (`vsinv::calibration::load_calibration`,
 //! `vsinv::calibration::calibrate_hand_eye`).
@@ -19,6 +19,6 @@ pub use camera_file::{
 };
 pub use error::CalibrationError;
 pub use hand_eye::{
-    AxisSpread, HandEyeAgreement, HandEyeCalibration, HandEyeMethod, PairResidual, calibrate_hand_eye,
+    AxisSpread, HandEyeAgreement, HandEyeCalibration, HandEyeMethod, HandEyeSetup, PairResidual, calibrate_hand_eye,
     compare_hand_eye_methods,
 };

@@ -1,7 +1,7 @@
 //! Hand-eye calibration in Python: `calibrate_hand_eye` and `compare_hand_eye_methods` on
 //! `(n, 4, 4)` arrays of gripper-to-base and target-to-camera poses (OpenCV's convention),
-//! returning `HandEyeCalibration` (the camera-to-gripper `matrix` and its diagnostics) and
-//! `HandEyeAgreement`.
+//! returning `HandEyeCalibration` (the camera-to-gripper `matrix` for `setup="eye_in_hand"`,
+//! camera-to-base for `setup="eye_to_hand"`, and its diagnostics) and `HandEyeAgreement`.
 
 use nalgebra::Matrix4;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 
 use super::arrays::{f64_array, from_matrix, mat, vec1};
 use super::errors::invalid_argument;
-use crate::calibration::hand_eye::{self, HandEyeAgreement, HandEyeCalibration, HandEyeMethod};
+use crate::calibration::hand_eye::{self, HandEyeAgreement, HandEyeCalibration, HandEyeMethod, HandEyeSetup};
 
 /// Reads an `(n, 4, 4)` array of poses.
 fn poses_arg(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<Matrix4<f64>>> {
@@ -25,10 +25,19 @@ fn method_arg(obj: &Bound<'_, PyAny>) -> PyResult<HandEyeMethod> {
     Ok(HandEyeMethod::from_name(&name)?)
 }
 
-/// A hand-eye calibration: the camera-to-gripper transform and its diagnostics.
+fn setup_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<HandEyeSetup> {
+    let Some(obj) = obj else { return Ok(HandEyeSetup::EyeInHand) };
+    let name: String = obj.extract().map_err(|_| {
+        invalid_argument("setup", "setup: expected a string: 'eye_in_hand' or 'eye_to_hand'".to_string())
+    })?;
+    Ok(HandEyeSetup::from_name(&name)?)
+}
+
+/// A hand-eye calibration: the camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand)
+/// transform and its diagnostics.
 ///
 /// For stations i < j the gripper motion A = G_j^-1 G_i and the camera motion B = C_j C_i^-1
-/// satisfy A X = X B; every pair is a motion (as in OpenCV).
+/// satisfy A X = X B (eye_to_hand: A = G_j G_i^-1); every pair is a motion (as in OpenCV).
 #[pyclass(name = "HandEyeCalibration", module = "vsinv._core", frozen)]
 pub struct PyHandEyeCalibration {
     inner: HandEyeCalibration,
@@ -36,10 +45,17 @@ pub struct PyHandEyeCalibration {
 
 #[pymethods]
 impl PyHandEyeCalibration {
-    /// The 4x4 camera-to-gripper transform X (the camera frame in the gripper frame).
+    /// The 4x4 transform X: camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand),
+    /// the camera frame in the gripper frame or in the base frame.
     #[getter]
     fn matrix<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         from_matrix(py, &self.inner.transform.to_homogeneous())
+    }
+    /// Where the camera is: 'eye_in_hand' (on the flange; `matrix` is camera-to-gripper) or
+    /// 'eye_to_hand' (fixed in the base frame; `matrix` is camera-to-base).
+    #[getter]
+    fn setup(&self) -> &'static str {
+        self.inner.setup.name()
     }
     /// The method: 'tsai', 'park' or 'daniilidis'.
     #[getter]
@@ -47,7 +63,7 @@ impl PyHandEyeCalibration {
         self.inner.method.name()
     }
     /// (m, 2): the residual of A X = X B for every pair of stations i < j (order of `pairs`):
-    /// rotation in degrees, translation in metres.
+    /// rotation in degrees, translation in metres (eye_to_hand: A = G_j G_i^-1, in the base frame).
     #[getter]
     fn residuals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let r = &self.inner.residuals;
@@ -107,8 +123,9 @@ impl PyHandEyeCalibration {
         let c = &self.inner;
         let t = c.transform.translation.vector;
         format!(
-            "HandEyeCalibration(method={:?}, translation_m=[{:.6}, {:.6}, {:.6}], rotation_deg={:.4}, rms_rotation_deg={:.4}, rms_translation_m={:.6}, axis_spread_deg={:.2}, motions_used={})",
+            "HandEyeCalibration(method={:?}, setup={:?}, translation_m=[{:.6}, {:.6}, {:.6}], rotation_deg={:.4}, rms_rotation_deg={:.4}, rms_translation_m={:.6}, axis_spread_deg={:.2}, motions_used={})",
             c.method.name(),
+            c.setup.name(),
             t[0],
             t[1],
             t[2],
@@ -147,6 +164,11 @@ impl PyHandEyeAgreement {
         }
         Ok(d)
     }
+    /// Where the camera is: 'eye_in_hand' or 'eye_to_hand' (what every calibration's `matrix` is).
+    #[getter]
+    fn setup(&self) -> &'static str {
+        self.inner.setup.name()
+    }
     /// The largest rotation between two methods' transforms, degrees.
     #[getter]
     fn max_rotation_deg(&self) -> f64 {
@@ -160,7 +182,8 @@ impl PyHandEyeAgreement {
     fn __repr__(&self) -> String {
         let names: Vec<&str> = self.inner.calibrations.iter().map(|c| c.method.name()).collect();
         format!(
-            "HandEyeAgreement(methods={names:?}, max_rotation_deg={:.4}, max_translation_m={:.6}, failures={})",
+            "HandEyeAgreement(methods={names:?}, setup={:?}, max_rotation_deg={:.4}, max_translation_m={:.6}, failures={})",
+            self.inner.setup.name(),
             self.inner.max_rotation_deg,
             self.inner.max_translation_m,
             self.inner.failures.len()
@@ -168,38 +191,53 @@ impl PyHandEyeAgreement {
     }
 }
 
-/// The camera-to-gripper transform from (n, 4, 4) gripper-to-base `gripper_poses` and
-/// target-to-camera `target_poses` (OpenCV's calibrateHandEye convention), by `method`
-/// ('tsai', 'park' or 'daniilidis').
+/// The camera-to-gripper (setup='eye_in_hand': camera on the flange, target fixed) or
+/// camera-to-base (setup='eye_to_hand': camera fixed, target on the flange) transform from
+/// (n, 4, 4) gripper-to-base `gripper_poses` and target-to-camera `target_poses` (OpenCV's
+/// calibrateHandEye convention), by `method` ('tsai', 'park' or 'daniilidis').
 ///
 /// `gripper_poses`: (n, 4, 4) gripper-to-base poses reported by the robot; `target_poses`:
 /// (n, 4, 4) target-to-camera poses (e.g. from solvePnP); `method`: 'tsai' (default), 'park' or
-/// 'daniilidis'. Raises InvalidInput for a pose that is not a rigid transform (naming the
-/// argument and the pose) and DegenerateGeometry (kind 'degenerate_motion') for fewer than 3
-/// poses, no rotation, or rotations about (nearly) parallel axes only.
+/// 'daniilidis'; `setup`: 'eye_in_hand' (default) or 'eye_to_hand' (the gripper poses are
+/// inverted, base-to-gripper, and the same method runs). Raises InvalidInput for a pose that is
+/// not a rigid transform (naming the argument and the pose), an unknown method or setup, and
+/// DegenerateGeometry (kind 'degenerate_motion') for fewer than 3 poses, no rotation, or
+/// rotations about (nearly) parallel axes only.
 #[pyfunction]
-#[pyo3(signature = (gripper_poses, target_poses, method = None), text_signature = "(gripper_poses, target_poses, method='tsai')")]
+#[pyo3(
+    signature = (gripper_poses, target_poses, method = None, setup = None),
+    text_signature = "(gripper_poses, target_poses, method='tsai', setup='eye_in_hand')"
+)]
 pub fn calibrate_hand_eye(
     py: Python<'_>,
     gripper_poses: &Bound<'_, PyAny>,
     target_poses: &Bound<'_, PyAny>,
     method: Option<&Bound<'_, PyAny>>,
+    setup: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyHandEyeCalibration> {
     let (g, c) = (poses_arg(gripper_poses, "gripper_poses")?, poses_arg(target_poses, "target_poses")?);
     let method = method.map(method_arg).transpose()?.unwrap_or(HandEyeMethod::TsaiLenz);
-    let inner = py.detach(|| hand_eye::calibrate_hand_eye(&g, &c, method))?;
+    let setup = setup_arg(setup)?;
+    let inner = py.detach(|| hand_eye::calibrate_hand_eye(&g, &c, method, setup))?;
     Ok(PyHandEyeCalibration { inner })
 }
 
-/// Runs every method on the same poses: their calibrations and how far apart they are.
+/// Runs every method on the same poses, for `setup` 'eye_in_hand' or 'eye_to_hand': their
+/// calibrations and how far apart they are.
 #[pyfunction]
+#[pyo3(
+    signature = (gripper_poses, target_poses, setup = None),
+    text_signature = "(gripper_poses, target_poses, setup='eye_in_hand')"
+)]
 pub fn compare_hand_eye_methods(
     py: Python<'_>,
     gripper_poses: &Bound<'_, PyAny>,
     target_poses: &Bound<'_, PyAny>,
+    setup: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyHandEyeAgreement> {
     let (g, c) = (poses_arg(gripper_poses, "gripper_poses")?, poses_arg(target_poses, "target_poses")?);
-    let inner = py.detach(|| hand_eye::compare_hand_eye_methods(&g, &c))?;
+    let setup = setup_arg(setup)?;
+    let inner = py.detach(|| hand_eye::compare_hand_eye_methods(&g, &c, setup))?;
     Ok(PyHandEyeAgreement { inner })
 }
 

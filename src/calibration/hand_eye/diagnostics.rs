@@ -8,7 +8,7 @@ use nalgebra::{Matrix3, SymmetricEigen};
 
 use super::motions::{Motion, Rigid};
 use super::rotation::{rotation_angle, rotation_vector};
-use super::{HandEyeCalibration, HandEyeMethod};
+use super::{HandEyeCalibration, HandEyeMethod, HandEyeSetup};
 use crate::calibration::error::{CalibrationError, Result};
 use crate::error::Short;
 
@@ -77,7 +77,7 @@ impl AxisSpread {
     pub(crate) fn check(&self, poses: usize) -> Result<()> {
         if self.rotating_motions == 0 {
             let reason = format!(
-                "no gripper motion rotates by {MIN_MOTION_ROTATION_DEG} degrees or more (largest {} degrees): pure translations do not determine the camera's rotation on the flange; rotate the gripper between poses, about at least two different axes",
+                "no gripper motion rotates by {MIN_MOTION_ROTATION_DEG} degrees or more (largest {} degrees): pure translations do not determine the camera's rotation (on the flange, or in the base frame); rotate the gripper between poses, about at least two different axes",
                 Short(self.max_rotation_deg)
             );
             return Err(CalibrationError::DegenerateMotion { poses, reason });
@@ -108,6 +108,9 @@ pub(crate) fn residuals(motions: &[Motion], x: &Rigid) -> Vec<PairResidual> {
 /// The results of every method on the same poses, and how far apart they are.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HandEyeAgreement {
+    /// Where the camera is: every calibration's transform is camera-to-gripper
+    /// (eye_in_hand) or camera-to-base (eye_to_hand).
+    pub setup: HandEyeSetup,
     /// The calibrations of the methods that succeeded, in [`HandEyeMethod::ALL`]'s order.
     pub calibrations: Vec<HandEyeCalibration>,
     /// The methods that refused the poses, with the reason (e.g. Tsai-Lenz without motions
@@ -121,7 +124,11 @@ pub struct HandEyeAgreement {
 
 impl HandEyeAgreement {
     /// Compares the calibrations pairwise.
-    pub(crate) fn new(calibrations: Vec<HandEyeCalibration>, failures: Vec<(HandEyeMethod, String)>) -> Self {
+    pub(crate) fn new(
+        setup: HandEyeSetup,
+        calibrations: Vec<HandEyeCalibration>,
+        failures: Vec<(HandEyeMethod, String)>,
+    ) -> Self {
         let (mut max_rotation_deg, mut max_translation_m) = (0.0_f64, 0.0_f64);
         for (k, a) in calibrations.iter().enumerate() {
             for b in &calibrations[k + 1..] {
@@ -131,6 +138,6 @@ impl HandEyeAgreement {
                     max_translation_m.max((a.transform.translation.vector - b.transform.translation.vector).norm());
             }
         }
-        HandEyeAgreement { calibrations, failures, max_rotation_deg, max_translation_m }
+        HandEyeAgreement { setup, calibrations, failures, max_rotation_deg, max_translation_m }
     }
 }

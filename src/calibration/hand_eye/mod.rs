@@ -12,8 +12,16 @@
 //! `i < j`, `A = G_j^-1 G_i` and `B = C_j C_i^-1` satisfy `A X = X B` (module `motions`);
 //! all pairs are used, as OpenCV does.
 //!
+//! **Eye-to-hand** ([`HandEyeSetup::EyeToHand`]): the camera is fixed in the base frame and the
+//! target rides on the flange. The inputs are the same (gripper-to-base from the robot,
+//! target-to-camera from the camera); the result is `Y`, the camera frame in the base frame
+//! (camera-to-base). The gripper poses are inverted (base-to-gripper) and the same solvers,
+//! residuals and refusals run on them (module `setup`: the reduction). The residuals and
+//! axes are then those of `A = G_j G_i^-1`, motions in the base frame.
+//!
 //! | concept | file | reference |
 //! |---|---|---|
+//! | eye-in-hand or eye-to-hand, the reduction of one to the other | `setup.rs` | Tsai-Lenz sec. I |
 //! | poses checked rigid, relative motions | `motions.rs` | Tsai-Lenz eqs. 6-7 |
 //! | quaternions and rotation vectors | `rotation.rs` | Shepperd 1978 |
 //! | Tsai-Lenz | `tsai.rs` | IEEE T-RA 5(3), 1989 |
@@ -30,7 +38,7 @@
 //! undetermined.
 //!
 //! ```
-//! use vsinv::calibration::{HandEyeMethod, calibrate_hand_eye};
+//! use vsinv::calibration::{HandEyeMethod, HandEyeSetup, calibrate_hand_eye};
 //! use vsinv::nalgebra::{Isometry3, Matrix4, Vector3};
 //! let x = Isometry3::new(Vector3::new(0.05, 0.0, 0.1), Vector3::new(0.0, 0.0, 0.3)); // camera on flange
 //! let target_in_base = Isometry3::new(Vector3::new(0.6, 0.0, 0.0), Vector3::zeros());
@@ -40,7 +48,7 @@
 //!     gripper.push(g.to_homogeneous());
 //!     target.push(((g * x).inverse() * target_in_base).to_homogeneous());
 //! }
-//! let calibration = calibrate_hand_eye(&gripper, &target, HandEyeMethod::ParkMartin)?;
+//! let calibration = calibrate_hand_eye(&gripper, &target, HandEyeMethod::ParkMartin, HandEyeSetup::EyeInHand)?;
 //! assert!((calibration.transform.to_homogeneous() - x.to_homogeneous()).amax() < 1e-9);
 //! # Ok::<(), vsinv::calibration::CalibrationError>(())
 //! ```
@@ -50,6 +58,7 @@ mod diagnostics;
 mod motions;
 mod park;
 mod rotation;
+mod setup;
 mod translation;
 mod tsai;
 
@@ -58,6 +67,7 @@ use nalgebra::{Isometry3, Matrix4, Rotation3, Translation3, UnitQuaternion};
 pub use diagnostics::{AxisSpread, HandEyeAgreement, MIN_AXIS_SPREAD_DEG, MIN_MOTION_ROTATION_DEG, PairResidual};
 pub use motions::{MAX_POSE_TRANSLATION_M, MAX_POSES, RIGID_TOLERANCE};
 use motions::{Motion, Rigid, motions, rigid_poses};
+pub use setup::HandEyeSetup;
 pub use tsai::TSAI_BAND;
 
 use crate::calibration::error::{CalibrationError, Result};
@@ -115,9 +125,13 @@ impl HandEyeMethod {
 pub struct HandEyeCalibration {
     /// The method that computed it.
     pub method: HandEyeMethod,
-    /// `X`: the camera frame in the gripper frame (camera-to-gripper).
+    /// Where the camera is, which says what [`transform`](Self::transform) is.
+    pub setup: HandEyeSetup,
+    /// `X`: camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand): the camera frame
+    /// in the gripper frame, or in the base frame.
     pub transform: Isometry3<f64>,
-    /// The residual of `A X = X B` for every pair of stations `i < j`, in order.
+    /// The residual of `A X = X B` for every pair of stations `i < j`, in order (for
+    /// eye-to-hand, `A = G_j G_i^-1`: translations in the base frame).
     pub residuals: Vec<PairResidual>,
     /// The spread of the rotation axes of the gripper motions.
     pub axis_spread: AxisSpread,
@@ -156,8 +170,13 @@ pub(crate) struct Solution {
     motions_used: usize,
 }
 
-/// The motions of checked poses, and their axis spread (refusing degenerate sets).
-fn prepare(gripper_poses: &[Matrix4<f64>], target_poses: &[Matrix4<f64>]) -> Result<(Vec<Motion>, AxisSpread)> {
+/// The motions of checked poses, and their axis spread (refusing degenerate sets). For
+/// eye-to-hand the gripper poses are inverted once checked (module `setup`).
+fn prepare(
+    gripper_poses: &[Matrix4<f64>],
+    target_poses: &[Matrix4<f64>],
+    setup: HandEyeSetup,
+) -> Result<(Vec<Motion>, AxisSpread)> {
     let n = gripper_poses.len();
     if target_poses.len() != n {
         let expected = format!("{n} poses (one per gripper pose)");
@@ -173,14 +192,23 @@ fn prepare(gripper_poses: &[Matrix4<f64>], target_poses: &[Matrix4<f64>]) -> Res
         let reason = "at least 3 poses are needed (two motions about different axes)".to_string();
         return Err(CalibrationError::DegenerateMotion { poses: n, reason });
     }
-    let (g, c) = (rigid_poses("gripper_poses", gripper_poses)?, rigid_poses("target_poses", target_poses)?);
+    let (mut g, c) = (rigid_poses("gripper_poses", gripper_poses)?, rigid_poses("target_poses", target_poses)?);
+    if setup == HandEyeSetup::EyeToHand {
+        g = g.iter().map(Rigid::inverse).collect();
+    }
     let motions = motions(&g, &c);
     let spread = AxisSpread::of(&motions);
     spread.check(n)?;
     Ok((motions, spread))
 }
 
-fn solve(method: HandEyeMethod, motions: &[Motion], spread: AxisSpread, poses: usize) -> Result<HandEyeCalibration> {
+fn solve(
+    method: HandEyeMethod,
+    setup: HandEyeSetup,
+    motions: &[Motion],
+    spread: AxisSpread,
+    poses: usize,
+) -> Result<HandEyeCalibration> {
     let solution = match method {
         HandEyeMethod::TsaiLenz => tsai::solve(motions, poses)?,
         HandEyeMethod::ParkMartin => park::solve(motions, poses)?,
@@ -194,19 +222,21 @@ fn solve(method: HandEyeMethod, motions: &[Motion], spread: AxisSpread, poses: u
     let rotation = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(x.r));
     let transform = Isometry3::from_parts(Translation3::from(x.t), rotation);
     let residuals = diagnostics::residuals(motions, &x);
-    Ok(HandEyeCalibration { method, transform, residuals, axis_spread: spread, motions_used: solution.motions_used })
+    let motions_used = solution.motions_used;
+    Ok(HandEyeCalibration { method, setup, transform, residuals, axis_spread: spread, motions_used })
 }
 
-/// The camera-to-gripper transform from gripper-to-base `gripper_poses` and target-to-camera
-/// `target_poses` (one per station, 4x4 homogeneous), by `method`, with its diagnostics
-/// (module docs: convention and refusals).
+/// The camera-to-gripper (eye_in_hand) or camera-to-base (eye_to_hand) transform from
+/// gripper-to-base `gripper_poses` and target-to-camera `target_poses` (one per station, 4x4
+/// homogeneous), by `method`, with its diagnostics (module docs: convention and refusals).
 pub fn calibrate_hand_eye(
     gripper_poses: &[Matrix4<f64>],
     target_poses: &[Matrix4<f64>],
     method: HandEyeMethod,
+    setup: HandEyeSetup,
 ) -> Result<HandEyeCalibration> {
-    let (motions, spread) = prepare(gripper_poses, target_poses)?;
-    solve(method, &motions, spread, gripper_poses.len())
+    let (motions, spread) = prepare(gripper_poses, target_poses, setup)?;
+    solve(method, setup, &motions, spread, gripper_poses.len())
 }
 
 /// Runs every method on the same poses and reports how far apart their results are: methods
@@ -216,11 +246,12 @@ pub fn calibrate_hand_eye(
 pub fn compare_hand_eye_methods(
     gripper_poses: &[Matrix4<f64>],
     target_poses: &[Matrix4<f64>],
+    setup: HandEyeSetup,
 ) -> Result<HandEyeAgreement> {
-    let (motions, spread) = prepare(gripper_poses, target_poses)?;
+    let (motions, spread) = prepare(gripper_poses, target_poses, setup)?;
     let (mut calibrations, mut failures, mut first_error) = (Vec::new(), Vec::new(), None);
     for method in HandEyeMethod::ALL {
-        match solve(method, &motions, spread, gripper_poses.len()) {
+        match solve(method, setup, &motions, spread, gripper_poses.len()) {
             Ok(c) => calibrations.push(c),
             Err(e) => {
                 failures.push((method, e.to_string()));
@@ -230,7 +261,7 @@ pub fn compare_hand_eye_methods(
     }
     match (calibrations.is_empty(), first_error) {
         (true, Some(e)) => Err(e),
-        _ => Ok(HandEyeAgreement::new(calibrations, failures)),
+        _ => Ok(HandEyeAgreement::new(setup, calibrations, failures)),
     }
 }
 
