@@ -1284,8 +1284,7 @@ class HandEyeCalibration:
     transform and its diagnostics.
 
     For stations i < j the gripper motion A = G_j^-1 G_i and the camera motion B = C_j C_i^-1
-    satisfy A X = X B; every pair is a motion (as in OpenCV). Eye-to-hand: the gripper poses
-    are inverted first, A = G_j G_i^-1."""
+    satisfy A X = X B (eye_to_hand: A = G_j G_i^-1); every pair is a motion (as in OpenCV)."""
 
     @property
     def matrix(self) -> _F64Array:
@@ -1364,15 +1363,13 @@ def calibrate_hand_eye(
     (n, 4, 4) gripper-to-base `gripper_poses` and target-to-camera `target_poses` (OpenCV's
     calibrateHandEye convention), by `method` ('tsai', 'park' or 'daniilidis').
 
-    ``gripper_poses``: (n, 4, 4) gripper-to-base poses reported by the robot;
-    ``target_poses``: (n, 4, 4) target-to-camera poses (e.g. from solvePnP); ``method``:
-    'tsai' (default), 'park' or 'daniilidis'; ``setup``: 'eye_in_hand' (default) or
-    'eye_to_hand' (the gripper poses are inverted, base-to-gripper, and the same method runs).
-    Raises InvalidInput for a pose that is not a
-    rigid transform (naming the argument and the pose), an unknown method or setup, and DegenerateGeometry (kind
-    'degenerate_motion') for fewer than 3 poses, no rotation, or rotations about (nearly)
-    parallel axes only.
-    """
+    `gripper_poses`: (n, 4, 4) gripper-to-base poses reported by the robot; `target_poses`:
+    (n, 4, 4) target-to-camera poses (e.g. from solvePnP); `method`: 'tsai' (default), 'park' or
+    'daniilidis'; `setup`: 'eye_in_hand' (default) or 'eye_to_hand' (the gripper poses are
+    inverted, base-to-gripper, and the same method runs). Raises InvalidInput for a pose that is
+    not a rigid transform (naming the argument and the pose), an unknown method or setup, and
+    DegenerateGeometry (kind 'degenerate_motion') for fewer than 3 poses, no rotation, or
+    rotations about (nearly) parallel axes only."""
 
 def compare_hand_eye_methods(
     gripper_poses: _ArrayLike, target_poses: _ArrayLike, setup: _HandEyeSetup | str = "eye_in_hand"
