@@ -20,7 +20,8 @@ run recorded, so detection is the step minus control. The loop moves a free came
 twist (no arm): there is no physics step. Beside them the kinematic world's figures for the
 same experiment: vsinv's own renderer (`vsinv.vision.render`) at the same poses and
 resolution, and the Rust simulator's whole iteration with images in the loop (the kinematic
-built-in with `[vision]`).
+built-in with `[vision]`); and the kinematic built-in from the same starts (its verdicts and
+final errors).
 
 Agreement first: before anything is timed, the control replay must give the twists the run
 sent (within 1e-9 m/s, rad/s) and each built-in from its own `[start]` must give the verdict
@@ -109,6 +110,23 @@ def kinematic_figures(name: str, poses: np.ndarray, times: np.ndarray) -> tuple[
     return render, whole
 
 
+def kinematic_starts(name: str, starts: list[np.ndarray], max_iterations: int | None) -> tuple[float, list[float], list[float]]:
+    """The kinematic built-in `name` from the same starts: its convergence rate and final
+    errors (m, degrees)."""
+    d = vsinv.load_scenario(name).to_dict()
+    if max_iterations is not None:
+        d["stop"]["max_iterations"] = max_iterations
+    statuses, t_err, r_err = [], [], []
+    for pose in starts:
+        position, thetau = geometry.thetau_from_pose(pose)
+        d["start"] = {"position": [float(x) for x in position], "rotation_deg": [float(x) for x in np.degrees(thetau)]}
+        s = vsinv.run_scenario(d, record=False).summary
+        statuses.append(s["status"])
+        t_err.append(s["final_translation_error"])
+        r_err.append(float(np.degrees(s["final_rotation_error"])))
+    return float(np.mean([st == "converged" for st in statuses])), t_err, r_err
+
+
 def agreement(max_iterations: int | None) -> bool:
     """The verdicts of the MuJoCo built-ins from their own starts against the kinematic ones
     (`max_iterations` None: full runs), and the control replay's twists against the run's."""
@@ -139,7 +157,8 @@ def sweep(name: str, kinematic: str, starts: int, max_iterations: int | None, se
     statuses, t_err, r_err, clock = [], [], [], {"render": 0.0, "servo": 0.0, "control": 0.0}
     frames, poses, times = 0, np.empty((0, 4, 4)), np.empty(0)
     with vm.World.from_scenario(d) as world:
-        for k, start in enumerate(start_poses(d, np.asarray(world.target_points), starts, seed)):
+        chosen = start_poses(d, np.asarray(world.target_points), starts, seed)
+        for k, start in enumerate(chosen):
             run = vm.run_loop(d, world=world, start=start, max_iterations=max_iterations)
             s = run.summary
             statuses.append(s["status"])
@@ -157,12 +176,14 @@ def sweep(name: str, kinematic: str, starts: int, max_iterations: int | None, se
     rate = np.mean([st == "converged" for st in statuses])
     per = {key: 1e3 * v / frames for key, v in clock.items()}
     k_render, k_whole = kinematic_figures(kinematic, poses, times)
+    k_rate, k_t, k_r = kinematic_starts(kinematic, chosen, max_iterations)
     c = d["camera"]
     return [
         f"| {name} | {100 * rate:.0f} % of {starts} | {1e3 * np.median(t_err):.2f} / {1e3 * np.max(t_err):.2f} mm | "
         f"{np.median(r_err):.3f} / {np.max(r_err):.3f} deg | {per['render']:.1f} | {per['servo'] - per['control']:.2f} | "
         f"{per['control']:.3f} | - | {int(c['width'])}x{int(c['height'])} |",
-        f"| {kinematic} (kinematic) | | | | {1e3 * k_render:.1f} | whole iteration {1e3 * k_whole:.2f} ms | | - | |",
+        f"| {kinematic} (kinematic) | {100 * k_rate:.0f} % of {starts} | {1e3 * np.median(k_t):.2f} / {1e3 * np.max(k_t):.2f} mm | "
+        f"{np.median(k_r):.3f} / {np.max(k_r):.3f} deg | {1e3 * k_render:.1f} | whole iteration {1e3 * k_whole:.2f} ms | | - | |",
     ]
 
 
