@@ -104,10 +104,12 @@ def test_progress_callback_and_its_errors():
 CLI_SAMPLE = ("lens-12-6", "ibvs-12-6", "zoom-stationary", "planar", "arm-ur5-12-6", "vision-12-6")
 
 
-@pytest.mark.parametrize(
-    "name",
-    [n if n in CLI_SAMPLE else pytest.param(n, marks=pytest.mark.slow) for n, _ in vsinv.sim.list_scenarios()],
-)
+#: The built-ins of the kinematic simulator; the `mujoco-*` ones (`[world] engine = "mujoco"`)
+#: need the mujoco extra and EGL: tests/test_mujoco_builtins.py runs them from the command line.
+KINEMATIC = [n for n, _ in vsinv.sim.list_scenarios() if vsinv.load_scenario(n).engine == "kinematic"]
+
+
+@pytest.mark.parametrize("name", [n if n in CLI_SAMPLE else pytest.param(n, marks=pytest.mark.slow) for n in KINEMATIC])
 def test_every_builtin_runs_from_the_command_line(name, capsys):
     import json
 

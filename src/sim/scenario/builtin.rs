@@ -3,7 +3,8 @@
 use super::{Scenario, scenario_error};
 use crate::sim::error::Result;
 
-/// The built-in scenarios: (name, TOML text).
+/// The built-in scenarios: (name, TOML text). The `mujoco-` ones have `[world] engine = "mujoco"`:
+/// Python's `vsinv.mujoco.run` runs them; this crate's simulator refuses them.
 pub const BUILTIN: &[(&str, &str)] = &[
     ("zoom-stationary", include_str!("../../../scenarios/zoom-stationary.toml")),
     ("lens-12-12", include_str!("../../../scenarios/lens-12-12.toml")),
@@ -32,6 +33,10 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("vision-zoom", include_str!("../../../scenarios/vision-zoom.toml")),
     ("tags-12-12", include_str!("../../../scenarios/tags-12-12.toml")),
     ("tags-12-6", include_str!("../../../scenarios/tags-12-6.toml")),
+    ("mujoco-lens-12-6", include_str!("../../../scenarios/mujoco-lens-12-6.toml")),
+    ("mujoco-lens-12-6-tags", include_str!("../../../scenarios/mujoco-lens-12-6-tags.toml")),
+    ("mujoco-zoom", include_str!("../../../scenarios/mujoco-zoom.toml")),
+    ("mujoco-ibvs-12-6", include_str!("../../../scenarios/mujoco-ibvs-12-6.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).
