@@ -145,7 +145,8 @@ def build_rust_docs() -> None:
     env = {**os.environ, "RUSTDOCFLAGS": "-D warnings"}
     subprocess.run(["cargo", "doc", "--no-deps", "-q"], cwd=ROOT, check=True, env=env)
     shutil.rmtree(DOCS / "rust", ignore_errors=True)
-    shutil.copytree(ROOT / "target" / "doc", DOCS / "rust")
+    target = Path(os.environ.get("CARGO_TARGET_DIR") or ROOT / "target")  # where cargo wrote it
+    shutil.copytree(ROOT / target / "doc", DOCS / "rust")
 
 
 def main() -> int:

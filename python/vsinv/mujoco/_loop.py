@@ -12,8 +12,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import geometry
-from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability
-from ..sim import load_scenario
+from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability, load_scenario
 from ._world import World
 
 # [stop] keys the image session reads (the others are the kinematic simulator's own).

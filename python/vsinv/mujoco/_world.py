@@ -9,8 +9,7 @@ from typing import Any
 import numpy as np
 
 from .. import geometry
-from .._core import Intrinsics, InvalidInput
-from ..sim import load_scenario
+from .._core import Intrinsics, InvalidInput, load_scenario
 from . import _camera, _scene
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # CPU rendering through EGL unless the user chose
@@ -110,7 +109,7 @@ class World:
         tags' bit patterns) lit by two lights, and a free camera with the scenario's `[camera]`
         resolution and K (10 um pixels). `scenario`: a `Scenario`, dict, built-in name or path."""
         mujoco = _mujoco()
-        d = load_scenario(scenario).to_dict() if not isinstance(scenario, dict) else load_scenario(scenario).to_dict()
+        d = load_scenario(scenario).to_dict()
         K, width, height = _k_of(d, "camera")
         K_ref, w_ref, h_ref = _k_of(d, "reference_camera")
         if (w_ref, h_ref) != (width, height):
