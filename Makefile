@@ -50,12 +50,17 @@ test-examples:
 
 # PYTEST_ARGS narrows or widens the Python tests, e.g. PYTEST_ARGS='-m vision' (one area: core,
 # servo, vision, sim, calibration, ros, cli, docs, robustness, package; docs/development.md).
+# pytest-xdist (the test extra) runs them in PYTEST_WORKERS processes, an idle one taking tests
+# queued on a busy one (worksteal: a MuJoCo closed loop takes minutes, most tests milliseconds);
+# PYTEST_WORKERS=0 runs them all in pytest's own process.
+PYTEST_WORKERS ?= 2
+PYTEST_XDIST = -n $(PYTEST_WORKERS) --dist worksteal
 test-python:
-	$(PYTHON) -m pytest -q $(PYTEST_ARGS)
+	$(PYTHON) -m pytest -q $(PYTEST_XDIST) $(PYTEST_ARGS)
 
 # The Python tests without those marked slow: for the edit-test loop (make test runs them all).
 test-fast:
-	$(PYTHON) -m pytest -q -m "not slow" $(PYTEST_ARGS)
+	$(PYTHON) -m pytest -q -m "not slow" $(PYTEST_XDIST) $(PYTEST_ARGS)
 
 stubtest:
 	$(PYTHON) -m mypy.stubtest vsinv._core

@@ -224,6 +224,24 @@ pub trait Located: std::error::Error {
     }
 }
 
+/// Checks that `lower` passes through `?` into the higher layer's error `E` unchanged: the same
+/// message, location, family and core error (the test every layer's error runs on the errors it
+/// wraps).
+#[cfg(test)]
+pub(crate) fn assert_passes_through<L, E>(lower: L) -> E
+where
+    L: Located + Clone,
+    E: Located + From<L>,
+{
+    let through = |r: std::result::Result<(), L>| -> std::result::Result<(), E> { Ok(r?) };
+    let Err(err) = through(Err(lower.clone())) else { unreachable!("an error stays an error") };
+    assert_eq!(err.to_string(), lower.to_string());
+    assert_eq!(err.location(), lower.location());
+    assert_eq!(err.is_degenerate(), lower.is_degenerate());
+    assert_eq!(err.core(), lower.core());
+    err
+}
+
 impl Located for Error {
     fn core(&self) -> Option<&Error> {
         Some(self)

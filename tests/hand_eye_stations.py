@@ -7,6 +7,40 @@ import cv2
 import numpy as np
 
 
+# OpenCV's hand-eye methods that vsinv implements, by vsinv's name.
+CV_METHODS = {
+    "tsai": cv2.CALIB_HAND_EYE_TSAI,
+    "park": cv2.CALIB_HAND_EYE_PARK,
+    "daniilidis": cv2.CALIB_HAND_EYE_DANIILIDIS,
+}
+# (rotation noise in degrees, translation noise in metres) of each target pose.
+NOISE_LEVELS = [(0.1, 0.001), (0.5, 0.002), (1.0, 0.005)]
+
+
+def homogeneous(r: np.ndarray, t: np.ndarray) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3], m[:3, 3] = r, np.asarray(t).ravel()
+    return m
+
+
+def opencv(g: np.ndarray, c: np.ndarray, method: str) -> np.ndarray:
+    """``cv2.calibrateHandEye`` on gripper-to-base poses ``g`` and target-to-camera poses ``c``."""
+    r, t = cv2.calibrateHandEye(list(g[:, :3, :3]), list(g[:, :3, 3]), list(c[:, :3, :3]), list(c[:, :3, 3]),
+                                method=CV_METHODS[method])
+    return homogeneous(r, t)
+
+
+def assert_within_noise(errs: np.ndarray, noise: tuple[float, float], lever_m: float) -> None:
+    """The (rotation deg, translation m) errors of many draws against the truth are within the
+    noise of one target pose: median below it and maximum below three times it, a rotation
+    error adding its lever (``lever_m``, the distance it acts over) to the translation's."""
+    rot_sd, trans_sd = noise
+    rot_noise = np.sqrt(3) * rot_sd
+    trans_noise = np.sqrt(3) * (trans_sd + np.radians(rot_sd) * lever_m)
+    assert np.median(errs[:, 0]) < rot_noise and errs[:, 0].max() < 3 * rot_noise, errs[:, 0]
+    assert np.median(errs[:, 1]) < trans_noise and errs[:, 1].max() < 3 * trans_noise, errs[:, 1]
+
+
 def rigid(rotvec: np.ndarray, t: np.ndarray) -> np.ndarray:
     m = np.eye(4)
     m[:3, :3] = cv2.Rodrigues(np.asarray(rotvec, dtype=float).reshape(3, 1))[0]
@@ -26,18 +60,29 @@ def stations(rng: np.random.Generator, n: int, noise: tuple[float, float] = (0.0
     and a translation of ``noise[1]`` metres (normal per axis). Returns (G, C, X)."""
     x = rigid(random_rotvec(rng, rng.uniform(0.2, 2.5)), rng.uniform(-0.1, 0.1, 3))
     target_in_base = rigid(random_rotvec(rng, 0.3), np.array([0.6, 0.0, 0.0]))
-    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
     g, c = [], []
     for _ in range(n):
-        tilt = rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
-        gi = looking_down @ tilt
-        ci = np.linalg.inv(gi @ x) @ target_in_base
-        rot_sd, trans_sd = noise
-        if rot_sd > 0 or trans_sd > 0:
-            ci = ci @ rigid(rng.normal(0.0, np.radians(rot_sd), 3), rng.normal(0.0, trans_sd, 3))
+        gi = gripper_pose(rng)
         g.append(gi)
-        c.append(ci)
+        c.append(perturbed(rng, np.linalg.inv(gi @ x) @ target_in_base, noise))
     return np.array(g), np.array(c), x
+
+
+def gripper_pose(rng: np.random.Generator) -> np.ndarray:
+    """A gripper-to-base pose 0.5 m above a point 0.6 m in front of the base, looking down and
+    tilted 10 to 40 degrees about a random axis, moved up to 0.15 m along each axis."""
+    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
+    tilt = rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
+    return looking_down @ tilt
+
+
+def perturbed(rng: np.random.Generator, pose: np.ndarray, noise: tuple[float, float]) -> np.ndarray:
+    """``pose`` moved by a random rotation of ``noise[0]`` degrees and a translation of
+    ``noise[1]`` metres (normal per axis, in its own frame); unchanged (no draw) without noise."""
+    rot_sd, trans_sd = noise
+    if rot_sd > 0 or trans_sd > 0:
+        return pose @ rigid(rng.normal(0.0, np.radians(rot_sd), 3), rng.normal(0.0, trans_sd, 3))
+    return pose
 
 
 def errors(found: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
@@ -57,15 +102,9 @@ def eye_to_hand_stations(rng: np.random.Generator, n: int, noise: tuple[float, f
     ``stations``. Returns (G, C, Y, T)."""
     y = rigid(np.array([0.0, -np.pi / 2, 0.0]) + random_rotvec(rng, 0.3), np.array([1.3, 0.0, 0.4]) + rng.uniform(-0.1, 0.1, 3))
     t = rigid(random_rotvec(rng, rng.uniform(0.0, 0.5)), np.array([0.0, 0.0, 0.1]) + rng.uniform(-0.03, 0.03, 3))
-    looking_down = rigid(np.array([np.pi, 0.0, 0.0]), np.array([0.6, 0.0, 0.5]))
     g, c = [], []
     for _ in range(n):
-        tilt = rigid(random_rotvec(rng, np.radians(rng.uniform(10, 40))), rng.uniform(-0.15, 0.15, 3))
-        gi = looking_down @ tilt
-        ci = np.linalg.inv(y) @ gi @ t
-        rot_sd, trans_sd = noise
-        if rot_sd > 0 or trans_sd > 0:
-            ci = ci @ rigid(rng.normal(0.0, np.radians(rot_sd), 3), rng.normal(0.0, trans_sd, 3))
+        gi = gripper_pose(rng)
         g.append(gi)
-        c.append(ci)
+        c.append(perturbed(rng, np.linalg.inv(y) @ gi @ t, noise))
     return np.array(g), np.array(c), y, t

@@ -428,12 +428,20 @@ def test_decode_image(data: Any) -> None:
 @fuzz_settings(100)
 @given(st.data())
 def test_to_grey(data: Any) -> None:
-    grey, _, _ = rendered()
-    colour = np.stack([grey, 255 - grey, grey // 2], axis=-1)
+    colour, variants = colour_frame()
     ref = vsinv.vision.to_grey(colour)
     # Independent: OpenCV's Rec. 601 conversion of the same frame, to the bit.
     assert np.array_equal(ref, cv2.cvtColor(colour, cv2.COLOR_RGB2GRAY))
     orders = st.sampled_from([V("rgb", SAME, "rgb"), V(None, SAME, "none"), V("bgr", ANY, "bgr"),
                               V("RGB", INVALID, "upper"), V(3, INVALID, "int"), V("", INVALID, "empty")])
-    fuzz(data, vsinv.vision.to_grey, {"image": colour, "order": "rgb"},
-         {"image": colour_variants(colour), "order": orders}, ref=ref)
+    fuzz(data, vsinv.vision.to_grey, {"image": colour, "order": "rgb"}, {"image": variants, "order": orders}, ref=ref)
+
+
+def colour_frame() -> tuple[np.ndarray, st.SearchStrategy[V]]:
+    """A colour frame made of the rendered view and its variants, built once (the list and
+    object variants of 832 x 624 x 3 pixels take a second each to make)."""
+    if "colour" not in IMG_LOCK:
+        grey, _, _ = rendered()
+        colour = np.stack([grey, 255 - grey, grey // 2], axis=-1)
+        IMG_LOCK["colour"] = (colour, colour_variants(colour))
+    return IMG_LOCK["colour"]

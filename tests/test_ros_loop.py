@@ -59,9 +59,12 @@ DT = 0.01  # the scenario's camera period: the robot holds each twist for 10 ms
 
 
 def ros_env() -> dict[str, str]:
-    """Loopback discovery and a domain id of this test run's own."""
+    """Loopback discovery and a domain id of this test run's own: pytest-xdist's workers (gw0,
+    gw1, ...) each get their own band of ids, so two tests of one run never share a domain."""
     env = dict(os.environ)
-    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(10 + os.getpid() % 90))
+    worker = int(os.environ.get("PYTEST_XDIST_WORKER", "gw0").removeprefix("gw") or 0)
+    domain = 10 + (worker % 4) * 20 + os.getpid() % 20
+    env.update(ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_LOCALHOST_ONLY="1", ROS_DOMAIN_ID=str(domain))
     env.pop("ROS_STATIC_PEERS", None)
     return env
 

@@ -87,34 +87,19 @@ impl Located for CalibrationError {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
-    use super::{CalibrationError, Located, Result};
-    use crate::error::Error;
-
-    fn core_step(degenerate: bool) -> crate::Result<()> {
-        Err(match degenerate {
-            false => Error::NonFinitePoint { what: "K", row: 1, column: 2 },
-            true => Error::DegenerateEstimate { what: "rotation", ratio: 0.0, hint: "no motion" },
-        })
-    }
-
-    fn calibration_step(degenerate: bool) -> Result<()> {
-        core_step(degenerate)?;
-        Ok(())
-    }
+    use super::{CalibrationError, Located};
+    use crate::error::{Error, assert_passes_through};
 
     /// A core error passes through `?` with its message, location and family.
     #[test]
     fn core_errors_pass_through() {
-        for degenerate in [false, true] {
-            let core = core_step(degenerate).unwrap_err();
-            let err = calibration_step(degenerate).unwrap_err();
-            assert_eq!(err, CalibrationError::Core(core.clone()));
-            assert_eq!(err.to_string(), core.to_string());
-            assert_eq!(Located::location(&err), core.location());
-            assert_eq!(err.is_degenerate(), degenerate);
-        }
-        let err = calibration_step(false).unwrap_err();
+        let err: CalibrationError = assert_passes_through(Error::NonFinitePoint { what: "K", row: 1, column: 2 });
         assert_eq!(Located::location(&err).map(|l| l.to_string()).as_deref(), Some("K[1][2]"));
+        assert!(!err.is_degenerate());
+        let degenerate = Error::DegenerateEstimate { what: "rotation", ratio: 0.0, hint: "no motion" };
+        let err: CalibrationError = assert_passes_through(degenerate.clone());
+        assert!(err.is_degenerate());
+        assert_eq!(err, CalibrationError::Core(degenerate));
     }
 
     /// The layer's own variants: where they are and which family.

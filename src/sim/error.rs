@@ -112,81 +112,46 @@ impl Located for SimError {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
-    use super::{Located, Result, SimError};
+    use super::{Located, SimError};
     use crate::calibration::CalibrationError;
-    use crate::error::Error;
+    use crate::error::{Error, assert_passes_through};
     use crate::vision::VisionError;
-
-    fn core_step() -> crate::Result<()> {
-        Err(Error::NonFinitePoint { what: "pixels", row: 4, column: 1 })
-    }
-
-    fn degenerate_step() -> crate::Result<()> {
-        Err(Error::DegenerateStructure { ratio: 1e-5, threshold: 1e-3 })
-    }
-
-    fn sim_step(degenerate: bool) -> Result<()> {
-        if degenerate {
-            degenerate_step()?
-        } else {
-            core_step()?
-        }
-        Ok(())
-    }
 
     /// A core error passes through `?` with its message, location and family.
     #[test]
     fn core_errors_pass_through() {
-        let core = core_step().unwrap_err();
-        let err = sim_step(false).unwrap_err();
-        assert_eq!(err, SimError::Core(core.clone()));
-        assert_eq!(err.to_string(), core.to_string());
+        let core = Error::NonFinitePoint { what: "pixels", row: 4, column: 1 };
+        let err: SimError = assert_passes_through(core.clone());
+        assert_eq!(err, SimError::Core(core));
         assert_eq!(Located::location(&err).map(|l| l.to_string()).as_deref(), Some("pixels[4][1]"));
         assert!(!err.is_degenerate());
-        let err = sim_step(true).unwrap_err();
+        let err: SimError = assert_passes_through(Error::DegenerateStructure { ratio: 1e-5, threshold: 1e-3 });
         assert!(err.is_degenerate() && Located::location(&err).is_none());
-        assert_eq!(err.to_string(), degenerate_step().unwrap_err().to_string());
-    }
-
-    fn vision_step() -> crate::vision::error::Result<()> {
-        Err(VisionError::InvalidImage { what: "reference".into(), reason: "point 2 not found".into() })
-    }
-
-    fn vision_core_step() -> crate::vision::error::Result<()> {
-        Err(Error::CollinearBasis { basis: [0, 1, 2], image: "reference", ratio: 1e-9 })?
-    }
-
-    fn calibration_step(degenerate: bool) -> crate::calibration::error::Result<()> {
-        Err(match degenerate {
-            true => CalibrationError::DegenerateMotion { poses: 2, reason: "too few poses".into() },
-            false => CalibrationError::File { file: "c.yaml".into(), field: "K.data[4]".into(), reason: "x".into() },
-        })
     }
 
     /// The errors of the vision and calibration layers (and the core errors they wrap) pass
     /// through `?` with their message, location and family, two layers down.
     #[test]
     fn vision_and_calibration_errors_pass_through() {
-        let through = |r: crate::vision::error::Result<()>| -> Result<()> { Ok(r?) };
-        let err = through(vision_step()).unwrap_err();
+        let err: SimError = assert_passes_through(VisionError::InvalidImage {
+            what: "reference".into(),
+            reason: "point 2 not found".into(),
+        });
         assert_eq!(err.to_string(), "reference: point 2 not found");
         assert_eq!(err.location(), Some(crate::Location::key("reference")));
         assert!(!err.is_degenerate() && err.core().is_none());
-        let err = through(vision_core_step()).unwrap_err();
-        assert_eq!(err.to_string(), vision_core_step().unwrap_err().to_string());
+        let collinear = Error::CollinearBasis { basis: [0, 1, 2], image: "reference", ratio: 1e-9 };
+        let err: SimError = assert_passes_through(VisionError::Core(collinear));
         assert!(err.is_degenerate() && err.location().is_none());
         assert!(matches!(err.core(), Some(Error::CollinearBasis { .. })));
-        let through = |r: crate::calibration::error::Result<()>| -> Result<()> { Ok(r?) };
-        for degenerate in [false, true] {
-            let lower = calibration_step(degenerate).unwrap_err();
-            let err = through(calibration_step(degenerate)).unwrap_err();
-            assert_eq!(err, SimError::Calibration(lower.clone()));
-            assert_eq!(err.to_string(), lower.to_string());
-            assert_eq!(err.location(), lower.location());
-            assert_eq!(err.is_degenerate(), degenerate);
-        }
-        let file = through(calibration_step(false)).unwrap_err();
-        assert_eq!(file.location().map(|l| l.to_string()).as_deref(), Some("K.data[4]"));
+        let motion = CalibrationError::DegenerateMotion { poses: 2, reason: "too few poses".into() };
+        let err: SimError = assert_passes_through(motion.clone());
+        assert_eq!(err, SimError::Calibration(motion));
+        assert!(err.is_degenerate());
+        let file = CalibrationError::File { file: "c.yaml".into(), field: "K.data[4]".into(), reason: "x".into() };
+        let err: SimError = assert_passes_through(file);
+        assert_eq!(err.location().map(|l| l.to_string()).as_deref(), Some("K.data[4]"));
+        assert!(!err.is_degenerate());
     }
 
     /// The simulator's own variants: a scenario error is located at its key, none is

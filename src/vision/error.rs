@@ -50,34 +50,19 @@ impl Located for VisionError {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
-    use super::{Located, Result, VisionError};
-    use crate::error::Error;
-
-    fn core_step(degenerate: bool) -> crate::Result<()> {
-        Err(match degenerate {
-            false => Error::NonFinite { what: "pixels", index: 3 },
-            true => Error::CollinearBasis { basis: [0, 1, 2], image: "current", ratio: 1e-9 },
-        })
-    }
-
-    fn vision_step(degenerate: bool) -> Result<()> {
-        core_step(degenerate)?;
-        Ok(())
-    }
+    use super::{Located, VisionError};
+    use crate::error::{Error, assert_passes_through};
 
     /// A core error passes through `?` with its message, location and family.
     #[test]
     fn core_errors_pass_through() {
-        for degenerate in [false, true] {
-            let core = core_step(degenerate).unwrap_err();
-            let err = vision_step(degenerate).unwrap_err();
-            assert_eq!(err, VisionError::Core(core.clone()));
-            assert_eq!(err.to_string(), core.to_string());
-            assert_eq!(Located::location(&err), core.location());
-            assert_eq!(err.is_degenerate(), degenerate);
-        }
-        let err = vision_step(false).unwrap_err();
+        let err: VisionError = assert_passes_through(Error::NonFinite { what: "pixels", index: 3 });
         assert_eq!(Located::location(&err).map(|l| l.to_string()).as_deref(), Some("pixels[3]"));
+        assert!(!err.is_degenerate());
+        let degenerate = Error::CollinearBasis { basis: [0, 1, 2], image: "current", ratio: 1e-9 };
+        let err: VisionError = assert_passes_through(degenerate.clone());
+        assert!(err.is_degenerate());
+        assert_eq!(err, VisionError::Core(degenerate));
     }
 
     /// The layer's own variant is located at the image's argument and is not degenerate.
