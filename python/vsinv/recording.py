@@ -21,7 +21,8 @@ Topics (log time = the run's time, nanoseconds from 0):
 
 The images are rendered again from the recorded poses (a run keeps no images): the kinematic
 world's `vsinv.vision.render` with the scenario's ``[vision]`` (the same image but for its noise draw),
-MuJoCo's renders for ``[world] engine = "mujoco"`` (deterministic: the frames the loop saw).
+MuJoCo's renders for ``[world] engine = "mujoco"`` (deterministic, with ``[vision]``'s blur and the
+same noise draws: the frames the loop saw).
 """
 
 from __future__ import annotations
@@ -120,10 +121,12 @@ def frames(result: RunResult) -> Iterator[Optional[np.ndarray]]:
     poses, times = result.pose, result.time
     if (d.get("world") or {}).get("engine") == "mujoco":
         from .mujoco import World
+        from .mujoco._effects import camera_image
+
         with World.from_scenario(d) as world:
             for k in range(len(poses)):
                 world.set_K(_camera_k(d, float(times[k])))
-                yield world.render(poses[k])
+                yield camera_image(world, d, poses[k], k + 1)
     elif d.get("vision") is not None:
         from ._core import render
 
