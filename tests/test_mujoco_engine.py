@@ -82,8 +82,9 @@ def test_what_the_mujoco_loop_does_not_simulate_is_refused(table: str, value: di
 
 
 def test_the_rust_runner_refuses_mujoco_by_name() -> None:
-    """The Rust simulator (`_core.run_scenario`, batches) does not run a MuJoCo scenario: a
-    Scenario error naming world.engine that says where it runs."""
+    """The Rust simulator (`_core.run_scenario`, `_core.run_batch`) does not run a MuJoCo
+    scenario: a Scenario error naming world.engine that says where it runs (`vsinv.sim.run_batch`
+    runs them in Python: tests/test_mujoco_batch.py)."""
     d = _scenario()
     with pytest.raises(vsinv.InvalidInput) as e:
         vsinv._core.run_scenario(d)
@@ -91,7 +92,7 @@ def test_the_rust_runner_refuses_mujoco_by_name() -> None:
     assert "world.engine" in msg and "Python" in msg and "vsinv[mujoco]" in msg, msg
     assert e.value.location == ("world", "engine")
     with pytest.raises(vsinv.InvalidInput, match="world.engine"):
-        vsinv.sim.run_batch([d], progress=False)
+        vsinv._core.run_batch([d])
 
 
 def test_from_recording_rebuilds_a_kinematic_run_and_checks_it() -> None:

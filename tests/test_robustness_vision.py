@@ -445,3 +445,26 @@ def colour_frame() -> tuple[np.ndarray, st.SearchStrategy[V]]:
         colour = np.stack([grey, 255 - grey, grey // 2], axis=-1)
         IMG_LOCK["colour"] = (colour, colour_variants(colour))
     return IMG_LOCK["colour"]
+
+
+@covers("degrade")
+@fuzz_settings(80)
+@given(st.data())
+def test_degrade(data: Any) -> None:
+    image, _, _ = rendered()
+    image = image[:120, :160].copy()
+    args = {"image": image, "blur_sigma": 0.8, "noise_sigma": 2.0, "seed": 3, "frame": 5}
+    ref = vsinv.vision.degrade(image, blur_sigma=0.8, noise_sigma=2.0, seed=3, frame=5)
+    # Independent: without noise, OpenCV's Gaussian blur of the frame inside the border (to rounding).
+    clean = vsinv.vision.degrade(image, blur_sigma=0.8, noise_sigma=0.0)
+    blurred = cv2.GaussianBlur(image.astype(np.float64), (7, 7), 0.8)
+    assert np.abs(clean[3:-3, 3:-3] - blurred[3:-3, 3:-3]).max() <= 0.5 + 1e-3
+    ranged = {k: INVALID for k in ("nan", "posinf", "neginf", "negative", "neghuge", "huge")}
+
+    def check(out: Any) -> None:
+        assert out.dtype == np.uint8 and out.ndim == 2 and out.flags.c_contiguous
+
+    fuzz(data, vsinv.vision.degrade, args,
+         {"image": image_variants(image), "blur_sigma": floats(0.8, overrides=ranged),
+          "noise_sigma": floats(2.0, overrides=ranged), "seed": ints(3), "frame": ints(5)},
+         ref=ref, check=check)

@@ -8,6 +8,7 @@ from typing import Any, Callable, Optional, Union
 
 import numpy.typing as npt
 
+from . import _batch_mujoco as _mujoco
 from . import _core
 from ._progress import Bar, Progress
 
@@ -25,7 +26,9 @@ def run_batch(
     max_line_deviation, observed_max_eps, pixel_sigma, translation_uncertainty,
     rotation_uncertainty (SI, NaN where not measured), prop1, prop2, within_tolerance, message (str). A scenario whose
     configuration is invalid raises before anything runs; a run that fails on the way has
-    status "error" and its message.
+    status "error" and its message. Scenarios of ``[world] engine = "mujoco"`` (the mujoco extra)
+    run on ``threads`` worker processes (None: every core) through ``vsinv.mujoco``, their rows in
+    the same table.
 
     ``progress``: a tqdm bar over runs (None: when stderr is a terminal; True, False), or a
     callable ``progress(done, total)`` called from the calling thread as runs finish (``done``
@@ -48,7 +51,42 @@ def run_batch(
             f"progress: expected None, True, False or a callable progress(done, total), got {type(progress).__name__}"
         )
     try:
-        return _core.run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=call)
+        return _run(scenarios, threads, allow_outside_files, call)
     finally:
         if bar is not None:
             bar.close()
+
+
+def _run(scenarios: Iterable[Any], threads: Optional[int], allow_outside_files: bool,
+         call: Optional[Callable[[int, int], Any]]) -> dict[str, npt.NDArray[Any]]:
+    """The Rust runner's batch, with the `[world] engine = "mujoco"` scenarios taken out and run
+    on worker processes (`vsinv._batch_mujoco`), their rows put back in place."""
+    try:
+        items = list(scenarios)
+    except TypeError:  # the Rust runner names what it expected
+        return _core.run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=call)
+    found = [_mujoco.mujoco_scenario(s, allow_outside_files, i) for i, s in enumerate(items)]
+    mujoco_rows = [i for i, d in enumerate(found) if d is not None]
+    if not mujoco_rows:
+        return _core.run_batch(items, threads=threads, allow_outside_files=allow_outside_files, progress=call)
+    rust_rows = [i for i, d in enumerate(found) if d is None]
+    n = len(items)
+
+    def progress(done: int, _total: int) -> None:
+        if call is not None:
+            call(done, n)
+
+    # The Rust runner checks `threads` and its scenarios (raising before anything runs) first.
+    table = _core.run_batch([items[i] for i in rust_rows], threads=threads, allow_outside_files=allow_outside_files,
+                            progress=progress if call is not None else None)
+    finished = len(rust_rows)
+
+    def one_done() -> None:
+        nonlocal finished
+        finished += 1
+        if call is not None:
+            call(finished, n)
+
+    mujoco = [d for d in found if d is not None]
+    rows = _mujoco.run_rows(mujoco, _mujoco.workers(threads), allow_outside_files, one_done)
+    return _mujoco.merge(n, table if rust_rows else None, rust_rows, rows, mujoco_rows)

@@ -108,6 +108,7 @@ __all__ = [
     "reference_depths",
     "render",
     "render_view",
+    "degrade",
     "Dots",
     "detect_dots",
     "DotTracker",
@@ -958,6 +959,19 @@ def render_view(
 ) -> tuple[_U8Image, _F64Array, npt.NDArray[np.bool_]]:
     """`render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true
     projections of the dots' centres and which dots are in the image."""
+
+def degrade(
+    image: _U8Image,
+    blur_sigma: float = 0.8,
+    noise_sigma: float = 2.0,
+    seed: int = 0,
+    frame: int = 0,
+) -> _U8Image:
+    """`image` (a grey or colour array, see `to_grey`) through the renderer's optics and sensor, as
+    a scenario's `[vision]` table describes them: blurred by a Gaussian PSF of `blur_sigma`
+    pixels in [0, 20] (near the border the kernel renormalised to the image), plus sensor noise
+    of `noise_sigma` grey levels in [0, 100] (the draws `render` takes for frame `frame` from
+    `seed`), rounded and clamped to 8 bits; what a MuJoCo run does to each render."""
 
 @final
 class Dots:

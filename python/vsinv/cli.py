@@ -181,6 +181,13 @@ def _build_parser() -> argparse.ArgumentParser:
     run.add_argument("scenario", metavar="NAME|FILE", help="a built-in scenario name (see `vsinv list`) or a TOML file")
     run.add_argument("--json", action="store_true", help="print the summary as one JSON object (NaN as null)")
     run.add_argument("--out", metavar="DIR", type=Path, help="write trajectory.npz and the figures (PNG) to DIR")
+    run.add_argument(
+        "--record",
+        metavar="FILE",
+        type=Path,
+        help="write a recording to FILE (MCAP: images with detections, poses, twist, errors, verdict per "
+        "iteration; opens in Foxglove; needs the record extra: pip install 'vsinv[record]')",
+    )
     run.add_argument("--no-progress", action="store_true", help="do not show a progress bar")
     add_allow_outside_files(run)
 
@@ -266,7 +273,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         progress = _Progress(int(stop.get("max_iterations") or 0), scenario.name)
     callback: Optional[Callable[[int, int], object]] = progress
     try:
-        result = run_scenario(scenario, record=out_dir is not None, progress=callback)
+        result = run_scenario(scenario, record=out_dir is not None or args.record is not None, progress=callback)
     finally:
         if progress is not None:
             progress.close()
@@ -280,6 +287,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
             from .view_plots import save_view_figures
 
             written.extend(save_view_figures(result, out_dir))
+    if args.record is not None:
+        from .recording import write_recording
+
+        write_recording(result, args.record)
+        written.append(args.record)
 
     if args.json:
         print(summary_json(summary))
@@ -287,7 +299,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         print(format_summary(summary))
     if written:
         listing = sys.stderr if args.json else sys.stdout
-        print(f"wrote {len(written)} files to {out_dir}:", file=listing)
+        print(f"wrote {len(written)} files" + (f" to {out_dir}:" if out_dir is not None else ":"), file=listing)
         for path in written:
             print(f"  {path}", file=listing)
     return 0 if summary.get("status") == "converged" else 1

@@ -73,6 +73,16 @@ pub fn min_contrast(obj: &Bound<'_, PyAny>) -> PyResult<u8> {
     Ok(int_in_range(obj, "min_contrast", 0, 255)? as u8)
 }
 
+/// A seed of the sensor noise: an integer in [0, 2^64 - 1].
+pub fn seed(obj: &Bound<'_, PyAny>) -> PyResult<u64> {
+    Ok(int_in_range(obj, "seed", 0, i128::from(u64::MAX))? as u64)
+}
+
+/// A frame number (which noise draw): an integer in [0, 2^64 - 1].
+pub fn frame(obj: &Bound<'_, PyAny>) -> PyResult<u64> {
+    Ok(int_in_range(obj, "frame", 0, i128::from(u64::MAX))? as u64)
+}
+
 pub fn max_iter(obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     count(obj, "max_iter")
 }

@@ -1,4 +1,4 @@
-//! Images in Python: `render`, `render_view`, `detect_dots` and `DotTracker`. Images are read
+//! Images in Python: `render`, `render_view`, `degrade`, `detect_dots` and `DotTracker`. Images are read
 //! by [`super::image_arg`] (grey read in place, colour BGR/BGRA converted to grey) and
 //! returned as `(height, width)` uint8 arrays without a copy; the work runs with the GIL
 //! released.
@@ -15,6 +15,7 @@ use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
 use crate::vision::image::{GreyImage, load_image as load_image_file, save_png};
 use crate::vision::polarity::Polarity;
+use crate::vision::render::{RenderConfig, Renderer};
 use crate::vision::tracker::{DotTracker, TrackerConfig};
 
 /// `(n, 2)` pixels and `(n,)` flags, as returned to Python.
@@ -61,6 +62,28 @@ pub fn render<'py>(
     reference: bool,
 ) -> PyResult<Bound<'py, PyArray2<u8>>> {
     image_out(py, scenario_view(py, scenario, pose, time, reference)?.image)
+}
+
+/// `image` (a grey or colour array, see `to_grey`) through the renderer's optics and sensor, as
+/// a scenario's `[vision]` table describes them: blurred by a Gaussian PSF of `blur_sigma`
+/// pixels in [0, 20] (near the border the kernel renormalised to the image), plus sensor noise
+/// of `noise_sigma` grey levels in [0, 100] (the draws `render` takes for frame `frame` from
+/// `seed`), rounded and clamped to 8 bits; what a MuJoCo run does to each render.
+#[pyfunction]
+#[pyo3(signature = (image, blur_sigma = 0.8, noise_sigma = 2.0, seed = 0, frame = 0))]
+pub fn degrade<'py>(
+    py: Python<'py>,
+    image: &Bound<'py, PyAny>,
+    blur_sigma: f64,
+    noise_sigma: f64,
+    #[pyo3(from_py_with = super::args::seed)] seed: u64,
+    #[pyo3(from_py_with = super::args::frame)] frame: u64,
+) -> PyResult<ImageArray<'py>> {
+    let image = image_arg(image, "image")?;
+    let buffer = image.buffer("image")?;
+    let config = RenderConfig { blur_sigma, noise_sigma, seed, ..RenderConfig::default() };
+    let renderer = Renderer::new(config)?;
+    image_out(py, py.detach(|| renderer.degrade(&buffer, frame))?)
 }
 
 /// `render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true
@@ -261,6 +284,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyDotTracker>()?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(render_view, m)?)?;
+    m.add_function(wrap_pyfunction!(degrade, m)?)?;
     m.add_function(wrap_pyfunction!(detect_dots, m)?)?;
     m.add_function(wrap_pyfunction!(load_image, m)?)?;
     m.add_function(wrap_pyfunction!(save_image, m)?)?;

@@ -12,6 +12,7 @@
 //! | the lens between the ideal pinhole image and the rendered one | `render/lens.rs` |
 //! | coverage, supersampling, blur, quantisation | `render/raster.rs` |
 //! | the sensor noise | `render/noise.rs` |
+//! | the PSF and noise on an image drawn elsewhere ([`Renderer::degrade`]) | `render/sensor.rs` |
 
 mod canvas;
 mod conic;
@@ -19,6 +20,7 @@ mod lens;
 mod noise;
 mod polygon;
 mod raster;
+mod sensor;
 
 use nalgebra::Isometry3;
 

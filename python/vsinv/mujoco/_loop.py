@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import geometry
 from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability, load_scenario
+from ._effects import camera_image
 from ._world import World
 
 # [stop] keys the image session reads (the others are the kinematic simulator's own).
@@ -168,7 +169,7 @@ def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray,
     if max_iterations is not None:
         options["stop"]["max_iterations"] = int(max_iterations)
     world.set_K(K_ref)
-    reference = world.render(np.eye(4))
+    reference = camera_image(world, d, np.eye(4), 0)
     args: dict[str, Any] = {}
     if target == "dots":  # the clicks a user would make: near the dots' true pixels
         args["reference_points"], _ = world.project(points, np.eye(4))
@@ -182,7 +183,7 @@ def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray,
     if target == "dots":
         args["first_points"], _ = world.project(points, pose)
     servo = ImageServo(reference, target, K_hat, **args, **options)
-    return _Session(servo, world.render(pose), float(options["dt"]), truth)
+    return _Session(servo, camera_image(world, d, pose, 1), float(options["dt"]), truth)
 
 
 def _run(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> MujocoRun:
@@ -213,7 +214,7 @@ def _run(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> MujocoRun
         t0 = _time.perf_counter()
         if zooms:  # the lens at the time of the next frame
             world.set_K(_intrinsics(d, "camera", dt * len(rows["pose"])))
-        image = world.render(pose)
+        image = camera_image(world, d, pose, len(rows["pose"]) + 1)
         clock["render"] += _time.perf_counter() - t0
     n = len(rows["pose"])
     summary = _summary(d, o.law or d.get("control", {}).get("law", "invariant"), servo, step, rows)

@@ -13,7 +13,8 @@ from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
 
-from .._core import InvalidInput, VsinvError, load_scenario, run_batch
+from .._batch import run_batch
+from .._core import InvalidInput, VsinvError, load_scenario
 from .._progress import Bar
 from .columns import Column
 from .plan import _Plan, _plan

@@ -267,7 +267,7 @@ pub(super) fn gaussian_kernel(sigma: f64) -> Vec<f32> {
 
 /// Separable convolution of a row-major patch with a symmetric kernel (zero outside): each
 /// output is the sum of `kernel[y + r - x] * input[y]` over the taps inside, in increasing `y`.
-fn blur(values: &mut [f32], patch: &Patch, kernel: &[f32]) {
+pub(super) fn blur(values: &mut [f32], patch: &Patch, kernel: &[f32]) {
     if kernel.len() == 1 {
         return;
     }

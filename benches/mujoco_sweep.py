@@ -1,0 +1,124 @@
+"""Runs per second of a MuJoCo sweep on worker processes, and the size of a recording (issue 31,
+"Measured": runs per second of a MuJoCo sweep on 2 cores; item 5's recordings).
+
+How to run (from the repository root, with the package and the mujoco and record extras)::
+
+    python benches/mujoco_sweep.py            # 8 runs of 60 iterations
+    python benches/mujoco_sweep.py --quick    # 4 runs of 10 iterations (make bench-quick)
+
+(a) `vsinv.sim.run_sweep` of `mujoco-lens-12-6` over `control.gain` on `--processes` worker
+processes (default 2: `vsinv.sim.run_batch` spawns them for the `[world] engine = "mujoco"`
+rows), against its peer in the same run: the same runs one after the other in this process
+(`vsinv.run_scenario`). Runs per second of each and their ratio; the sweep's time includes
+spawning the workers (each imports vsinv and MuJoCo and opens an EGL context).
+
+(b) `vsinv.recording.write_recording` of one MuJoCo run and of the kinematic `vision-12-6`
+with `[vision]` (images with sensor noise): bytes per iteration of the MCAP file.
+
+Agreement first: every row of the sweep must equal the summary of the same scenario run alone
+(status, iterations, final errors: MuJoCo's CPU renders are deterministic, so exactly); the
+script exits 1 otherwise. Without mujoco or EGL it says what to install and exits 0.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+import numpy as np  # noqa: E402
+
+import vsinv  # noqa: E402
+import vsinv.sim  # noqa: E402
+
+KEYS = ("status", "iterations", "final_translation_error", "final_rotation_error", "final_invariant_error")
+
+
+def base(iterations: int) -> dict:
+    d = vsinv.load_scenario("mujoco-lens-12-6").to_dict()
+    d["stop"]["max_iterations"] = iterations
+    return d
+
+
+def single_runs(d: dict, sweep: vsinv.sim.SweepResult) -> list[dict]:
+    """The sweep's runs one after the other here: each scenario as the sweep built it."""
+    out = []
+    for i, gain in enumerate(sweep.columns["control.gain"]):
+        s = {**d, "control": {**d["control"], "gain": float(gain)},
+             "noise": {**(d.get("noise") or {}), "seed": int(sweep.columns["seed"][i])}}
+        out.append(vsinv.run_scenario(s, record=False).summary)
+    return out
+
+
+def agree(sweep: vsinv.sim.SweepResult, alone: list[dict]) -> list[str]:
+    bad = []
+    for i, summary in enumerate(alone):
+        for k in KEYS:
+            got, want = sweep.columns[k][i].item(), summary[k]
+            if got != want:
+                bad.append(f"run {i} {k}: sweep {got!r}, alone {want!r}")
+    return bad
+
+
+def recording_sizes(iterations: int) -> dict[str, float]:
+    from vsinv.recording import write_recording
+
+    sizes = {}
+    for name in ("mujoco-lens-12-6", "vision-12-6"):
+        d = vsinv.load_scenario(name).to_dict()
+        d["stop"]["max_iterations"] = iterations
+        result = vsinv.run_scenario(d)
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "run.mcap")
+            write_recording(result, path)
+            sizes[name] = os.path.getsize(path) / len(result.time)
+    return sizes
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="4 runs of 10 iterations")
+    parser.add_argument("--processes", type=int, default=2, help="worker processes of the sweep (default 2)")
+    args = parser.parse_args()
+    import vsinv.mujoco as vm
+
+    why = vm.available()
+    if why is not None:
+        print(f"skipped: {why}")
+        return 0
+    iterations, gains = (10, [0.5, 0.8, 1.2, 1.5]) if args.quick else (60, list(np.linspace(0.4, 1.6, 8)))
+    d = base(iterations)
+    t0 = time.perf_counter()
+    sweep = vsinv.sim.run_sweep(d, {"control.gain": gains}, threads=args.processes, progress=False)
+    t_sweep = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    alone = single_runs(d, sweep)
+    t_alone = time.perf_counter() - t0
+    bad = agree(sweep, alone)
+    if bad:
+        print("DISAGREE: the sweep's rows are not the single runs':\n  " + "\n  ".join(bad))
+        return 1
+    n = len(alone)
+    its = int(sum(s["iterations"] for s in alone))
+    print(f"(a) MuJoCo sweep of {n} runs ({its} iterations, {os.cpu_count()} cores), rows equal the single runs:")
+    print(f"    run_sweep on {args.processes} processes: {t_sweep:6.2f} s  {n / t_sweep:6.2f} runs/s  "
+          f"{its / t_sweep:7.1f} iterations/s")
+    print(f"    one after the other here:  {t_alone:6.2f} s  {n / t_alone:6.2f} runs/s  {its / t_alone:7.1f} iterations/s")
+    print(f"    ratio (sweep / serial runs per second): {t_alone / t_sweep:.2f}")
+    try:
+        sizes = recording_sizes(iterations)
+    except ImportError as e:
+        print(f"(b) skipped: {e}")
+        return 0
+    print("(b) recording (MCAP) size per iteration:")
+    for name, size in sizes.items():
+        print(f"    {name:18s} {size / 1024:8.1f} kB")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,197 @@
+"""Recordings (issue 31, item 5): `vsinv.recording.write_recording` and `vsinv run --record`.
+
+The file is read back by a reader written here from the MCAP specification (records, chunks,
+zstd/lz4), not by the writer's library, and by the `mcap` package's indexed reader (what
+viewers use: the summary section and its statistics). Checked: the topics, message counts,
+log times (the run's times), the images (decoded by OpenCV) against the frames the runs saw
+(`vsinv.vision.render` of the kinematic run's pose and MuJoCo loop's last frame), the poses (the
+quaternion turned back into a matrix) against the run's trajectory, the twists and the verdict.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import struct
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import vsinv  # noqa: E402
+import vsinv.vision  # noqa: E402
+
+mcap = pytest.importorskip("mcap", reason="pip install 'vsinv[record]' (the mcap package)")
+cv2 = pytest.importorskip("cv2")
+
+from vsinv.recording import TOPICS, encode_png, write_recording  # noqa: E402
+
+_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _string(b: bytes, at: int) -> tuple[str, int]:
+    (n,) = struct.unpack_from("<I", b, at)
+    return b[at + 4 : at + 4 + n].decode(), at + 4 + n
+
+
+def _records(b: bytes, channels: dict[int, str], out: list[tuple[str, int, bytes]]) -> None:
+    """Appends (topic, log_time, data) of every message of the records in `b` (the spec's
+    opcodes: 0x04 channel, 0x05 message, 0x06 chunk; the others skipped; 0x0F data end stops)."""
+    at = 0
+    while at < len(b):
+        op, length = struct.unpack_from("<BQ", b, at)
+        body = b[at + 9 : at + 9 + length]
+        at += 9 + length
+        if op == 0x0F:
+            return
+        if op == 0x04:
+            cid, _schema = struct.unpack_from("<HH", body, 0)
+            channels[cid], _ = _string(body, 4)
+        elif op == 0x05:
+            cid, _seq, log_time, _pub = struct.unpack_from("<HIQQ", body, 0)
+            out.append((channels[cid], log_time, body[22:]))
+        elif op == 0x06:
+            _start, _end, size, _crc = struct.unpack_from("<QQQI", body, 0)
+            compression, p = _string(body, 28)
+            (n,) = struct.unpack_from("<Q", body, p)
+            data = body[p + 8 : p + 8 + n]
+            if compression == "zstd":
+                import zstandard
+
+                data = zstandard.ZstdDecompressor().decompress(data, max_output_size=size)
+            elif compression == "lz4":
+                import lz4.frame
+
+                data = lz4.frame.decompress(data)
+            assert len(data) == size
+            _records(data, channels, out)
+
+
+def read_messages(path: Path) -> list[tuple[str, int, dict]]:
+    b = path.read_bytes()
+    assert b[:8] == _MAGIC and b[-8:] == _MAGIC
+    raw: list[tuple[str, int, bytes]] = []
+    _records(b[8:-8], {}, raw)
+    return [(topic, t, json.loads(data)) for topic, t, data in raw]
+
+
+def _rotation(q: dict) -> np.ndarray:
+    x, y, z, w = q["x"], q["y"], q["z"], q["w"]
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def _png(message: dict) -> np.ndarray:
+    assert message["format"] == "png"
+    return cv2.imdecode(np.frombuffer(base64.b64decode(message["data"]), np.uint8), cv2.IMREAD_UNCHANGED)
+
+
+def _check(path: Path, result: vsinv.RunResult, images: bool) -> list[tuple[str, int, dict]]:
+    messages = read_messages(path)
+    n = len(result.time)
+    by_topic: dict[str, list[tuple[int, dict]]] = {}
+    for topic, t, m in messages:
+        by_topic.setdefault(topic, []).append((t, m))
+    expected = {t: n for t in TOPICS}
+    expected["/summary"] = 1
+    if not images:
+        del expected["/camera/image"]
+    assert {t: len(v) for t, v in by_topic.items()} == expected
+    stamps = np.round(result.time * 1e9).astype(np.int64)
+    for topic in expected:
+        if topic != "/summary":
+            assert [t for t, _ in by_topic[topic]] == list(stamps), topic
+    for k, (_, tf) in enumerate(by_topic["/tf"]):
+        camera = next(x for x in tf["transforms"] if x["child_frame_id"] == "camera")
+        assert camera["parent_frame_id"] == "target"
+        t = camera["translation"]
+        np.testing.assert_allclose([t["x"], t["y"], t["z"]], result.pose[k][:3, 3], atol=1e-12)
+        np.testing.assert_allclose(_rotation(camera["rotation"]), result.pose[k][:3, :3], atol=1e-9)
+    steps = [m for _, m in by_topic["/servo"]]
+    np.testing.assert_allclose([s["twist"] for s in steps[:-1]], result.twist[:-1], atol=0)
+    np.testing.assert_allclose([s["image_error"] for s in steps], result.image_error)
+    assert [s["verdict"] for s in steps] == ["running"] * (n - 1) + [result.summary["status"]]
+    assert by_topic["/summary"][0][1]["iterations"] == result.summary["iterations"]
+    found = [len(m["circles"]) for _, m in by_topic["/camera/detections"]]
+    assert found == list(result.visible.sum(axis=1))
+    # The library's indexed reader agrees on the count (its summary section and statistics).
+    from mcap.reader import make_reader
+
+    with open(path, "rb") as f:
+        reader = make_reader(f)
+        assert reader.get_summary().statistics.message_count == len(messages)
+        assert sum(1 for _ in reader.iter_messages()) == len(messages)
+    return messages
+
+
+def test_png_encoder_round_trips_through_opencv() -> None:
+    image = np.random.default_rng(0).integers(0, 256, (7, 13), dtype=np.uint8)
+    decoded = cv2.imdecode(np.frombuffer(encode_png(image), np.uint8), cv2.IMREAD_UNCHANGED)
+    np.testing.assert_array_equal(decoded, image)
+
+
+def test_a_kinematic_run_with_images(tmp_path: Path) -> None:
+    d = vsinv.load_scenario("vision-12-6").to_dict()
+    d["stop"]["max_iterations"] = 6
+    result = vsinv.run_scenario(d)
+    path = tmp_path / "run.mcap"
+    count = write_recording(result, path)
+    messages = _check(path, result, images=True)
+    assert count == len(messages)
+    images = [m for topic, _, m in messages if topic == "/camera/image"]
+    k = 3
+    np.testing.assert_array_equal(_png(images[k]), vsinv.vision.render(d, pose=result.pose[k], time=float(result.time[k])))
+
+
+def test_a_kinematic_run_without_images_has_no_image_topic(tmp_path: Path) -> None:
+    d = vsinv.load_scenario("lens-12-6").to_dict()
+    d["stop"]["max_iterations"] = 5
+    result = vsinv.run_scenario(d)
+    path = tmp_path / "run.mcap"
+    write_recording(result, path)
+    _check(path, result, images=False)
+
+
+def test_a_run_without_rows_is_refused(tmp_path: Path) -> None:
+    result = vsinv.run_scenario("lens-12-6", record=False)
+    with pytest.raises(vsinv.InvalidInput, match="record=True"):
+        write_recording(result, tmp_path / "x.mcap")
+    with pytest.raises(TypeError, match="result"):
+        write_recording("lens-12-6", tmp_path / "x.mcap")  # type: ignore[arg-type]
+
+
+def test_a_mujoco_run_records_the_frames_it_saw(tmp_path: Path) -> None:
+    vm = pytest.importorskip("vsinv.mujoco")
+    why = vm.available()
+    if why is not None:
+        pytest.skip(why)
+    d = vsinv.load_scenario("mujoco-lens-12-6").to_dict()
+    run = vm.run_loop(d, max_iterations=5)
+    path = tmp_path / "run.mcap"
+    write_recording(run.result, path)
+    messages = _check(path, run.result, images=True)
+    images = [m for topic, _, m in messages if topic == "/camera/image"]
+    np.testing.assert_array_equal(_png(images[-1]), run.last_image)
+
+
+def test_the_cli_writes_a_recording(tmp_path: Path) -> None:
+    from vsinv.cli import main
+
+    path = tmp_path / "run.mcap"
+    code = main(["run", "lens-12-6", "--record", str(path), "--no-progress"])
+    assert code in (0, 1)
+    messages = read_messages(path)
+    assert {t for t, _, _ in messages} == set(TOPICS) - {"/camera/image"}
+
+
+@pytest.mark.parametrize("bad", [np.zeros((3, 4), np.float64), np.zeros((3, 4, 3), np.uint8), np.zeros((0, 4), np.uint8)])
+def test_the_png_encoder_refuses_what_is_not_a_grey_image(bad: np.ndarray) -> None:
+    with pytest.raises(vsinv.InvalidInput, match="image"):
+        encode_png(bad)
