@@ -126,10 +126,10 @@ def test_the_mjcf_and_the_urdf_carry_the_published_inertials_and_limits() -> Non
     np.testing.assert_allclose(mjcf.actuator_forcerange[:, 1], [150.0] * 3 + [28.0] * 3)
     d = vsinv.load_scenario("arm-ur5-12-6").to_dict()
     d["robot"]["urdf"] = "ur5e"
-    d["robot"].pop("joints")
-    d["start"] = d["start"] if "start" in d else None
+    d["robot"].pop("joints")  # placed by [start] (the UR5e's own inverse kinematics)
     arm = vsinv.load_scenario({**d, "start": {"position": [0.2, -0.15, -0.15], "rotation_deg": [-19.33, -4.86, 77.28]}}).arm()
-    np.testing.assert_allclose(arm.lower, -2 * np.pi) and np.testing.assert_allclose(arm.upper, 2 * np.pi)
+    np.testing.assert_allclose(arm.lower, -2 * np.pi)
+    np.testing.assert_allclose(arm.upper, 2 * np.pi)
     np.testing.assert_allclose(arm.velocity, np.pi, rtol=1e-5)
 
 
