@@ -38,6 +38,27 @@ INVARIANT = {
     "mujoco-zoom": "zoom-servo",
 }
 IBVS = {"mujoco-ibvs-12-6": "ibvs-12-6"}
+#: The built-ins with an arm (mass, gravity, 500 Hz physics) and the experiment they share their
+#: target, lenses, start, law and stop rules with; their kinematic twin is the same scenario
+#: without `[world]` (the kinematic simulator's arm), eye-to-hand's the free camera (`lens-12-6`:
+#: the same relative motion, the camera fixed and the target carried instead).
+ARMS = {
+    "mujoco-arm-ur5e-12-6": "lens-12-6",
+    "mujoco-arm-ur5e-12-6-tags": "tags-12-6",
+    "mujoco-arm-panda-zoom": "zoom-servo",
+    "mujoco-eye-to-hand-12-6": "lens-12-6",
+}
+ARM_IBVS = {"mujoco-arm-ur5e-ibvs-12-6": "ibvs-12-6"}
+
+
+def _twin(name: str) -> dict:
+    """The kinematic twin of an arm built-in: itself without `[world]`, or the free camera of
+    the same relative motion for eye-to-hand."""
+    if "eye-to-hand" in name:
+        return vsinv.load_scenario(ARMS[name]).to_dict()
+    d = vsinv.load_scenario(name).to_dict()
+    d.pop("world")
+    return d
 
 
 def _run_cli(name: str, capsys: pytest.CaptureFixture[str]) -> tuple[int, dict]:
@@ -49,7 +70,7 @@ def test_the_mujoco_builtins_are_listed_with_the_mujoco_engine() -> None:
     """Runs without MuJoCo: the names are built-ins, each selects MuJoCo and is otherwise the
     kinematic built-in of its experiment (same target, lenses, start, law)."""
     names = {n for n, _ in vsinv.sim.list_scenarios()}
-    for name, kinematic in {**INVARIANT, **IBVS}.items():
+    for name, kinematic in {**INVARIANT, **IBVS, **ARMS, **ARM_IBVS}.items():
         assert name in names and kinematic in names
         d, k = vsinv.load_scenario(name).to_dict(), vsinv.load_scenario(kinematic).to_dict()
         assert d["world"]["engine"] == "mujoco" and "world" not in k
@@ -89,3 +110,38 @@ def test_ibvs_on_the_lens_change_in_mujoco_does_not_converge(capsys: pytest.Capt
     kinematic_end = k.pose[-1][:3, 3]
     r = vsinv.run_scenario("mujoco-ibvs-12-6")
     assert np.linalg.norm(r.pose[-1][:3, 3] - kinematic_end) < 0.01, (r.pose[-1][:3, 3], kinematic_end)
+
+
+@needs_mujoco
+@pytest.mark.slow  # each arm run renders 200-700 frames: 6-25 s idle, three times that on a busy machine
+@pytest.mark.parametrize("name", sorted(ARMS))
+def test_each_arm_builtin_converges_as_its_kinematic_twin(name: str, capsys: pytest.CaptureFixture[str]) -> None:
+    """The arm built-ins from `vsinv run NAME`: `converged`, within the scenario's tolerances by
+    the scene's truth, the error down by two orders of magnitude, about as fast as the kinematic
+    twin (which converges too)."""
+    code, s = _run_cli(name, capsys)
+    k = vsinv.run_scenario(_twin(name)).summary
+    print(name, s["status"], s["iterations"], s["final_translation_error"], np.degrees(s["final_rotation_error"]),
+          "| twin", k["status"], k["iterations"])
+    assert code == 0 and s["name"] == name
+    assert s["status"] == "converged" and k["status"] == "converged", s["message"]
+    assert s["within_tolerance"] and s["final_translation_error"] < 5e-3 and np.degrees(s["final_rotation_error"]) < 0.5, s
+    assert s["final_translation_error"] < 0.01 * s["start_translation_error"]
+    assert s["iterations"] < 1.5 * k["iterations"] + 100
+    if "eye-to-hand" not in name:
+        assert s["min_manipulability"] > vsinv.load_scenario(name).arm().min_manipulability
+
+
+@needs_mujoco
+@pytest.mark.slow  # about 230 frames: 7 s idle, 15 s busy
+def test_ibvs_on_the_lens_change_with_the_ur5e_fails() -> None:
+    """IBVS with the UR5e through MuJoCo's 6 mm images: it never says `converged` and stops
+    about 300 mm from the reference pose, where the kinematic arm's IBVS ends (within 10 mm)."""
+    r = vsinv.run_scenario("mujoco-arm-ur5e-ibvs-12-6")
+    k = vsinv.run_scenario(_twin("mujoco-arm-ur5e-ibvs-12-6"))
+    s = r.summary
+    print(s["status"], s["iterations"], s["final_translation_error"], k.summary["final_translation_error"])
+    assert s["status"] != "converged" and not s["within_tolerance"], s
+    assert k.summary["status"] != "converged"
+    assert s["final_translation_error"] > 0.2, s
+    assert np.linalg.norm(r.pose[-1][:3, 3] - k.pose[-1][:3, 3]) < 0.01

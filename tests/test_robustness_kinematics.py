@@ -94,3 +94,35 @@ def test_damped_least_squares(data: Any) -> None:
     name, v, out = fuzz(data, vsinv.kinematics.damped_least_squares, args, strategies, ref=ref, rtol=1e-12)
     if returned(out):
         assert out.shape == (np.asarray(v.value).shape[1] if name == "jacobian" else 6,)
+
+
+ARM_SCENARIO = vsinv.load_scenario("arm-ur5-12-6")
+
+
+@covers("Scenario.arm", "ScenarioArm", "ScenarioArm.model", "ScenarioArm.end_effector", "ScenarioArm.joint_names", "ScenarioArm.base", "ScenarioArm.mount", "ScenarioArm.believed_mount", "ScenarioArm.start", "ScenarioArm.lower", "ScenarioArm.upper", "ScenarioArm.velocity", "ScenarioArm.damping", "ScenarioArm.min_manipulability", "ScenarioArm.camera_pose", "ScenarioArm.manipulability", "ScenarioArm.joint_velocities")
+@fuzz_settings(100)
+@given(st.data())
+def test_scenario_arm_joint_velocities(data: Any) -> None:
+    """`Scenario.arm()` (None for a free camera) and its `joint_velocities(jacobian, joints,
+    twist)`: every variant of an argument gives the canonical answer or InvalidInput naming it;
+    `camera_pose` and `manipulability` refuse bad joints by name."""
+    assert vsinv.load_scenario("lens-12-12").arm() is None
+    arm = ARM_SCENARIO.arm()
+    assert arm is not None
+    q = np.asarray(arm.start)
+    args: dict[str, Any] = {"jacobian": J_UR5, "joints": q, "twist": TWIST}
+    strategies = {
+        "jacobian": arrays(J_UR5, overrides={"fewer": INVALID, "empty": INVALID}),
+        "joints": arrays(q, overrides={"fewer": INVALID, "empty": INVALID}),
+        "twist": arrays(TWIST, overrides={"fewer": INVALID, "empty": INVALID}),
+    }
+    ref = arm.joint_velocities(J_UR5, q, TWIST)
+    assert isinstance(arm, vsinv.sim.ScenarioArm) and len(arm.joint_names) == 6 and arm.model == "ur5"
+    assert arm.end_effector == "tool0" and arm.damping > 0 and arm.min_manipulability >= 0
+    for name in ("base", "mount", "believed_mount", "start", "lower", "upper", "velocity"):
+        assert np.isfinite(getattr(arm, name)).all()
+    fuzz(data, arm.joint_velocities, args, strategies, api="ScenarioArm.joint_velocities", ref=ref, rtol=1e-12,
+         digest=lambda out: out[0] if isinstance(out, tuple) else out)
+    for method in (arm.camera_pose, arm.manipulability):
+        call(method, data.draw(st.sampled_from([q[:5], np.r_[q, 0.0], np.full(6, np.nan), "abc"])),
+             _api=f"ScenarioArm.{method.__name__}", _expect=INVALID, _names=("joints",), _finite=False)

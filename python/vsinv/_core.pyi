@@ -93,6 +93,7 @@ __all__ = [
     "check_stability",
     "tracking_bound",
     "Scenario",
+    "ScenarioArm",
     "RunResult",
     "recorded_columns",
     "summary_fields",
@@ -707,8 +708,66 @@ class Scenario:
     def to_dict(self) -> dict[str, Any]:
         """The scenario as a dictionary (every default filled in); edit it and pass it back to
         `run_scenario` or `Scenario.from_dict`."""
+    def arm(self) -> ScenarioArm | None:
+        """The arm of `[robot] kind = "urdf"` as the kinematic simulator reads it (its start joints
+        solved from `[start]` if need be), or None for a free camera or a Cartesian robot: what
+        a world that moves the arm itself (`vsinv.mujoco`) needs."""
     def to_toml(self) -> str:
         """The scenario as TOML text."""
+
+@final
+class ScenarioArm:
+    """The arm of a scenario (`Scenario.arm()`): the built-in model or URDF, its base in F*, the
+    camera's mount on the end effector, the start joints and the limits the kinematic simulator
+    uses, and its resolution of camera twists into joint velocities."""
+
+    @property
+    def model(self) -> str:
+        """`robot.urdf`: the built-in arm's name ('ur5', 'ur5e', 'panda') or the URDF's source."""
+    @property
+    def end_effector(self) -> str:
+        """The link carrying the camera (`robot.end_effector`, or the model's default)."""
+    @property
+    def joint_names(self) -> list[str]:
+        """The actuated joints' names, base to end effector."""
+    @property
+    def base(self) -> _F64Array:
+        """The arm's base link in F* (4x4, `robot.base`)."""
+    @property
+    def mount(self) -> _F64Array:
+        """The camera in the end effector's frame (4x4, `robot.camera_mount`): where it is."""
+    @property
+    def believed_mount(self) -> _F64Array:
+        """The mount the controller believes (4x4: `camera_mount * mount_error`, or the mount):
+        camera twists become joint velocities through it."""
+    @property
+    def start(self) -> _F64Array:
+        """The start joints (rad; m for prismatic joints): `robot.joints`, or solved from `[start]`."""
+    @property
+    def lower(self) -> _F64Array:
+        """Lower joint limits (rad, m)."""
+    @property
+    def upper(self) -> _F64Array:
+        """Upper joint limits (rad, m)."""
+    @property
+    def velocity(self) -> _F64Array:
+        """Joint speed limits (rad/s, m/s)."""
+    @property
+    def damping(self) -> float:
+        """The largest damping factor of the least squares (`robot.damping`)."""
+    @property
+    def min_manipulability(self) -> float:
+        """A run ends `singular` below this manipulability (`robot.min_manipulability`)."""
+    def camera_pose(self, joints: _ArrayLike) -> _F64Array:
+        """The camera's pose in F* (4x4) at `joints`: `base * fk(joints) * mount`."""
+    def manipulability(self, joints: _ArrayLike) -> float:
+        """The manipulability sqrt(det(J J^T)) at `joints` (any frame's Jacobian gives it)."""
+    def joint_velocities(self, jacobian: _ArrayLike, joints: _ArrayLike, twist: _ArrayLike) -> tuple[_F64Array, bool]:
+        """Joint velocities (n,) for the camera `twist` (6,: in the camera frame the controller
+        believes) at `joints`, where `jacobian` (6, n) is that camera frame's Jacobian from
+        elsewhere (MuJoCo's `mj_jacSite`, rows turned into the camera frame): the kinematic arm's
+        damped least squares, with its joint-centring task on a redundant arm, scaled as a whole
+        within the joint speed limits; and whether the limits scaled them."""
 
 _ScenarioLike = Union[Scenario, dict[str, Any], str, os.PathLike[str]]
 
@@ -1267,7 +1326,7 @@ class IkSolution:
         spread seeds in order."""
 
 def fk(arm: str, joints: _ArrayLike) -> _F64Array:
-    """The 4x4 pose of the end-effector of the built-in `arm` ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
+    """The 4x4 pose of the end-effector of the built-in `arm` ('ur5', 'ur5e': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
     base frame (its URDF root link: `base_link`, `panda_link0`) at `joints` (rad), one value per joint within the
     joint limits (InvalidInput naming the first joint outside)."""
 
@@ -1281,8 +1340,8 @@ def damped_least_squares(
     Jacobian's null space. For a Jacobian from elsewhere (MuJoCo's `mj_jacSite`)."""
 
 def ik(arm: str, pose: _ArrayLike, seed: _ArrayLike | None = None) -> IkSolution:
-    """Joints within the limits of the built-in `arm` ('ur5', 'panda') that put its end-effector at `pose`: a 4x4
-    float64 rigid motion of the end-effector frame ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
+    """Joints within the limits of the built-in `arm` ('ur5', 'ur5e', 'panda') that put its end-effector at `pose`: a 4x4
+    float64 rigid motion of the end-effector frame ('ur5', 'ur5e': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
     frame (the URDF root link), as :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011)
     projected on the joint limits, from `seed` (one value per joint; default the middle of the limits), then from up
     to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A redundant arm (the Panda) returns one of its

@@ -3,7 +3,7 @@ batches in parallel, parameter sweeps (:mod:`vsinv.sweep` holds their parts), an
 declarations of the recorded columns and the summary's numbers."""
 
 from ._batch import run_batch
-from ._core import RunResult, Scenario, list_scenarios, load_scenario, recorded_columns, summary_fields
+from ._core import RunResult, Scenario, ScenarioArm, list_scenarios, load_scenario, recorded_columns, summary_fields
 from ._run import run_scenario
 from .sweep import Choice, LogUniform, SweepResult, Uniform, run_sweep
 
@@ -12,6 +12,7 @@ __all__ = [
     "LogUniform",
     "RunResult",
     "Scenario",
+    "ScenarioArm",
     "SweepResult",
     "Uniform",
     "list_scenarios",

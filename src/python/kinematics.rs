@@ -91,7 +91,7 @@ impl PyIkSolution {
     }
 }
 
-/// The 4x4 pose of the end-effector of the built-in `arm` ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
+/// The 4x4 pose of the end-effector of the built-in `arm` ('ur5', 'ur5e': `tool0`, 'panda': `panda_hand_tcp`) in the arm's
 /// base frame (its URDF root link: `base_link`, `panda_link0`) at `joints` (rad), one value per joint within the
 /// joint limits (InvalidInput naming the first joint outside).
 #[pyfunction]
@@ -112,8 +112,8 @@ fn fk<'py>(
     from_matrix(py, &model.fk(&q)?.to_homogeneous())
 }
 
-/// Joints within the limits of the built-in `arm` ('ur5', 'panda') that put its end-effector at `pose`: a 4x4
-/// float64 rigid motion of the end-effector frame ('ur5': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
+/// Joints within the limits of the built-in `arm` ('ur5', 'ur5e', 'panda') that put its end-effector at `pose`: a 4x4
+/// float64 rigid motion of the end-effector frame ('ur5', 'ur5e': `tool0`, 'panda': `panda_hand_tcp`) in the arm's base
 /// frame (the URDF root link), as :func:`fk` returns. Damped least squares (Levenberg-Marquardt, Sugihara 2011)
 /// projected on the joint limits, from `seed` (one value per joint; default the middle of the limits), then from up
 /// to 63 spread seeds until one converges to 1e-10 m and 1e-10 rad. A redundant arm (the Panda) returns one of its

@@ -24,6 +24,7 @@ mod lens;
 mod logs;
 mod planning;
 mod run_record;
+mod scenario_arm;
 mod se3;
 mod servo;
 mod shared;
@@ -66,6 +67,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     tag_tracker::register(m)?;
     se3::register(m)?;
     kinematics::register(m)?;
+    scenario_arm::register(m)?;
     lens::register(m)?;
     hand_eye::register(m)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

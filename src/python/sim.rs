@@ -61,6 +61,13 @@ impl PyScenario {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         values::to_python(py, &self.inner.to_value()?)
     }
+    /// The arm of `[robot] kind = "urdf"` as the kinematic simulator reads it (its start joints
+    /// solved from `[start]` if need be), or None for a free camera or a Cartesian robot: what
+    /// a world that moves the arm itself (`vsinv.mujoco`) needs.
+    fn arm(&self, py: Python<'_>) -> PyResult<Option<super::scenario_arm::PyScenarioArm>> {
+        let inner = py.detach(|| self.inner.arm())?;
+        Ok(inner.map(|inner| super::scenario_arm::PyScenarioArm { inner }))
+    }
     /// The scenario as TOML text.
     fn to_toml(&self) -> PyResult<String> {
         Ok(self.inner.to_toml()?)

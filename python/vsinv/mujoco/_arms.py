@@ -1,12 +1,20 @@
-"""Arms with mass for MuJoCo (issue 31, item 2): the UR5 of vsinv's `robots/ur5.urdf` (the same
-standard DH kinematics, so `vsinv.kinematics.fk("ur5", q)` is the flange's pose in the base
-frame) with Universal Robots' published masses and centres of mass, capsule geometry the camera
-can see, joint limits, and velocity actuators limited to the published speed and effort limits.
+"""Arms with mass for MuJoCo (issue 31, item 2): the UR5 of vsinv's `robots/ur5.urdf` and the
+UR5e of `robots/ur5e.urdf` (the same standard DH kinematics, so `vsinv.kinematics.fk("ur5", q)`
+and `fk("ur5e", q)` are the flange's pose in the base frame) with Universal Robots' published
+masses and centres of mass, capsule geometry the camera can see, joint limits, and velocity
+actuators limited to the published speed and effort limits.
 
-Masses and centres of mass: Universal Robots, "DH parameters for calculations of kinematics and
-dynamics" (UR5: m = 3.7, 8.393, 2.33, 1.219, 1.219, 0.1879 kg; centres of mass in the DH frames
-below). UR publishes no inertia tensors for the UR5: each link's is that of a uniform solid
-cylinder of its mass along its longest segment (radius 0.05 m), at its centre of mass.
+Source of the numbers: Universal Robots, "DH parameters for calculations of kinematics and
+dynamics" (https://www.universal-robots.com/articles/ur/application-installation/dh-parameters-for-calculations-of-kinematics-and-dynamics/).
+UR5: d = 0.089159, 0, 0, 0.10915, 0.09465, 0.0823 m; a2 = -0.425, a3 = -0.39225 m;
+m = 3.7, 8.393, 2.33, 1.219, 1.219, 0.1879 kg; centres of mass in the DH frames below. UR
+publishes no inertia tensors for the UR5: each link's is that of a uniform solid cylinder of its
+mass along its longest segment (radius 0.05 m), at its centre of mass.
+UR5e: d = 0.1625, 0, 0, 0.1333, 0.0997, 0.0996 m; a2 = -0.425, a3 = -0.3922 m;
+m = 3.761, 8.058, 2.846, 1.37, 1.3, 0.365 kg; the same centres of mass; the published diagonal
+inertia tensors about the centres of mass in the DH frames (UR5E_INERTIA). Limits of both (the
+datasheets): +-360 degrees, 180 degrees/s (UR5: 3.15 rad/s as robots/ur5.urdf), 150 N m on the
+three size-3 joints and 28 N m on the wrists.
 The bodies compensate their own weight (MuJoCo's `gravcomp`, as the arm's controller does) and
 each joint is driven by a velocity actuator (gain `kv`, torque within the effort limit). The
 geometry is seen (it can occlude a target) but does not collide (contype 0).
@@ -14,6 +22,7 @@ geometry is seen (it can occlude a target) but does not collide (contype 0).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -29,8 +38,37 @@ UR5_COM = ((0.0, -0.02561, 0.00193), (0.2125, 0.0, 0.11336), (0.15, 0.0, 0.0265)
 UR5_EFFORT = (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)  # N m
 UR5_SPEED = 3.15  # rad/s, every joint
 UR5_KV = (300.0, 300.0, 150.0, 50.0, 50.0, 20.0)  # N m s / rad
+# The UR5e (robots/ur5e.urdf): standard DH, masses, centres of mass (DH frames), inertia tensors
+# (diagonal, about the centre of mass, axes of the DH frame), Universal Robots' UR5e rows.
+UR5E_DH = ((0.1625, 0.0, np.pi / 2), (0.0, -0.425, 0.0), (0.0, -0.3922, 0.0),
+           (0.1333, 0.0, np.pi / 2), (0.0997, 0.0, -np.pi / 2), (0.0996, 0.0, 0.0))
+UR5E_MASS = (3.761, 8.058, 2.846, 1.37, 1.3, 0.365)
+UR5E_COM = UR5_COM
+UR5E_INERTIA = ((0.0084, 0.0064, 0.0084), (0.0078, 0.21, 0.21), (0.0016, 0.0462, 0.0462),
+                (0.0016, 0.0016, 0.0009), (0.0016, 0.0016, 0.0009), (0.0001, 0.0001, 0.0001))
+UR5E_SPEED = np.pi  # rad/s (180 degrees/s), every joint
 JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 LINKS = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
+
+
+@dataclass(frozen=True)
+class UrArm:
+    """A Universal Robots arm's published numbers: standard DH rows (d, a, alpha), masses,
+    centres of mass (DH frames), principal inertias about them in the DH frames (None: a solid
+    cylinder along the longest segment), speed (rad/s) and effort (N m) limits."""
+
+    name: str
+    dh: tuple[tuple[float, float, float], ...]
+    mass: tuple[float, ...]
+    com: tuple[tuple[float, float, float], ...]
+    inertia: tuple[tuple[float, float, float], ...] | None
+    speed: float
+    effort: tuple[float, ...] = UR5_EFFORT
+    kv: tuple[float, ...] = UR5_KV
+
+
+UR5 = UrArm("ur5", UR5_DH, UR5_MASS, UR5_COM, None, UR5_SPEED)
+UR5E = UrArm("ur5e", UR5E_DH, UR5E_MASS, UR5E_COM, UR5E_INERTIA, UR5E_SPEED)
 
 
 def _dh(d: float, a: float, alpha: float) -> np.ndarray:
@@ -49,12 +87,12 @@ def _cylinder_inertia(mass: float, length: float, radius: float = 0.05) -> np.nd
     return np.array([side, side, mass * radius**2 / 2.0])
 
 
-def _link(i: int, child: str) -> str:
+def _link(arm: UrArm, i: int, child: str) -> str:
     """The content of link i's body: joint i, its inertia and geometry, and `child` (the body of
     link i + 1, or the flange's site and camera)."""
-    d, a, alpha = UR5_DH[i]
+    d, a, alpha = arm.dh[i]
     frame = _dh(d, a, alpha)  # DH frame i in the body's frame: where the next joint is
-    com = (frame @ np.append(UR5_COM[i], 1.0))[:3]
+    com = (frame @ np.append(arm.com[i], 1.0))[:3]
     segments = [(np.zeros(3), np.array([0.0, 0.0, d])), (np.array([0.0, 0.0, d]), frame[:3, 3])]
     longest = max(float(np.linalg.norm(q - p)) for p, q in segments)
     radius = 0.045 if i < 3 else 0.035
@@ -63,22 +101,53 @@ def _link(i: int, child: str) -> str:
         for p, q in segments if np.linalg.norm(q - p) > 1e-9
     )
     geoms += f'<geom type="cylinder" size="{radius * 1.1} {radius}" rgba="0.25 0.45 0.7 1" mass="0" contype="0" conaffinity="0"/>'
-    # the cylinder's axis along the longest segment (one along x: z turned onto x about y)
-    quat = "0.7071068 0 0.7071068 0" if abs(a) > abs(d) else "1 0 0 0"
-    inertial = (f'<inertial pos="{_v(com)}" quat="{quat}" mass="{UR5_MASS[i]}" '
-                f'diaginertia="{_v(_cylinder_inertia(UR5_MASS[i], max(longest, 0.05)))}"/>')
+    if arm.inertia is None:
+        # the cylinder's axis along the longest segment (one along x: z turned onto x about y)
+        quat = "0.7071068 0 0.7071068 0" if abs(a) > abs(d) else "1 0 0 0"
+        moments = _cylinder_inertia(arm.mass[i], max(longest, 0.05))
+    else:  # the published tensor, axes of DH frame i: the body's turned by alpha about x
+        quat = f"{np.cos(alpha / 2):.17g} {np.sin(alpha / 2):.17g} 0 0"
+        moments = np.asarray(arm.inertia[i])
+    inertial = f'<inertial pos="{_v(com)}" quat="{quat}" mass="{arm.mass[i]}" diaginertia="{_v(moments)}"/>'
     joint = f'<joint name="{JOINTS[i]}" axis="0 0 1" range="{-2 * np.pi} {2 * np.pi}" damping="0.1" armature="0.1"/>'
     return f"{joint}{inertial}{geoms}{child}"
 
 
-def _chain(tool: str) -> str:
-    """Link 0's body with links 1..5 nested: the body of link i + 1 sits at the DH frame i."""
-    inner = _link(5, tool)
+def ur_chain(arm: UrArm, tool: str) -> str:
+    """Link 0's body with links 1..5 nested (the body of link i + 1 sits at the DH frame i),
+    `tool` in the last link's body (whose frame is DH frame 5 turned by q6: the flange is
+    `Tz(d6)` in it)."""
+    inner = _link(arm, 5, tool)
     for i in reversed(range(5)):
-        d, a, alpha = UR5_DH[i]
+        d, a, alpha = arm.dh[i]
         pos = _dh(d, a, alpha)[:3, 3]
-        inner = _link(i, f'<body name="{LINKS[i + 1]}" pos="{_v(pos)}" euler="{alpha} 0 0" gravcomp="1">{inner}</body>')
+        inner = _link(arm, i, f'<body name="{LINKS[i + 1]}" pos="{_v(pos)}" euler="{alpha} 0 0" gravcomp="1">{inner}</body>')
     return f'<body name="{LINKS[0]}" gravcomp="1">{inner}</body>'
+
+
+def ur_actuators(arm: UrArm) -> str:
+    """Velocity actuators `v_<joint>` within the speed and effort limits."""
+    return "".join(
+        f'<velocity name="v_{j}" joint="{j}" kv="{kv}" ctrlrange="{-arm.speed!r} {arm.speed!r}" '
+        f'forcerange="{-e} {e}" forcelimited="true"/>'
+        for j, kv, e in zip(JOINTS, arm.kv, arm.effort)
+    )
+
+
+def _ur_mjcf(arm: UrArm, camera_fovy: float, physics_dt: float) -> str:
+    d6 = arm.dh[5][0]
+    tool = (f'<site name="flange" pos="0 0 {d6}" size="0.01"/>'
+            f'<camera name="wrist" pos="0 0 {d6}" quat="0 1 0 0" fovy="{camera_fovy}"/>')
+    return f"""<mujoco model="{arm.name}-vsinv">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{physics_dt}" gravity="0 0 -9.81" integrator="implicitfast"/>
+  <worldbody>
+    <light name="top" pos="0 0 3" dir="0 0 -1" directional="true" diffuse="0.6 0.6 0.6"/>
+    <geom name="base" type="cylinder" size="0.075 0.02" pos="0 0 -0.02" rgba="0.25 0.45 0.7 1" contype="0" conaffinity="0"/>
+    {ur_chain(arm, tool)}
+  </worldbody>
+  <actuator>{ur_actuators(arm)}</actuator>
+</mujoco>"""
 
 
 def ur5_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
@@ -86,24 +155,13 @@ def ur5_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
     step `physics_dt` (500 Hz by default), a site `flange` (vsinv's `tool0`: the DH frame 6) and
     a camera `wrist` on it whose vsinv frame is the flange's (MuJoCo's camera turned by pi
     about x), velocity actuators `v_<joint>` on every joint."""
-    d6 = UR5_DH[5][0]
-    tool = (f'<site name="flange" pos="0 0 {d6}" size="0.01"/>'
-            f'<camera name="wrist" pos="0 0 {d6}" quat="0 1 0 0" fovy="{camera_fovy}"/>')
-    actuators = "".join(
-        f'<velocity name="v_{j}" joint="{j}" kv="{kv}" ctrlrange="{-UR5_SPEED} {UR5_SPEED}" '
-        f'forcerange="{-e} {e}" forcelimited="true"/>'
-        for j, kv, e in zip(JOINTS, UR5_KV, UR5_EFFORT)
-    )
-    return f"""<mujoco model="ur5-vsinv">
-  <compiler angle="radian" autolimits="true"/>
-  <option timestep="{physics_dt}" gravity="0 0 -9.81" integrator="implicitfast"/>
-  <worldbody>
-    <light name="top" pos="0 0 3" dir="0 0 -1" directional="true" diffuse="0.6 0.6 0.6"/>
-    <geom name="base" type="cylinder" size="0.075 0.02" pos="0 0 -0.02" rgba="0.25 0.45 0.7 1" contype="0" conaffinity="0"/>
-    {_chain(tool)}
-  </worldbody>
-  <actuator>{actuators}</actuator>
-</mujoco>"""
+    return _ur_mjcf(UR5, camera_fovy, physics_dt)
+
+
+def ur5e_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
+    """`ur5_mjcf` for the UR5e (robots/ur5e.urdf: `vsinv.kinematics.fk("ur5e", q)` is the site
+    `flange`), with its published inertia tensors."""
+    return _ur_mjcf(UR5E, camera_fovy, physics_dt)
 
 
 def joint_velocities(model: Any, data: Any, site: str, twist: Any, damping: float = 0.02) -> np.ndarray:

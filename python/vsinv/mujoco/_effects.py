@@ -13,10 +13,14 @@ from ._world import World
 
 
 def camera_image(world: World, d: dict[str, Any], pose: Any, frame: int) -> np.ndarray:
-    """`world.render(pose)` degraded by `[vision]`'s `blur_sigma`, `noise_sigma` and `seed` with
-    the noise draw of frame `frame` (0 the reference image, k + 1 the k-th servo frame, as the
-    kinematic image loop numbers them); the render itself when the scenario has no `[vision]`."""
-    image = world.render(pose)
+    """`world.render(pose)` through `degraded` (frame `frame`)."""
+    return degraded(d, world.render(pose), frame)
+
+
+def degraded(d: dict[str, Any], image: np.ndarray, frame: int) -> np.ndarray:
+    """`image` degraded by `[vision]`'s `blur_sigma`, `noise_sigma` and `seed` with the noise draw
+    of frame `frame` (0 the reference image, k + 1 the k-th servo frame, as the kinematic image
+    loop numbers them); `image` itself when the scenario has no `[vision]`."""
     options = d.get("vision")
     if not options:
         return image

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import geometry
 from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability, load_scenario
-from ._effects import camera_image
+from ._effects import camera_image, degraded
 from ._world import World
 
 # [stop] keys the image session reads (the others are the kinematic simulator's own).
@@ -157,9 +157,11 @@ class _Session:
     truth: np.ndarray  # per session point, its row of world.target_points
 
 
-def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray, max_iterations: int | None) -> _Session:
-    """The `ImageServo` on the reference image (K* at F*), the first frame (K at `pose`), dt
-    and which scene point each of the session's points is."""
+def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray, max_iterations: int | None,
+             first: Callable[[], np.ndarray] | None = None) -> _Session:
+    """The `ImageServo` on the reference image (K* at F*), the first frame (K at `pose`; or
+    `first()`, which puts the world at its start and renders), dt and which scene point each
+    of the session's points is."""
     target: Any = world.target
     points = world.target_points
     if target not in ("dots", "tags") or points is None or world.scenario is None:
@@ -169,7 +171,7 @@ def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray,
     if max_iterations is not None:
         options["stop"]["max_iterations"] = int(max_iterations)
     world.set_K(K_ref)
-    reference = camera_image(world, d, np.eye(4), 0)
+    reference = degraded(d, world.render_reference(), 0)
     args: dict[str, Any] = {}
     if target == "dots":  # the clicks a user would make: near the dots' true pixels
         args["reference_points"], _ = world.project(points, np.eye(4))
@@ -183,10 +185,15 @@ def _session(d: dict[str, Any], world: World, law: str | None, pose: np.ndarray,
     if target == "dots":
         args["first_points"], _ = world.project(points, pose)
     servo = ImageServo(reference, target, K_hat, **args, **options)
-    return _Session(servo, camera_image(world, d, pose, 1), float(options["dt"]), truth)
+    image = first() if first is not None else world.render(pose if world.free_camera else None)
+    return _Session(servo, degraded(d, image, 1), float(options["dt"]), truth)
 
 
 def _run(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> MujocoRun:
+    if world.arm is not None:
+        from ._arm_loop import run_arm
+
+        return run_arm(loaded, d, world, o)  # eye-in-hand or eye-to-hand
     start = o.start
     if start is None:
         s = d["start"]

@@ -80,6 +80,23 @@ def _link(i: int, inner: str) -> str:
             f"{joint}{inertial}{geoms}{inner}</body>")
 
 
+def panda_chain(tool: str) -> str:
+    """The bodies panda_link1..7 nested, `tool` in panda_link7's body (the flange panda_link8
+    is `Tz(0.107)` in it)."""
+    inner = tool
+    for i in reversed(range(7)):
+        inner = _link(i, inner)
+    return inner
+
+
+def panda_actuators() -> str:
+    """Velocity actuators `v_<joint>` within the speed and torque limits."""
+    return "".join(
+        f'<velocity name="v_{j}" joint="{j}" kv="{kv}" ctrlrange="{-s} {s}" forcerange="{-e} {e}" forcelimited="true"/>'
+        for j, kv, s, e in zip(PANDA_JOINTS, PANDA_KV, PANDA_SPEED, PANDA_EFFORT)
+    )
+
+
 def panda_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
     """The MJCF text of the Panda on the world's origin (its base frame, panda_link0), gravity
     on, the physics step `physics_dt` (500 Hz by default), sites `flange` (panda_link8) and `tcp`
@@ -93,13 +110,8 @@ def panda_mjcf(camera_fovy: float = 60.0, physics_dt: float = 0.002) -> str:
     tool = (f'<site name="flange" pos="0 0 {PANDA_FLANGE!r}" size="0.01"/>'
             f'<site name="tcp" pos="0 0 {z!r}" quat="{tcp_quat}" size="0.01"/>'
             f'<camera name="wrist" pos="0 0 {z!r}" quat="{cam_quat}" fovy="{camera_fovy}"/>')
-    inner = tool
-    for i in reversed(range(7)):
-        inner = _link(i, inner)
-    actuators = "".join(
-        f'<velocity name="v_{j}" joint="{j}" kv="{kv}" ctrlrange="{-s} {s}" forcerange="{-e} {e}" forcelimited="true"/>'
-        for j, kv, s, e in zip(PANDA_JOINTS, PANDA_KV, PANDA_SPEED, PANDA_EFFORT)
-    )
+    inner = panda_chain(tool)
+    actuators = panda_actuators()
     return f"""<mujoco model="panda-vsinv">
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{physics_dt}" gravity="0 0 -9.81" integrator="implicitfast"/>

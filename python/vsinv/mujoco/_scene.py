@@ -13,7 +13,18 @@ from .. import geometry, vision
 
 CAMERA = "vsinv_camera"
 PIXEL = 1e-5  # the sensor's pixel pitch (metres): 10 um, as the scenarios' lenses (f = 1200 px: 12 mm)
-THIN = 0.0005  # half thickness of a tag tile and of a dot's disc, metres
+PHYSICS_DT = 0.002  # s: 500 Hz physics under an arm
+THIN = 0.0005
+
+
+def backing(points: np.ndarray) -> str:
+    """Eye-to-hand: a black plate facing F* 40 mm behind the target's farthest point, 100 mm
+    wider than the target on each side, hiding the arm that carries it (F* coordinates)."""
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, hi[2] + 0.04])
+    half = (hi[:2] - lo[:2]) / 2 + 0.1
+    return (f'<geom name="backing" type="box" size="{half[0]} {half[1]} 0.004" pos="{_v(centre)}" rgba="0 0 0 1" '
+            'contype="0" conaffinity="0"/>')  # half thickness of a tag tile and of a dot's disc, metres
 
 
 def _v(x: Any) -> str:
@@ -80,9 +91,16 @@ def _png(grey: np.ndarray) -> bytes:
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
 
 
-def scene(scenario: dict[str, Any], width: int, height: int) -> tuple[str, dict[str, bytes], str, np.ndarray]:
+def scene(scenario: dict[str, Any], width: int, height: int, arm: Any = None) -> tuple[str, dict[str, bytes], str, np.ndarray]:
     """The MJCF text, its assets, the target kind ("dots" or "tags") and the target's points in
-    F* ((n, 3): the dots' centres, or the tags' corners tag by tag in `[object]` order)."""
+    F* ((n, 3): the dots' centres, or the tags' corners tag by tag in `[object]` order). With
+    `arm` (a `ScenarioArm`), the arm with mass carrying a second camera (`_mounted`), gravity
+    along its base's -z, 500 Hz physics; with `[world] eye_to_hand`, the arm carries the target
+    (its geoms in F*, `BACKING` behind them) and the free camera stays at the world's origin."""
+    from . import _mounted
+
+    arm_body, actuators, option = "", "", ""
+    eye_to_hand = scenario.get("world", {}).get("eye_to_hand") is not None
     obj = scenario["object"]
     assets: dict[str, bytes] = {}
     asset_xml: list[str] = []
@@ -114,7 +132,16 @@ def scene(scenario: dict[str, Any], width: int, height: int) -> tuple[str, dict[
                 f'<geom name="dot{k}" type="cylinder" size="{radius} {THIN}" pos="{_v(p)}" zaxis="{_v(normal)}" '
                 'rgba="1 1 1 1" contype="0" conaffinity="0"/>'
             )
+    if arm is not None:
+        payload = ""
+        if eye_to_hand:  # the target rides the arm, a dark plate behind it hiding the arm
+            payload = "".join(geoms) + backing(points)
+            geoms = []
+        arm_body, actuators, gravity = _mounted.arm_xml(arm, width, height, height, payload)
+        option = f'<option timestep="{PHYSICS_DT}" gravity="{_v(gravity)}" integrator="implicitfast"/>'
+        actuators = f"<actuator>{actuators}</actuator>"
     xml = f"""<mujoco model="vsinv-{scenario.get("name", "scenario")}">
+  <compiler angle="radian" autolimits="true"/>{option}
   <visual><global offwidth="{width}" offheight="{height}"/>
     <headlight ambient="0.45 0.45 0.45" diffuse="0.35 0.35 0.35" specular="0.05 0.05 0.05"/></visual>
   <asset>{"".join(asset_xml)}</asset>
@@ -122,6 +149,7 @@ def scene(scenario: dict[str, Any], width: int, height: int) -> tuple[str, dict[
     <light name="key" directional="true" pos="0 -1 -1" dir="0.2 0.3 1" diffuse="0.3 0.3 0.3" specular="0.1 0.1 0.1" castshadow="false"/>
     {"".join(geoms)}
     <camera name="{CAMERA}" pos="0 0 0" resolution="{width} {height}" sensorsize="{width * PIXEL} {height * PIXEL}" focalpixel="{height} {height}"/>
-  </worldbody>
+    {arm_body}
+  </worldbody>{actuators}
 </mujoco>"""
     return xml, assets, kind, points

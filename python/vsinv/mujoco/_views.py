@@ -15,7 +15,7 @@ from ._world import World
 class Views:
     """A scenario's MuJoCo world kept open to render views: `render(pose=..., time=...)` with
     `[camera]`'s K at `time` (a zoom followed), `render(reference=True)` at F* with
-    `[reference_camera]`'s K. Close it (or use it as a context manager) to free the renderer."""
+    `[reference_camera]`'s K (with an arm, the arm hidden: `World.render_view`). Close it (or use it as a context manager) to free the renderer."""
 
     def __init__(self, scenario: Any) -> None:
         self.world = World.from_scenario(scenario)
@@ -26,9 +26,9 @@ class Views:
         """The grey image (height, width) uint8 MuJoCo renders of the view."""
         if reference:
             self.world.set_K(_intrinsics(self._d, "reference_camera"))
-            return self.world.render(np.eye(4))
+            return self.world.render_view(np.eye(4))
         self.world.set_K(_intrinsics(self._d, "camera", float(time)))
-        return self.world.render(np.eye(4) if pose is None else pose)
+        return self.world.render_view(np.eye(4) if pose is None else pose)
 
     def close(self) -> None:
         self.world.close()

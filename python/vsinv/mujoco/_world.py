@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import geometry
 from .._core import Intrinsics, InvalidInput, load_scenario
-from . import _camera, _scene
+from . import _camera, _mounted, _scene
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # CPU rendering through EGL unless the user chose
 
@@ -82,7 +82,8 @@ class World:
     """
 
     def __init__(self, model: Any, camera: str, width: int, height: int, *, supersample: int = 1,
-                 target: str | None = None, target_points: Any = None, target_bodies: tuple[str, ...] = ()) -> None:
+                 target: str | None = None, target_points: Any = None, target_bodies: tuple[str, ...] = (),
+                 reference_camera: str | None = None) -> None:
         mujoco = _mujoco()
         _check_size(width, height, supersample)
         self.model = model
@@ -99,6 +100,14 @@ class World:
                 raise InvalidInput(f"target_bodies: no body named {name!r} in the model")
         self.target_bodies = tuple(target_bodies)
         self.scenario: dict[str, Any] | None = None  # the scenario's dict (from_scenario)
+        # A world whose camera rides an arm renders its reference image from a free camera at F*
+        # (`render_reference`), the arm hidden; `set_K` sets both cameras' lenses.
+        self.reference_camera_id = -1 if reference_camera is None else mujoco.mj_name2id(
+            model, mujoco.mjtObj.mjOBJ_CAMERA, reference_camera)
+        if reference_camera is not None and self.reference_camera_id < 0:
+            raise InvalidInput(f"reference_camera: no camera named {reference_camera!r} in the model")
+        self.arm: Any = None  # the scenario's `ScenarioArm` when the camera (or the target) rides an arm
+        self.eye_to_hand = False  # the arm carries the target, the camera is fixed
         self._renderer = mujoco.Renderer(model, self.height * self.supersample, self.width * self.supersample)
         mujoco.mj_forward(model, self.data)
 
@@ -115,9 +124,20 @@ class World:
         if (w_ref, h_ref) != (width, height):
             raise InvalidInput(f"scenario: [reference_camera] is {w_ref} x {h_ref} and [camera] {width} x {height}; "
                                "vsinv.mujoco renders both with one sensor")
-        xml, assets, kind, points = _scene.scene(d, width * supersample, height * supersample)
+        eye_to_hand = (d.get("world") or {}).get("eye_to_hand") is not None
+        has_arm = eye_to_hand or d.get("robot", {}).get("kind") == "urdf"
+        arm = load_scenario(scenario).arm() if has_arm else None
+        xml, assets, kind, points = _scene.scene(d, width * supersample, height * supersample, arm)
         model = mujoco.MjModel.from_xml_string(xml, assets)
-        world = cls(model, _scene.CAMERA, width, height, supersample=supersample, target=kind, target_points=points)
+        if arm is None or eye_to_hand:  # the free camera (eye-to-hand: fixed at the world's origin)
+            world = cls(model, _scene.CAMERA, width, height, supersample=supersample, target=kind, target_points=points)
+        else:
+            world = cls(model, _mounted.CAMERA, width, height, supersample=supersample, target=kind,
+                        target_points=points, reference_camera=_scene.CAMERA)
+        if arm is not None:
+            world.arm, world.eye_to_hand = arm, eye_to_hand
+            world.data.qpos[:] = arm.start
+            mujoco.mj_forward(model, world.data)
         world.scenario = d
         world.set_K(K)
         return world
@@ -173,8 +193,10 @@ class World:
         if not (fx > 0 and fy > 0 and np.isfinite([cx, cy]).all()):
             raise InvalidInput(f"K: expected positive focal lengths and a finite principal point, got {(fx, fy, cx, cy)}")
         intrinsic, sensor = _camera.intrinsics_of_k((fx, fy, cx, cy), self.width, self.height, _scene.PIXEL)
-        self.model.cam_intrinsic[self.camera_id] = intrinsic
-        self.model.cam_sensorsize[self.camera_id] = sensor
+        for c in (self.camera_id, self.reference_camera_id):
+            if c >= 0:
+                self.model.cam_intrinsic[c] = intrinsic
+                self.model.cam_sensorsize[c] = sensor
 
     @property
     def free_camera(self) -> bool:
@@ -229,6 +251,48 @@ class World:
         mujoco.mj_kinematics(self.model, self.data)
         mujoco.mj_camlight(self.model, self.data)
         self._renderer.update_scene(self.data, camera=self.camera)
+        return self._grey()
+
+    def render_reference(self) -> np.ndarray:
+        """The image at F* (the reference image's pose) with the current K: `render(identity)`
+        for a free camera; for a camera riding an arm, the free reference camera's image with
+        the arm hidden (the reference image is the target's, as the kinematic world's)."""
+        if self.reference_camera_id < 0:
+            return self.render(np.eye(4))
+        return self._render_free(self.reference_camera_id, np.eye(4))
+
+    def render_view(self, pose: Any) -> np.ndarray:
+        """The image from the camera's pose `pose` in F* (4x4) without moving the world: `render(pose)`
+        for a free camera; with an arm, a free camera placed at `pose` relative to the target
+        (eye-to-hand: to the target's frame where the arm holds it) with the arm hidden (the
+        figures' views of a recorded run)."""
+        pose = np.asarray(pose, dtype=float)
+        if self.arm is None:
+            return self.render(pose)
+        if not self.eye_to_hand:
+            return self._render_free(self.reference_camera_id, pose)
+        target = np.asarray(self.arm.camera_pose(self.data.qpos))  # F* in the world
+        image = self._render_free(self.camera_id, target @ pose)
+        self.set_camera_pose(np.eye(4))  # the fixed camera back at the world's origin
+        return image
+
+    def _render_free(self, camera: int, pose: np.ndarray) -> np.ndarray:
+        """The image of the world-body camera `camera` placed at `pose` (vsinv's frame, in the
+        world), the arm's geoms (group `_mounted.GROUP`) hidden."""
+        mujoco = _mujoco()
+        position, rotation = _camera.mujoco_pose(pose)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, np.ascontiguousarray(rotation).reshape(9))
+        self.model.cam_pos[camera], self.model.cam_quat[camera] = position, quat
+        mujoco.mj_kinematics(self.model, self.data)
+        mujoco.mj_camlight(self.model, self.data)
+        option = mujoco.MjvOption()
+        option.geomgroup[_mounted.GROUP] = 0
+        self._renderer.update_scene(self.data, camera=camera, scene_option=option)
+        return self._grey()
+
+    def _grey(self) -> np.ndarray:
+        """The renderer's image as grey uint8, averaged over the supersampling blocks."""
         rgb = self._renderer.render().astype(np.float64)
         grey = rgb[:, :, 0] * 0.299 + rgb[:, :, 1] * 0.587 + rgb[:, :, 2] * 0.114
         k = self.supersample

@@ -7,8 +7,8 @@
 //! into the next joint's origin). URDF origins are `Trans(xyz) Rz(yaw) Ry(pitch) Rx(roll)`.
 //! Joint positions are `&[f64]`, one value per actuated joint, base to end-effector.
 //!
-//! Two models ship with the crate ([`BUILTIN_ARMS`], files under `robots/`): `ur5`
-//! (Universal Robots UR5 from its standard DH parameters, end-effector `tool0`) and `panda`
+//! Three models ship with the crate ([`BUILTIN_ARMS`], files under `robots/`): `ur5` and `ur5e`
+//! (Universal Robots UR5 and UR5e from their standard DH parameters, end-effector `tool0`) and `panda`
 //! (Franka Emika Panda from its modified DH parameters, end-effector `panda_hand_tcp`, the
 //! hand's tool centre point 0.103 m past the flange `panda_link8`, turned by -pi/4 about z).
 //!
@@ -40,11 +40,12 @@ use crate::error::Error;
 use crate::sim::error::Result;
 
 /// Names of the built-in arms.
-pub const BUILTIN_ARMS: [&str; 2] = ["ur5", "panda"];
+pub const BUILTIN_ARMS: [&str; 3] = ["ur5", "ur5e", "panda"];
 
 /// URDF text and default end-effector link of a built-in arm.
-const BUILTIN: [(&str, &str, &str); 2] = [
+const BUILTIN: [(&str, &str, &str); 3] = [
     ("ur5", include_str!("../../../robots/ur5.urdf"), "tool0"),
+    ("ur5e", include_str!("../../../robots/ur5e.urdf"), "tool0"),
     ("panda", include_str!("../../../robots/panda.urdf"), "panda_hand_tcp"),
 ];
 
@@ -61,7 +62,7 @@ fn builtin_entry(name: &str) -> Result<(&'static str, &'static str, &'static str
 }
 
 impl ArmModel {
-    /// A built-in arm ([`BUILTIN_ARMS`]) up to its default end-effector: `tool0` for `ur5`,
+    /// A built-in arm ([`BUILTIN_ARMS`]) up to its default end-effector: `tool0` for `ur5`, `ur5e`,
     /// `panda_hand_tcp` for `panda`.
     pub fn builtin(name: &str) -> Result<Self> {
         let (name, urdf, end_effector) = builtin_entry(name)?;

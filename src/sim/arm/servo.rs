@@ -151,6 +151,31 @@ impl ArmRobot {
         self.resolve(&jac, q, &(self.mount_twist_transform() * camera_twist))
     }
 
+    /// Joint velocities for a camera twist where `camera_jacobian` (6 x n, rows in the camera
+    /// frame the controller believes) is the camera's Jacobian from elsewhere (a physics
+    /// engine's): the kinematic arm's damped least squares, joint-centring task on redundant
+    /// arms and saturation by the joint speed limits, as [`ArmRobot::step`]; returns the joint
+    /// velocities and whether the limits scaled them down.
+    pub fn camera_joint_velocities(
+        &self,
+        camera_jacobian: &Matrix6xX<f64>,
+        q: &[f64],
+        camera_twist: &Vector6<f64>,
+    ) -> Result<(DVector<f64>, bool)> {
+        if camera_jacobian.ncols() != self.dof() || q.len() != self.dof() {
+            return Err(Error::Shape {
+                what: "jacobian",
+                expected: format!("(6, {n}) and {n} joints", n = self.dof()),
+                got: format!("(6, {}) and {} joints", camera_jacobian.ncols(), q.len()),
+            }
+            .into());
+        }
+        check_finite("joints", q)?;
+        let mut dq = self.resolve(camera_jacobian, q, camera_twist)?;
+        let limited = self.saturate(&mut dq);
+        Ok((dq, limited))
+    }
+
     /// `dq = J^T (J J^T + mu^2 I)^-1 v + (I - J^T (J J^T + mu^2 I)^-1 J) z` (six joints or
     /// more); `(J^T J + mu^2 I)^-1 J^T v` below six.
     fn resolve(&self, jac: &Matrix6xX<f64>, q: &[f64], v: &Vector6<f64>) -> Result<DVector<f64>> {
@@ -362,6 +387,31 @@ mod tests {
             for (got, want) in dq.iter().zip(closed_form(&s, &v, d)) {
                 assert!((got - want).abs() < 1e-12, "{got} vs {want}");
             }
+        }
+    }
+
+    /// A camera Jacobian from elsewhere (here the end effector's turned into the camera frame,
+    /// as a physics engine's site Jacobian would be) gives the joint velocities of the kinematic
+    /// arm's own step where the damping is inactive, saturated the same way.
+    #[test]
+    fn camera_joint_velocities_are_the_kinematic_arms() {
+        for name in ["ur5", "ur5e", "panda"] {
+            let model = ArmModel::builtin(name).unwrap();
+            let n = model.dof();
+            let q: Vec<f64> = [0.3, -1.1, 1.2, -1.6, 0.7, 1.4, 0.4][..n].to_vec();
+            let q = if name == "panda" { vec![0.1, -0.4, 0.05, -2.0, 0.05, 1.7, 0.7] } else { q };
+            let mount = crate::core::se3::pose_from_position_thetau([0.01, -0.06, 0.04], [0.1, -0.2, 0.3]).unwrap();
+            let arm = ArmRobot::new(model, Isometry3::identity(), mount, q.clone());
+            let jac_cam = twist_transform(&mount.inverse()) * arm.model.jacobian_end_effector(&q).unwrap();
+            let twist = Vector6::new(0.02, -0.01, 0.03, 0.05, -0.02, 0.04);
+            let (dq, limited) = arm.camera_joint_velocities(&jac_cam, &q, &twist).unwrap();
+            let mut want = arm.joint_velocities(&q, &twist).unwrap();
+            assert!(!arm.saturate(&mut want) && !limited);
+            assert!((&dq - &want).amax() < 1e-9, "{name}: {dq} vs {want}");
+            let (fast, limited) = arm.camera_joint_velocities(&jac_cam, &q, &(twist * 200.0)).unwrap();
+            let scale = fast.iter().zip(&arm.limits.velocity).map(|(v, m)| v.abs() / m).fold(0.0, f64::max);
+            assert!(limited && (scale - 1.0).abs() < 1e-12, "{name}: {scale}");
+            assert!(arm.camera_joint_velocities(&jac_cam.columns(0, n - 1).into_owned(), &q, &twist).is_err());
         }
     }
 

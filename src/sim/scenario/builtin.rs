@@ -37,6 +37,11 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("mujoco-lens-12-6-tags", include_str!("../../../scenarios/mujoco-lens-12-6-tags.toml")),
     ("mujoco-zoom", include_str!("../../../scenarios/mujoco-zoom.toml")),
     ("mujoco-ibvs-12-6", include_str!("../../../scenarios/mujoco-ibvs-12-6.toml")),
+    ("mujoco-arm-ur5e-12-6", include_str!("../../../scenarios/mujoco-arm-ur5e-12-6.toml")),
+    ("mujoco-arm-ur5e-12-6-tags", include_str!("../../../scenarios/mujoco-arm-ur5e-12-6-tags.toml")),
+    ("mujoco-arm-panda-zoom", include_str!("../../../scenarios/mujoco-arm-panda-zoom.toml")),
+    ("mujoco-arm-ur5e-ibvs-12-6", include_str!("../../../scenarios/mujoco-arm-ur5e-ibvs-12-6.toml")),
+    ("mujoco-eye-to-hand-12-6", include_str!("../../../scenarios/mujoco-eye-to-hand-12-6.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).

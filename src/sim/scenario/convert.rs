@@ -91,6 +91,9 @@ impl Scenario {
     /// Every engine's scenario is checked as the kinematic simulator reads it.
     pub fn validate(&self) -> Result<()> {
         self.check_world()?;
+        if self.world.eye_to_hand.is_some() {
+            self.arm()?;
+        }
         self.simulation().map(|_| ())
     }
 
@@ -108,6 +111,23 @@ impl Scenario {
         self.simulation()
     }
 
+    /// The arm of `[robot] kind = "urdf"` as the kinematic simulator reads it (model, base,
+    /// mount, believed mount, start joints solved from `[start]` if need be, limits, damping),
+    /// for a world that moves the arm itself (`vsinv.mujoco`); `None` for the other robots.
+    ///
+    /// With `[world] eye_to_hand`, the arm carrying the target: its "camera" is the target's
+    /// frame F* (`target_mount` on the end effector) in the fixed camera's frame (`base` is
+    /// in that frame), so its start joints put F* at the inverse of `[start]`.
+    pub fn arm(&self) -> Result<Option<crate::sim::arm::ArmRobot>> {
+        if let Some(e) = &self.world.eye_to_hand {
+            return arm::eye_to_hand(e, self.start.as_ref(), self.files()).map(Some);
+        }
+        match self.robot()? {
+            Robot::Arm(arm) => Ok(Some((*arm).clone())),
+            _ => Ok(None),
+        }
+    }
+
     /// `[world]`: a latency only where a world applies it, within [`MAX_LATENCY_FRAMES`].
     fn check_world(&self) -> Result<()> {
         let w = &self.world;
@@ -120,18 +140,36 @@ impl Scenario {
                 "a latency is applied by the \"mujoco\" engine only (world.engine); the kinematic simulator has none";
             return Err(scenario_error("world.latency_frames", reason));
         }
+        if w.eye_to_hand.is_some() && w.engine == Engine::Kinematic {
+            let reason = "a fixed camera and an arm carrying the target are simulated by the \"mujoco\" engine only";
+            return Err(scenario_error("world.eye_to_hand", reason));
+        }
+        if let Some(e) = w.eye_to_hand.as_ref().filter(|e| !crate::sim::arm::BUILTIN_ARMS.contains(&e.urdf.as_str())) {
+            let arms = crate::sim::arm::BUILTIN_ARMS.join(", ");
+            let reason = format!("`{}`: expected a built-in arm ({arms}), whose MJCF models MuJoCo runs", e.urdf);
+            return Err(scenario_error("world.eye_to_hand.urdf", reason));
+        }
+        if w.eye_to_hand.is_some() && self.robot.kind != RobotKind::Free {
+            let reason = "the camera is fixed: [robot] must be the free camera (the arm is world.eye_to_hand's)";
+            return Err(scenario_error("world.eye_to_hand", reason));
+        }
         if w.engine == Engine::Mujoco { self.check_mujoco() } else { Ok(()) }
     }
 
-    /// What the `mujoco` engine's loop (a free camera servoed through MuJoCo's pinhole renders
-    /// with the reference depths) does not do is refused by its key, rather than ignored.
+    /// What the `mujoco` engine's loop (a free camera or a built-in arm with mass servoed
+    /// through MuJoCo's pinhole renders with the reference depths) does not do is refused by its key, rather than ignored.
     fn check_mujoco(&self) -> Result<()> {
         let refuse = |key: &str, what: &str| {
             Err(scenario_error(key, format!("{what} is not simulated by the \"mujoco\" engine (world.engine)")))
         };
         let distorted = |c: &CameraSpec| c.distortion.is_some() || c.calibration.is_some();
-        if self.robot.kind != RobotKind::Free {
-            return refuse("robot.kind", "an arm or a Cartesian robot (the camera flies free there)");
+        if self.robot.kind == RobotKind::Cartesian {
+            return refuse("robot.kind", "a Cartesian robot (a free camera or a built-in arm are)");
+        }
+        let builtin = |u: &String| crate::sim::arm::BUILTIN_ARMS.contains(&u.as_str());
+        if self.robot.kind == RobotKind::Urdf && !self.robot.urdf.as_ref().is_some_and(builtin) {
+            let arms = crate::sim::arm::BUILTIN_ARMS.join(", ");
+            return refuse("robot.urdf", &format!("an arm from a URDF file (its MJCF models are the built-in {arms})"));
         }
         if self.control.depths.is_some_and(|d| d != DepthsName::Reference) {
             return refuse("control.depths", "depths other than \"reference\"");

@@ -236,10 +236,34 @@ mod tests {
             ("[noise]\npixel_sigma = 0.5", "noise.pixel_sigma"),
             ("[path]\nsamples = 100", "path"),
             ("[robot]\nkind = \"cartesian\"", "robot.kind"),
+            ("[robot]\nkind = \"urdf\"\nurdf = \"arm.urdf\"\nend_effector = \"tool0\"", "robot.urdf"),
         ] {
             let e = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\n{table}\n")).unwrap_err();
             assert!(e.to_string().contains(&format!("{key}: ")) && e.to_string().contains("not simulated"), "{e}");
         }
+        // A built-in arm runs in MuJoCo: its arm is the kinematic simulator's (start joints,
+        // limits), and none for a free camera.
+        let arm_text = include_str!("../../../scenarios/arm-ur5-12-6.toml");
+        let s = Scenario::from_toml(&format!("{arm_text}\n[world]\nengine = \"mujoco\"\n")).unwrap();
+        let arm = s.arm().unwrap().unwrap();
+        let kinematic = Scenario::from_toml(arm_text).unwrap().to_config().unwrap();
+        let crate::sim::robot::Robot::Arm(k) = &kinematic.robot else { panic!("an arm") };
+        assert_eq!(&arm, k.as_ref());
+        assert!(Scenario::from_toml(text).unwrap().arm().unwrap().is_none());
+        // Eye-to-hand: the arm carries F*, which the start puts at the inverse of [start] in
+        // the fixed camera's frame; refused by the kinematic engine and with an arm in [robot].
+        let e2h = builtin("mujoco-eye-to-hand-12-6").unwrap();
+        let arm = e2h.arm().unwrap().unwrap();
+        let start = e2h.start.as_ref().map(|s| convert::pose_of(s.position, s.rotation_deg)).unwrap();
+        let (dt, dr) = crate::core::se3::pose_error(&arm.camera_pose(&arm.start).unwrap(), &start.inverse());
+        assert!(dt < 1e-9 && dr < 1e-9, "{dt} {dr}");
+        let e2h_text = include_str!("../../../scenarios/mujoco-eye-to-hand-12-6.toml");
+        let e = Scenario::from_toml(&e2h_text.replace("engine = \"mujoco\"", "engine = \"kinematic\"")).unwrap_err();
+        assert!(e.to_string().contains("world.eye_to_hand: "), "{e}");
+        let e = Scenario::from_toml(&format!("{e2h_text}\n[robot]\nkind = \"cartesian\"\n")).unwrap_err();
+        assert!(e.to_string().contains("world.eye_to_hand: "), "{e}");
+        let e = Scenario::from_toml(&e2h_text.replace("urdf = \"ur5e\"", "urdf = \"ur7\"")).unwrap_err();
+        assert!(e.to_string().contains("world.eye_to_hand.urdf: "), "{e}");
         let plain = Scenario::from_toml(text).unwrap();
         assert!(plain.world.is_default() && !plain.to_toml().unwrap().contains("[world]"));
     }

@@ -329,8 +329,28 @@ impl Engine {
     }
 }
 
+/// `[world] eye_to_hand`: the camera is fixed and a built-in arm carries the target (the
+/// `mujoco` engine only). The scenario's `[start]` stays the camera's pose in F*, the frame of
+/// the reference view rigid with the target; the world frame is the fixed camera's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EyeToHandSpec {
+    /// The built-in arm carrying the target (`ur5`, `ur5e`, `panda`).
+    pub urdf: String,
+    /// The link carrying the target (default: the built-in model's end effector).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_effector: Option<String>,
+    /// The arm's base link in the fixed camera's frame.
+    pub base: PoseSpec,
+    /// F* (the target's frame: the reference view's camera frame) in the end-effector frame.
+    pub target_mount: PoseSpec,
+    /// The joints (degrees, metres) the inverse kinematics of the start starts from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ik_seed: Option<Vec<f64>>,
+}
+
 /// `[world]`: which world runs the scenario, and what it adds to the loop.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldSpec {
     /// `"kinematic"` (default: this crate's simulator) or `"mujoco"` (Python's `vsinv.mujoco`).
@@ -340,6 +360,9 @@ pub struct WorldSpec {
     /// frame k moves the camera after frame k + N (default 0; the `mujoco` engine only).
     #[serde(default)]
     pub latency_frames: u32,
+    /// Eye-to-hand: a fixed camera watching a target carried by an arm (the `mujoco` engine only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eye_to_hand: Option<EyeToHandSpec>,
 }
 
 impl WorldSpec {

@@ -9,7 +9,7 @@ use crate::error::Error;
 use crate::sim::arm::{ArmModel, ArmRobot, BUILTIN_ARMS, JointKind};
 use crate::sim::error::{Result, SimError};
 use crate::sim::robot::Robot;
-use crate::sim::scenario::schema::{PoseSpec, RobotSpec, StartSpec};
+use crate::sim::scenario::schema::{EyeToHandSpec, PoseSpec, RobotKind, RobotSpec, StartSpec};
 use crate::sim::scenario::{FileScope, scenario_error};
 
 /// The arm of `[robot]`, placed by `robot.joints` or by the camera's pose `start`; `files`
@@ -49,6 +49,40 @@ pub(super) fn robot(r: &RobotSpec, start: Option<&StartSpec>, files: FileScope<'
         other => scenario_error("robot", other.to_string()),
     })?;
     Ok(Robot::Arm(Arc::new(arm)))
+}
+
+/// The arm of `[world] eye_to_hand` as an eye-in-hand arm whose "camera" is the target's frame
+/// F* in the fixed camera's frame: `base * fk(q) * target_mount`, placed by inverse kinematics
+/// at the inverse of the camera's start pose in F*. Errors name `world.eye_to_hand.*`.
+pub(super) fn eye_to_hand(e: &EyeToHandSpec, start: Option<&StartSpec>, files: FileScope<'_>) -> Result<ArmRobot> {
+    let start = start.ok_or_else(|| scenario_error("start", "missing: the camera's start pose in F*"))?;
+    check_values("start.position", &start.position)?;
+    check_values("start.rotation_deg", &start.rotation_deg)?;
+    let target = pose_of(start.position, start.rotation_deg).inverse();
+    let (axis, angle) =
+        target.rotation.axis_angle().map_or((nalgebra::Vector3::x(), 0.0), |(a, t)| (a.into_inner(), t));
+    let thetau = axis * angle.to_degrees();
+    let t = target.translation.vector;
+    let spec = RobotSpec {
+        kind: RobotKind::Urdf,
+        urdf: Some(e.urdf.clone()),
+        end_effector: e.end_effector.clone(),
+        camera_mount: Some(e.target_mount.clone()),
+        base: Some(e.base.clone()),
+        ik_seed: e.ik_seed.clone(),
+        ..RobotSpec::default()
+    };
+    let at = StartSpec { position: [t.x, t.y, t.z], rotation_deg: [thetau.x, thetau.y, thetau.z] };
+    match robot(&spec, Some(&at), files) {
+        Ok(Robot::Arm(arm)) => Ok((*arm).clone()),
+        Ok(_) => Err(scenario_error("world.eye_to_hand", "not an arm")),
+        Err(SimError::Scenario { key, reason }) => {
+            let key = key.to_string();
+            let key = key.replacen("robot.camera_mount", "target_mount", 1).replacen("robot.", "", 1);
+            Err(scenario_error(&format!("world.eye_to_hand.{key}"), reason))
+        }
+        Err(other) => Err(other),
+    }
 }
 
 const BOTH_GIVEN: &str = "the arm is placed twice: by robot.joints and by [start] (start.position, \
