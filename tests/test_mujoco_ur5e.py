@@ -1,5 +1,5 @@
 """The UR5e (issue 31, item 2): robots/ur5e.urdf and `vsinv.mujoco.ur5e_mjcf` from Universal
-Robots' published UR5e DH and dynamic parameters.
+Robots' published UR5e DH parameters, masses and centres of mass (approximate inertia tensors).
 
 The independent checks: a standard DH forward kinematics of the published table written here
 (numpy), and roboticstoolbox-python's DH kinematics and gravity load (its `DHRobot` of the same
@@ -106,9 +106,9 @@ def test_gravity_torques_are_those_of_the_published_masses_and_centres() -> None
             np.testing.assert_allclose(data.qfrc_bias, tau, atol=1e-6)
 
 
-def test_the_mjcf_and_the_urdf_carry_the_published_inertials_and_limits() -> None:
+def test_the_mjcf_and_the_urdf_carry_the_same_inertials_and_limits() -> None:
     """Masses (19.7 kg in all), centres of mass and principal inertias are the same in the MJCF
-    and the URDF as MuJoCo reads them; the inertia tensors are the published diagonals; joint
+    and the URDF as MuJoCo reads them; the inertia tensors are the approximate diagonals of robots/ur5e.urdf; joint
     ranges +-2 pi, speeds pi rad/s, torques 150 N m (size-3 joints) and 28 N m (wrists), in the
     MJCF's actuators and in vsinv's reading of the URDF."""
     mjcf = mujoco.MjModel.from_xml_string(vm.ur5e_mjcf())
@@ -117,10 +117,10 @@ def test_the_mjcf_and_the_urdf_carry_the_published_inertials_and_limits() -> Non
     np.testing.assert_allclose(urdf.body_mass[1:], MASS)
     np.testing.assert_allclose(mjcf.body_mass[moving], MASS)
     np.testing.assert_allclose(urdf.body_ipos[1:], mjcf.body_ipos[moving], atol=1e-9)
-    published = np.sort(np.array([(0.0084, 0.0064, 0.0084), (0.0078, 0.21, 0.21), (0.0016, 0.0462, 0.0462),
+    approximate = np.sort(np.array([(0.0084, 0.0064, 0.0084), (0.0078, 0.21, 0.21), (0.0016, 0.0462, 0.0462),
                                   (0.0016, 0.0016, 0.0009), (0.0016, 0.0016, 0.0009), (1e-4, 1e-4, 1e-4)]), axis=1)
-    np.testing.assert_allclose(np.sort(urdf.body_inertia[1:], axis=1), published, rtol=1e-9)
-    np.testing.assert_allclose(np.sort(mjcf.body_inertia[moving], axis=1), published, rtol=1e-9)
+    np.testing.assert_allclose(np.sort(urdf.body_inertia[1:], axis=1), approximate, rtol=1e-9)
+    np.testing.assert_allclose(np.sort(mjcf.body_inertia[moving], axis=1), approximate, rtol=1e-9)
     np.testing.assert_allclose(mjcf.jnt_range, np.tile([-2 * np.pi, 2 * np.pi], (6, 1)))
     np.testing.assert_allclose(mjcf.actuator_ctrlrange[:, 1], np.pi)
     np.testing.assert_allclose(mjcf.actuator_forcerange[:, 1], [150.0] * 3 + [28.0] * 3)

@@ -11,8 +11,13 @@ m = 3.7, 8.393, 2.33, 1.219, 1.219, 0.1879 kg; centres of mass in the DH frames 
 publishes no inertia tensors for the UR5: each link's is that of a uniform solid cylinder of its
 mass along its longest segment (radius 0.05 m), at its centre of mass.
 UR5e: d = 0.1625, 0, 0, 0.1333, 0.0997, 0.0996 m; a2 = -0.425, a3 = -0.3922 m;
-m = 3.761, 8.058, 2.846, 1.37, 1.3, 0.365 kg; the same centres of mass; the published diagonal
-inertia tensors about the centres of mass in the DH frames (UR5E_INERTIA). Limits of both (the
+m = 3.761, 8.058, 2.846, 1.37, 1.3, 0.365 kg; the same centres of mass. That page gives no inertia
+for the UR5e (it calls it negligible): the tensors (UR5E_INERTIA, diagonal, about the centres of
+mass, axes of the DH frames) are approximate, not a published table. Universal Robots' ROS 2
+description (config/ur5e/physical_parameters.yaml) has CAD tensors of the same order (upper arm
+0.0151 / 0.334 / 0.332 kg m^2 against 0.0078 / 0.21 / 0.21 here); with its diagonals the tags
+built-in ends `settled` from the paper's start (0.55 mm from the goal, the images allowing
+5.8 mm against a 5 mm tolerance), so they are not adopted yet. Limits of both (the
 datasheets): +-360 degrees, 180 degrees/s (UR5: 3.15 rad/s as robots/ur5.urdf), 150 N m on the
 three size-3 joints and 28 N m on the wrists.
 The bodies compensate their own weight (MuJoCo's `gravcomp`, as the arm's controller does) and
@@ -38,8 +43,9 @@ UR5_COM = ((0.0, -0.02561, 0.00193), (0.2125, 0.0, 0.11336), (0.15, 0.0, 0.0265)
 UR5_EFFORT = (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)  # N m
 UR5_SPEED = 3.15  # rad/s, every joint
 UR5_KV = (300.0, 300.0, 150.0, 50.0, 50.0, 20.0)  # N m s / rad
-# The UR5e (robots/ur5e.urdf): standard DH, masses, centres of mass (DH frames), inertia tensors
-# (diagonal, about the centre of mass, axes of the DH frame), Universal Robots' UR5e rows.
+# The UR5e (robots/ur5e.urdf): standard DH, masses, centres of mass (DH frames): Universal Robots'
+# UR5e rows; inertia tensors (diagonal, about the centre of mass, axes of the DH frame): approximate
+# (see above).
 UR5E_DH = ((0.1625, 0.0, np.pi / 2), (0.0, -0.425, 0.0), (0.0, -0.3922, 0.0),
            (0.1333, 0.0, np.pi / 2), (0.0997, 0.0, -np.pi / 2), (0.0996, 0.0, 0.0))
 UR5E_MASS = (3.761, 8.058, 2.846, 1.37, 1.3, 0.365)
