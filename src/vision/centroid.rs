@@ -88,8 +88,7 @@ pub fn weighted_centroid<C: Pixels>(
             }
             // The sums in registers over the segment (captured ones live in memory).
             let (mut s, mut s_u, mut s_v, mut o) = (sum, su, sv, own);
-            let quiet = |a: u32, b: u32| quiet_level(owner, a, b, v, &background, floor);
-            for (a, pixels, quiet) in loud_blocks(&line[u0 as usize..u1 as usize], u0, flip, quiet) {
+            let mut add = |a: u32, pixels: &[u8], quiet: i16| {
                 for (u, &g) in (a..).zip(pixels) {
                     if i16::from(g ^ flip) <= quiet {
                         continue;
@@ -110,6 +109,17 @@ pub fn weighted_centroid<C: Pixels>(
                         s_u += weight * f64::from(u);
                         s_v += weight * f64::from(v);
                     }
+                }
+            };
+            // A run of the dot's own pixels, or a short one, in one go; a long run of
+            // background block by block (most blocks of a grown box are quiet).
+            let segment = &line[u0 as usize..u1 as usize];
+            if owner == Owner::Own || segment.len() <= BLOCK {
+                add(u0, segment, quiet_level(owner, u0, u1, v, &background, floor));
+            } else {
+                let quiet = |a: u32, b: u32| quiet_level(owner, a, b, v, &background, floor);
+                for (a, pixels, quiet) in loud_blocks(segment, u0, flip, quiet) {
+                    add(a, pixels, quiet);
                 }
             }
             (sum, su, sv, own) = (s, s_u, s_v, o);
