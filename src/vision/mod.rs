@@ -47,6 +47,7 @@ pub mod error;
 pub mod grey;
 pub mod image;
 pub mod image_servo;
+pub mod own_sums;
 pub mod polarity;
 pub mod render;
 pub mod row_scan;
