@@ -31,11 +31,12 @@ AREAS = {
         "test_real_images.py", "test_tag_families.py", "test_tag_options.py", "test_tag_rig.py",
         "test_tag_tracking.py", "test_tags.py", "test_tags_robustness.py", "test_tracker_border.py",
         "test_tracker_lost.py", "test_tracker_shape.py", "test_vision.py", "test_camera_source.py",
-        "test_colour_images.py", "test_decode_image.py", "test_dots_upscaled.py",
+        "test_colour_images.py", "test_decode_image.py", "test_dots_upscaled.py", "test_features.py",
     ],
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
-        "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_recording.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
+        "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_features_mujoco.py",
+        "test_recording.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
     ],
     "calibration": ["test_distortion.py", "test_fisheye.py", "test_hand_eye.py", "test_hand_eye_to_hand.py"],
     "ros": [

@@ -2,7 +2,8 @@
 //! layers read the table: for each entry, a built-in scenario shows it, the scenario schema has
 //! each key the entry names, and the image loop's builder draws it and its detector finds every
 //! point at its true projection. Nothing here lists the targets: a new entry is tested as it is
-//! added (and needs a scenario that shows it).
+//! added (and needs a scenario that shows it, unless it is not `simulated`: no scene shows a
+//! target of real images only, and the builder refuses to make one).
 
 use vsinv::sim::scenario::{BUILTIN, Scenario};
 use vsinv::sim::{Shot, SimulationConfig, render_view};
@@ -55,7 +56,7 @@ fn error_with(text: &str, key: &str) -> String {
 
 #[test]
 fn the_schema_has_every_key_each_target_reads() {
-    for spec in &TARGETS {
+    for spec in TARGETS.iter().filter(|t| t.simulated) {
         let (name, text, _) = builtin_showing(spec);
         assert!(!spec.scenario_keys.is_empty(), "{}: no scenario key", spec.name);
         for key in spec.scenario_keys {
@@ -72,7 +73,7 @@ fn the_schema_has_every_key_each_target_reads() {
 
 #[test]
 fn the_image_loop_builds_each_target_and_its_detector_finds_it() {
-    for spec in &TARGETS {
+    for spec in TARGETS.iter().filter(|t| t.simulated) {
         let (name, _, config) = builtin_showing(spec);
         let vision = config.vision.unwrap_or_default();
         let mut built = scene_vision(&object(&config), &vision).unwrap();
@@ -88,6 +89,19 @@ fn the_image_loop_builds_each_target_and_its_detector_finds_it() {
             let d = d.unwrap_or_else(|| panic!("{} ({name}): point {} not found", spec.name, e.id));
             let error = (d.pixel[0] - e.pixel[0]).hypot(d.pixel[1] - e.pixel[1]);
             assert!(error < 0.5, "{} ({name}): point {} found {error} px from its projection", spec.name, e.id);
+        }
+    }
+}
+
+#[test]
+fn a_target_of_real_images_only_is_shown_by_no_scene_and_refused_by_its_builder() {
+    for spec in TARGETS.iter().filter(|t| !t.simulated) {
+        assert!(spec.scenario_keys.is_empty(), "{}", spec.name);
+        for (name, text) in kinematic_builtins() {
+            let config = Scenario::from_toml(text).unwrap().to_config().unwrap();
+            assert!(!(spec.shows)(&object(&config)), "{name} shows {}", spec.name);
+            let vision = config.vision.unwrap_or_default();
+            assert!((spec.scene)(&object(&config), &vision).is_err(), "{name}: {}", spec.name);
         }
     }
 }

@@ -468,3 +468,47 @@ def test_degrade(data: Any) -> None:
          {"image": image_variants(image), "blur_sigma": floats(0.8, overrides=ranged),
           "noise_sigma": floats(2.0, overrides=ranged), "seed": ints(3), "frame": ints(5)},
          ref=ref, check=check)
+
+
+def texture(shift: tuple[int, int] = (0, 0)) -> np.ndarray:
+    """A 160 x 120 random texture (smoothed noise, seeded), moved by `shift` pixels (u, v)."""
+    rng = np.random.default_rng(32)
+    noise = rng.random((126, 166))
+    smooth = sum(np.roll(np.roll(noise, i, 0), j, 1) for i in range(-2, 3) for j in range(-2, 3)) / 25.0
+    image = np.clip(255 * (smooth - smooth.min()) / np.ptp(smooth), 0, 255).astype(np.uint8)
+    return np.ascontiguousarray(image[3 - shift[1] : 123 - shift[1], 3 - shift[0] : 163 - shift[0]])
+
+
+@covers("match_features")
+@fuzz_settings(25)
+@given(st.data())
+def test_match_features(data: Any) -> None:
+    a, b = texture(), texture((2, 1))
+    args = {"reference_image": a, "image": b, "threshold": 1.5}
+    ref = vsinv.vision.match_features(**args)
+    assert len(ref[0]) >= 12
+    error = np.linalg.norm(ref[1] - ref[0] - [2.0, 1.0], axis=1)
+    assert np.median(error) < 0.3 and error.max() < 1.5  # 1.5: the epipolar bound
+    positive = {k: INVALID for k in ("zero", "negative", "neghuge", "neginf", "posinf", "nan")}
+    fuzz(data, vsinv.vision.match_features, args,
+         {"reference_image": image_variants(a), "image": image_variants(b), "threshold": floats(1.5, overrides=positive)},
+         digest=lambda out: out, ref=ref, names={"reference_image": ("reference_image", "image")})
+
+
+@covers("track_points")
+@fuzz_settings(60)
+@given(st.data())
+def test_track_points(data: Any) -> None:
+    a, b = texture(), texture((2, 1))
+    points = np.array([[40.0, 30.0], [80.0, 60.0], [120.0, 90.0], [60.5, 70.25]])
+    args = {"previous_image": a, "next_image": b, "points": points, "max_error": 0.5}
+    ref = vsinv.vision.track_points(**args)
+    assert ref[1].all()
+    np.testing.assert_allclose(ref[0], points + [2.0, 1.0], atol=0.05)
+    positive = {k: INVALID for k in ("zero", "negative", "neghuge", "neginf", "posinf", "nan")}
+    over = {"fewer": ANY, "empty": ANY, "huge": ANY, "zero": ANY, "negative": ANY}
+    fuzz(data, vsinv.vision.track_points, args,
+         {"previous_image": image_variants(a), "next_image": image_variants(b), "points": arrays(points, overrides=over),
+          "max_error": floats(0.5, overrides=positive)},
+         digest=lambda out: out, ref=ref, finite=False,
+         names={"previous_image": ("previous_image", "next_image"), "next_image": ("next_image", "previous_image")})

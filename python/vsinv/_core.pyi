@@ -112,6 +112,8 @@ __all__ = [
     "degrade",
     "Dots",
     "detect_dots",
+    "match_features",
+    "track_points",
     "DotTracker",
     "Tags",
     "TagTracker",
@@ -154,7 +156,7 @@ __all__ = [
 
 _ArrayLike = npt.ArrayLike
 #: The names of ``TARGETS`` (a test checks they are the same).
-_TargetName = Literal["dots", "tags"]
+_TargetName = Literal["dots", "tags", "features"]
 _F64Array = npt.NDArray[np.float64]
 _Basis = Union[tuple[int, int, int], Sequence[int], Literal["auto"]]
 
@@ -541,7 +543,14 @@ class ImageServo:
     AprilTags of `family`, decoded in every frame (searched near their last corners first, the whole frame when
     one is lost), the corners of the tags `tag_ids` (None: every tag decoded in the reference image), corner c of
     tag t under identity 4 t + c: no clicks, correspondences by identity between any two cameras. `decimation`
-    (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`.
+    (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`. `target="features"`: no
+    markers, no clicks: a spread of `max_points` (default 150) SIFT keypoints of the reference image, keypoint i
+    under identity i, matched in the first frame by descriptors checked by the fundamental matrix (no intrinsics
+    needed), then tracked (Lucas-Kanade, forward-backward check) and checked against the reference again each
+    frame; a point failing a check is not visible, and the frame is matched afresh when fewer than `min_tracked`
+    (default 24) remain; `point_ids` (None: all) keeps some of the points. The reference depths of natural
+    keypoints are unknown: estimate them by appendix A (`depths=ResectionDepths(...)` over the points of a
+    translation pair, those given to `point_ids`; `vsinv.vision.match_features` and `track_points` find them).
 
     `reference_K` and `reference_distortion` undistort the reference points. Every other keyword argument is the
     `Servo` session's (law, reference_depths, depths, basis, gain, ..., dt) and an unknown one is refused by name.
@@ -565,6 +574,9 @@ class ImageServo:
         family: _TagFamily | None = None,
         tag_ids: Sequence[int] | None = None,
         decimation: int | None = None,
+        max_points: int | None = None,
+        min_tracked: int | None = None,
+        point_ids: Sequence[int] | None = None,
         distortion: Distortion | _ArrayLike | None = None,
         reference_K: _IntrinsicsLike | None = None,
         reference_distortion: Distortion | _ArrayLike | None = None,
@@ -1046,6 +1058,25 @@ class Dots:
     def bboxes(self) -> npt.NDArray[np.int64]:
         """Bounding boxes `[u_min, v_min, u_max, v_max]` (inclusive), `(m, 4)` int64."""
     def __len__(self) -> int: ...
+
+def match_features(
+    reference_image: _U8Image, image: _U8Image, threshold: float = 1.5
+) -> tuple[_F64Array, _F64Array]:
+    """The SIFT matches of `reference_image` in `image` (two cameras, any intrinsics): mutual
+    nearest descriptors passing Lowe's ratio (0.8), then those within `threshold` pixels of the
+    epipolar lines of one fundamental matrix (RANSAC, seeded), agreeing with their neighbours (a
+    locally affine view), each refined to a fraction of a pixel by aligning the reference's
+    patch warped into `image` (a match whose patch does not align is dropped). Returns `(reference_pixels (m, 2),
+    pixels (m, 2))`; fewer than 12 matches (too little texture, another scene) raises
+    `InvalidImage` naming the image."""
+
+def track_points(
+    previous_image: _U8Image, next_image: _U8Image, points: _ArrayLike, max_error: float = 0.5
+) -> tuple[_F64Array, npt.NDArray[np.bool_]]:
+    """Where `points` (n, 2) of `previous_image` are in `next_image` (same size): pyramidal
+    Lucas-Kanade (21 x 21 windows, 3 levels above the image) forward, then backward; a point
+    is found when both ways converge and it comes back within `max_error` pixels of where it
+    started. Returns `(pixels (n, 2), found (n,) bool)`, NaN where not found."""
 
 def detect_dots(
     image: _U8Image,

@@ -152,11 +152,18 @@ def _track_tags(args: argparse.Namespace, basis: Optional[Sequence[int]]) -> Inv
     return track_tag_invariance(args.reference, args.images, basis, **tag_options(args))
 
 
+def _track_features(args: argparse.Namespace, basis: Optional[Sequence[int]]) -> InvarianceResult:
+    """Keypoints: not followed by this command yet (issue 32): refused with the reason."""
+    raise ValueError("--target: features is not followed by `vsinv invariance` yet (issue 32); "
+                     "`vsinv.vision.match_features` gives the matches of two images")
+
+
 #: How the command follows each target of ``TARGET_NAMES`` through image files (a test checks
 #: every target of the table has one: a new target cannot fall through to another's code).
 TRACKERS: dict[str, Callable[[argparse.Namespace, Optional[Sequence[int]]], InvarianceResult]] = {
     "dots": _track_dots,
     "tags": _track_tags,
+    "features": _track_features,
 }
 
 

@@ -1,4 +1,5 @@
-"""Images: frame sources, the dot and AprilTag detectors and trackers, rendering of the
+"""Images: frame sources, the dot and AprilTag detectors and trackers, keypoint matches and
+tracks (`match_features`, `track_points`), rendering of the
 simulated camera, image files and grey conversion, lens distortion, and the pixel noise meter."""
 
 from ._core import (
@@ -17,11 +18,13 @@ from ._core import (
     distort_points,
     distort_rays,
     load_image,
+    match_features,
     render,
     render_view,
     degrade,
     save_image,
     to_grey,
+    track_points,
     undistort_points,
     undistort_rays,
 )
@@ -44,11 +47,13 @@ __all__ = [
     "distort_rays",
     "frames",
     "load_image",
+    "match_features",
     "render",
     "render_view",
     "degrade",
     "save_image",
     "to_grey",
+    "track_points",
     "undistort_points",
     "undistort_rays",
 ]

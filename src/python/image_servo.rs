@@ -124,7 +124,14 @@ fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageT
 /// AprilTags of `family`, decoded in every frame (searched near their last corners first, the whole frame when
 /// one is lost), the corners of the tags `tag_ids` (None: every tag decoded in the reference image), corner c of
 /// tag t under identity 4 t + c: no clicks, correspondences by identity between any two cameras. `decimation`
-/// (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`.
+/// (1..=8, None: the detector's default) is the quad search's, as in `detect_tags`. `target="features"`: no
+/// markers, no clicks: a spread of `max_points` (default 150) SIFT keypoints of the reference image, keypoint i
+/// under identity i, matched in the first frame by descriptors checked by the fundamental matrix (no intrinsics
+/// needed), then tracked (Lucas-Kanade, forward-backward check) and checked against the reference again each
+/// frame; a point failing a check is not visible, and the frame is matched afresh when fewer than `min_tracked`
+/// (default 24) remain; `point_ids` (None: all) keeps some of the points. The reference depths of natural
+/// keypoints are unknown: estimate them by appendix A (`depths=ResectionDepths(...)` over the points of a
+/// translation pair, those given to `point_ids`; `vsinv.vision.match_features` and `track_points` find them).
 ///
 /// `reference_K` and `reference_distortion` undistort the reference points. Every other keyword argument is the
 /// `Servo` session's (law, reference_depths, depths, basis, gain, ..., dt) and an unknown one is refused by name.

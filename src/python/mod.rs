@@ -13,6 +13,7 @@ mod camera;
 mod compressed;
 mod control;
 mod errors;
+mod features;
 mod grey;
 mod hand_eye;
 mod image_arg;
@@ -59,6 +60,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     planning::register(m)?;
     sim::register(m)?;
     vision::register(m)?;
+    features::register(m)?;
     grey::register(m)?;
     compressed::register(m)?;
     image_servo::register(m)?;

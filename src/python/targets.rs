@@ -26,7 +26,8 @@ fn arg_dict<'py>(py: Python<'py>, a: &TargetArg) -> PyResult<Bound<'py, PyDict>>
     Ok(d)
 }
 
-/// One target as a dict: name, doc, detector (name, module, doc), args, scenario_keys.
+/// One target as a dict: name, doc, detector (name, module, doc), args, scenario_keys,
+/// simulated.
 fn target_dict<'py>(py: Python<'py>, t: &TargetSpec) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", t.name)?;
@@ -39,6 +40,7 @@ fn target_dict<'py>(py: Python<'py>, t: &TargetSpec) -> PyResult<Bound<'py, PyDi
     let args: Vec<Bound<'_, PyDict>> = t.args.iter().map(|a| arg_dict(py, a)).collect::<PyResult<_>>()?;
     d.set_item("args", PyTuple::new(py, args)?)?;
     d.set_item("scenario_keys", PyTuple::new(py, t.scenario_keys)?)?;
+    d.set_item("simulated", t.simulated)?;
     Ok(d)
 }
 

@@ -7,6 +7,7 @@
 //! detectors.
 
 pub mod dot_tracking;
+pub mod features;
 mod tag_regions;
 pub mod tags;
 

@@ -74,6 +74,13 @@ pub trait ImageTargetKind: Send + Sync + std::fmt::Debug {
     fn validate(&self) -> Result<()> {
         Ok(())
     }
+
+    /// The frames' detector, given the reference image and the points kept in it (default:
+    /// [`detector`](Self::detector) of the frames, which needs neither; the keypoint target
+    /// matches the frames to the reference image's descriptors).
+    fn frames_detector(&self, _reference: &GreyView<'_>, _kept: &[Detection]) -> Result<Box<dyn Detector>> {
+        self.detector(true)
+    }
 }
 
 impl ImageTargetKind for ImageTarget {
@@ -197,7 +204,7 @@ impl ImageServo {
             .map_err(|e| hints_named(e, "reference_points"))?;
         let found = target.select(found)?;
         let first = target.first_hints(&found);
-        Self::with_detector(&found, target.detector(true)?, first, config, depths)
+        Self::with_detector(&found, target.frames_detector(&reference, &found)?, first, config, depths)
     }
 
     /// The pipeline over any detector: `reference` holds the reference image's points (their

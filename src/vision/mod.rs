@@ -14,6 +14,8 @@
 //! | the renderer: one entry point, [`Renderer::render`] (canvas, conics, lens, rasterising, noise) | [`render`] |
 //! | what is detected: the [`Detector`] trait | [`detector`] |
 //! | today's detector: the dot tracker ([`DotTracking`]) | [`detector::dot_tracking`] |
+//! | natural keypoints: SIFT, matches across cameras checked by the fundamental matrix, LK tracks | [`features`] |
+//! | keypoints as a detector: matched once, tracked, checked, re-detected ([`FeatureTracking`](detector::features::FeatureTracking)) | [`detector::features`] |
 //! | AprilTags as a detector: four corners a tag, tracked between frames ([`TagDetector`]) | [`detector::tags`] |
 //! | AprilTag detection: ids and corners in OpenCV's order and convention ([`detect_tags`]) | [`tags`] |
 //! | dot detection: thresholds, filters, the dots of an image or a window | [`dots`] |
@@ -44,6 +46,7 @@ pub mod compressed;
 pub mod detector;
 pub mod dots;
 pub mod error;
+pub mod features;
 pub mod grey;
 pub mod image;
 pub mod image_servo;

@@ -4,6 +4,7 @@
 //! of AprilTags (their corners as points, their white cells as filled polygons).
 
 pub mod dots;
+pub mod features;
 pub mod tags;
 
 use crate::vision::render::{Canvas, Drawing};

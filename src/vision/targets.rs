@@ -39,13 +39,16 @@
 use crate::error::Error;
 use crate::vision::detector::Detector;
 use crate::vision::detector::dot_tracking::DotTracking;
+use crate::vision::detector::features::FeatureSettings;
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::error::Result;
+use crate::vision::features::matching::MIN_MATCHES;
 use crate::vision::image_servo::{ImageTarget, ImageTargetKind};
 use crate::vision::render::{Disc, RenderConfig};
 use crate::vision::tags::{MAX_DECIMATION, TagFamily};
 use crate::vision::target::Target;
 use crate::vision::target::dots::Dots;
+use crate::vision::target::features::{FeatureTarget, MAX_FEATURE_POINTS};
 use crate::vision::target::tags::TagRig;
 use crate::vision::tracker::TrackerConfig;
 
@@ -180,6 +183,9 @@ pub struct TargetSpec {
     pub args: &'static [TargetArg],
     /// The scenario keys (dotted, `table.key`) it reads.
     pub scenario_keys: &'static [&'static str],
+    /// Whether vsinv's renderer draws it (a built-in scenario shows it); false for a target
+    /// of real images only (the keypoints of a textured object).
+    pub simulated: bool,
     /// Whether a scene's object shows this target (exactly one entry does).
     pub shows: fn(&SceneObject<'_>) -> bool,
     /// The target of a scene and a fresh detector for it, with the `[vision]` settings.
@@ -238,6 +244,31 @@ const TAG_ARGS: &[TargetArg] = &[
     },
 ];
 
+/// The keypoint target's arguments.
+const FEATURE_ARGS: &[TargetArg] = &[
+    TargetArg {
+        name: "max_points",
+        kind: ArgKind::Count { min: MIN_MATCHES as u32, max: MAX_FEATURE_POINTS },
+        default: Some("150"),
+        required: false,
+        doc: "how many keypoints of the reference image the target holds (a spread over the image)",
+    },
+    TargetArg {
+        name: "min_tracked",
+        kind: ArgKind::Count { min: MIN_MATCHES as u32, max: MAX_FEATURE_POINTS },
+        default: Some("24"),
+        required: false,
+        doc: "fewer points tracked than this (or than half of the last match's) and the frame is matched afresh",
+    },
+    TargetArg {
+        name: "point_ids",
+        kind: ArgKind::Ids,
+        default: None,
+        required: false,
+        doc: "the keypoints to servo on, by identity (unset: every point of the reference image's spread)",
+    },
+];
+
 /// White discs, one per point, tracked from approximate pixels.
 pub const DOTS: TargetSpec = TargetSpec {
     name: "dots",
@@ -249,6 +280,7 @@ pub const DOTS: TargetSpec = TargetSpec {
     },
     args: DOT_ARGS,
     scenario_keys: &["object.points", "object.normals", "vision.dot_radius", "vision.polarity"],
+    simulated: true,
     shows: |object| object.tags.is_none(),
     scene: dots_scene,
     image: dots_image,
@@ -265,13 +297,33 @@ pub const TAGS: TargetSpec = TargetSpec {
     },
     args: TAG_ARGS,
     scenario_keys: &["object.tags", "object.tag_family", "object.rig"],
+    simulated: true,
     shows: |object| object.tags.is_some(),
     scene: tags_scene,
     image: tags_image,
 };
 
+/// Natural keypoints of a textured object: no markers, no clicks.
+pub const FEATURES: TargetSpec = TargetSpec {
+    name: "features",
+    doc: "natural keypoints (SIFT) of a textured object, matched across cameras by descriptors and the \
+          fundamental matrix, then tracked (Lucas-Kanade, forward-backward); keypoint i has identity i",
+    detector: DetectorSpec {
+        name: "features",
+        module: "features",
+        doc: "keypoints matched once by descriptors, tracked frame to frame, checked, matched afresh when too few",
+    },
+    args: FEATURE_ARGS,
+    scenario_keys: &[],
+    // vsinv's renderer draws no textures: no simulated scene shows it.
+    simulated: false,
+    shows: |_| false,
+    scene: features_scene,
+    image: features_image,
+};
+
 /// Every target, in the order Python lists them.
-pub const TARGETS: [TargetSpec; 2] = [DOTS, TAGS];
+pub const TARGETS: [TargetSpec; 3] = [DOTS, TAGS, FEATURES];
 
 /// The target named `name`.
 pub fn target(name: &str) -> Option<&'static TargetSpec> {
@@ -331,6 +383,37 @@ fn dots_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
         Some(_) => return Err(expected("tracker", "the tracker's settings").into()),
     };
     Ok(Box::new(ImageTarget::Dots { reference_points, first_points, tracker }))
+}
+
+fn features_scene(_object: &SceneObject<'_>, _config: &RenderConfig) -> Result<SceneVision> {
+    let reason = "vsinv's renderer draws no textures: the keypoint target is for real (or MuJoCo) images".into();
+    Err(Error::InvalidParameter { name: "object", reason }.into())
+}
+
+fn count_arg(args: &TargetArgs, name: &'static str, default: usize) -> Result<usize> {
+    match args.get(name) {
+        None => Ok(default),
+        Some(&ArgValue::Count(n)) => usize::try_from(n)
+            .map_err(|_| Error::InvalidParameter { name, reason: format!("must be positive, got {n}") }.into()),
+        Some(_) => Err(expected(name, "an integer").into()),
+    }
+}
+
+fn features_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
+    let defaults = FeatureSettings::default();
+    let settings = FeatureSettings {
+        max_points: count_arg(args, "max_points", defaults.max_points)?,
+        min_tracked: count_arg(args, "min_tracked", defaults.min_tracked)?,
+        ..defaults
+    };
+    let ids = match args.get("point_ids") {
+        None => None,
+        Some(ArgValue::Ids(ids)) => Some(ids.clone()),
+        Some(_) => return Err(expected("point_ids", "a sequence of point identities (non-negative integers)").into()),
+    };
+    let target = FeatureTarget { settings, ids };
+    target.validate()?;
+    Ok(Box::new(target))
 }
 
 fn tags_image(args: &TargetArgs) -> Result<Box<dyn ImageTargetKind>> {
