@@ -172,6 +172,8 @@ def test_results_from_threads(scene: dict[str, Any], tmp_path: Any) -> None:
         "Distortion": (lambda d: lambda: (d.coefficients, d.model))(vsinv.vision.Distortion([0.1, 0.01, 0, 0, 0], "plumb_bob")),
         "HandEyeCalibration": (lambda h: lambda: (h.matrix, h.residuals))(vsinv.calibration.calibrate_hand_eye(g, c)),
         "HandEyeAgreement": (lambda h: lambda: (h.calibrations, h.max_rotation_deg))(vsinv.calibration.compare_hand_eye_methods(g, c)),
+        "ScenarioArm": (lambda a: lambda: (a.manipulability(a.start), a.joint_names, a.base))(
+            vsinv.load_scenario("arm-ur5-12-6").arm()),
     }
     for name, call in calls.items():
         counts = hammer(call)
@@ -182,7 +184,7 @@ STATEFUL = {"InvariantController", "IbvsController", "Servo", "PixelNoiseMeter",
             "DotTracker", "ImageServo", "TagTracker"}
 FROZEN = {"Intrinsics", "StabilityReport", "ServoStep", "ImageStep", "PoseUncertainty", "PlaneParallax",
           "InvariantPath", "Scenario", "RunResult", "Dots", "Tags", "IkSolution", "Distortion",
-          "HandEyeCalibration", "HandEyeAgreement", "Calibration"}
+          "HandEyeCalibration", "HandEyeAgreement", "Calibration", "ScenarioArm"}
 
 
 def test_every_class_is_covered() -> None:
