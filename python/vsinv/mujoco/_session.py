@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import geometry
 from .._core import LAW_OPTIONS, ImageServo, Intrinsics, InvalidInput, RunResult, check_stability
+from .._zoom import camera_k
 from ._effects import degraded
 from ._world import World
 
@@ -105,16 +106,8 @@ class _Options:
 
 
 def _intrinsics(d: dict[str, Any], key: str, t: float = 0.0) -> Intrinsics:
-    """K of `[key]` at time `t`: a `[camera] zoom` (times, fku, fkv, optional u0, v0) is
-    interpolated piecewise linearly and held outside its times, as the simulator's."""
-    c = d[key]
-    k = [float(c["fku"]), float(c["fkv"]), float(c["u0"]), float(c["v0"])]
-    zoom = c.get("zoom")
-    if zoom:
-        for i, name in enumerate(("fku", "fkv", "u0", "v0")):
-            if zoom.get(name) is not None:
-                k[i] = float(np.interp(t, zoom["times"], zoom[name]))
-    return Intrinsics(*k)
+    """K of `[key]` at time `t` (`[camera] zoom` interpolated, as the simulator's)."""
+    return Intrinsics(*camera_k(d, key, t))
 
 
 @dataclass
