@@ -39,6 +39,7 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from ._core import InvalidInput, RunResult
+from ._zoom import camera_k
 
 __all__ = ["TOPICS", "encode_png", "frames", "write_recording"]
 
@@ -101,18 +102,6 @@ def encode_png(image: Any) -> bytes:
     return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b"")
 
 
-def _camera_k(d: dict[str, Any], t: float) -> tuple[float, float, float, float]:
-    """K of `[camera]` at time t (a `[camera] zoom` interpolated, as both worlds do)."""
-    c = d["camera"]
-    k = [float(c["fku"]), float(c["fkv"]), float(c["u0"]), float(c["v0"])]
-    zoom = c.get("zoom")
-    if zoom:
-        for i, name in enumerate(("fku", "fkv", "u0", "v0")):
-            if zoom.get(name) is not None:
-                k[i] = float(np.interp(t, zoom["times"], zoom[name]))
-    return k[0], k[1], k[2], k[3]
-
-
 def frames(result: RunResult) -> Iterator[Optional[np.ndarray]]:
     """The image of each recorded iteration of `result` (None throughout for a run without
     images): MuJoCo's render of the pose for a MuJoCo run, `vsinv.render` for a kinematic run
@@ -125,7 +114,7 @@ def frames(result: RunResult) -> Iterator[Optional[np.ndarray]]:
 
         with World.from_scenario(d) as world:
             for k in range(len(poses)):
-                world.set_K(_camera_k(d, float(times[k])))
+                world.set_K(camera_k(d, "camera", float(times[k])))
                 yield camera_image(world, d, poses[k], k + 1)
     elif d.get("vision") is not None:
         from ._core import render
@@ -197,7 +186,7 @@ def _annotations(ns: int, pixels: np.ndarray, visible: np.ndarray, reference: np
 
 
 def _calibration(ns: int, d: dict[str, Any], t: float) -> dict[str, Any]:
-    fx, fy, u0, v0 = _camera_k(d, t)
+    fx, fy, u0, v0 = camera_k(d, "camera", t)
     c = d["camera"]
     return {"timestamp": _stamp(ns), "frame_id": "camera", "width": int(c["width"]), "height": int(c["height"]),
             "distortion_model": "", "D": [], "K": [fx, 0.0, u0, 0.0, fy, v0, 0.0, 0.0, 1.0],

@@ -26,7 +26,7 @@ from .. import geometry, kinematics
 from .._core import InvalidInput, RunResult
 from . import _mounted
 from ._effects import degraded
-from ._loop import MujocoRun, _arrays, _intrinsics, _Options, _record, _session, _summary
+from ._session import MujocoRun, _arrays, _intrinsics, _Options, _record, _session, _summary
 from ._world import World
 
 #: A joint this close to an end of its range (rad, m) has reached it.
@@ -120,7 +120,7 @@ def _start_session(d: dict[str, Any], world: World, o: _Options, g: _Geometry) -
 
 
 def run_arm(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> MujocoRun:
-    """`_loop._run` for a world whose camera (or, eye-to-hand, whose target) rides `world.arm`."""
+    """`_loop`'s run for a world whose camera (or, eye-to-hand, whose target) rides `world.arm`."""
     import mujoco
 
     arm, m, data = world.arm, world.model, world.data

@@ -20,6 +20,10 @@ from typing import Any
 
 import numpy as np
 
+# The sensor's pixel pitch (metres) of the cameras vsinv puts in a scene: 10 um, as the scenarios'
+# lenses (f = 1200 px: 12 mm); MuJoCo's `sensorsize` is the image size times it.
+PIXEL = 1e-5
+
 FLIP = np.diag([1.0, -1.0, -1.0])
 
 

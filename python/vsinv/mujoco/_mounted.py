@@ -22,6 +22,7 @@ import numpy as np
 from .. import geometry
 from .._core import InvalidInput
 from . import _arms, _panda
+from ._camera import PIXEL
 
 CAMERA = "vsinv_wrist"
 CAMERA_SITE = "vsinv_camera"
@@ -71,8 +72,6 @@ def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") 
     the free camera's sensor (`width` x `height` pixels, focal length `focal` pixels;
     `World.set_K` sets it). `payload` (eye-to-hand: the target's geoms, in F*) goes into a body
     `TARGET` at the mount (F* on the end effector)."""
-    from . import _scene
-
     ee = end_effector(arm.model, arm.end_effector)
     camera = ee @ np.asarray(arm.mount)
     believed = ee @ np.asarray(arm.believed_mount)
@@ -80,7 +79,7 @@ def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") 
     tool = (f'<site name="{CAMERA_SITE}" pos="{_v(camera[:3, 3])}" quat="{quat(camera)}" size="0.005"/>'
             f'<site name="{BELIEVED_SITE}" pos="{_v(believed[:3, 3])}" quat="{quat(believed)}" size="0.005"/>'
             f'<camera name="{CAMERA}" pos="{_v(camera[:3, 3])}" quat="{quat(camera @ flip)}" resolution="{width} {height}" '
-            f'sensorsize="{width * _scene.PIXEL} {height * _scene.PIXEL}" focalpixel="{focal} {focal}"/>')
+            f'sensorsize="{width * PIXEL} {height * PIXEL}" focalpixel="{focal} {focal}"/>')
     if payload:  # a 0.3 kg target whose weight the controller compensates, as the arm's own
         payload = payload.replace("<geom ", '<geom mass="0" ')
         inertial = f'<inertial pos="0 0 {PAYLOAD_DEPTH}" mass="{PAYLOAD_MASS}" diaginertia="0.005 0.005 0.01"/>'

@@ -10,9 +10,10 @@ from typing import Any
 import numpy as np
 
 from .. import geometry, vision
+from . import _mounted
+from ._camera import PIXEL
 
 CAMERA = "vsinv_camera"
-PIXEL = 1e-5  # the sensor's pixel pitch (metres): 10 um, as the scenarios' lenses (f = 1200 px: 12 mm)
 PHYSICS_DT = 0.002  # s: 500 Hz physics under an arm
 THIN = 0.0005
 
@@ -97,8 +98,6 @@ def scene(scenario: dict[str, Any], width: int, height: int, arm: Any = None) ->
     `arm` (a `ScenarioArm`), the arm with mass carrying a second camera (`_mounted`), gravity
     along its base's -z, 500 Hz physics; with `[world] eye_to_hand`, the arm carries the target
     (its geoms in F*, `BACKING` behind them) and the free camera stays at the world's origin."""
-    from . import _mounted
-
     arm_body, actuators, option = "", "", ""
     eye_to_hand = scenario.get("world", {}).get("eye_to_hand") is not None
     obj = scenario["object"]

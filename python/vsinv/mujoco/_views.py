@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from ._loop import _intrinsics
+from ._session import _intrinsics
 from ._world import World
 
 

@@ -192,7 +192,7 @@ class World:
         fx, fy, cx, cy = (float(v) for v in (K if not isinstance(K, Intrinsics) else (K.fku, K.fkv, K.u0, K.v0)))
         if not (fx > 0 and fy > 0 and np.isfinite([cx, cy]).all()):
             raise InvalidInput(f"K: expected positive focal lengths and a finite principal point, got {(fx, fy, cx, cy)}")
-        intrinsic, sensor = _camera.intrinsics_of_k((fx, fy, cx, cy), self.width, self.height, _scene.PIXEL)
+        intrinsic, sensor = _camera.intrinsics_of_k((fx, fy, cx, cy), self.width, self.height, _camera.PIXEL)
         for c in (self.camera_id, self.reference_camera_id):
             if c >= 0:
                 self.model.cam_intrinsic[c] = intrinsic
