@@ -1,5 +1,6 @@
 """The UR5e (issue 31, item 2): robots/ur5e.urdf and `vsinv.mujoco.ur5e_mjcf` from Universal
-Robots' published UR5e DH parameters, masses and centres of mass (approximate inertia tensors).
+Robots' published UR5e DH parameters, masses and centres of mass, and the inertia tensors of its
+ROS 2 description.
 
 The independent checks: a standard DH forward kinematics of the published table written here
 (numpy), and roboticstoolbox-python's DH kinematics and gravity load (its `DHRobot` of the same
@@ -106,10 +107,10 @@ def test_gravity_torques_are_those_of_the_published_masses_and_centres() -> None
             np.testing.assert_allclose(data.qfrc_bias, tau, atol=1e-6)
 
 
-def test_the_mjcf_and_the_urdf_carry_the_same_inertials_and_limits() -> None:
+def test_the_mjcf_and_the_urdf_carry_the_published_inertials_and_limits() -> None:
     """Masses (19.7 kg in all), centres of mass and principal inertias are the same in the MJCF
-    and the URDF as MuJoCo reads them; the inertia tensors are the approximate diagonals of robots/ur5e.urdf; joint
-    ranges +-2 pi, speeds pi rad/s, torques 150 N m (size-3 joints) and 28 N m (wrists), in the
+    and the URDF as MuJoCo reads them; the inertia tensors are the diagonals of Universal Robots'
+    ROS 2 description; joint ranges +-2 pi, speeds pi rad/s, torques 150 N m (size-3 joints) and 28 N m (wrists), in the
     MJCF's actuators and in vsinv's reading of the URDF."""
     mjcf = mujoco.MjModel.from_xml_string(vm.ur5e_mjcf())
     urdf = mujoco.MjModel.from_xml_path(str(URDF))
@@ -117,10 +118,12 @@ def test_the_mjcf_and_the_urdf_carry_the_same_inertials_and_limits() -> None:
     np.testing.assert_allclose(urdf.body_mass[1:], MASS)
     np.testing.assert_allclose(mjcf.body_mass[moving], MASS)
     np.testing.assert_allclose(urdf.body_ipos[1:], mjcf.body_ipos[moving], atol=1e-9)
-    approximate = np.sort(np.array([(0.0084, 0.0064, 0.0084), (0.0078, 0.21, 0.21), (0.0016, 0.0462, 0.0462),
-                                  (0.0016, 0.0016, 0.0009), (0.0016, 0.0016, 0.0009), (1e-4, 1e-4, 1e-4)]), axis=1)
-    np.testing.assert_allclose(np.sort(urdf.body_inertia[1:], axis=1), approximate, rtol=1e-9)
-    np.testing.assert_allclose(np.sort(mjcf.body_inertia[moving], axis=1), approximate, rtol=1e-9)
+    # The diagonals of Universal Robots' ROS 2 description (config/ur5e/physical_parameters.yaml).
+    published = np.sort(np.array([(0.0070021, 0.00648091, 0.00657286), (0.01505885, 0.33388086, 0.33247207),
+                                  (0.00399632, 0.07879254, 0.0784851), (0.00165491, 0.00135962, 0.00126279),
+                                  (0.00135617, 0.00127827, 0.00096614), (0.00018694, 0.00018908, 0.00025756)]), axis=1)
+    np.testing.assert_allclose(np.sort(urdf.body_inertia[1:], axis=1), published, rtol=1e-9)
+    np.testing.assert_allclose(np.sort(mjcf.body_inertia[moving], axis=1), published, rtol=1e-9)
     np.testing.assert_allclose(mjcf.jnt_range, np.tile([-2 * np.pi, 2 * np.pi], (6, 1)))
     np.testing.assert_allclose(mjcf.actuator_ctrlrange[:, 1], np.pi)
     np.testing.assert_allclose(mjcf.actuator_forcerange[:, 1], [150.0] * 3 + [28.0] * 3)

@@ -12,12 +12,11 @@ publishes no inertia tensors for the UR5: each link's is that of a uniform solid
 mass along its longest segment (radius 0.05 m), at its centre of mass.
 UR5e: d = 0.1625, 0, 0, 0.1333, 0.0997, 0.0996 m; a2 = -0.425, a3 = -0.3922 m;
 m = 3.761, 8.058, 2.846, 1.37, 1.3, 0.365 kg; the same centres of mass. That page gives no inertia
-for the UR5e (it calls it negligible): the tensors (UR5E_INERTIA, diagonal, about the centres of
-mass, axes of the DH frames) are approximate, not a published table. Universal Robots' ROS 2
-description (config/ur5e/physical_parameters.yaml) has CAD tensors of the same order (upper arm
-0.0151 / 0.334 / 0.332 kg m^2 against 0.0078 / 0.21 / 0.21 here); with its diagonals the tags
-built-in ends `settled` from the paper's start (0.55 mm from the goal, the images allowing
-5.8 mm against a 5 mm tolerance), so they are not adopted yet. Limits of both (the
+for the UR5e ("negligible"): the tensors (UR5E_INERTIA, about the centres of mass, axes of the DH
+frames) are the diagonals of those in Universal Robots' ROS 2 description
+(Universal_Robots_ROS2_Description, config/ur5e/physical_parameters.yaml, whose inertial frames
+are the DH frames: its rotations are the DH alphas); its off-diagonal terms, at most 7.1 % of
+the link's largest moment, are left out. Limits of both (the
 datasheets): +-360 degrees, 180 degrees/s (UR5: 3.15 rad/s as robots/ur5.urdf), 150 N m on the
 three size-3 joints and 28 N m on the wrists.
 The bodies compensate their own weight (MuJoCo's `gravcomp`, as the arm's controller does) and
@@ -44,14 +43,15 @@ UR5_EFFORT = (150.0, 150.0, 150.0, 28.0, 28.0, 28.0)  # N m
 UR5_SPEED = 3.15  # rad/s, every joint
 UR5_KV = (300.0, 300.0, 150.0, 50.0, 50.0, 20.0)  # N m s / rad
 # The UR5e (robots/ur5e.urdf): standard DH, masses, centres of mass (DH frames): Universal Robots'
-# UR5e rows; inertia tensors (diagonal, about the centre of mass, axes of the DH frame): approximate
-# (see above).
+# UR5e rows; inertia tensors (diagonal, about the centre of mass, axes of the DH frame): the
+# diagonals of Universal Robots' ROS 2 description (see above).
 UR5E_DH = ((0.1625, 0.0, np.pi / 2), (0.0, -0.425, 0.0), (0.0, -0.3922, 0.0),
            (0.1333, 0.0, np.pi / 2), (0.0997, 0.0, -np.pi / 2), (0.0996, 0.0, 0.0))
 UR5E_MASS = (3.761, 8.058, 2.846, 1.37, 1.3, 0.365)
 UR5E_COM = UR5_COM
-UR5E_INERTIA = ((0.0084, 0.0064, 0.0084), (0.0078, 0.21, 0.21), (0.0016, 0.0462, 0.0462),
-                (0.0016, 0.0016, 0.0009), (0.0016, 0.0016, 0.0009), (0.0001, 0.0001, 0.0001))
+UR5E_INERTIA = ((0.0070021, 0.00648091, 0.00657286), (0.01505885, 0.33388086, 0.33247207),
+                (0.00399632, 0.07879254, 0.0784851), (0.00165491, 0.00135962, 0.00126279),
+                (0.00135617, 0.00127827, 0.00096614), (0.00018694, 0.00018908, 0.00025756))
 UR5E_SPEED = np.pi  # rad/s (180 degrees/s), every joint
 JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 LINKS = ("shoulder_link", "upper_arm_link", "forearm_link", "wrist_1_link", "wrist_2_link", "wrist_3_link")
