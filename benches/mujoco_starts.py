@@ -50,7 +50,7 @@ import numpy as np  # noqa: E402
 import vsinv  # noqa: E402
 import vsinv.mujoco as vm  # noqa: E402
 from vsinv import geometry  # noqa: E402
-from vsinv.mujoco import _loop  # noqa: E402
+from vsinv.mujoco import _session  # noqa: E402
 
 #: Each MuJoCo built-in and the kinematic built-in of the same experiment (None: the same
 #: scenario without `[world]`, the kinematic simulator's arm; eye-to-hand's twin is the free
@@ -111,13 +111,13 @@ def control_replay(d: dict, world: vm.World, run: vm.MujocoRun) -> tuple[float, 
     if world.arm is not None:  # the arm's own set-up (eye-to-hand: the target at F* for the reference)
         from vsinv.mujoco import _arm_loop
 
-        defaults = _loop._Options(None, None, None, False, None)
+        defaults = _session._Options(None, None, None, False, None)
         session, _ = _arm_loop._start_session(d, world, defaults, _arm_loop._Geometry(world))
     else:
-        session = _loop._session(d, world, None, run.pose[0], None)  # the run's own ImageServo set-up
-    options = _loop.session_options(d, None)
+        session = _session._session(d, world, None, run.pose[0], None)  # the run's own ImageServo set-up
+    options = _session.session_options(d, None)
     points = np.asarray(world.target_points)  # a World.from_scenario has them
-    servo = vsinv.Servo(np.asarray(session.servo.reference_pixels), _loop._intrinsics(d, "estimate"),
+    servo = vsinv.Servo(np.asarray(session.servo.reference_pixels), _session._intrinsics(d, "estimate"),
                         reference_depths=points[session.truth, 2], **options)
     r = run.result
     twists = []
