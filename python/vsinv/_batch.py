@@ -65,7 +65,7 @@ def _run(scenarios: Iterable[Any], threads: Optional[int], allow_outside_files: 
         items = list(scenarios)
     except TypeError:  # the Rust runner names what it expected
         return _core.run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=call)
-    found = [_mujoco.mujoco_scenario(s, allow_outside_files, i) for i, s in enumerate(items)]
+    found = _mujoco_rows(items, allow_outside_files)
     mujoco_rows = [i for i, d in enumerate(found) if d is not None]
     if not mujoco_rows:
         return _core.run_batch(items, threads=threads, allow_outside_files=allow_outside_files, progress=call)
@@ -90,3 +90,19 @@ def _run(scenarios: Iterable[Any], threads: Optional[int], allow_outside_files: 
     mujoco = [d for d in found if d is not None]
     rows = _mujoco.run_rows(mujoco, _mujoco.workers(threads), allow_outside_files, one_done)
     return _mujoco.merge(n, table if rust_rows else None, rust_rows, rows, mujoco_rows)
+
+
+def _mujoco_rows(items: list[Any], allow_outside_files: bool) -> list[Optional[dict[str, Any]]]:
+    """Per scenario, its dict when it is a MuJoCo scenario (else None); a name or text repeated
+    through the batch is read once (a batch of 20,000 runs of one built-in reads it once)."""
+    seen: dict[str, Optional[dict[str, Any]]] = {}
+    found: list[Optional[dict[str, Any]]] = []
+    for i, s in enumerate(items):
+        if isinstance(s, str):
+            if s not in seen:
+                seen[s] = _mujoco.mujoco_scenario(s, allow_outside_files, i)
+            found.append(seen[s])
+        else:
+            found.append(_mujoco.mujoco_scenario(s, allow_outside_files, i))
+    return found
+
