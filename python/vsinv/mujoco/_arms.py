@@ -175,9 +175,15 @@ def joint_velocities(model: Any, data: Any, site: str, twist: Any, damping: floa
     as a camera twist when the camera's vsinv frame is the site's): MuJoCo's Jacobian of the site
     (`mj_jacSite`, world frame) turned into the site's frame, then the kinematic arm's damped
     least squares (`vsinv.kinematics.damped_least_squares`)."""
-    import mujoco
-
     from ..kinematics import damped_least_squares
+
+    return np.asarray(damped_least_squares(site_jacobian(model, data, site), np.asarray(twist, dtype=float), damping))
+
+
+def site_jacobian(model: Any, data: Any, site: str) -> np.ndarray:
+    """MuJoCo's Jacobian (6, nv) of `site` (`mj_jacSite`: world-frame rows), its rows turned into
+    the site's frame: joint velocities to the site's twist (v, w) in its own frame."""
+    import mujoco
 
     s = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site)
     if s < 0:
@@ -187,4 +193,4 @@ def joint_velocities(model: Any, data: Any, site: str, twist: Any, damping: floa
     mujoco.mj_comPos(model, data)
     mujoco.mj_jacSite(model, data, jp, jr, s)
     R = data.site_xmat[s].reshape(3, 3)
-    return np.asarray(damped_least_squares(np.vstack([R.T @ jp, R.T @ jr]), np.asarray(twist, dtype=float), damping))
+    return np.vstack([R.T @ jp, R.T @ jr])

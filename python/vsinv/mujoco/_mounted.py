@@ -105,15 +105,6 @@ def set_joint_ranges(model: Any, arm: Any) -> None:
 
 
 def camera_jacobian(model: Any, data: Any) -> np.ndarray:
-    """MuJoCo's Jacobian (6, nv) of the site where the controller believes the camera is
-    (`mj_jacSite`: world-frame rows), its rows turned into that site's frame: joint velocities
-    to the camera twist (v, w) in the camera frame."""
-    import mujoco
-
-    s = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, BELIEVED_SITE)
-    jp, jr = np.zeros((3, model.nv)), np.zeros((3, model.nv))
-    mujoco.mj_kinematics(model, data)
-    mujoco.mj_comPos(model, data)
-    mujoco.mj_jacSite(model, data, jp, jr, s)
-    R = data.site_xmat[s].reshape(3, 3)
-    return np.vstack([R.T @ jp, R.T @ jr])
+    """MuJoCo's Jacobian (6, nv) of the site where the controller believes the camera is, in
+    that site's frame (`_arms.site_jacobian`): joint velocities to the camera twist (v, w)."""
+    return _arms.site_jacobian(model, data, BELIEVED_SITE)
