@@ -11,7 +11,13 @@ import numpy as np
 
 def camera_k(d: dict[str, Any], key: str = "camera", t: float = 0.0) -> tuple[float, float, float, float]:
     """(fku, fkv, u0, v0) of `[key]` at time `t`: a `zoom` table (times, fku, fkv, optional u0,
-    v0) interpolated piecewise linearly and held outside its times, as the simulator's."""
+    v0) interpolated piecewise linearly and held outside its times, as the simulator's. A
+    missing `[estimate]` is the servo camera at t = 0 and a missing `[camera]` the reference
+    camera, the scenario schema's defaults."""
+    if key == "estimate" and d.get("estimate") is None:
+        return camera_k(d, "camera", 0.0)
+    if key == "camera" and d.get("camera") is None:
+        key = "reference_camera"
     c = d[key]
     k = [float(c["fku"]), float(c["fkv"]), float(c["u0"]), float(c["v0"])]
     zoom = c.get("zoom")

@@ -70,6 +70,7 @@ class _Geometry:
 
     def __init__(self, world: World) -> None:
         self.world = world
+        self.camera_to_base = believed_camera_to_base(world)
 
     def pose(self) -> np.ndarray:
         if not self.world.eye_to_hand:
@@ -77,12 +78,28 @@ class _Geometry:
         return np.linalg.inv(self.world.arm.camera_pose(self.world.data.qpos))
 
     def site_twist(self, twist: np.ndarray, pose: np.ndarray) -> np.ndarray:
+        """The site's twist for the law's `twist`; eye-to-hand through the camera's pose in F*
+        the controller believes (`pose`, the truth, with its camera-to-base replaced by
+        `world.eye_to_hand.camera_to_base`)."""
         if not self.world.eye_to_hand:
             return twist
+        if self.camera_to_base is not None:  # P = Y^-1 fk(q) mount = Y^-1 base^-1 P_true, X = P^-1
+            pose = pose @ np.asarray(self.world.arm.base) @ self.camera_to_base
         return -np.asarray(geometry.twist_adjoint(pose)) @ twist
 
     def render(self) -> np.ndarray:
         return self.world.render(np.eye(4) if self.world.eye_to_hand else None)
+
+
+def believed_camera_to_base(world: World) -> np.ndarray | None:
+    """Eye-to-hand: the camera-to-base transform Y the controller believes (4x4, the camera's
+    frame in the arm's base frame: `world.eye_to_hand.camera_to_base`, e.g. a hand-eye
+    calibration's `matrix`); None when the scenario gives none (the truth, `base` inverted)."""
+    spec = ((world.scenario or {}).get("world") or {}).get("eye_to_hand") or {}
+    c = spec.get("camera_to_base")
+    if not world.eye_to_hand or c is None:
+        return None
+    return np.asarray(geometry.pose_from_position_thetau(c["position"], np.radians(c.get("rotation_deg", [0.0, 0.0, 0.0]))))
 
 
 def goal_joints(arm: Any) -> np.ndarray:

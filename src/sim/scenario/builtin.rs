@@ -42,6 +42,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("mujoco-arm-panda-zoom", include_str!("../../../scenarios/mujoco-arm-panda-zoom.toml")),
     ("mujoco-arm-ur5e-ibvs-12-6", include_str!("../../../scenarios/mujoco-arm-ur5e-ibvs-12-6.toml")),
     ("mujoco-eye-to-hand-12-6", include_str!("../../../scenarios/mujoco-eye-to-hand-12-6.toml")),
+    ("mujoco-arm-ur5e-zoom-stationary", include_str!("../../../scenarios/mujoco-arm-ur5e-zoom-stationary.toml")),
 ];
 
 /// A built-in scenario by name (parsed once, then cloned).

@@ -264,6 +264,10 @@ mod tests {
         assert!(e.to_string().contains("world.eye_to_hand: "), "{e}");
         let e = Scenario::from_toml(&e2h_text.replace("urdf = \"ur5e\"", "urdf = \"ur7\"")).unwrap_err();
         assert!(e.to_string().contains("world.eye_to_hand.urdf: "), "{e}");
+        let bad =
+            e2h_text.replace("target_mount = {", "camera_to_base = { position = [0.0, nan, 0.0] }\ntarget_mount = {");
+        let e = Scenario::from_toml(&bad).unwrap_err();
+        assert!(e.to_string().contains("world.eye_to_hand.camera_to_base.position[1]: "), "{e}");
         let plain = Scenario::from_toml(text).unwrap();
         assert!(plain.world.is_default() && !plain.to_toml().unwrap().contains("[world]"));
     }

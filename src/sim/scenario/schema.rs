@@ -347,6 +347,12 @@ pub struct EyeToHandSpec {
     /// The joints (degrees, metres) the inverse kinematics of the start starts from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ik_seed: Option<Vec<f64>>,
+    /// The camera-to-base transform the controller believes (the fixed camera's frame in the
+    /// base frame: the `matrix` of `calibrate_hand_eye(..., setup="eye_to_hand")`, as a
+    /// position and a theta-u rotation), by which it carries the law's twist to the target;
+    /// default: the true one, the inverse of `base`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_to_base: Option<PoseSpec>,
 }
 
 /// `[world]`: which world runs the scenario, and what it adds to the loop.

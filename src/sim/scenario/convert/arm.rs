@@ -58,6 +58,10 @@ pub(super) fn eye_to_hand(e: &EyeToHandSpec, start: Option<&StartSpec>, files: F
     let start = start.ok_or_else(|| scenario_error("start", "missing: the camera's start pose in F*"))?;
     check_values("start.position", &start.position)?;
     check_values("start.rotation_deg", &start.rotation_deg)?;
+    if let Some(c) = &e.camera_to_base {
+        check_values("world.eye_to_hand.camera_to_base.position", &c.position)?;
+        check_values("world.eye_to_hand.camera_to_base.rotation_deg", &c.rotation_deg)?;
+    }
     let target = pose_of(start.position, start.rotation_deg).inverse();
     let (axis, angle) =
         target.rotation.axis_angle().map_or((nalgebra::Vector3::x(), 0.0), |(a, t)| (a.into_inner(), t));
