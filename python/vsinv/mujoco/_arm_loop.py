@@ -68,9 +68,9 @@ class _Geometry:
     -Ad(X) v in its own frame (X = P^-1 carries the camera's frame to the target's: the
     camera-to-base transform, then the arm's kinematics)."""
 
-    def __init__(self, world: World) -> None:
+    def __init__(self, world: World, d: dict[str, Any] | None = None) -> None:
         self.world = world
-        self.camera_to_base = believed_camera_to_base(world)
+        self.camera_to_base = believed_camera_to_base(world, world.scenario if d is None else d)
 
     def pose(self) -> np.ndarray:
         if not self.world.eye_to_hand:
@@ -91,11 +91,11 @@ class _Geometry:
         return self.world.render(np.eye(4) if self.world.eye_to_hand else None)
 
 
-def believed_camera_to_base(world: World) -> np.ndarray | None:
+def believed_camera_to_base(world: World, d: dict[str, Any] | None) -> np.ndarray | None:
     """Eye-to-hand: the camera-to-base transform Y the controller believes (4x4, the camera's
-    frame in the arm's base frame: `world.eye_to_hand.camera_to_base`, e.g. a hand-eye
-    calibration's `matrix`); None when the scenario gives none (the truth, `base` inverted)."""
-    spec = ((world.scenario or {}).get("world") or {}).get("eye_to_hand") or {}
+    frame in the arm's base frame: the run's scenario `d`'s `world.eye_to_hand.camera_to_base`,
+    e.g. a hand-eye calibration's `matrix`); None when it gives none (the truth, `base` inverted)."""
+    spec = ((d or {}).get("world") or {}).get("eye_to_hand") or {}
     c = spec.get("camera_to_base")
     if not world.eye_to_hand or c is None:
         return None
@@ -142,7 +142,7 @@ def run_arm(loaded: Any, d: dict[str, Any], world: World, o: _Options) -> Mujoco
 
     arm, m, data = world.arm, world.model, world.data
     _mounted.set_joint_ranges(m, arm)
-    g = _Geometry(world)
+    g = _Geometry(world, d)
     session, pose = _start_session(d, world, o, g)
     servo, image, dt = session.servo, session.first_image, session.dt
     steps = max(1, round(dt / m.opt.timestep))
