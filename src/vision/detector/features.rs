@@ -6,6 +6,10 @@
 //! matrix again. The matches are refined to a fraction of a pixel first (the reference's patch
 //! warped into the frame and aligned, [`refine`](crate::vision::features::refine)), since
 //! SIFT's own positions differ by up to 2 px across two lenses.
+//! A point not found (SIFT matches a third to a half of them across a focal ratio of 2; tracks
+//! lose some) is looked for again each frame where its found neighbours put it, aligned on
+//! its reference patch ([`FeatureTracking::reacquire`]): the law then measures every point in
+//! view, and its basis is switched less often (each switch restarts the controller).
 //! A point failing a check is reported not found, never at a wrong place; when
 //! fewer than [`FeatureSettings::min_tracked`] remain, the frame is matched afresh
 //! (re-detection). The expected pixels are ignored.
@@ -14,10 +18,10 @@ use kornia_image::Image;
 
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::error::{Result, VisionError};
-use crate::vision::features::flow::{FlowConfig, plane, track};
+use crate::vision::features::flow::{FlowConfig, FramePyramid, plane, track_pyramids};
 use crate::vision::features::keypoints::{Keypoints, sift};
-use crate::vision::features::matching::{MIN_MATCHES, checked, epipolar_inliers};
-use crate::vision::features::refine::{pyramid, refine_matches};
+use crate::vision::features::matching::{MIN_MATCHES, checked, epipolar_inliers, map_at};
+use crate::vision::features::refine::{pyramid, refine, refine_matches};
 use crate::vision::features::spread::spread;
 use crate::vision::image::GreyView;
 
@@ -130,7 +134,8 @@ pub struct FeatureTracking {
     /// The identity of each point tracked, and its keypoint (index in the reference's).
     ids: Vec<u32>,
     keypoints: Vec<usize>,
-    previous: Option<Image<f32, 1>>,
+    /// The last frame's pyramid (kept: it is the next track's start).
+    previous: Option<FramePyramid>,
     last: Vec<Option<[f64; 2]>>,
     matched: usize,
     since_match: u32,
@@ -217,6 +222,30 @@ impl FeatureTracking {
         }
     }
 
+    /// Finds the points not found again without descriptors: each one's pixel predicted by the
+    /// affine map of its nearest found neighbours (reference to frame), then aligned on the
+    /// reference's patch as the matches are ([`refine`]). SIFT matches a third to a half of
+    /// the points across a focal ratio of 2, and tracks lose some on the way; with the others
+    /// back, the law measures every point in view (its bound shrinks with their number and
+    /// spread) and its basis is switched less often. The epipolar check follows.
+    pub fn reacquire(&mut self, frame: &Image<f32, 1>) {
+        let found: Vec<usize> = (0..self.last.len()).filter(|&i| self.last[i].is_some()).collect();
+        if found.len() == self.last.len() {
+            return;
+        }
+        let first: Vec<[f64; 2]> = found.iter().map(|&i| self.reference.keypoints.pixels[self.keypoints[i]]).collect();
+        let second: Vec<[f64; 2]> = found.iter().filter_map(|&i| self.last[i]).collect();
+        for i in 0..self.last.len() {
+            if self.last[i].is_some() {
+                continue;
+            }
+            let at = self.reference.keypoints.pixels[self.keypoints[i]];
+            if let Some((map, guess)) = map_at(&first, &second, at) {
+                self.last[i] = refine(&self.reference.pyramid, frame, at, &map, guess);
+            }
+        }
+    }
+
     /// Drops the points off the epipolar geometry of the others with the reference: all of
     /// them when too few are left for the check.
     fn check_epipolar(&mut self) {
@@ -259,8 +288,10 @@ impl Detector for FeatureTracking {
     /// Matches the first frame to the reference (the hints are ignored).
     fn start(&mut self, image: &GreyView<'_>, _expected: &[Expected]) -> Result<Vec<Detection>> {
         self.last.fill(None);
-        let next = plane("image", image)?;
-        self.rematch(image, &next)?;
+        let next = FramePyramid::new(&plane("image", image)?, self.settings.flow.levels)?;
+        self.rematch(image, next.image())?;
+        self.check_epipolar();
+        self.reacquire(next.image());
         self.previous = Some(next);
         self.check_epipolar();
         Ok(self.report())
@@ -269,23 +300,24 @@ impl Detector for FeatureTracking {
     /// Tracks the points from the last frame, checks them, and matches the frame afresh
     /// when too few remain.
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
-        let next = plane("image", image)?;
-        let same_size = self.previous.as_ref().is_some_and(|p| p.size() == next.size());
-        if same_size && let Some(previous) = &self.previous {
+        let mut next = FramePyramid::new(&plane("image", image)?, self.settings.flow.levels)?;
+        let same_size = self.previous.as_ref().is_some_and(|p| p.image().size() == next.image().size());
+        if same_size && let Some(previous) = &mut self.previous {
             let which: Vec<usize> = (0..self.last.len()).filter(|&i| self.last[i].is_some()).collect();
             let points: Vec<[f64; 2]> = which.iter().filter_map(|&i| self.last[i]).collect();
-            let tracked = track(previous, &next, &points, &self.settings.flow)?;
+            let tracked = track_pyramids(previous, &mut next, &points, &self.settings.flow)?;
             for (i, p) in which.into_iter().zip(tracked) {
                 self.last[i] = p;
             }
-            self.anchor(&next);
+            self.anchor(next.image());
         } else {
             self.last.fill(None);
         }
         self.since_match = self.since_match.saturating_add(1);
         if self.too_few() && (self.since_match >= self.settings.redetect_every || !same_size) {
-            self.rematch(image, &next)?;
+            self.rematch(image, next.image())?;
         }
+        self.reacquire(next.image());
         self.previous = Some(next);
         self.check_epipolar();
         Ok(self.report())

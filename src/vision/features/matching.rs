@@ -157,6 +157,18 @@ fn affine_fit(
     Some((linear, [x[(2, 0)], x[(2, 1)]]))
 }
 
+/// The affine map (first image to second) fitted to the [`NEIGHBOURS`] matches nearest to
+/// `at` in the first image: its linear part and its value at `at` (where the second image
+/// should show the first image's `at`); None with fewer matches or collinear ones.
+pub fn map_at(first: &[[f64; 2]], second: &[[f64; 2]], at: [f64; 2]) -> Option<(nalgebra::Matrix2<f64>, [f64; 2])> {
+    let mut near: Vec<(f64, usize)> =
+        (0..first.len().min(second.len())).map(|j| ((first[j][0] - at[0]).hypot(first[j][1] - at[1]), j)).collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0));
+    near.truncate(NEIGHBOURS);
+    let ids: Vec<usize> = near.iter().map(|&(_, j)| j).collect();
+    (ids.len() == NEIGHBOURS).then(|| affine_fit(first, second, &ids, at)).flatten()
+}
+
 /// The local linear map (first image to second) at match `i`, fitted to its
 /// [`NEIGHBOURS`] nearest matches.
 pub fn local_map(first: &[[f64; 2]], second: &[[f64; 2]], i: usize) -> Option<nalgebra::Matrix2<f64>> {
