@@ -77,7 +77,7 @@ def station_joints(arm: Any, count: int, seed: int, angle_deg: float = 20.0, off
     goal = goal_joints(arm)
     home = np.asarray(arm.camera_pose(goal))  # F* in the camera, about the identity
     base_inv, mount_inv = np.linalg.inv(np.asarray(arm.base)), np.linalg.inv(np.asarray(arm.mount))
-    out = []
+    out: list[np.ndarray] = []
     while len(out) < count:
         axis, shift = rng.normal(size=3), rng.normal(size=3)
         turn = axis / np.linalg.norm(axis) * np.radians(rng.uniform(0.5, 1.0) * angle_deg)
