@@ -1,4 +1,5 @@
-"""AprilTag detection (tag36h11) against OpenCV's aruco detector, side by side on the same images.
+"""AprilTag detection (tag36h11) against OpenCV's aruco detector and pupil-apriltags (the AprilTag
+library), side by side on the same images.
 
 How to run (from the repository root, with the package, ``opencv-python-headless`` (with its
 aruco module) and Debian's ``visp-images-data`` installed)::
@@ -25,19 +26,25 @@ they are converted to OpenCV's order and convention as in ``tests/test_tags.py``
 ``cv2.aruco.ArucoDetector(DICT_APRILTAG_36h11)`` with subpixel corner refinement
 (``CORNER_REFINE_SUBPIX``, whose corners are in OpenCV's convention; ``CORNER_REFINE_APRILTAG``
 is shown too: its corners are half a pixel off OpenCV's own convention, in the AprilTag
-library's, and are moved back by 0.5 before their errors are taken).
+library's, and are moved back by 0.5 before their errors are taken). The AprilTag library itself
+is ``pupil_apriltags.Detector(families="tag36h11")`` (its corners converted as in
+``tests/tag_sets.py``), timed twice: at its default ``quad_decimate`` (2.0) and at 1.0 (the
+quad search on the whole frame); both columns are skipped when pupil-apriltags is not installed.
 
 Timing: as ``benches/vision.py``: the number of calls per repeat is the smallest power of two
 taking at least 50 ms; a round is ``Timer.repeat(5, number)`` and gives the median time per
 call; the detectors alternate from round to round and each cell is the minimum over rounds of
 the medians. Both detectors use the machine's cores by default (vsinv's through rayon inside
 kornia-apriltag, OpenCV's through its own threads); ``--threads 1`` sets
-``RAYON_NUM_THREADS=1`` and ``cv2.setNumThreads(1)``. The ratio is vsinv time / OpenCV time
-(below 1: vsinv is faster).
+``RAYON_NUM_THREADS=1``, ``cv2.setNumThreads(1)`` and pupil-apriltags' ``nthreads=1``. The
+ratios are vsinv time / peer time (below 1: vsinv is faster).
 
 Accuracy: the distance of each published corner to the detector's corner of the same tag and
 index (a wrong order shows as an error of a tag side), median and max over all corners;
-``found`` counts the tags of the ground truth that were detected.
+``found`` counts the tags of the ground truth that were detected. Before timing, vsinv must find
+every tag of the reference with its corners within 1.5 px, and each peer's corners of the tags it
+finds must be within 1.5 px of the reference (its conversion checked), or the script exits with
+``MISMATCH``.
 """
 
 from __future__ import annotations
@@ -64,6 +71,7 @@ from vision import timed_min_of_medians  # noqa: E402
 
 VISP = Path("/usr/share/visp-images-data/ViSP-images/AprilTag")
 VISP_TO_OPENCV = [1, 0, 3, 2]
+PUPIL_DECIMATIONS = (2.0, 1.0)  # pupil-apriltags' default quad_decimate, then the whole frame
 SCALE = 2.25  # 640 x 480 -> 1440 x 1080
 
 
@@ -126,6 +134,21 @@ def opencv_tags(detector: cv2.aruco.ArucoDetector, image: np.ndarray, shift: flo
     return {int(i): c.reshape(4, 2).astype(np.float64) - shift for i, c in zip(ids.ravel(), corners)}
 
 
+def pupil_detectors(threads: int) -> dict[float, object]:
+    """pupil-apriltags' detectors, one per quad_decimate ({} when it is not installed); made once
+    for the process (pupil-apriltags aborts when detectors are made and freed again and again)."""
+    try:
+        import pupil_apriltags
+    except ImportError:
+        return {}
+    return {d: pupil_apriltags.Detector(families="tag36h11", nthreads=threads, quad_decimate=d) for d in PUPIL_DECIMATIONS}
+
+
+def pupil_tags(detector, image: np.ndarray) -> dict[int, np.ndarray]:  # type: ignore[no-untyped-def]
+    """pupil-apriltags' tags in OpenCV's order and convention (as tests/tag_sets.py converts them)."""
+    return {int(t.tag_id): np.asarray(t.corners, np.float64)[VISP_TO_OPENCV] - 0.5 for t in detector.detect(image)}
+
+
 def vsinv_tags(image: np.ndarray, decimation: int) -> dict[int, np.ndarray]:
     tags = vsinv.vision.detect_tags(image, decimation=decimation)
     return {int(i): c for i, c in zip(tags.ids, tags.corners)}
@@ -158,13 +181,24 @@ class Row:
     vsinv: Accuracy
     opencv: Accuracy
     opencv_apriltag: Accuracy
+    pupil_ms: dict[str, float]
+    pupil: dict[str, Accuracy]
 
     @property
     def ratio(self) -> float:
         return self.vsinv_ms / self.opencv_ms
 
 
-def measure(rounds: int) -> list[Row]:
+def agreeing(name: str, peer: str, found: dict[int, np.ndarray], reference: dict[int, np.ndarray]) -> Accuracy:
+    """The peer's accuracy; MISMATCH when a tag it finds is more than 1.5 px off the reference."""
+    acc = accuracy(found, reference)
+    if acc.found and not acc.max_px <= 1.5:
+        raise SystemExit(f"MISMATCH on {name}: {peer}'s corners up to {acc.max_px:.3f} px off the reference")
+    return acc
+
+
+def measure(rounds: int, threads: int) -> list[Row]:
+    pupils = pupil_detectors(threads)
     subpix = opencv_detector(cv2.aruco.CORNER_REFINE_SUBPIX)
     april = opencv_detector(cv2.aruco.CORNER_REFINE_APRILTAG)
     rows = []
@@ -178,14 +212,15 @@ def measure(rounds: int) -> list[Row]:
         mine = accuracy(ours, reference)
         if mine.found < mine.of or not mine.max_px <= 1.5:
             raise SystemExit(f"MISMATCH on {name}: vsinv found {mine.found} of {mine.of} tags, corners up to {mine.max_px:.3f} px off")
-        t = timed_min_of_medians(
-            {
-                "vsinv": lambda: vsinv.vision.detect_tags(image, decimation=decimation),
-                "opencv": lambda: subpix.detectMarkers(image),
-                "opencv_apriltag": lambda: april.detectMarkers(image),
-            },
-            rounds,
-        )
+        pupil_acc = {f"{d:g}": agreeing(name, f"pupil-apriltags (quad_decimate {d:g})", pupil_tags(p, image), reference) for d, p in pupils.items()}
+        calls = {
+            "vsinv": lambda: vsinv.vision.detect_tags(image, decimation=decimation),
+            "opencv": lambda: subpix.detectMarkers(image),
+            "opencv_apriltag": lambda: april.detectMarkers(image),
+        }
+        for d, p in pupils.items():
+            calls[f"pupil {d:g}"] = lambda p=p: p.detect(image)
+        t = timed_min_of_medians(calls, rounds)
         rows.append(
             Row(
                 image=name if truth is not None else f"{name} (vs OpenCV subpix)",
@@ -196,6 +231,8 @@ def measure(rounds: int) -> list[Row]:
                 vsinv=mine,
                 opencv=accuracy(theirs, reference),
                 opencv_apriltag=accuracy(theirs_april, reference),
+                pupil_ms={d: t[f"pupil {d}"] * 1e3 for d in pupil_acc},
+                pupil=pupil_acc,
             )
         )
     return rows
@@ -205,16 +242,21 @@ def print_table(rows: list[Row]) -> None:
     def acc(a: Accuracy) -> str:
         return f"{a.found}/{a.of} {a.median_px:.3f}/{a.max_px:.3f}"
 
+    decimations = list(rows[0].pupil) if rows else []
+    pupil_head = "".join(f" {'pupil d' + d + ' (ms)':>16} {'ratio':>6}" for d in decimations)
+    pupil_acc_head = "".join(f" {'pupil d' + d:>20}" for d in decimations)
     head = (
-        f"{'image':<45} {'vsinv (ms)':>10} {'OpenCV (ms)':>11} {'ratio':>6} {'CV april (ms)':>13}  "
-        f"{'vsinv found, median/max px':>27} {'OpenCV subpix':>20} {'OpenCV apriltag':>20}"
+        f"{'image':<45} {'vsinv (ms)':>10} {'OpenCV (ms)':>11} {'ratio':>6} {'CV april (ms)':>13}{pupil_head}  "
+        f"{'vsinv found, median/max px':>27} {'OpenCV subpix':>20} {'OpenCV apriltag':>20}{pupil_acc_head}"
     )
     print(head)
     print("-" * len(head))
     for r in rows:
+        pupil_cells = "".join(f" {r.pupil_ms[d]:>16.2f} {r.vsinv_ms / r.pupil_ms[d]:>6.2f}" for d in decimations)
+        pupil_accs = "".join(f" {acc(r.pupil[d]):>20}" for d in decimations)
         print(
-            f"{r.image:<45} {r.vsinv_ms:>10.2f} {r.opencv_ms:>11.2f} {r.ratio:>6.2f} {r.opencv_apriltag_ms:>13.2f}  "
-            f"{acc(r.vsinv):>27} {acc(r.opencv):>20} {acc(r.opencv_apriltag):>20}"
+            f"{r.image:<45} {r.vsinv_ms:>10.2f} {r.opencv_ms:>11.2f} {r.ratio:>6.2f} {r.opencv_apriltag_ms:>13.2f}{pupil_cells}  "
+            f"{acc(r.vsinv):>27} {acc(r.opencv):>20} {acc(r.opencv_apriltag):>20}{pupil_accs}"
         )
 
 
@@ -230,9 +272,9 @@ def main() -> int:
     if args.threads:
         cv2.setNumThreads(args.threads)
     threads = args.threads or os.cpu_count()
-    print(f"tag36h11: vsinv {vsinv.__version__} (kornia-apriltag) vs OpenCV {cv2.__version__} aruco, "
+    print(f"tag36h11: vsinv {vsinv.__version__} (kornia-apriltag) vs OpenCV {cv2.__version__} aruco and pupil-apriltags, "
           f"{threads} thread(s), {platform.processor() or platform.machine()}")
-    rows = measure(2 if args.quick else 5)
+    rows = measure(2 if args.quick else 5, threads)
     print_table(rows)
     if args.json:
         write_json(args.json, {"threads": threads, "rows": [{**asdict(r), "ratio": r.ratio} for r in rows]})

@@ -9,7 +9,7 @@
 //! of 30 ids, about 45 us each). Both grow with the regions of the thresholded image, not
 //! with its pixels. So:
 //!
-//! - before a level is searched, its regions are counted ([`regions`]: the black and white
+//! - before a level is searched, its regions are counted ([`RegionCounter::regions`]: the black and white
 //!   regions of the detector's own threshold large enough to start a quad, one pass over the
 //!   searched pixels and a union-find over their runs), and a level that would take the frame past [`MAX_SEARCHED_REGIONS`] is not
 //!   searched (the coarser levels still are: their regions are fewer);
@@ -62,7 +62,7 @@ impl Budget {
     /// Whether a level whose quad search reads `searched_pixels` is searched: it holds at most
     /// one region per [`MIN_REGION_PIXELS`] pixels, and when that many fit in what is left
     /// they are taken from the budget without counting; otherwise its regions are counted
-    /// (`count`, [`regions`]) and taken as [`Self::admit`] takes them. On an ordinary frame
+    /// (`count`, [`RegionCounter::regions`]) and taken as [`Self::admit`] takes them. On an ordinary frame
     /// only the finest level is counted.
     pub(super) fn admit_level(&mut self, searched_pixels: u64, count: impl FnOnce() -> Option<u64>) -> bool {
         let most = searched_pixels / u64::from(MIN_REGION_PIXELS);
@@ -82,81 +82,123 @@ impl Budget {
     }
 }
 
-/// The regions the detector would decode quads from in `source` decimated by `decimation`
-/// (one pixel of `decimation x decimation`, as the detector decimates): the image is
-/// thresholded as the detector thresholds it (`adaptive_threshold_with_split`, 4 x 4 tiles),
-/// and the 4-connected regions of black or white pixels of at least [`MIN_REGION_PIXELS`] are
-/// counted (the detector leaves smaller ones out). `None` when the image is smaller than a
-/// tile.
-pub(super) fn regions(source: &Image<u8, 1>, decimation: u32, min_difference: u8, split: f32) -> Option<u64> {
-    let d = decimation.max(1) as usize;
-    let decimated;
-    let searched = if d == 1 {
-        source
-    } else {
-        let (width, height) = (source.width(), source.height());
-        let size = ImageSize { width: 1 + width.saturating_sub(1) / d, height: 1 + height.saturating_sub(1) / d };
-        let raw = source.as_slice();
-        let mut pixels = Vec::with_capacity(size.width * size.height);
-        for row in raw.chunks_exact(width).step_by(d) {
-            pixels.extend(row.iter().step_by(d));
+/// Counts the regions the detector would decode quads from ([`Self::regions`]), its buffers
+/// (the decimated level, its threshold, the runs and their union-find) kept from call to call.
+#[derive(Default)]
+pub(super) struct RegionCounter {
+    decimated: Vec<u8>,
+    binary: Option<Image<Pixel, 1>>,
+    tiles: Option<(ImageSize, TileMinMax)>,
+    runs: Runs,
+}
+
+impl RegionCounter {
+    /// The regions the detector would decode quads from in `source` decimated by `decimation`
+    /// (one pixel of `decimation x decimation`, as the detector decimates): the image is
+    /// thresholded as the detector thresholds it (`adaptive_threshold_with_split`, 4 x 4
+    /// tiles), and the 4-connected regions of black or white pixels of at least
+    /// [`MIN_REGION_PIXELS`] are counted (the detector leaves smaller ones out). `None` when the
+    /// image is smaller than a tile.
+    pub(super) fn regions(
+        &mut self,
+        source: &Image<u8, 1>,
+        decimation: u32,
+        min_difference: u8,
+        split: f32,
+    ) -> Option<u64> {
+        let d = decimation.max(1) as usize;
+        let decimated = if d == 1 {
+            None
+        } else {
+            let (width, height) = (source.width(), source.height());
+            let size = ImageSize { width: 1 + width.saturating_sub(1) / d, height: 1 + height.saturating_sub(1) / d };
+            let mut pixels = std::mem::take(&mut self.decimated);
+            pixels.clear();
+            for row in source.as_slice().chunks_exact(width).step_by(d) {
+                pixels.extend(row.iter().step_by(d));
+            }
+            Some(Image::<u8, 1>::new(size, pixels).ok()?)
+        };
+        let searched = decimated.as_ref().unwrap_or(source);
+        let size = searched.size();
+        let binary = match self.binary.take() {
+            Some(b) if b.size() == size => b,
+            _ => Image::<Pixel, 1>::from_size_val(size, Pixel::Skip).ok()?,
+        };
+        let binary = self.binary.insert(binary);
+        let tiles = match self.tiles.take() {
+            Some((s, t)) if s == size => t,
+            _ => TileMinMax::new(size, 4),
+        };
+        let (_, tiles) = self.tiles.insert((size, tiles));
+        // kornia's threshold runs with rayon: on vsinv's pool, never rayon's global one, which a
+        // forked child would inherit without its threads (see `parallel`).
+        let threshold = || adaptive_threshold_with_split(searched, &mut *binary, &mut *tiles, min_difference, split);
+        let thresholded = crate::parallel::install(threshold).ok().and_then(Result::ok);
+        let count = thresholded.map(|()| self.runs.count_regions(binary.as_slice(), size.width));
+        if let Some(image) = decimated {
+            self.decimated = image.into_vec();
         }
-        decimated = Image::<u8, 1>::new(size, pixels).ok()?;
-        &decimated
-    };
-    let size = searched.size();
-    let mut binary = Image::<Pixel, 1>::from_size_val(size, Pixel::Skip).ok()?;
-    let mut tiles = TileMinMax::new(size, 4);
-    // kornia's threshold runs with rayon: on vsinv's pool, never rayon's global one, which a
-    // forked child would inherit without its threads (see `parallel`).
-    let threshold = || adaptive_threshold_with_split(searched, &mut binary, &mut tiles, min_difference, split);
-    crate::parallel::install(threshold).ok()?.ok()?;
-    Some(count_regions(binary.as_slice(), size.width))
+        count
+    }
 }
 
 /// The detector's smallest connected component (pixels): smaller ones start no quad.
 pub const MIN_REGION_PIXELS: u32 = 25;
 
-/// The 4-connected regions of black or white pixels (rows of `width`) of at least
-/// [`MIN_REGION_PIXELS`]: the runs of each row are joined to the overlapping runs of the
-/// same colour in the row above (union-find over runs, their areas summed at the roots).
-fn count_regions(pixels: &[Pixel], width: usize) -> u64 {
-    /// A run: its first and one-past-last columns, its colour and its index in `parent`.
-    type Run = (usize, usize, Pixel, u32);
-    let mut parent: Vec<u32> = Vec::new();
-    let mut area: Vec<u32> = Vec::new();
-    let (mut above, mut here): (Vec<Run>, Vec<Run>) = (Vec::new(), Vec::new());
-    for row in pixels.chunks_exact(width) {
-        here.clear();
-        let mut start = 0;
-        while start < width {
-            let colour = row[start];
-            let end = row[start..].iter().position(|&p| p != colour).map_or(width, |n| start + n);
-            if colour != Pixel::Skip {
-                let id = parent.len() as u32;
-                parent.push(id);
-                area.push((end - start) as u32);
-                here.push((start, end, colour, id));
-            }
-            start = end;
-        }
-        // Two pointers over the runs of the two rows, both sorted by their start.
-        let mut j = 0;
-        for &(x0, x1, colour, id) in &here {
-            while j < above.len() && above[j].1 <= x0 {
-                j += 1;
-            }
-            let mut k = j;
-            while k < above.len() && above[k].0 < x1 {
-                if above[k].2 == colour {
-                    union(&mut parent, &mut area, id, above[k].3);
+/// A run: its first and one-past-last columns, its colour and its index in `parent`.
+type Run = (usize, usize, Pixel, u32);
+
+/// The buffers of [`Runs::count_regions`], kept from call to call.
+#[derive(Default)]
+struct Runs {
+    parent: Vec<u32>,
+    area: Vec<u32>,
+    above: Vec<Run>,
+    here: Vec<Run>,
+}
+
+impl Runs {
+    /// The 4-connected regions of black or white pixels (rows of `width`) of at least
+    /// [`MIN_REGION_PIXELS`]: the runs of each row are joined to the overlapping runs of the
+    /// same colour in the row above (union-find over runs, their areas summed at the roots).
+    fn count_regions(&mut self, pixels: &[Pixel], width: usize) -> u64 {
+        let Self { parent, area, above, here } = self;
+        parent.clear();
+        area.clear();
+        above.clear();
+        for row in pixels.chunks_exact(width) {
+            here.clear();
+            let mut start = 0;
+            while start < width {
+                let colour = row[start];
+                let end = row[start..].iter().position(|&p| p != colour).map_or(width, |n| start + n);
+                if colour != Pixel::Skip {
+                    let id = parent.len() as u32;
+                    parent.push(id);
+                    area.push((end - start) as u32);
+                    here.push((start, end, colour, id));
                 }
-                k += 1;
+                start = end;
             }
+            // Two pointers over the runs of the two rows, both sorted by their start.
+            let mut j = 0;
+            for &(x0, x1, colour, id) in here.iter() {
+                while j < above.len() && above[j].1 <= x0 {
+                    j += 1;
+                }
+                let mut k = j;
+                while k < above.len() && above[k].0 < x1 {
+                    if above[k].2 == colour {
+                        union(parent, area, id, above[k].3);
+                    }
+                    k += 1;
+                }
+            }
+            std::mem::swap(above, here);
         }
-        std::mem::swap(&mut above, &mut here);
+        (0..parent.len()).filter(|&i| parent[i] as usize == i && area[i] >= MIN_REGION_PIXELS).count() as u64
     }
-    (0..parent.len()).filter(|&i| parent[i] as usize == i && area[i] >= MIN_REGION_PIXELS).count() as u64
 }
 
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
@@ -248,6 +290,10 @@ mod tests {
             *areas.entry(p[0]).or_insert(0u32) += 1;
         }
         areas.values().filter(|&&a| a >= MIN_REGION_PIXELS).count() as u64
+    }
+
+    fn count_regions(pixels: &[Pixel], width: usize) -> u64 {
+        Runs::default().count_regions(pixels, width)
     }
 
     #[test]
@@ -365,7 +411,7 @@ mod tests {
         assert!(!budget.admit(11) && budget.stopped_early);
         assert!(budget.admit(10));
         let tiny = Image::<u8, 1>::from_size_val(ImageSize { width: 3, height: 3 }, 0).unwrap();
-        assert!(regions(&tiny, 1, 5, 0.5).is_none());
+        assert!(RegionCounter::default().regions(&tiny, 1, 5, 0.5).is_none());
         // A level that cannot hold more regions than are left is admitted without counting.
         let mut budget = Budget::new();
         assert!(budget.admit_level(25 * 100, || panic!("counted")));

@@ -263,9 +263,18 @@ fn crossing_and_width<C: Pixels>(
     let start = -(steps as f64) * STEP / 2.0;
     let mut profile = [0.0f64; 32];
     let profile = profile.get_mut(..=steps)?;
-    for (k, value) in profile.iter_mut().enumerate() {
+    let at = |k: usize| {
         let o = start + STEP * k as f64;
-        let g = bilinear(image, p[0] + out[0] * o, p[1] + out[1] * o)?;
+        [p[0] + out[0] * o, p[1] + out[1] * o]
+    };
+    // Each coordinate of `at(k)` is monotonic in `k`: with both ends inside the image, every
+    // sample is, and the samples are read without the check.
+    if !inside(image, at(0)) || !inside(image, at(steps)) {
+        return None;
+    }
+    for (k, value) in profile.iter_mut().enumerate() {
+        let [u, v] = at(k);
+        let g = sample(image, u, v)?;
         *value = if reversed { 255.0 - g } else { g };
     }
     let (black, white) = ((profile[0] + profile[1]) / 2.0, (profile[steps] + profile[steps - 1]) / 2.0);
@@ -359,10 +368,23 @@ fn intersect(l: Line, m: Line) -> Option<P> {
 /// Inlined into the profile loops, which spend most of a tracked frame here.
 #[inline]
 pub(super) fn bilinear<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
-    let (w, h) = (image.width() as f64, image.height() as f64);
-    if !(u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0) {
+    if !inside(image, [u, v]) {
         return None;
     }
+    sample(image, u, v)
+}
+
+/// Whether `[u, v]` is inside the image's pixel centres (where [`bilinear`] reads).
+#[inline]
+fn inside<C: Pixels>(image: &GreyBuffer<C>, [u, v]: P) -> bool {
+    let (w, h) = (image.width() as f64, image.height() as f64);
+    u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0
+}
+
+/// [`bilinear`] at a point known to be [`inside`] the image.
+#[inline]
+fn sample<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
+    let (w, h) = (image.width() as f64, image.height() as f64);
     // `u, v >= 0` and below 2^32: truncation is the floor, without a call to libm's `floor`.
     let (u0, v0) = ((u as u32 as f64).min(w - 2.0).max(0.0), (v as u32 as f64).min(h - 2.0).max(0.0));
     let (fu, fv) = (u - u0, v - v0);

@@ -46,7 +46,7 @@ pub use follow::TagFollower;
 
 use crate::error::Error;
 use crate::vision::error::{Result, VisionError};
-use crate::vision::image::{GreyBuffer, GreyImage, Pixels, check_image};
+use crate::vision::image::{GreyBuffer, Pixels, check_image};
 
 /// The tag families [`detect_tags`] reads, declared once (`FAMILIES`): AprilTag 3's nine
 /// (the classic four are also OpenCV aruco's `DICT_APRILTAG_*`, whose corner order is checked
@@ -200,6 +200,10 @@ pub struct TagDecoder {
     decimation: Option<u32>,
     /// One detector per level: the size it reads and its own decimation.
     levels: Vec<(ImageSize, usize, AprilTagDecoder)>,
+    /// The image and its halves, as the levels read them.
+    pyramid: pyramid::Pyramid,
+    /// The buffers of the regions' count (`budget.rs`).
+    counter: budget::RegionCounter,
 }
 
 /// AprilTag's own default decimation, for callers that fix one ([`TagDecoder::new`] chooses it
@@ -213,7 +217,7 @@ pub const AUTOMATIC_MIN_SIDE: u32 = 480;
 const THRESHOLD_SPLIT: f32 = 0.5;
 /// The contrast (grey levels between the darkest and brightest pixel around a 4 x 4 tile)
 /// below which a tile of the threshold is left out of the quad search; set here so that
-/// [`budget::regions`] thresholds as the detector does.
+/// [`budget::RegionCounter::regions`] thresholds as the detector does.
 ///
 /// Why 15 and not the AprilTag library's 5: on a real photograph the background's faint
 /// texture (paper grain, a wall, shadows) passes 5 everywhere and becomes thousands of small
@@ -303,7 +307,7 @@ impl TagDecoder {
     /// A detector of `family`'s tags, which chooses the decimation per image
     /// ([`automatic_decimation`]).
     pub fn new(family: TagFamily) -> Self {
-        Self { family, decimation: None, levels: Vec::new() }
+        Self { family, decimation: None, levels: Vec::new(), pyramid: Default::default(), counter: Default::default() }
     }
 
     /// A detector whose finest quad search is in the image shrunk by `decimation` (`1..=8`;
@@ -317,7 +321,13 @@ impl TagDecoder {
             }
             .into());
         }
-        Ok(Self { family, decimation: Some(decimation), levels: Vec::new() })
+        Ok(Self {
+            family,
+            decimation: Some(decimation),
+            levels: Vec::new(),
+            pyramid: Default::default(),
+            counter: Default::default(),
+        })
     }
 
     /// The decimation of the finest quad search, `None` when chosen per image.
@@ -344,23 +354,11 @@ impl TagDecoder {
         let decimation = self.decimation.unwrap_or_else(|| automatic_decimation(image.width(), image.height()));
         check_search(image.width(), image.height(), decimation)?;
         let mut budget = budget::Budget::new();
-        let mut candidates = self.search_within(&mut budget, 0, image, decimation, 1.0)?;
-        let (mut scale, mut level, mut half) = (1u32, 0, None::<GreyImage>);
-        loop {
-            let next = match &half {
-                Some(h) => pyramid::halve(h),
-                None => pyramid::halve(image),
-            };
-            scale *= 2;
-            if next.width().min(next.height()) < MIN_LEVEL_SIDE {
-                break;
-            }
-            if scale > decimation {
-                level += 1;
-                candidates.extend(self.search_within(&mut budget, level, &next, 1, f64::from(scale))?);
-            }
-            half = Some(next);
-        }
+        // The levels are kept in the decoder (their buffers reused), out of it while searched.
+        let mut pyramid = std::mem::take(&mut self.pyramid);
+        let candidates = self.search_levels(&mut pyramid, &mut budget, image, decimation);
+        self.pyramid = pyramid;
+        let mut candidates = candidates?;
         let border =
             edges::Border { cells: f64::from(self.family.border_cells()), reversed: self.family.reversed_border() };
         let max_errors = self.family.max_bit_errors();
@@ -374,29 +372,53 @@ impl TagDecoder {
         Ok(TagReport { tags, stopped_early: budget.stopped_early || stopped })
     }
 
+    /// The candidates of every level: the image at `decimation`, then halved again and again
+    /// (the halves finer than the decimation are not searched) down to [`MIN_LEVEL_SIDE`].
+    fn search_levels<C: Pixels>(
+        &mut self,
+        pyramid: &mut pyramid::Pyramid,
+        budget: &mut budget::Budget,
+        image: &GreyBuffer<C>,
+        decimation: u32,
+    ) -> Result<Vec<Candidate>> {
+        let full = pyramid.set(image).ok_or_else(|| decoder_error("short buffer"))?;
+        let mut candidates = self.search_within(budget, 0, full, decimation, 1.0)?;
+        let (mut k, mut level) = (0, 0);
+        loop {
+            k += 1;
+            let Some(next) = pyramid.halve(k) else { break };
+            if next.width().min(next.height()) < MIN_LEVEL_SIDE as usize {
+                break;
+            }
+            let scale = 1u32 << k;
+            if scale > decimation {
+                level += 1;
+                candidates.extend(self.search_within(budget, level, next, 1, f64::from(scale))?);
+            }
+        }
+        Ok(candidates)
+    }
+
     /// [`Self::search`] when the level's regions fit in what is left of the frame's budget
     /// ([`budget::Budget::admit_level`]), nothing otherwise.
-    fn search_within<C: Pixels>(
+    fn search_within(
         &mut self,
         budget: &mut budget::Budget,
         level: usize,
-        image: &GreyBuffer<C>,
+        source: &Image<u8, 1>,
         decimation: u32,
         scale: f64,
     ) -> Result<Vec<Candidate>> {
-        let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
-        let pixels: &[u8] = image.as_raw();
-        let pixels = pixels.get(..size.width * size.height).ok_or_else(|| decoder_error("short buffer"))?;
-        // One copy in kornia's image type, read by both the count and the search.
-        let source = Image::<u8, 1>::from_size_slice(size, pixels).map_err(decoder_error)?;
-        let searched = searched_pixels(image.width(), image.height(), decimation);
-        let count = || budget::regions(&source, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT);
+        let size = source.size();
+        let searched = searched_pixels(size.width as u32, size.height as u32, decimation);
+        let counter = &mut self.counter;
+        let count = || counter.regions(source, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT);
         if !budget.admit_level(searched, count) {
             // The level keeps its decoder, so that the levels after it find theirs.
             self.decoder_for(level, size, decimation)?;
             return Ok(Vec::new());
         }
-        self.search(level, &source, decimation, scale)
+        self.search(level, source, decimation, scale)
     }
 
     /// The tags the detector decodes in `source` (a level `scale` times smaller than the

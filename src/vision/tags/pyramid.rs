@@ -12,32 +12,88 @@
 //! accuracy. The mean of the 2 x 2 pixels (not one pixel of four, as the detector's own
 //! decimation) also averages the noise away.
 
-use crate::vision::image::{GreyBuffer, GreyImage, Pixels};
+use kornia_image::{Image, ImageSize};
 
-/// The image halved: pixel `(u, v)` is the rounded mean of pixels `2u..2u+2 x 2v..2v+2` (the
-/// last row or column of an odd side is dropped), so a point `p` of the half image (pixel
-/// centres at `+0.5`, as the AprilTag library counts) is at `2 p` in the image.
-pub(super) fn halve<C: Pixels>(image: &GreyBuffer<C>) -> GreyImage {
-    let (w, h) = (image.width() / 2, image.height() / 2);
-    let stride = image.width() as usize;
-    let pixels: &[u8] = image.as_raw();
-    let mut out = Vec::with_capacity(w as usize * h as usize);
-    // Pairs of rows, read in pairs of pixels (a form the compiler vectorises).
-    for rows in pixels.chunks_exact(2 * stride).take(h as usize) {
-        let (top, bottom) = rows.split_at(stride);
-        let pairs = top.chunks_exact(2).zip(bottom.chunks_exact(2)).take(w as usize);
-        out.extend(pairs.map(|(t, b)| {
-            let sum = u16::from(t[0]) + u16::from(t[1]) + u16::from(b[0]) + u16::from(b[1]);
-            ((sum + 2) / 4) as u8
-        }));
+use crate::vision::image::{GreyBuffer, Pixels};
+
+/// The image halved: pixel `(u, v)` of `out` is the rounded mean of pixels `2u..2u+2 x
+/// 2v..2v+2` of `pixels` (rows of `width`; the last row or column of an odd side is dropped),
+/// so a point `p` of the half image (pixel centres at `+0.5`, as the AprilTag library counts)
+/// is at `2 p` in the image. `out` has rows of `half_width` (at most `width / 2`), as many as
+/// it holds (at most half those of `pixels`).
+fn halve_into(pixels: &[u8], width: usize, out: &mut [u8], half_width: usize) {
+    if half_width == 0 {
+        return;
     }
-    GreyImage::from_raw(w, h, out).unwrap_or_default()
+    // Pairs of rows, read in pairs of pixels (a form the compiler vectorises).
+    for (rows, out) in pixels.chunks_exact(2 * width).zip(out.chunks_exact_mut(half_width)) {
+        let (top, bottom) = rows.split_at(width);
+        let pairs = top.chunks_exact(2).zip(bottom.chunks_exact(2));
+        for (o, (t, b)) in out.iter_mut().zip(pairs) {
+            let sum = u16::from(t[0]) + u16::from(t[1]) + u16::from(b[0]) + u16::from(b[1]);
+            *o = ((sum + 2) / 4) as u8;
+        }
+    }
+}
+
+/// The levels of one image, kept from frame to frame (their buffers are reused while the
+/// image size stays the same): level 0 the image itself (in kornia's image type, which the
+/// detector reads), level `k` the image halved `k` times ([`halve_into`]).
+#[derive(Default)]
+pub(super) struct Pyramid {
+    levels: Vec<Image<u8, 1>>,
+}
+
+impl Pyramid {
+    /// Level 0: a copy of `image` (`None` when its buffer is short).
+    pub(super) fn set<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Option<&Image<u8, 1>> {
+        let size = ImageSize { width: image.width() as usize, height: image.height() as usize };
+        let pixels: &[u8] = image.as_raw();
+        let pixels = pixels.get(..size.width * size.height)?;
+        self.resize(0, size)?.as_slice_mut().copy_from_slice(pixels);
+        self.levels.first()
+    }
+
+    /// Level `k` from level `k - 1` (which must be set), `None` when either is missing or
+    /// the level would be empty.
+    pub(super) fn halve(&mut self, k: usize) -> Option<&Image<u8, 1>> {
+        let finer = self.levels.get(k.checked_sub(1)?)?;
+        let (width, size) = (finer.width(), ImageSize { width: finer.width() / 2, height: finer.height() / 2 });
+        if size.width == 0 || size.height == 0 {
+            return None;
+        }
+        self.resize(k, size)?;
+        let (finer, coarser) = self.levels.split_at_mut(k);
+        let level = coarser.first_mut()?;
+        halve_into(finer.last()?.as_slice(), width, level.as_slice_mut(), size.width);
+        self.levels.get(k)
+    }
+
+    /// Level `k` (at most one past the last) with `size`, a new buffer when its size changed.
+    fn resize(&mut self, k: usize, size: ImageSize) -> Option<&mut Image<u8, 1>> {
+        if self.levels.get(k).is_none_or(|l| l.size() != size) {
+            let level = Image::from_size_val(size, 0).ok()?;
+            match self.levels.get_mut(k) {
+                Some(old) => *old = level,
+                None => self.levels.push(level),
+            }
+        }
+        self.levels.get_mut(k)
+    }
 }
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+    use crate::vision::image::GreyImage;
+
+    fn halve(image: &GreyImage) -> GreyImage {
+        let (w, h) = (image.width() / 2, image.height() / 2);
+        let mut out = vec![0; w as usize * h as usize];
+        halve_into(image.as_raw(), image.width() as usize, &mut out, w as usize);
+        GreyImage::from_raw(w, h, out).unwrap()
+    }
 
     #[test]
     fn each_pixel_is_the_mean_of_the_four_it_covers() {
@@ -53,5 +109,32 @@ mod tests {
             assert!((f64::from(p[0]) - f64::from(sum) / 4.0).abs() <= 0.5, "{u} {v}");
         }
         assert_eq!(halve(&GreyImage::new(1, 9)).dimensions(), (0, 4));
+    }
+
+    #[test]
+    fn the_kept_levels_are_the_image_halved_again_and_again_whatever_came_before() {
+        let image = |w, h, seed: u32| {
+            GreyImage::from_fn(w, h, |u, v| ::image::Luma([((u * 29 + v * 53 + seed * u * v) % 251) as u8]))
+        };
+        let mut pyramid = Pyramid::default();
+        // Sizes that change from frame to frame, and back: every level is rebuilt or reused.
+        for (w, h, seed) in [(67, 45, 1), (64, 48, 2), (67, 45, 3), (9, 3, 4), (67, 45, 5)] {
+            let frame = image(w, h, seed);
+            let mut expected = frame.clone();
+            assert_eq!(pyramid.set(&frame).unwrap().as_slice(), expected.as_raw().as_slice());
+            for k in 1.. {
+                expected = halve(&expected);
+                match pyramid.halve(k) {
+                    Some(level) => {
+                        assert_eq!((level.width() as u32, level.height() as u32), expected.dimensions());
+                        assert_eq!(level.as_slice(), expected.as_raw().as_slice(), "{w} x {h}, level {k}");
+                    }
+                    None => {
+                        assert!(expected.width() == 0 || expected.height() == 0);
+                        break;
+                    }
+                }
+            }
+        }
     }
 }
