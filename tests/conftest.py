@@ -36,6 +36,7 @@ AREAS = {
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
         "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_features_mujoco.py",
+        "test_mujoco_user_arm.py",
         "test_recording.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
     ],
     "calibration": ["test_distortion.py", "test_fisheye.py", "test_hand_eye.py", "test_hand_eye_to_hand.py"],

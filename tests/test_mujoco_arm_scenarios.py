@@ -87,8 +87,9 @@ def test_the_arm_of_a_scenario_is_the_kinematic_simulators() -> None:
 
 
 def test_what_the_mujoco_arm_does_not_model_is_refused_by_name(tmp_path) -> None:
-    """A URDF file (MuJoCo's arms are the built-in MJCF models) and a Cartesian robot are refused
-    naming their key; an end effector the MJCF does not carry names robot.end_effector."""
+    """A URDF file that is not there (a user's URDF arm runs: tests/test_mujoco_user_arm.py) and
+    a Cartesian robot are refused naming their key; an end effector the built-in MJCF does not
+    carry names robot.end_effector."""
     d = _scenario(UR5E)
     for robot, key in [({"urdf": "arm.urdf"}, "robot.urdf"), ({"kind": "cartesian"}, "robot.kind")]:
         bad = {**d, "robot": {**d["robot"], **robot}}

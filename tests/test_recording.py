@@ -28,7 +28,7 @@ import vsinv.vision  # noqa: E402
 mcap = pytest.importorskip("mcap", reason="pip install 'vsinv[record]' (the mcap package)")
 cv2 = pytest.importorskip("cv2")
 
-from vsinv.recording import TOPICS, encode_png, write_recording  # noqa: E402
+from vsinv.recording import ARM_TOPICS, TOPICS, encode_png, write_recording  # noqa: E402
 
 _MAGIC = b"\x89MCAP0\r\n"
 
@@ -99,7 +99,7 @@ def _check(path: Path, result: vsinv.RunResult, images: bool) -> list[tuple[str,
     by_topic: dict[str, list[tuple[int, dict]]] = {}
     for topic, t, m in messages:
         by_topic.setdefault(topic, []).append((t, m))
-    expected = {t: n for t in TOPICS}
+    expected = {t: n for t in TOPICS + (ARM_TOPICS if result.joint_limits is not None else ())}
     expected["/summary"] = 1
     if not images:
         del expected["/camera/image"]
@@ -195,3 +195,76 @@ def test_the_cli_writes_a_recording(tmp_path: Path) -> None:
 def test_the_png_encoder_refuses_what_is_not_a_grey_image(bad: np.ndarray) -> None:
     with pytest.raises(vsinv.InvalidInput, match="image"):
         encode_png(bad)
+
+
+def _pose(transform: dict) -> np.ndarray:
+    t = transform["translation"]
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = _rotation(transform["rotation"]), [t["x"], t["y"], t["z"]]
+    return out
+
+
+def _arm_rows(messages: list[tuple[str, int, dict]], result: vsinv.RunResult) -> list[dict[str, np.ndarray]]:
+    """Per row, the arm's frames (`base`, `flange`: 4x4 in their parents) after checking the
+    joint states against the run's joints and joint velocities."""
+    states = [m for topic, _, m in messages if topic == "/arm/joint_states"]
+    names = list(result.joint_limits["names"])
+    for k, m in enumerate(states):
+        assert m["name"] == names
+        np.testing.assert_array_equal(m["position"], result.joints[k])
+        if k + 1 < len(states):
+            np.testing.assert_array_equal(m["velocity"], result.joint_velocities[k])
+        else:
+            assert m["velocity"] == []  # no command followed the last image
+    rows = []
+    for _, _, tf in (x for x in messages if x[0] == "/tf"):
+        by_child = {x["child_frame_id"]: x for x in tf["transforms"]}
+        assert by_child["flange"]["parent_frame_id"] == "base"
+        rows.append({"parent": by_child["base"]["parent_frame_id"], "base": _pose(by_child["base"]),
+                     "flange": _pose(by_child["flange"])})
+    return rows
+
+
+def test_an_arm_runs_frames_and_joint_states(tmp_path: Path) -> None:
+    d = vsinv.load_scenario("arm-ur5-12-6").to_dict()
+    d["stop"]["max_iterations"] = 6
+    result = vsinv.run_scenario(d)
+    arm = result.scenario.arm()
+    path = tmp_path / "run.mcap"
+    write_recording(result, path)
+    messages = _check(path, result, images=False)
+    rows = _arm_rows(messages, result)
+    assert len(rows) == len(result.time)
+    for k, row in enumerate(rows):
+        assert row["parent"] == "target"
+        np.testing.assert_allclose(row["base"], arm.base, atol=1e-12)
+        # the flange against the built-in kinematics (tool0 in the base link), and the chain
+        # target -> base -> flange -> camera_mount against the run's camera pose
+        np.testing.assert_allclose(row["flange"], vsinv.kinematics.fk("ur5", result.joints[k]), atol=1e-9)
+        np.testing.assert_allclose(row["base"] @ row["flange"] @ arm.mount, result.pose[k], atol=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["mujoco-arm-ur5e-12-6", "mujoco-eye-to-hand-12-6"])
+def test_a_mujoco_arm_runs_frames_against_mujocos_poses(tmp_path: Path, name: str) -> None:
+    vm = pytest.importorskip("vsinv.mujoco")
+    why = vm.available()
+    if why is not None:
+        pytest.skip(why)
+    run = vm.run_loop(name, max_iterations=4)
+    result = run.result
+    arm = result.scenario.arm()
+    path = tmp_path / "run.mcap"
+    write_recording(result, path)
+    messages = _check(path, result, images=True)
+    images = [m for topic, _, m in messages if topic == "/camera/image"]
+    np.testing.assert_array_equal(_png(images[-1]), run.last_image)  # the arm at the last row's joints
+    eye_to_hand = name == "mujoco-eye-to-hand-12-6"
+    for k, row in enumerate(_arm_rows(messages, result)):
+        assert row["parent"] == ("camera" if eye_to_hand else "target")
+        np.testing.assert_allclose(row["flange"], vsinv.kinematics.fk("ur5e", result.joints[k]), atol=1e-9)
+        chain = row["base"] @ row["flange"] @ arm.mount  # the camera (eye-in-hand) or F* (eye-to-hand)
+        # result.pose is MuJoCo's camera (eye-in-hand: its body chain; eye-to-hand: the inverse of
+        # the target's site seen from the fixed camera)
+        expected = np.linalg.inv(result.pose[k]) if eye_to_hand else result.pose[k]
+        np.testing.assert_allclose(chain, expected, atol=1e-6)

@@ -1,9 +1,17 @@
 """The MuJoCo rows of a batch: `[world] engine = "mujoco"` scenarios run by `vsinv.mujoco` (MuJoCo
 renders in Python, not in Rust's thread pool) in a pool of worker processes, each row the run's
-summary in the batch table's columns (`vsinv.sim.run_batch` merges them with the Rust runner's)."""
+summary in the batch table's columns (`vsinv.sim.run_batch` merges them with the Rust runner's).
+
+The pool is kept between calls (a spawned worker takes about a second to import vsinv and
+MuJoCo: a second batch does not pay it again) and each worker renders with `cores / processes`
+llvmpipe threads (`LP_NUM_THREADS`, set in the worker before it loads EGL, unless the user set
+it): Mesa's CPU renderer otherwise starts a thread per core in every worker, and the workers'
+renders fight over the cores (benches/mujoco_sweep.py measures both).
+"""
 
 from __future__ import annotations
 
+import atexit
 import concurrent.futures as cf
 import json
 import math
@@ -101,17 +109,55 @@ def run_rows(scenarios: Sequence[dict[str, Any]], processes: int, allow_outside_
             done()
         return rows
     out: list[Optional[dict[str, Any]]] = [None] * len(scenarios)
-    context = multiprocessing.get_context(_start_method())
-    with cf.ProcessPoolExecutor(max_workers=min(processes, len(scenarios)), mp_context=context) as pool:
-        futures = {pool.submit(run_one, s, allow_outside_files): i for i, s in enumerate(scenarios)}
-        try:
-            for future in cf.as_completed(futures):
-                out[futures[future]] = future.result()
-                done()
-        finally:
-            for future in futures:
-                future.cancel()
+    pool = _pool(processes)
+    futures = {pool.submit(run_one, s, allow_outside_files): i for i, s in enumerate(scenarios)}
+    try:
+        for future in cf.as_completed(futures):
+            out[futures[future]] = future.result()
+            done()
+    except BaseException:
+        # a worker's exception or Ctrl-C: what has not started is cancelled, the pool dropped
+        # (its workers may be busy or gone), and a later batch starts a new one
+        _drop_pool(processes)
+        raise
     return [r for r in out if r is not None]
+
+
+#: The kept worker pools, by their number of processes and start method.
+_POOLS: dict[tuple[int, str], cf.ProcessPoolExecutor] = {}
+
+
+def _pool(processes: int) -> cf.ProcessPoolExecutor:
+    """The kept pool of `processes` workers for this start method (made on first use, again
+    after a failure)."""
+    method = _start_method()
+    pool = _POOLS.get((processes, method))
+    if pool is None:
+        threads = max(1, (os.cpu_count() or 1) // processes)
+        pool = cf.ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context(method),
+                                      initializer=_worker_init, initargs=(threads,))
+        _POOLS[(processes, method)] = pool
+    return pool
+
+
+def _drop_pool(processes: int) -> None:
+    pool = _POOLS.pop((processes, _start_method()), None)
+    if pool is not None:
+        pool.shutdown(wait=False, cancel_futures=True)
+
+
+@atexit.register
+def _shutdown_pools() -> None:
+    """The kept pools' workers end with this process."""
+    while _POOLS:
+        _, pool = _POOLS.popitem()
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _worker_init(threads: int) -> None:
+    """A worker's start: `threads` llvmpipe render threads (Mesa reads `LP_NUM_THREADS` when EGL
+    opens its first context, after this) unless the user chose."""
+    os.environ.setdefault("LP_NUM_THREADS", str(threads))
 
 
 def _start_method() -> str:

@@ -737,6 +737,10 @@ class ScenarioArm:
     def model(self) -> str:
         """`robot.urdf`: the built-in arm's name ('ur5', 'ur5e', 'panda') or the URDF's source."""
     @property
+    def source(self) -> str:
+        """Where the arm's model came from: `builtin:<name>` for a built-in arm, else the path of
+        the URDF file `robot.urdf` (resolved from the scenario file's folder)."""
+    @property
     def end_effector(self) -> str:
         """The link carrying the camera (`robot.end_effector`, or the model's default)."""
     @property

@@ -15,9 +15,20 @@ Topics (log time = the run's time, nanoseconds from 0):
 | ``/camera/image`` | ``foxglove.CompressedImage`` (PNG) | the camera's image (runs with images only) |
 | ``/camera/detections`` | ``foxglove.ImageAnnotations`` | detected points (green circles), reference points (red) |
 | ``/camera/calibration`` | ``foxglove.CameraCalibration`` | K(t) and the image size |
-| ``/tf`` | ``foxglove.FrameTransforms`` | ``target`` (F*, the frame of the target's points) to ``camera`` and to ``reference`` |
+| ``/tf`` | ``foxglove.FrameTransforms`` | ``target`` (F*, the frame of the target's points) to ``camera`` and to ``reference``; with an arm, ``base`` (the arm's base link) and ``flange`` (its ``robot.end_effector`` link) |
+| ``/arm/joint_states`` | ``sensor_msgs/msg/JointState`` (JSON) | with an arm: the joints' names, positions and velocities (rad, m; per second) |
 | ``/servo`` | ``vsinv.Step`` | iteration, twist (v, w), the errors, the verdict (``running`` until the last) |
 | ``/summary`` | ``vsinv.Summary`` | the run's summary, once, at the last time |
+
+The arm's frames: eye-in-hand, ``base`` hangs from ``target`` (``robot.base``, F* coordinates)
+and ``flange`` from ``base`` (the kinematics at the recorded joints), so ``base -> flange`` composed
+with ``robot.camera_mount`` is ``target -> camera``; eye-to-hand (``[world] eye_to_hand``), the
+fixed camera is the world: ``base`` hangs from ``camera`` and ``base -> flange -> target_mount`` is
+``camera -> target``. Foxglove has no JSON schema for joint states: the joints are JSON messages
+with the fields of ROS 2's ``sensor_msgs/msg/JointState`` (``header``, ``name``, ``position``,
+``velocity``, ``effort``) under that schema name, which Foxglove's Plot and Raw Message panels
+read by field path and ROS users already know (``velocity`` empty on the last row, where no
+command followed; ``effort`` empty: not recorded).
 
 The images are rendered again from the recorded poses (a run keeps no images): the kinematic
 world's `vsinv.vision.render` with the scenario's ``[vision]`` (the same image but for its noise draw),
@@ -41,10 +52,12 @@ import numpy as np
 from ._core import InvalidInput, RunResult
 from ._zoom import camera_k
 
-__all__ = ["TOPICS", "encode_png", "frames", "write_recording"]
+__all__ = ["ARM_TOPICS", "TOPICS", "encode_png", "frames", "write_recording"]
 
 #: The topics a recording has, in the order their channels are registered.
 TOPICS = ("/camera/image", "/camera/detections", "/camera/calibration", "/tf", "/servo", "/summary")
+#: The topics a recording of a run with an arm has besides `TOPICS`.
+ARM_TOPICS = ("/arm/joint_states",)
 
 _TIME = {"type": "object", "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer"}}}
 _VEC3 = {"type": "object", "properties": {k: {"type": "number"} for k in "xyz"}}
@@ -83,8 +96,14 @@ SCHEMAS: dict[str, dict[str, Any]] = {
         "image_error": {"type": "number"}, "invariant_error": {"type": "number"},
         "visible": {"type": "integer"}, "verdict": {"type": "string"}}},
     "vsinv.Summary": {"type": "object"},
+    "sensor_msgs/msg/JointState": {"type": "object", "properties": {
+        "header": {"type": "object", "properties": {
+            "stamp": {"type": "object", "properties": {"sec": {"type": "integer"}, "nanosec": {"type": "integer"}}},
+            "frame_id": {"type": "string"}}},
+        "name": {"type": "array", "items": {"type": "string"}}, "position": _NUMBERS, "velocity": _NUMBERS,
+        "effort": _NUMBERS}},
 }
-_SCHEMA_OF = dict(zip(TOPICS, SCHEMAS))
+_SCHEMA_OF = dict(zip(TOPICS + ARM_TOPICS, SCHEMAS))
 
 
 def encode_png(image: Any) -> bytes:
@@ -104,7 +123,8 @@ def encode_png(image: Any) -> bytes:
 
 def frames(result: RunResult) -> Iterator[Optional[np.ndarray]]:
     """The image of each recorded iteration of `result` (None throughout for a run without
-    images): MuJoCo's render of the pose for a MuJoCo run, `vsinv.render` for a kinematic run
+    images): MuJoCo's render of the pose for a MuJoCo run (with an arm: of the arm at the row's
+    joints, the frame the loop saw), `vsinv.render` for a kinematic run
     with `[vision]` (`vsinv.vision.render`)."""
     d = result.scenario.to_dict()
     poses, times = result.pose, result.time
@@ -115,7 +135,11 @@ def frames(result: RunResult) -> Iterator[Optional[np.ndarray]]:
         with World.from_scenario(d) as world:
             for k in range(len(poses)):
                 world.set_K(camera_k(d, "camera", float(times[k])))
-                yield camera_image(world, d, poses[k], k + 1)
+                if world.arm is None:
+                    yield camera_image(world, d, poses[k], k + 1)
+                else:  # the arm at the row's joints: the camera it carries, or the fixed one
+                    world.data.qpos[:] = result.joints[k]
+                    yield camera_image(world, d, np.eye(4) if world.eye_to_hand else None, k + 1)
     elif d.get("vision") is not None:
         from ._core import render
 
@@ -147,9 +171,9 @@ def _quaternion(r: np.ndarray) -> dict[str, float]:
     return {"x": sign * q[0], "y": sign * q[1], "z": sign * q[2], "w": sign * q[3]}
 
 
-def _transform(ns: int, child: str, pose: np.ndarray) -> dict[str, Any]:
+def _transform(ns: int, child: str, pose: np.ndarray, parent: str = "target") -> dict[str, Any]:
     t = pose[:3, 3]
-    return {"timestamp": _stamp(ns), "parent_frame_id": "target", "child_frame_id": child,
+    return {"timestamp": _stamp(ns), "parent_frame_id": parent, "child_frame_id": child,
             "translation": {"x": float(t[0]), "y": float(t[1]), "z": float(t[2])},
             "rotation": _quaternion(pose[:3, :3])}
 
@@ -202,6 +226,33 @@ def _step(result: RunResult, k: int, verdict: str) -> dict[str, Any]:
             "visible": int(np.count_nonzero(result.visible[k])), "verdict": verdict}
 
 
+class _Arm:
+    """The arm of a recorded run (`Scenario.arm()`): its frames and joint states at a row."""
+
+    def __init__(self, result: RunResult, d: dict[str, Any]) -> None:
+        arm = result.scenario.arm()
+        limits = result.joint_limits
+        if arm is None or limits is None:
+            raise InvalidInput("result: a run with an arm has joint limits and a scenario arm")
+        self.arm, self.names = arm, [str(n) for n in limits["names"]]
+        self.parent = "camera" if (d.get("world") or {}).get("eye_to_hand") is not None else "target"
+        self.base = np.asarray(arm.base, dtype=float)
+        self.to_flange = np.linalg.inv(self.base), np.linalg.inv(np.asarray(arm.mount, dtype=float))
+
+    def transforms(self, ns: int, q: np.ndarray) -> list[dict[str, Any]]:
+        """`base` in its parent (F*, or the fixed camera's frame eye-to-hand) and `flange` in
+        `base`: base^-1 (base fk(q) mount) mount^-1, the kinematics `Scenario.arm()` runs."""
+        inv_base, inv_mount = self.to_flange
+        flange = inv_base @ np.asarray(self.arm.camera_pose(q), dtype=float) @ inv_mount
+        return [_transform(ns, "base", self.base, self.parent), _transform(ns, "flange", flange, "base")]
+
+    def joint_state(self, ns: int, q: np.ndarray, dq: Optional[np.ndarray]) -> dict[str, Any]:
+        moving = dq is not None and bool(np.all(np.isfinite(dq)))
+        return {"header": {"stamp": {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}, "frame_id": ""},
+                "name": self.names, "position": [float(x) for x in q],
+                "velocity": [float(x) for x in dq] if moving and dq is not None else [], "effort": []}
+
+
 def write_recording(result: RunResult, path: Union[str, "os.PathLike[str]"]) -> int:
     """Writes `result` (a run with its rows: `run_scenario(..., record=True)`) to the MCAP file
     `path` (the topics of the module's table; zstd-compressed chunks); returns the number of
@@ -217,11 +268,13 @@ def write_recording(result: RunResult, path: Union[str, "os.PathLike[str]"]) -> 
         raise ImportError(f"recordings need the mcap package ({e}): pip install 'vsinv[record]'") from e
     d = result.scenario.to_dict()
     summary = result.summary
+    arm = _Arm(result, d) if result.joint_limits is not None else None
+    topics = TOPICS + (ARM_TOPICS if arm is not None else ())
     with open(os.fspath(path), "wb") as f:
         writer = Writer(f)
         writer.start(profile="", library="vsinv")
         channel = {}
-        for topic in TOPICS:
+        for topic in topics:
             name = _SCHEMA_OF[topic]
             sid = writer.register_schema(name=name, encoding="jsonschema",
                                          data=json.dumps(SCHEMAS[name]).encode())
@@ -242,8 +295,13 @@ def write_recording(result: RunResult, path: Union[str, "os.PathLike[str]"]) -> 
                 put("/camera/image", ns, {"timestamp": _stamp(ns), "frame_id": "camera", "data": png, "format": "png"})
             put("/camera/detections", ns, _annotations(ns, result.pixels[k], result.visible[k], reference))
             put("/camera/calibration", ns, _calibration(ns, d, float(result.time[k])))
-            put("/tf", ns, {"transforms": [_transform(ns, "camera", result.pose[k]),
-                                           _transform(ns, "reference", np.eye(4))]})
+            tf = [_transform(ns, "camera", result.pose[k]), _transform(ns, "reference", np.eye(4))]
+            if arm is not None:
+                q = np.asarray(result.joints[k], dtype=float)
+                dq = None if result.joint_velocities is None else np.asarray(result.joint_velocities[k])
+                tf += arm.transforms(ns, q)
+                put("/arm/joint_states", ns, arm.joint_state(ns, q, dq))
+            put("/tf", ns, {"transforms": tf})
             put("/servo", ns, _step(result, k, "running" if k + 1 < n else str(summary.get("status"))))
         last = int(round(float(result.time[-1]) * 1e9))
         put("/summary", last, _json_safe(summary))

@@ -31,6 +31,12 @@ impl PyScenarioArm {
     fn model(&self) -> &str {
         self.inner.model.name()
     }
+    /// Where the arm's model came from: `builtin:<name>` for a built-in arm, else the path of
+    /// the URDF file `robot.urdf` (resolved from the scenario file's folder).
+    #[getter]
+    fn source(&self) -> &str {
+        self.inner.model.source()
+    }
     /// The link carrying the camera (`robot.end_effector`, or the model's default).
     #[getter]
     fn end_effector(&self) -> &str {

@@ -66,13 +66,16 @@ def end_effector(model: str, link: str) -> np.ndarray:
     raise InvalidInput(f"robot.end_effector: {link!r} of {model!r} is not modelled in MuJoCo ({known})")
 
 
-def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") -> tuple[str, str, np.ndarray]:
-    """The worldbody XML of `arm` (a `ScenarioArm`: model, end effector, base, mount), its
-    actuators' XML and the gravity vector in the world frame (the base's -z). The camera has
-    the free camera's sensor (`width` x `height` pixels, focal length `focal` pixels;
-    `World.set_K` sets it). `payload` (eye-to-hand: the target's geoms, in F*) goes into a body
-    `TARGET` at the mount (F* on the end effector)."""
-    ee = end_effector(arm.model, arm.end_effector)
+def is_builtin(arm: Any) -> bool:
+    """Whether `arm` (a `ScenarioArm`) is a built-in arm (its MJCF written here), not a user's URDF."""
+    return str(arm.source).startswith("builtin:")
+
+
+def tool_xml(arm: Any, ee: np.ndarray, width: int, height: int, focal: float, payload: str = "") -> str:
+    """What vsinv puts on the end effector `ee` (its pose in the body that carries it): the
+    camera's site and the believed one, the camera (the free camera's sensor: `width` x `height`
+    pixels, focal length `focal` pixels; `World.set_K` sets it) and, eye-to-hand, `payload` (the
+    target's geoms, in F*) in a body `TARGET` at the mount (F* on the end effector)."""
     camera = ee @ np.asarray(arm.mount)
     believed = ee @ np.asarray(arm.believed_mount)
     flip = np.diag([1.0, -1.0, -1.0, 1.0])
@@ -85,6 +88,19 @@ def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") 
         inertial = f'<inertial pos="0 0 {PAYLOAD_DEPTH}" mass="{PAYLOAD_MASS}" diaginertia="0.005 0.005 0.01"/>'
         tool += (f'<body name="{TARGET}" pos="{_v(camera[:3, 3])}" quat="{quat(camera)}" gravcomp="1">'
                  f"{inertial}{payload}</body>")
+    return tool
+
+
+def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") -> tuple[str, str, np.ndarray]:
+    """The worldbody XML of `arm` (a `ScenarioArm`: model, end effector, base, mount), its
+    actuators' XML and the gravity vector in the world frame (the base's -z); `tool_xml` on
+    its end effector. A user's URDF arm (`is_builtin` false) is the empty base body here:
+    `_urdf.attach` puts the arm, its tool and its actuators in it."""
+    base = np.asarray(arm.base)
+    gravity = base[:3, :3] @ np.array([0.0, 0.0, -GRAVITY])
+    if not is_builtin(arm):
+        return f'<body name="{BASE}" pos="{_v(base[:3, 3])}" quat="{quat(base)}"/>', "", gravity
+    tool = tool_xml(arm, end_effector(arm.model, arm.end_effector), width, height, focal, payload)
     here = "<!--tool-->"
     if arm.model == "panda":
         chain, actuators = _panda.panda_chain(here), _panda.panda_actuators()
@@ -92,9 +108,8 @@ def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") 
         ur = _arms.UR5 if arm.model == "ur5" else _arms.UR5E
         chain, actuators = _arms.ur_chain(ur, here), _arms.ur_actuators(ur)
     chain = chain.replace("<geom ", f'<geom group="{GROUP}" ').replace(here, tool)  # the arm's geoms only
-    base = np.asarray(arm.base)
     body = f'<body name="{BASE}" pos="{_v(base[:3, 3])}" quat="{quat(base)}">{chain}</body>'
-    return body, actuators, base[:3, :3] @ np.array([0.0, 0.0, -GRAVITY])
+    return body, actuators, gravity
 
 
 def set_joint_ranges(model: Any, arm: Any) -> None:

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import geometry
 from .._core import Intrinsics, InvalidInput, load_scenario
-from . import _camera, _mounted, _scene
+from . import _camera, _mounted, _scene, _urdf, _user_arm
 
 os.environ.setdefault("MUJOCO_GL", "egl")  # CPU rendering through EGL unless the user chose
 
@@ -61,6 +61,15 @@ def available() -> str | None:
     return None
 
 
+def _compile_step(step: Any, path: Path) -> Any:
+    """`step()` (reading or compiling a user's MJCF), MuJoCo's errors as InvalidInput naming
+    `path` (MuJoCo's own message, which may quote the file, stays in the exception's cause)."""
+    try:
+        return step()
+    except (ValueError, TypeError) as e:
+        raise InvalidInput(f"path: MuJoCo could not load {str(path)!r} as MJCF ({type(e).__name__})") from e
+
+
 def _k_of(d: dict[str, Any], key: str) -> tuple[tuple[float, float, float, float], int, int]:
     c = d[key]
     if abs(float(c.get("skew_deg", 90.0)) - 90.0) > 1e-9:
@@ -108,6 +117,7 @@ class World:
             raise InvalidInput(f"reference_camera: no camera named {reference_camera!r} in the model")
         self.arm: Any = None  # the scenario's `ScenarioArm` when the camera (or the target) rides an arm
         self.eye_to_hand = False  # the arm carries the target, the camera is fixed
+        self.user_arm: Any = None  # from_mjcf's `arm_joints` (a `_user_arm.UserArm`)
         self._renderer = mujoco.Renderer(model, self.height * self.supersample, self.width * self.supersample)
         mujoco.mj_forward(model, self.data)
 
@@ -127,8 +137,12 @@ class World:
         eye_to_hand = (d.get("world") or {}).get("eye_to_hand") is not None
         has_arm = eye_to_hand or d.get("robot", {}).get("kind") == "urdf"
         arm = load_scenario(scenario).arm() if has_arm else None
-        xml, assets, kind, points = _scene.scene(d, width * supersample, height * supersample, arm)
-        model = mujoco.MjModel.from_xml_string(xml, assets)
+        w, h = width * supersample, height * supersample
+        xml, assets, kind, points = _scene.scene(d, w, h, arm)
+        if arm is not None and not _mounted.is_builtin(arm):  # a user's URDF arm
+            model = _urdf.attach(mujoco.MjSpec.from_string(xml, assets=assets), arm, w, h, h)
+        else:
+            model = mujoco.MjModel.from_xml_string(xml, assets)
         if arm is None or eye_to_hand:  # the free camera (eye-to-hand: fixed at the world's origin)
             world = cls(model, _scene.CAMERA, width, height, supersample=supersample, target=kind, target_points=points)
         else:
@@ -144,10 +158,14 @@ class World:
 
     @classmethod
     def from_mjcf(cls, path: str | os.PathLike[str], camera: str, *, width: int = 640, height: int = 480,
-                  target_bodies: tuple[str, ...] = (), supersample: int = 1) -> World:
+                  target_bodies: tuple[str, ...] = (), supersample: int = 1, arm_joints: tuple[str, ...] = (),
+                  camera_site: str | None = None) -> World:
         """A user's own MJCF file: `camera` names the camera vsinv sees through (a camera of the
         world body can be moved by `render(pose)` and `move_camera`; one on a moving body follows
-        it), `target_bodies` the bodies that carry the target (checked to exist)."""
+        it), `target_bodies` the bodies that carry the target (checked to exist). `arm_joints`
+        names the joints of an arm carrying the camera, which `move_arm` drives, and
+        `camera_site` a site whose frame is the camera's in vsinv's convention (default: one
+        added at the camera); see `vsinv.mujoco._user_arm` for the actuators."""
         mujoco = _mujoco()
         _check_size(width, height, supersample)
         path = Path(path)
@@ -157,14 +175,18 @@ class World:
             raise InvalidInput(f"path: no MJCF file at {str(path)!r}")
         if path.stat().st_size > MAX_MJCF_BYTES:
             raise InvalidInput(f"path: {str(path)!r} is larger than {MAX_MJCF_BYTES >> 20} MiB")
-        try:
-            spec = mujoco.MjSpec.from_file(str(path))
-            spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, width * supersample)
-            spec.visual.global_.offheight = max(spec.visual.global_.offheight, height * supersample)
-            model = spec.compile()
-        except (ValueError, TypeError) as e:
-            raise InvalidInput(f"path: MuJoCo could not load {str(path)!r} as MJCF ({type(e).__name__})") from e
-        return cls(model, camera, width, height, supersample=supersample, target_bodies=target_bodies)
+        joints = tuple(arm_joints)
+        spec = _compile_step(lambda: mujoco.MjSpec.from_file(str(path)), path)
+        spec.visual.global_.offwidth = max(spec.visual.global_.offwidth, width * supersample)
+        spec.visual.global_.offheight = max(spec.visual.global_.offheight, height * supersample)
+        site = _user_arm.prepare(spec, camera, joints, camera_site) if joints else None
+        model = _compile_step(spec.compile, path)
+        if joints and _user_arm.add_actuators(spec, model, joints, str(path)):
+            model = _compile_step(spec.compile, path)
+        world = cls(model, camera, width, height, supersample=supersample, target_bodies=target_bodies)
+        if site is not None:
+            world.user_arm = _user_arm.UserArm(model, joints, site)
+        return world
 
     def close(self) -> None:
         """Frees the renderer's GL context."""
@@ -231,6 +253,26 @@ class World:
         pose = self.camera_pose() @ geometry.exp_twist(np.asarray(twist, dtype=float), float(dt))
         self.set_camera_pose(pose)
         return pose
+
+    def move_arm(self, twist: Any, dt: float, damping: float = 0.02) -> np.ndarray:
+        """Drives the arm of `from_mjcf(..., arm_joints=)` so that the camera follows `twist`
+        (vx, vy, vz, wx, wy, wz in its own frame) for `dt` seconds: joint velocities from
+        MuJoCo's Jacobian of the camera's site (`mj_jacSite`) and the damped least squares of
+        the kinematic arm (`vsinv.kinematics.damped_least_squares`), held on the joints'
+        velocity actuators for the physics steps of `dt`; returns them (n,)."""
+        from ..kinematics import damped_least_squares
+
+        if self.user_arm is None:
+            raise InvalidInput("arm_joints: this world has no arm to move (World.from_mjcf(..., arm_joints=...))")
+        twist = np.asarray(twist, dtype=float)
+        if twist.shape != (6,) or not np.isfinite(twist).all() or not (float(dt) > 0):
+            raise InvalidInput(f"twist, dt: expected 6 finite numbers and dt > 0, got shape {twist.shape} and {dt!r}")
+        mujoco = _mujoco()
+        dq = np.asarray(damped_least_squares(self.user_arm.jacobian(self.model, self.data), twist, damping))
+        self.data.ctrl[self.user_arm.actuators] = dq
+        for _ in range(max(1, round(float(dt) / self.model.opt.timestep))):
+            mujoco.mj_step(self.model, self.data)
+        return dq
 
     def project(self, points: Any, pose: Any = None) -> tuple[np.ndarray, np.ndarray]:
         """Pixels (n, 2) and depths (n,) of world points (n, 3) seen with `K` from `pose` (default: the camera's)."""

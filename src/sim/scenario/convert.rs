@@ -156,8 +156,8 @@ impl Scenario {
         if w.engine == Engine::Mujoco { self.check_mujoco() } else { Ok(()) }
     }
 
-    /// What the `mujoco` engine's loop (a free camera or a built-in arm with mass servoed
-    /// through MuJoCo's pinhole renders with the reference depths) does not do is refused by its key, rather than ignored.
+    /// What the `mujoco` engine's loop (a free camera, or a built-in arm or a URDF arm with
+    /// inertials, with mass, servoed through MuJoCo's pinhole renders with the reference depths) does not do is refused by its key, rather than ignored.
     fn check_mujoco(&self) -> Result<()> {
         let refuse = |key: &str, what: &str| {
             Err(scenario_error(key, format!("{what} is not simulated by the \"mujoco\" engine (world.engine)")))
@@ -165,11 +165,6 @@ impl Scenario {
         let distorted = |c: &CameraSpec| c.distortion.is_some() || c.calibration.is_some();
         if self.robot.kind == RobotKind::Cartesian {
             return refuse("robot.kind", "a Cartesian robot (a free camera or a built-in arm are)");
-        }
-        let builtin = |u: &String| crate::sim::arm::BUILTIN_ARMS.contains(&u.as_str());
-        if self.robot.kind == RobotKind::Urdf && !self.robot.urdf.as_ref().is_some_and(builtin) {
-            let arms = crate::sim::arm::BUILTIN_ARMS.join(", ");
-            return refuse("robot.urdf", &format!("an arm from a URDF file (its MJCF models are the built-in {arms})"));
         }
         if self.control.depths.is_some_and(|d| d != DepthsName::Reference) {
             return refuse("control.depths", "depths other than \"reference\"");

@@ -236,7 +236,6 @@ mod tests {
             ("[noise]\npixel_sigma = 0.5", "noise.pixel_sigma"),
             ("[path]\nsamples = 100", "path"),
             ("[robot]\nkind = \"cartesian\"", "robot.kind"),
-            ("[robot]\nkind = \"urdf\"\nurdf = \"arm.urdf\"\nend_effector = \"tool0\"", "robot.urdf"),
         ] {
             let e = Scenario::from_toml(&format!("{text}\n[world]\nengine = \"mujoco\"\n{table}\n")).unwrap_err();
             assert!(e.to_string().contains(&format!("{key}: ")) && e.to_string().contains("not simulated"), "{e}");
