@@ -177,7 +177,9 @@ def vision_sweep(args: argparse.Namespace, results: dict[str, Any]) -> None:
     alone = [vsinv.run_scenario(s, record=False) for s in scenarios]
     wall_alone = time.perf_counter() - t0
     for i, r in enumerate(alone):
-        if r.status != table["status"][i] or r.iterations != table["iterations"][i]:
+        s = r.summary
+        if s["status"] != table["status"][i] or s["iterations"] != table["iterations"][i] \
+                or s["final_translation_error"] != table["final_translation_error"][i]:
             raise SystemExit(f"MISMATCH: vision sweep run {i} differs from run_scenario of its scenario")
     its = int(np.sum(table["iterations"]))
     n = len(scenarios)
@@ -187,10 +189,10 @@ def vision_sweep(args: argparse.Namespace, results: dict[str, Any]) -> None:
     plain.pop("vision")
     t0 = time.perf_counter()
     r_plain = vsinv.run_scenario(plain, record=False)
-    t_plain = (time.perf_counter() - t0) / max(1, r_plain.iterations)
+    t_plain = (time.perf_counter() - t0) / max(1, r_plain.summary["iterations"])
     t_vision = wall_alone / its
     image, pixels, _ = vsinv.vision.render_view(VISION)
-    tracker = vsinv.DotTracker(image, pixels)
+    tracker = vsinv.vision.DotTracker(image, pixels)
     k = 200
     t0 = time.perf_counter()
     for _ in range(k):
