@@ -1,26 +1,35 @@
-"""In-process sweeps against ``run_batch`` of the same runs, on 1 and 2 threads, in one run.
+"""In-process sweeps against ``run_batch`` of the same runs, on 1 and 2 threads, in one run,
+with each call's CPU time and run-queue wait per thread; and a sweep with images in the loop.
 
 How to run (from the repository root, with the package installed)::
 
-    python benches/sweep.py                  # about a minute
+    python benches/sweep.py                  # about two minutes
     python benches/sweep.py --quick          # fewer runs and rounds
     python benches/sweep.py --json out.json  # also write the numbers as JSON
 
 The sweep is the one of the performance page: ``lens-12-6`` with ``focal_error`` on a grid
 and ``roll_deg`` drawn uniformly (``--runs`` runs in all). Its peer is
 ``vsinv.sim.run_batch`` of the very scenarios the sweep runs (``vsinv.sweep.build_scenarios``,
-written as JSON texts before the clock starts): the same Rust runs without the sweep's own
-work (planning each run's scenario in Python and writing it as JSON, overlapped with the
-previous chunk's runs). Before timing, the script checks that both give the same table
-(status, iterations and final errors, bit for bit).
+written as JSON texts before the clock starts): the same Rust runs, each text parsed twice
+(validated before any runs, parsed again to run). The sweep applies its keys in Rust to the base
+scenario read once and parses each run's scenario once. Before timing, the script checks that
+both give the same table (every column, bit for bit).
 
 Timing: the four calls (batch and sweep on 1 and 2 threads) alternate within each round so
 that they share the machine's load; each figure is the fastest of the rounds. The machine's
-load average is printed before and after, and for each call the process's CPU time over
-its wall time (`os.times`) in the fastest round: a 2-thread call that gets 1.0 had one core
-(the machine was busy), and an unchanged CPU time per run on 2 threads rules out time lost
-to locks or allocation in the runs. Ratios: sweep time per run over batch time per run (1:
-as fast), and 2 threads over 1.
+load average is printed before and after. For each call in its fastest round, from
+``/proc/self/task/*/schedstat`` (Linux): the CPU time of each thread that ran (the calling
+thread and vsinv's rayon workers) and the time it waited runnable for a core (run-queue wait).
+A 2-thread call whose workers wait for a core as long as they run had one core: the machine
+was busy. CPU time per run unchanged from 1 to 2 threads rules out time lost to locks,
+allocation or the GIL in the runs (those would add CPU time or leave a worker idle, not
+waiting). Ratios: sweep time per run over batch time per run (1: as fast), and 2 threads over 1.
+
+The vision sweep: ``vision-12-6`` (images rendered, dots tracked in the loop) with
+``focal_error`` on a grid on one thread, against its runs one at a time (``run_scenario``),
+and one iteration split into render + track (the vision run's iteration time less the same
+scenario's without ``[vision]``), track (``DotTracker.track`` on a frame) and the rest (law,
+world). It checks first that the sweep's rows equal the single runs'.
 """
 
 from __future__ import annotations
@@ -31,12 +40,12 @@ import os
 import platform
 import sys
 import time
+from typing import Any, Callable
 
 import numpy as np
 
 import vsinv
 from vsinv.sweep import Uniform, build_scenarios
-from vsinv.sweep.execute import _texts
 from vsinv.sweep.plan import _plan
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -44,10 +53,20 @@ from bench_step import write_json  # noqa: E402
 
 BASE = "lens-12-6"
 GRID = 20  # focal_error values
+VISION = "vision-12-6"
 
 
 def vary() -> dict:
     return {"focal_error": np.linspace(-0.5, 1.0, GRID), "roll_deg": Uniform(-30.0, 30.0)}
+
+
+def same_table(a: dict[str, Any], b: dict[str, Any], what: str) -> None:
+    """Every column of ``b`` equal in ``a``, bit for bit (NaN where NaN); MISMATCH otherwise."""
+    for key in b:
+        x, y = np.asarray(a[key]), np.asarray(b[key])
+        same = x.shape == y.shape and (x.tobytes() == y.tobytes() if x.dtype.kind == "f" else (x == y).all())
+        if not same:
+            raise SystemExit(f"MISMATCH: {what} differ in {key}")
 
 
 def check(runs: int) -> list[str]:
@@ -56,29 +75,49 @@ def check(runs: int) -> list[str]:
     texts = [json.dumps(d) for d in build_scenarios(BASE, vary(), draws=draws, seed=1)]
     sweep = vsinv.sim.run_sweep(BASE, vary(), draws=draws, seed=1, threads=2, progress=False).columns
     batch = vsinv.sim.run_batch(texts, threads=2, progress=False)
-    for key in ("status", "iterations", "final_translation_error", "final_rotation_error"):
-        a, b = np.asarray(sweep[key]), np.asarray(batch[key])
-        if a.shape != b.shape or not (a == b).all():
-            raise SystemExit(f"MISMATCH: run_sweep and run_batch of the same scenarios differ in {key}")
+    same_table(sweep, batch, "run_sweep and run_batch of the same scenarios")
     converged = int((np.asarray(batch["status"]) == "converged").sum())
-    print(f"check: run_sweep == run_batch on {len(texts)} runs ({converged} converged)")
+    print(f"check: run_sweep == run_batch on {len(texts)} runs, every column bit for bit ({converged} converged)")
     return texts
 
 
-def planning_s(runs: int) -> float:
-    """Seconds the sweep's Python side takes to plan and write ``runs`` scenarios."""
+def thread_times() -> dict[int, tuple[int, int]]:
+    """Per thread of this process: (CPU ns, run-queue wait ns), from /proc/self/task/*/schedstat."""
+    out = {}
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{tid}/schedstat") as f:
+                cpu, wait, _ = f.read().split()
+        except (OSError, ValueError):
+            continue
+        out[int(tid)] = (int(cpu), int(wait))
+    return out
+
+
+def timed(fn: Callable[[], Any]) -> tuple[float, list[tuple[float, float]]]:
+    """Wall seconds of ``fn()`` and, per thread that ran, (CPU s, run-queue wait s), busiest first."""
+    before = thread_times()
+    t0 = time.perf_counter()
+    fn()
+    wall = time.perf_counter() - t0
+    after = thread_times()
+    used = []
+    for tid, (cpu, wait) in after.items():
+        c0, w0 = before.get(tid, (0, 0))
+        if cpu - c0 > 1e6:  # more than 1 ms of CPU in the call
+            used.append(((cpu - c0) * 1e-9, (wait - w0) * 1e-9))
+    return wall, sorted(used, reverse=True)
+
+
+def planning_us(runs: int) -> float:
+    """Microseconds a run the sweep's Python side takes to plan (columns sliced to lists)."""
     plan = _plan(BASE, vary(), 1, runs // GRID, 1)
     t0 = time.perf_counter()
-    _texts(plan.scenarios(0, len(plan)), plan.base)
-    return time.perf_counter() - t0
+    plan.runs(0, len(plan))
+    return (time.perf_counter() - t0) / len(plan) * 1e6
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="1000 runs, 3 rounds")
-    parser.add_argument("--runs", type=int, default=None, help="runs per call (default 2000; quick 1000)")
-    parser.add_argument("--json", metavar="PATH", help="also write the results to PATH as JSON")
-    args = parser.parse_args(argv)
+def batch_and_sweep(args: argparse.Namespace, results: dict[str, Any]) -> None:
     runs = args.runs or (1000 if args.quick else 2000)
     rounds = 3 if args.quick else 5
     texts = check(runs)
@@ -93,16 +132,13 @@ def main(argv: list[str] | None = None) -> int:
         for what in ("batch", "sweep")
     }
     load_before = os.getloadavg()
-    best = {name: float("inf") for name in calls}
-    cpu = {name: 0.0 for name in calls}  # CPU seconds of the fastest round
+    best: dict[str, float] = {name: float("inf") for name in calls}
+    threads_of: dict[str, list[tuple[float, float]]] = {}
     for _ in range(rounds):
         for name, fn in calls.items():
-            c0, t0 = os.times(), time.perf_counter()
-            fn()
-            c1, wall = os.times(), time.perf_counter() - t0
+            wall, used = timed(fn)
             if wall < best[name]:
-                best[name], cpu[name] = wall, (c1.user - c0.user) + (c1.system - c0.system)
-    plan_s = planning_s(runs)
+                best[name], threads_of[name] = wall, used
     load_after = os.getloadavg()
 
     n = len(texts)
@@ -110,23 +146,84 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\n{n} runs of {BASE} per call, fastest of {rounds} alternating rounds; "
           f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, {load_after[0]:.1f} after; "
           f"vsinv {vsinv.__version__}, Python {platform.python_version()}")
-    head = (f"{'threads':<8} {'run_batch runs/s':>17} {'run_sweep runs/s':>17} {'sweep / batch time':>19} "
-            f"{'CPU/wall batch, sweep':>22} {'CPU us a run batch, sweep':>26}")
+    head = f"{'call':<9} {'runs/s':>8} {'wall us/run':>12} {'CPU us/run':>11} {'threads that ran: CPU s / run-queue wait s':>45}"
     print(head)
     print("-" * len(head))
+    for name in calls:
+        cpu = sum(c for c, _ in threads_of[name])
+        per = ", ".join(f"{c:.2f}/{w:.2f}" for c, w in threads_of[name])
+        print(f"{name:<9} {rate[name]:>8.0f} {best[name] / n * 1e6:>12.1f} {cpu / n * 1e6:>11.1f} {per:>45}")
     for t in (1, 2):
-        b, s = rate[f"batch {t}"], rate[f"sweep {t}"]
-        use = f"{cpu[f'batch {t}'] / best[f'batch {t}']:.2f}, {cpu[f'sweep {t}'] / best[f'sweep {t}']:.2f}"
-        per_run = f"{cpu[f'batch {t}'] / n * 1e6:.0f}, {cpu[f'sweep {t}'] / n * 1e6:.0f}"
-        print(f"{t:<8} {b:>17.0f} {s:>17.0f} {b / s:>19.2f} {use:>22} {per_run:>26}")
-    print(f"{'2 / 1':<8} {rate['batch 2'] / rate['batch 1']:>16.2f}x {rate['sweep 2'] / rate['sweep 1']:>16.2f}x")
-    print(f"the sweep's planning in Python: {plan_s / n * 1e6:.1f} us a run "
-          f"(batch run on 1 thread: {best['batch 1'] / n * 1e6:.1f} us)")
+        print(f"sweep / batch time a run, {t} thread{'s' if t > 1 else ''}: {rate[f'batch {t}'] / rate[f'sweep {t}']:.3f}")
+    print(f"2 threads / 1: batch {rate['batch 2'] / rate['batch 1']:.2f}x, sweep {rate['sweep 2'] / rate['sweep 1']:.2f}x")
+    print(f"the sweep's planning in Python: {planning_us(runs):.2f} us a run")
+    results.update({
+        "runs": n, "rounds": rounds, "load_before": load_before, "load_after": load_after,
+        "runs_per_s": rate, "wall_s": best, "threads_cpu_wait_s": threads_of,
+    })
+
+
+def vision_sweep(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    values = np.linspace(-0.3, 0.6, 4 if args.quick else 8)
+    vary_v = {"focal_error": values}
+    load_before = os.getloadavg()
+    c0 = time.process_time()
+    wall, used = timed(lambda: results.setdefault(
+        "_vision", vsinv.sim.run_sweep(VISION, vary_v, seed=3, threads=1, progress=False).columns))
+    sweep_cpu = time.process_time() - c0
+    table = results.pop("_vision")
+    scenarios = build_scenarios(VISION, vary_v, seed=3)
+    t0 = time.perf_counter()
+    alone = [vsinv.run_scenario(s, record=False) for s in scenarios]
+    wall_alone = time.perf_counter() - t0
+    for i, r in enumerate(alone):
+        s = r.summary
+        if s["status"] != table["status"][i] or s["iterations"] != table["iterations"][i] \
+                or s["final_translation_error"] != table["final_translation_error"][i]:
+            raise SystemExit(f"MISMATCH: vision sweep run {i} differs from run_scenario of its scenario")
+    its = int(np.sum(table["iterations"]))
+    n = len(scenarios)
+
+    # One iteration's split: the vision run against the same scenario without [vision].
+    plain = dict(scenarios[0])
+    plain.pop("vision")
+    t0 = time.perf_counter()
+    r_plain = vsinv.run_scenario(plain, record=False)
+    t_plain = (time.perf_counter() - t0) / max(1, r_plain.summary["iterations"])
+    t_vision = wall_alone / its
+    image, pixels, _ = vsinv.vision.render_view(VISION)
+    tracker = vsinv.vision.DotTracker(image, pixels)
+    k = 200
+    t0 = time.perf_counter()
+    for _ in range(k):
+        tracker.track(image)
+    track_us = (time.perf_counter() - t0) / k * 1e6
+    load_after = os.getloadavg()
+    print(f"\nvision sweep: {n} runs of {VISION} ({its} iterations) on 1 thread, load average "
+          f"{load_before[0]:.1f} before, {load_after[0]:.1f} after")
+    print(f"  run_sweep: {wall:.2f} s, {n / wall:.2f} runs/s, CPU {sweep_cpu:.2f} s; "
+          f"run_scenario one at a time: {wall_alone:.2f} s, {n / wall_alone:.2f} runs/s")
+    print(f"  an iteration: {t_vision * 1e6:.0f} us with images, {t_plain * 1e6:.1f} us without "
+          f"(law and world); render + track {(t_vision - t_plain) * 1e6:.0f} us, of which track "
+          f"{track_us:.0f} us (DotTracker.track from Python)")
+    results["vision"] = {
+        "runs": n, "iterations": its, "sweep_s": wall, "runs_per_s": n / wall, "alone_s": wall_alone,
+        "iteration_us": t_vision * 1e6, "plain_iteration_us": t_plain * 1e6, "track_us": track_us,
+        "load_before": load_before, "load_after": load_after,
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="1000 runs, 3 rounds; 4 vision runs")
+    parser.add_argument("--runs", type=int, default=None, help="runs per call (default 2000; quick 1000)")
+    parser.add_argument("--json", metavar="PATH", help="also write the results to PATH as JSON")
+    args = parser.parse_args(argv)
+    results: dict[str, Any] = {}
+    batch_and_sweep(args, results)
+    vision_sweep(args, results)
     if args.json:
-        write_json(args.json, {
-            "runs": n, "rounds": rounds, "load_before": load_before, "load_after": load_after,
-            "runs_per_s": rate, "cpu_s": cpu, "wall_s": best, "planning_us_per_run": plan_s / n * 1e6,
-        })
+        write_json(args.json, results)
     return 0
 
 

@@ -235,6 +235,7 @@ def test_bad_keys_and_values_raise_before_running(monkeypatch, key, values, matc
         raise AssertionError("ran before validating")
 
     monkeypatch.setattr(module, "run_batch", no_run)
+    monkeypatch.setattr(module, "run_sweep_runs", no_run)
     draws = 2 if not isinstance(values, (list, str)) else None
     with pytest.raises(vsinv.InvalidInput, match=match.replace(".", r"\.")):
         run_sweep(BASE, {key: values}, draws=draws, progress=False)
@@ -552,3 +553,20 @@ def test_cli_sweep_bad_arguments_exit_2(capsys, args, match):
     out, err = capsys.readouterr()
     assert code == 2
     assert match in err and err.startswith("vsinv: error:")
+
+
+def test_the_rust_sweep_runner_names_bad_arguments():
+    from vsinv import _core
+
+    base = vsinv.load_scenario(BASE).to_dict()
+    with pytest.raises(vsinv.InvalidInput, match="seeds: 1 seeds for 2 runs"):
+        _core.run_sweep_runs(base, ["focal_error"], [[0.1, 0.2]], seeds=[1])
+    with pytest.raises(vsinv.InvalidInput, match="seeds: expected a non-negative integer at index 0"):
+        _core.sweep_scenarios(base, ["focal_error"], [[0.1]], seeds=[-1])
+    with pytest.raises(vsinv.InvalidInput, match="values: expected 2 lists, one per key"):
+        _core.sweep_scenarios(base, ["focal_error", "roll_deg"], [[0.1]])
+    with pytest.raises(vsinv.InvalidInput, match="values: list 1 has 1 values, expected 2"):
+        _core.sweep_scenarios(base, ["focal_error", "roll_deg"], [[0.1, 0.2], [3.0]])
+    with pytest.raises(vsinv.InvalidInput, match=r"\[1\]\.estimate"):  # the run at fault, by index
+        _core.run_sweep_runs(base, ["focal_error"], [[0.1, -1.5]], threads=1)
+    assert _core.SWEEP_DERIVED_KEYS == vsinv.sweep.DERIVED_KEYS == ("lens_ratio", "focal_error", "principal_point_error", "roll_deg")

@@ -27,6 +27,9 @@ _TagFamily = Literal[
 #: The names of the AprilTag families every tag argument and scenario key accepts (Rust `TagFamily::NAMES`).
 TAG_FAMILIES: tuple[str, ...]
 
+#: The derived keys of a sweep, in the order they are applied (Rust `sim::sweep::DERIVED_KEYS`).
+SWEEP_DERIVED_KEYS: tuple[str, ...]
+
 #: The laws' options, declared once in the servo layer (Rust `servo::law::options::LAW_OPTIONS`):
 #: name (the keyword of `Servo`, `ImageServo` and the controllers, the ROS parameter, the `vsinv
 #: replay` flag), the laws that read it, kind, choices, default (None: unset), range, unit,
@@ -101,6 +104,9 @@ __all__ = [
     "list_scenarios",
     "run_scenario",
     "run_batch",
+    "SWEEP_DERIVED_KEYS",
+    "sweep_scenarios",
+    "run_sweep_runs",
     "PlaneParallax",
     "InvariantPath",
     "ResectionDepths",
@@ -926,6 +932,20 @@ def run_batch(
     runs finish (`done` increasing to `total`); `vsinv.sim.run_batch` draws a tqdm bar instead
     for None, True or False. Ctrl-C or an exception of `progress` stops the batch and is raised.
     Works in a process forked after earlier batches (the pools are rebuilt)."""
+def run_sweep_runs(
+    base: dict[str, Any],
+    keys: list[str],
+    values: list[list[Any]],
+    seeds: list[int] | None = None,
+    threads: int | None = None,
+    allow_outside_files: bool = False,
+    progress: Callable[[int, int], object] | None = None,
+) -> dict[str, npt.NDArray[Any]]:
+    """Runs a sweep's runs (the scenarios `sweep_scenarios` gives for the same arguments) with the
+    GIL released and returns `run_batch`'s table, one row per run. Each run's scenario is
+    parsed once, on the worker that runs it; a run whose scenario is invalid raises, its index
+    in the key (`[17].estimate.fku`), and the runs not started are skipped. `threads`,
+    `allow_outside_files` and `progress` as for `run_batch`."""
 def run_scenario(
     scenario: _ScenarioLike,
     record: bool = True,
@@ -934,6 +954,17 @@ def run_scenario(
 ) -> RunResult:
     """Runs a scenario (a `Scenario`, dict, built-in name or TOML path) with the GIL released.
     `progress(done, total)` is called every 64 iterations if given; Ctrl-C stops the run."""
+
+def sweep_scenarios(
+    base: dict[str, Any],
+    keys: list[str],
+    values: list[list[Any]],
+    seeds: list[int] | None = None,
+) -> list[dict[str, Any]]:
+    """The scenarios of a sweep's runs as dictionaries: the scenario dictionary `base` with, for
+    run i, `values[k][i]` set for each key `keys[k]` (dotted scenario keys as given, then the
+    derived keys in the order of `SWEEP_DERIVED_KEYS`) and `noise.seed = seeds[i]` unless
+    `seeds` is None. `InvalidInput` names the key at fault ("vary key 'control.gian': ...")."""
 
 @final
 class PlaneParallax:

@@ -24,7 +24,22 @@ pub fn run_reporting(
     access: FileAccess,
     reporter: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Vec<crate::sim::error::Result<Summary>>> {
-    let total = texts.len();
+    let batch = |watch: &BatchWatch| run_json_batch_watched(texts, threads, access, watch);
+    run_watched(py, texts.len(), threads, reporter, batch)
+}
+
+/// Runs `batch` (`total` runs, which it counts in the watch it is given) as [`run_reporting`]
+/// does: on vsinv's pool, with the reports and Ctrl-C answered from the calling thread.
+pub fn run_watched<F>(
+    py: Python<'_>,
+    total: usize,
+    threads: Option<usize>,
+    reporter: Option<&Bound<'_, PyAny>>,
+    batch: F,
+) -> PyResult<Vec<crate::sim::error::Result<Summary>>>
+where
+    F: FnOnce(&BatchWatch) -> crate::sim::error::Result<Vec<crate::sim::error::Result<Summary>>> + Send,
+{
     let pool = crate::parallel::pool(threads)?;
     let watch = BatchWatch::default();
     let reporter = reporter.map(|r| r.clone().unbind());
@@ -36,7 +51,7 @@ pub fn run_reporting(
         // The batch is a job of the pool (no thread is started for it); the calling thread
         // stays outside the pool and watches.
         pool.in_place_scope(|scope| {
-            scope.spawn(|_| results = Some(run_json_batch_watched(texts, threads, access, &watch)));
+            scope.spawn(|_| results = Some(batch(&watch)));
             let mut reported = 0;
             loop {
                 let (done, returned) = watch.wait_past(reported.max(news), SIGNAL_CHECK);

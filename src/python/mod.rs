@@ -31,6 +31,7 @@ mod servo;
 mod shared;
 mod sim;
 mod stability;
+mod sweep;
 mod tag_tracker;
 mod tags;
 mod targets;
@@ -59,6 +60,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     uncertainty::register(m)?;
     planning::register(m)?;
     sim::register(m)?;
+    sweep::register(m)?;
     vision::register(m)?;
     features::register(m)?;
     grey::register(m)?;

@@ -89,7 +89,7 @@ fn scenario_from_dict(d: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Scen
 /// A scenario dictionary as a structured value (NumPy scalars and arrays as the numbers and
 /// lists they hold); a value that cannot be read names its key (`scenario: object.points[2][1]:
 /// ...`, kind `scenario`).
-fn scenario_value(d: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
+pub(super) fn scenario_value(d: &Bound<'_, PyAny>) -> PyResult<serde_json::Value> {
     scenario_value_at(d, None)
 }
 
@@ -401,7 +401,7 @@ pub fn run_scenario(
 }
 
 /// A `progress` argument: None or a callable `progress(done, total)` (a TypeError otherwise).
-fn check_progress(progress: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+pub(super) fn check_progress(progress: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
     match progress {
         Some(cb) if !cb.is_callable() => {
             let kind = cb.get_type().name()?.to_string();
@@ -567,7 +567,7 @@ const BATCH_FIELDS: [&str; 9] = [
 ];
 
 /// `run_batch`'s table, one row per run.
-struct BatchTable {
+pub(super) struct BatchTable {
     status: Vec<String>,
     message: Vec<String>,
     iterations: Vec<i64>,
@@ -578,7 +578,7 @@ struct BatchTable {
 }
 
 impl BatchTable {
-    fn with_capacity(m: usize) -> Self {
+    pub(super) fn with_capacity(m: usize) -> Self {
         Self {
             status: Vec::with_capacity(m),
             message: Vec::with_capacity(m),
@@ -591,7 +591,7 @@ impl BatchTable {
     }
 
     /// A run's row: its summary, or status "error" and the message.
-    fn push(&mut self, result: &crate::sim::error::Result<crate::sim::outcome::Summary>) {
+    pub(super) fn push(&mut self, result: &crate::sim::error::Result<crate::sim::outcome::Summary>) {
         let s = match result {
             Ok(s) => s,
             Err(e) => return self.push_error(e),
@@ -619,7 +619,7 @@ impl BatchTable {
     }
 
     /// The table as a dict of NumPy arrays (strings as a `str` array).
-    fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    pub(super) fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
         let np = py.import("numpy")?;
         let d = PyDict::new(py);
         let str_array = |v: Vec<String>| -> PyResult<Bound<'_, PyAny>> {

@@ -50,15 +50,25 @@ pub fn run_json_batch_watched(
     access: FileAccess,
     watch: &BatchWatch,
 ) -> Result<Vec<Result<Summary>>> {
-    /// Marks the batch returned however it ends (a panicking run included).
-    struct Returned<'a>(&'a BatchWatch);
-    impl Drop for Returned<'_> {
-        fn drop(&mut self) {
-            self.0.finish();
-        }
-    }
     let _returned = Returned(watch);
     json_batch_on_pool(texts, threads, access, watch)
+}
+
+/// Marks a batch returned however it ends (a panicking run included).
+pub(crate) struct Returned<'a>(pub(crate) &'a BatchWatch);
+
+impl Drop for Returned<'_> {
+    fn drop(&mut self) {
+        self.0.finish();
+    }
+}
+
+/// The error of the scenario `i` of a batch, its key under the index (`[17].control.gain`).
+pub(crate) fn at_index(err: SimError, i: usize) -> SimError {
+    match err {
+        SimError::Scenario { key, reason } => SimError::Scenario { key: key.under_index(i), reason },
+        other => SimError::Scenario { key: crate::Location::root().then_index(i), reason: other.to_string() },
+    }
 }
 
 fn json_batch_on_pool(
@@ -76,10 +86,7 @@ fn json_batch_on_pool(
             .enumerate()
             .find_map_first(|(i, t)| Scenario::config_from_json_with(t, access).err().map(|e| (i, e)));
         if let Some((i, err)) = first_error {
-            return Err(match err {
-                SimError::Scenario { key, reason } => SimError::Scenario { key: key.under_index(i), reason },
-                other => SimError::Scenario { key: crate::Location::root().then_index(i), reason: other.to_string() },
-            });
+            return Err(at_index(err, i));
         }
         Ok(texts.par_iter().map(|t| run_one(t, access, watch)).collect())
     })
@@ -98,7 +105,7 @@ fn run_one(text: &str, access: FileAccess, watch: &BatchWatch) -> Result<Summary
     }
 }
 
-fn run_config(mut config: SimulationConfig, watch: &BatchWatch) -> Result<Summary> {
+pub(crate) fn run_config(mut config: SimulationConfig, watch: &BatchWatch) -> Result<Summary> {
     if watch.is_cancelled() {
         return Err(cancelled().into());
     }

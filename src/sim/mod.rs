@@ -17,6 +17,7 @@
 //! | status, summary, recording | [`outcome`] |
 //! | scenario files (TOML, JSON) and the built-in scenarios | [`scenario`] |
 //! | many runs in parallel (rayon) | [`batch`] |
+//! | many runs of one scenario with keys overridden per run | [`sweep`] |
 
 pub mod arm;
 #[cfg(feature = "batch")]
@@ -32,6 +33,8 @@ pub mod robot;
 pub mod scenario;
 pub mod scene;
 pub mod simulate;
+#[cfg(feature = "batch")]
+pub mod sweep;
 pub mod views;
 
 pub use camera_model::{CameraModel, Zoom};

@@ -48,14 +48,19 @@ then the noise seed.
 every grid value and for each distribution's bounds) raise :class:`vsinv.InvalidInput` naming
 the key before anything runs.
 
-**Execution.** Runs go through :func:`vsinv.sim.run_batch` in chunks. Without an ``executor`` the
-chunks run one after another in this process, each on all cores (rayon; ``threads`` is passed
-through). With any :class:`concurrent.futures.Executor` (a ``ProcessPoolExecutor``, dask's
-``client.get_executor()``, ...) the module-level :func:`vsinv.sweep.execute._run_chunk` is
-submitted per chunk, a bounded number at a time (memory stays flat), and the results are gathered in order. In worker
-processes pass ``threads`` (e.g. ``os.cpu_count() // workers``) to avoid oversubscription.
-Process pools with any start method work whatever ran before in this process: a forked
-worker starts its own rayon pools (vsinv's pools are per process, see ``src/parallel.rs``).
+**Execution.** The runs' scenarios are built and run in Rust (``vsinv._core.run_sweep_runs``,
+``src/sim/sweep/``): the base scenario is read once, each run's keys are applied to a copy of
+it, which is parsed once on the worker that runs it (no JSON text per run). The runs go in
+chunks; without an ``executor`` the chunks run one after another in this process, each on all
+cores (rayon; ``threads`` is passed through). With any :class:`concurrent.futures.Executor` (a
+``ProcessPoolExecutor``, dask's ``client.get_executor()``, ...) the module-level
+:func:`vsinv.sweep.execute._run_chunk` is submitted per chunk (the base, the keys and the
+chunk's values and seeds), a bounded number at a time (memory stays flat), and the results are
+gathered in order. In worker processes pass ``threads`` (e.g. ``os.cpu_count() // workers``) to
+avoid oversubscription. Process pools with any start method work whatever ran before in this
+process: a forked worker starts its own rayon pools (vsinv's pools are per process, see
+``src/parallel.rs``). A MuJoCo base (``[world] engine = "mujoco"``) runs its chunks through
+:func:`vsinv.sim.run_batch`.
 
 The package, one concern a module: :mod:`.distributions` (random axes), :mod:`.keys` (dotted and
 derived keys), :mod:`.plan` (the runs and their seeds), :mod:`.execute` (chunks, executors,

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Optional
 import numpy as np
 
 from .._batch import run_batch
-from .._core import InvalidInput, VsinvError, load_scenario
+from .._core import InvalidInput, VsinvError, load_scenario, run_sweep_runs, sweep_scenarios
 from .._progress import Bar
 from .columns import Column
 from .plan import _Plan, _plan
@@ -27,30 +27,19 @@ log = logging.getLogger("vsinv")
 
 
 def _run_chunk(
-    scenarios: list[str], threads: Optional[int] = None, allow_outside_files: bool = False
+    base: dict[str, Any], keys: list[str], values: list[list[Any]], seeds: Optional[list[int]],
+    threads: Optional[int] = None, allow_outside_files: bool = False,
 ) -> dict[str, Column]:
-    """Run a chunk of scenarios written as JSON texts with :func:`vsinv.sim.run_batch` (module
-    level: picklable, for executors; texts pickle faster than nested dicts). The sweep has
-    its own bar: the chunk shows none."""
-    return run_batch(scenarios, threads=threads, allow_outside_files=allow_outside_files, progress=None)
-
-
-def _texts(chunk: list[dict[str, Any]], base: Mapping[str, Any]) -> list[str]:
-    """The chunk's scenarios as JSON texts. A run's dict shares the sections it does not
-    change with ``base`` (same objects), so those are serialised once per chunk."""
-    cache: dict[int, str] = {id(v): json.dumps(v) for v in base.values()}
-    names: dict[str, str] = {k: json.dumps(k) + ":" for k in base}  # keys repeat in every run
-    out = []
-    for d in chunk:
-        parts = []
-        for k, v in d.items():
-            text = cache.get(id(v)) if base.get(k) is v else None
-            name = names.get(k)
-            if name is None:
-                name = names[k] = json.dumps(k) + ":"
-            parts.append(name + (text if text is not None else json.dumps(v)))
-        out.append("{" + ",".join(parts) + "}")
-    return out
+    """Run a chunk of a sweep's runs (module level: picklable, for executors): the base
+    scenario, the varied keys, one list of values per key and the noise seeds, applied and run
+    in Rust (``vsinv._core.run_sweep_runs``). A MuJoCo base (``[world] engine = "mujoco"``)
+    runs through :func:`vsinv.sim.run_batch` (its worker processes). The sweep has its own
+    bar: the chunk shows none."""
+    world = base.get("world")
+    if isinstance(world, dict) and world.get("engine") == "mujoco":
+        texts = [json.dumps(d) for d in sweep_scenarios(base, keys, values, seeds)]
+        return run_batch(texts, threads=threads, allow_outside_files=allow_outside_files, progress=None)
+    return run_sweep_runs(base, keys, values, seeds, threads=threads, allow_outside_files=allow_outside_files)
 
 
 def _executor_workers(executor: Optional[cf.Executor], threads: Optional[int]) -> int:
@@ -60,14 +49,13 @@ def _executor_workers(executor: Optional[cf.Executor], threads: Optional[int]) -
     return n if isinstance(n, int) and n > 0 else (os.cpu_count() or 1)
 
 
-def _explain(plan: _Plan, start: int, chunk: list[dict[str, Any]], exc: BaseException) -> BaseException:
+def _explain(plan: _Plan, start: int, stop: int, exc: BaseException) -> BaseException:
     """An error of a chunk with the run at fault (index and varied values), when it can be
-    reproduced by validating the chunk's scenarios here."""
-    for j, d in enumerate(chunk):
+    reproduced by building and validating the chunk's scenarios here."""
+    for i in range(start, stop):
         try:
-            load_scenario(d, allow_outside_files=plan.allow_outside_files)
+            load_scenario(plan.scenario(i), allow_outside_files=plan.allow_outside_files)
         except (VsinvError, ValueError) as inner:
-            i = start + j
             return InvalidInput(f"sweep run {i} ({plan.values(i)}, seed {int(plan.columns['seed'][i])}): {inner}")
     return exc
 
@@ -124,26 +112,14 @@ def run_sweep(
     parts: dict[int, dict[str, Column]] = {}
     try:
         if executor is None:
-            # One chunk runs in Rust (GIL released) while the next one is built here.
-            import concurrent.futures as cf
-
-            with cf.ThreadPoolExecutor(max_workers=1) as runner:
-                running: Optional[tuple[int, int, list[dict[str, Any]], cf.Future[dict[str, Column]]]] = None
-                for start, stop in [*_chunks(n, chunk_size), (n, n)]:
-                    chunk = plan.scenarios(start, stop) if start < n else []
-                    if running is not None:
-                        r_start, r_stop, r_chunk, fut = running
-                        try:
-                            parts[r_start] = fut.result()
-                        except (VsinvError, ValueError) as exc:
-                            raise _explain(plan, r_start, r_chunk, exc) from exc
-                        bar.update(r_stop - r_start)
-                        log.debug("run_sweep: runs %d to %d done", r_start, r_stop - 1)
-                        running = None
-                    if chunk:
-                        running = (start, stop, chunk, runner.submit(
-                            _run_chunk, _texts(chunk, plan.base), threads, plan.allow_outside_files
-                        ))
+            # The runs are built and run in Rust with the GIL released, a chunk at a time.
+            for start, stop in _chunks(n, chunk_size):
+                try:
+                    parts[start] = _run_chunk(plan.base, *plan.runs(start, stop), threads, plan.allow_outside_files)
+                except (VsinvError, ValueError) as exc:
+                    raise _explain(plan, start, stop, exc) from exc
+                bar.update(stop - start)
+                log.debug("run_sweep: runs %d to %d done", start, stop - 1)
         else:
             _run_on(executor, plan, n, chunk_size, threads, max(2, 2 * workers), parts, bar)
     finally:
@@ -189,8 +165,8 @@ def _run_on(
                 nxt = next(todo, None)
                 if nxt is None:
                     break
-                texts = _texts(plan.scenarios(*nxt), plan.base)
-                pending[executor.submit(_run_chunk, texts, threads, plan.allow_outside_files)] = nxt
+                runs = plan.runs(*nxt)
+                pending[executor.submit(_run_chunk, plan.base, *runs, threads, plan.allow_outside_files)] = nxt
             if not pending:
                 return
             done, _ = cf.wait(pending, return_when=cf.FIRST_COMPLETED)
@@ -199,7 +175,7 @@ def _run_on(
                 try:
                     parts[start] = fut.result()
                 except (VsinvError, ValueError) as exc:
-                    raise _explain(plan, start, plan.scenarios(start, stop), exc) from exc
+                    raise _explain(plan, start, stop, exc) from exc
                 bar.update(stop - start)
                 log.debug("run_sweep: runs %d to %d done", start, stop - 1)
     finally:

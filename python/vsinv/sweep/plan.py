@@ -6,20 +6,15 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Optional, Union
+from typing import Any, Optional
 
 import numpy as np
 import numpy.typing as npt
 
-from .._core import InvalidInput, VsinvError, load_scenario
+from .._core import InvalidInput, VsinvError, load_scenario, sweep_scenarios
 from .columns import Column, _column, _item, _native
 from .distributions import Distribution
-from .keys import _apply, _numeric_array, _split
-
-
-def _listed(v: Any) -> Any:
-    """A column's value as ``_item`` gives it (tuples of list values back to lists)."""
-    return [_native(x) for x in v] if isinstance(v, tuple) else v
+from .keys import _check_key, _numeric_array
 
 
 #: The most runs one sweep plans (its columns are allocated up front).
@@ -69,7 +64,6 @@ class _Plan:
     base: dict[str, Any]
     grid_keys: tuple[str, ...]
     random_keys: tuple[str, ...]
-    paths: dict[str, list[Union[str, int]]]
     columns: dict[str, Column]  # varied keys, "repeat", "seed", one row per run
     points: npt.NDArray[np.int64]
     seed_varied: bool
@@ -88,20 +82,17 @@ class _Plan:
     def scenario(self, i: int) -> dict[str, Any]:
         return self.scenarios(i, i + 1)[0]
 
+    def runs(self, start: int, stop: int) -> tuple[list[str], list[list[Any]], Optional[list[int]]]:
+        """Runs ``start`` to ``stop - 1`` as the Rust sweep takes them: the keys, one list of
+        values per key, and the noise seeds (None when ``noise.seed`` is itself varied)."""
+        values = [self.columns[k][start:stop].tolist() for k in self.keys]
+        seeds = None if self.seed_varied else self.columns["seed"][start:stop].tolist()
+        return list(self.keys), values, seeds
+
     def scenarios(self, start: int, stop: int) -> list[dict[str, Any]]:
-        """Runs ``start`` to ``stop - 1``, as :meth:`scenario` builds them (the columns are
-        read as Python values once for the chunk rather than one item at a time)."""
-        cols = {k: self.columns[k][start:stop].tolist() for k in self.keys}
-        seeds = self.columns["seed"][start:stop].tolist()
-        out = []
-        for j in range(stop - start):
-            d = _apply(self.base, {k: _listed(cols[k][j]) for k in self.keys}, self.paths)
-            if not self.seed_varied:
-                noise = dict(d.get("noise") or {})
-                noise["seed"] = int(seeds[j])
-                d["noise"] = noise
-            out.append(d)
-        return out
+        """The scenarios of runs ``start`` to ``stop - 1``: the base with the varied keys
+        applied (dotted keys, then derived keys), then the noise seed."""
+        return sweep_scenarios(self.base, *self.runs(start, stop))
 
 
 def _plan(
@@ -118,9 +109,8 @@ def _plan(
 
     grid: dict[str, Column] = {}
     dists: dict[str, Distribution] = {}
-    paths: dict[str, list[Union[str, int]]] = {}
     for key, spec in vary.items():
-        paths[key] = _split(key)
+        _check_key(key)
         if isinstance(spec, Distribution):
             dists[key] = spec
         elif isinstance(spec, (str, bytes, Mapping)):
@@ -146,11 +136,12 @@ def _plan(
             v = _native(v)
             v = list(v) if isinstance(v, tuple) else v
             try:
-                load_scenario(_apply(base_dict, {key: v}, paths), allow_outside_files=allow_outside_files)
-            except (VsinvError, ValueError, TypeError, KeyError) as exc:
-                msg = str(exc) if not isinstance(exc, KeyError) else f"missing {exc}"
-                if msg.startswith(f"vary key {key!r}"):
-                    raise InvalidInput(msg) from exc
+                (one,) = sweep_scenarios(base_dict, [key], [[v]])
+                load_scenario(one, allow_outside_files=allow_outside_files)
+            except (VsinvError, ValueError, TypeError) as exc:
+                msg = str(exc)
+                if f"vary key {key!r}" in msg:
+                    raise InvalidInput(msg[msg.index(f"vary key {key!r}"):]) from exc
                 raise InvalidInput(f"vary key {key!r} = {v!r}: {msg}") from exc
 
     sizes = [len(c) for c in grid.values()]
@@ -183,7 +174,7 @@ def _plan(
         columns["seed"] = np.asarray(columns["noise.seed"], dtype=np.int64)
     else:
         columns["seed"] = noise_seeds(int(seed), points, rep)
-    return _Plan(base_dict, tuple(grid), tuple(dists), paths, columns, points, seed_varied, allow_outside_files)
+    return _Plan(base_dict, tuple(grid), tuple(dists), columns, points, seed_varied, allow_outside_files)
 
 
 def build_scenarios(

@@ -184,6 +184,17 @@ impl Scenario {
         Ok(scenario)
     }
 
+    /// The simulation described by a structured value, parsed and validated once (sweep
+    /// runs), its files resolved by the rule `access`.
+    pub fn config_from_value_with(value: serde_json::Value, access: FileAccess) -> Result<SimulationConfig> {
+        let mut scenario: Scenario = serde_path_to_error::deserialize(value).map_err(|e| {
+            let key = e.path().to_string();
+            scenario_error(&key, shorten_quotes(&e.into_inner().to_string()))
+        })?;
+        scenario.file_access = access;
+        scenario.to_config()
+    }
+
     /// The scenario as a structured value (entries in the order of the file's sections).
     pub fn to_value(&self) -> Result<serde_json::Value> {
         serde_json::to_value(self).map_err(|e| scenario_error("", e.to_string()))
