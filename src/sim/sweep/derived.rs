@@ -278,8 +278,11 @@ mod tests {
         let cam = d["camera"].clone();
         Derived::FocalError.apply(&mut d, &json!(0.5)).unwrap();
         assert_eq!(d["estimate"]["fku"].as_f64().unwrap(), cam["fku"].as_f64().unwrap() * 1.5);
+        // An estimate exists (the scenario's, kept by focal_error): its principal point moves.
+        let u0 = d["estimate"]["u0"].as_f64().unwrap();
+        assert_ne!(u0, cam["u0"].as_f64().unwrap());
         Derived::PrincipalPointError.apply(&mut d, &json!(2)).unwrap();
-        assert_eq!(d["estimate"]["u0"].as_f64().unwrap(), cam["u0"].as_f64().unwrap() + 2.0);
+        assert_eq!(d["estimate"]["u0"].as_f64().unwrap(), u0 + 2.0);
         Derived::LensRatio.apply(&mut d, &json!(2.0)).unwrap();
         let fku_ref = d["reference_camera"]["fku"].as_f64().unwrap();
         assert_eq!(d["camera"]["fku"].as_f64().unwrap(), fku_ref * 2.0);
