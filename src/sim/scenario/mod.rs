@@ -175,11 +175,7 @@ impl Scenario {
     /// From a structured value (a Python dictionary walked by the bindings), its files
     /// resolved by the rule `access` (relative to the working directory).
     pub fn from_value_with(value: serde_json::Value, access: FileAccess) -> Result<Self> {
-        let mut scenario: Scenario = serde_path_to_error::deserialize(value).map_err(|e| {
-            let key = e.path().to_string();
-            scenario_error(&key, shorten_quotes(&e.into_inner().to_string()))
-        })?;
-        scenario.file_access = access;
+        let scenario = Self::deserialize_value(value, access)?;
         scenario.validate()?;
         Ok(scenario)
     }
@@ -187,12 +183,18 @@ impl Scenario {
     /// The simulation described by a structured value, parsed and validated once (sweep
     /// runs), its files resolved by the rule `access`.
     pub fn config_from_value_with(value: serde_json::Value, access: FileAccess) -> Result<SimulationConfig> {
+        Self::deserialize_value(value, access)?.to_config()
+    }
+
+    /// The scenario of a structured value as the schema reads it (an error names the key), not
+    /// yet validated.
+    fn deserialize_value(value: serde_json::Value, access: FileAccess) -> Result<Self> {
         let mut scenario: Scenario = serde_path_to_error::deserialize(value).map_err(|e| {
             let key = e.path().to_string();
             scenario_error(&key, shorten_quotes(&e.into_inner().to_string()))
         })?;
         scenario.file_access = access;
-        scenario.to_config()
+        Ok(scenario)
     }
 
     /// The scenario as a structured value (entries in the order of the file's sections).

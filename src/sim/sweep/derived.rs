@@ -7,8 +7,15 @@ use nalgebra::{Matrix4, Vector3};
 use serde_json::{Map, Value, json};
 
 use crate::core::se3;
-use crate::sim::error::Result;
-use crate::sim::sweep::keys::{DERIVED_KEYS, key_error};
+use crate::sim::error::{Result, SimError};
+
+/// Keys computed from the scenario rather than set verbatim, in the order they are applied.
+pub const DERIVED_KEYS: [&str; 4] = ["lens_ratio", "focal_error", "principal_point_error", "roll_deg"];
+
+/// A sweep's error about `key`: `vary key 'key': reason`.
+pub(crate) fn key_error(key: &str, reason: impl std::fmt::Display) -> SimError {
+    SimError::Scenario { key: crate::Location::root(), reason: format!("vary key '{key}': {reason}") }
+}
 
 /// A derived key.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

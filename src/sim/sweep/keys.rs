@@ -5,11 +5,8 @@
 
 use serde_json::{Map, Value};
 
-use crate::sim::error::{Result, SimError};
-use crate::sim::sweep::derived::Derived;
-
-/// Keys computed from the scenario rather than set verbatim, in the order they are applied.
-pub const DERIVED_KEYS: [&str; 4] = ["lens_ratio", "focal_error", "principal_point_error", "roll_deg"];
+use crate::sim::error::Result;
+use crate::sim::sweep::derived::{DERIVED_KEYS, Derived, key_error};
 
 /// One step of a dotted key: a table's entry or a list's index.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -32,11 +29,6 @@ pub enum SweepKey {
     },
     /// A derived key.
     Derived(Derived),
-}
-
-/// A sweep's error about `key`: `vary key 'key': reason`.
-pub(crate) fn key_error(key: &str, reason: impl std::fmt::Display) -> SimError {
-    SimError::Scenario { key: crate::Location::root(), reason: format!("vary key '{key}': {reason}") }
 }
 
 impl SweepKey {

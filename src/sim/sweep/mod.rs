@@ -10,8 +10,9 @@ pub mod keys;
 use rayon::prelude::*;
 use serde_json::{Map, Value};
 
+pub use derived::DERIVED_KEYS;
 pub use derived::Derived;
-pub use keys::{DERIVED_KEYS, Segment, SweepKey};
+pub use keys::{Segment, SweepKey};
 
 use crate::parallel::pool;
 use crate::sim::batch::{BatchWatch, run_config};
