@@ -94,6 +94,7 @@ def test_every_name_of_the_core_has_a_home() -> None:
     core = {n for n in dir(_core) if not n.startswith("_")}
     placed = (SESSION | {n for m in levels().values() for n in m.__all__}) - {"replay", "ReplayResult", "frames"}
     placed |= {"run_batch"}  # vsinv.sim.run_batch wraps the core's with progress bars
+    placed |= {"run_sweep_runs", "sweep_scenarios", "SWEEP_DERIVED_KEYS"}  # vsinv.sweep's engine (run_sweep, DERIVED_KEYS)
     assert core - placed == set(), sorted(core - placed)
     assert vsinv.sim.run_batch is not _core.run_batch and vsinv.sim.run_batch.__module__ == "vsinv._batch"
 

@@ -99,7 +99,7 @@ def test_damped_least_squares(data: Any) -> None:
 ARM_SCENARIO = vsinv.load_scenario("arm-ur5-12-6")
 
 
-@covers("Scenario.arm", "ScenarioArm", "ScenarioArm.model", "ScenarioArm.end_effector", "ScenarioArm.joint_names", "ScenarioArm.base", "ScenarioArm.mount", "ScenarioArm.believed_mount", "ScenarioArm.start", "ScenarioArm.lower", "ScenarioArm.upper", "ScenarioArm.velocity", "ScenarioArm.damping", "ScenarioArm.min_manipulability", "ScenarioArm.camera_pose", "ScenarioArm.manipulability", "ScenarioArm.joint_velocities")
+@covers("Scenario.arm", "ScenarioArm", "ScenarioArm.model", "ScenarioArm.source", "ScenarioArm.end_effector", "ScenarioArm.joint_names", "ScenarioArm.base", "ScenarioArm.mount", "ScenarioArm.believed_mount", "ScenarioArm.start", "ScenarioArm.lower", "ScenarioArm.upper", "ScenarioArm.velocity", "ScenarioArm.damping", "ScenarioArm.min_manipulability", "ScenarioArm.camera_pose", "ScenarioArm.manipulability", "ScenarioArm.joint_velocities")
 @fuzz_settings(100)
 @given(st.data())
 def test_scenario_arm_joint_velocities(data: Any) -> None:
@@ -119,6 +119,7 @@ def test_scenario_arm_joint_velocities(data: Any) -> None:
     ref = arm.joint_velocities(J_UR5, q, TWIST)
     assert isinstance(arm, vsinv.sim.ScenarioArm) and len(arm.joint_names) == 6 and arm.model == "ur5"
     assert arm.end_effector == "tool0" and arm.damping > 0 and arm.min_manipulability >= 0
+    assert arm.source == "builtin:ur5"
     for name in ("base", "mount", "believed_mount", "start", "lower", "upper", "velocity"):
         assert np.isfinite(getattr(arm, name)).all()
     fuzz(data, arm.joint_velocities, args, strategies, api="ScenarioArm.joint_velocities", ref=ref, rtol=1e-12,
