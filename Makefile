@@ -56,7 +56,7 @@ test-examples:
 PYTEST_WORKERS ?= 2
 PYTEST_XDIST = -n $(PYTEST_WORKERS) --dist worksteal
 test-python:
-	$(PYTHON) -m pytest -q $(PYTEST_XDIST) $(PYTEST_ARGS)
+	$(PYTHON) -m pytest -q --durations=15 $(PYTEST_XDIST) $(PYTEST_ARGS)
 
 # The Python tests without those marked slow: for the edit-test loop (make test runs them all).
 test-fast:
@@ -111,7 +111,7 @@ bench: install
 # visp-images-data) says so and skips that part. Needs the package installed (make install).
 bench-quick:
 	cargo test --release --bench vsinv
-	for b in $(BENCH_SCRIPTS); do echo "== benches/$$b.py --quick"; $(PYTHON) benches/$$b.py --quick || exit 1; done
+	for b in $(BENCH_SCRIPTS); do echo "== benches/$$b.py --quick"; s=$$(date +%s); $(PYTHON) benches/$$b.py --quick || exit 1; echo "== benches/$$b.py --quick took $$(( $$(date +%s) - s )) s"; done
 
 # Every built-in scenario with every key mutated (the CI part is tests/test_fuzz_scenarios.py),
 # the image decoders and detectors on mutated image files for FUZZ_SECONDS (the CI part replays
