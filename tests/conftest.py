@@ -44,7 +44,7 @@ AREAS = {
         "test_ros_bridge.py", "test_ros_compressed.py", "test_ros_gate.py", "test_ros_lifecycle.py", "test_ros_loop.py",
         "test_ros_package.py",
     ],
-    "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py"],
+    "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py", "test_features_replay.py"],
     "docs": ["test_docs.py", "test_readme_blocks.py"],
     "robustness": [
         "test_error_locations.py", "test_errors.py", "test_fork_safety.py", "test_fuzz_scenarios.py", "test_hostile_files.py",

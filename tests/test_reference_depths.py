@@ -105,3 +105,44 @@ def test_bad_inputs_are_refused_by_name() -> None:
     bad[3, 1] = np.nan
     with pytest.raises(vsinv.InvalidInput, match=r"object_points"):
         vsinv.calibration.reference_depths(bad, px)
+
+
+def _project(K: np.ndarray, pose: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pixels (n, 2) and depths (n,) of `points` (n, 3, world) seen by a camera at `pose` (camera to world)."""
+    cam = (points - pose[:3, 3]) @ pose[:3, :3]
+    px = cam @ K.T
+    return px[:, :2] / px[:, 2:], cam[:, 2]
+
+
+@pytest.mark.parametrize("f_reference", [600.0, 1200.0])
+def test_appendix_a_depths_across_a_lens_change_carry_the_det_ratio_of_the_two_lenses(f_reference: float) -> None:
+    # Issue 32, item 3: ResectionDepths fixes the scale of every resection by det(P[:, :3]) of the
+    # reference image's, which is det(K) times the scale cubed. When the current camera (the
+    # servo's, f = 600 px) is not the reference photo's, every current depth is the true one
+    # times cbrt(det K* / det K) (docs/concepts/depth-estimation.md's kappa; 1.587 for
+    # f* = 1200 px), constant over a run and exact in shape: one part of the "off by tens of
+    # percent" measured with the keypoint target, which the law tolerates (Prop. 2).
+    # Independent truth: a direct projection of a box's points by each camera.
+    K = np.array([[600.0, 0, 320], [0, 600.0, 240], [0, 0, 1]])
+    K_ref = np.array([[f_reference, 0, 330], [0, f_reference, 235], [0, 0, 1]])
+    points = np.random.default_rng(32).uniform(-0.08, 0.08, (40, 3))
+    points[:, 2] = np.where(points[:, 0] > 0, 0.08, points[:, 2])  # two faces and the inside: in relief
+    look = vsinv.geometry.pose_from_position_thetau([0.0, 0.0, -0.8], [0.0, 0.0, 0.0])
+    reference = look @ vsinv.geometry.pose_from_position_thetau([0.02, -0.01, 0.0], [0.05, -0.04, 0.02])
+    first = look @ vsinv.geometry.pose_from_position_thetau([-0.03, 0.02, 0.04], [-0.06, 0.05, 0.03])
+    second = first.copy()
+    second[:3, 3] += first[:3, :3] @ np.array([0.04, 0.02, 0.01])  # a pure translation
+    current = look @ vsinv.geometry.pose_from_position_thetau([0.03, 0.01, -0.05], [0.08, 0.02, -0.1])
+    ref_px, z_ref = _project(K_ref, reference, points)
+    first_px, z_first = _project(K, first, points)
+    second_px, _ = _project(K, second, points)
+    cur_px, z_cur = _project(K, current, points)
+    d1, _, residual = vsinv.calibration.depths_from_translation(first_px, second_px)
+    assert residual < 1e-9
+    np.testing.assert_allclose(d1, z_first / z_first.mean(), rtol=1e-9)  # eq. (26): exact up to scale
+    guess = 0.7
+    est = vsinv.calibration.ResectionDepths(first_px, d1, ref_px, guess)
+    scale = guess / z_ref.mean()
+    np.testing.assert_allclose(est.estimate(ref_px), z_ref * scale, rtol=1e-7)
+    kappa = np.cbrt(np.linalg.det(K_ref) / np.linalg.det(K))
+    np.testing.assert_allclose(est.estimate(cur_px), z_cur * scale * kappa, rtol=1e-7)

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from ._core import LAW_OPTIONS, TARGETS, Intrinsics, InvalidInput, VsinvError, check_law_option, load_calibration
+from .cli_features import FEATURE_OPTION_NAMES, add_feature_options, feature_options
 from .cli_tags import TAG_OPTION_NAMES, add_tag_options, tag_options
 from .cli_tracker import add_tracker_options, named_as_options, tracker_options
 from .images import read_points
@@ -34,6 +35,7 @@ _OPTION_NAMES = {
     "reference_points": "--points",
     "first_points": "--first-points",
     **TAG_OPTION_NAMES,
+    **FEATURE_OPTION_NAMES,
     **{o["name"]: _flag(o["name"]) for o in LAW_OPTIONS},
 }
 
@@ -85,6 +87,7 @@ def add_replay_command(sub: Any) -> None:
     p.add_argument("--points", metavar="CSV", type=Path, help="dots: approximate positions in REF (u, v columns)")
     p.add_argument("--first-points", metavar="CSV", type=Path, help="dots: approximate positions in the first frame (default: those found in REF)")
     add_tag_options(p)
+    add_feature_options(p)
     camera = p.add_mutually_exclusive_group(required=True)
     camera.add_argument("--calibration", metavar="FILE", type=Path, help="the servo camera's calibration (K_hat and lens): ROS or OpenCV YAML/XML")
     camera.add_argument("--K-hat", metavar="FX,FY,U0,V0", help="the servo camera's intrinsics K_hat, pixels (no lens distortion)")
@@ -155,8 +158,10 @@ def _options(args: argparse.Namespace) -> dict[str, Any]:
         if args.first_points is not None:
             options["first_points"] = read_points(args.first_points)
         options["tracker"] = tracker_options(args)
-    else:
+    elif args.target == "tags":
         options.update(tag_options(args))
+    else:
+        options.update(feature_options(args))
     return options
 
 
