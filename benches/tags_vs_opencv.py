@@ -31,6 +31,14 @@ is ``pupil_apriltags.Detector(families="tag36h11")`` (its corners converted as i
 ``tests/tag_sets.py``), timed twice: at its default ``quad_decimate`` (2.0) and at 1.0 (the
 quad search on the whole frame); both columns are skipped when pupil-apriltags is not installed.
 
+Like with like: vsinv's decimation is the AprilTag library's (the top-left pixel of each
+``d x d`` block, kornia-apriltag's copy of ``image_u8_decimate``), so vsinv at decimation 2 (the
+``vsinv`` column, the row's decimation) is timed against pupil-apriltags at ``quad_decimate`` 2,
+and vsinv at decimation 1 (``vsinv d1``, checked as the ``vsinv`` column is) against
+``quad_decimate`` 1. vsinv also searches the coarser halvings of the image (for large tags) and
+measures every corner again on the full image's edges; the AprilTag library refines its edges
+on the full image too (``refine_edges``).
+
 Timing: as ``benches/vision.py``: the number of calls per repeat is the smallest power of two
 taking at least 50 ms; a round is ``Timer.repeat(5, number)`` and gives the median time per
 call; the detectors alternate from round to round and each cell is the minimum over rounds of
@@ -176,9 +184,11 @@ class Row:
     image: str
     size: str
     vsinv_ms: float
+    vsinv_d1_ms: float
     opencv_ms: float
     opencv_apriltag_ms: float
     vsinv: Accuracy
+    vsinv_d1: Accuracy
     opencv: Accuracy
     opencv_apriltag: Accuracy
     pupil_ms: dict[str, float]
@@ -209,12 +219,14 @@ def measure(rounds: int, threads: int) -> list[Row]:
         reference = truth if truth is not None else theirs
         # Before timing: vsinv finds every tag of the reference, each corner within 1.5 px
         # (measured: 0.61 px at most).
-        mine = accuracy(ours, reference)
-        if mine.found < mine.of or not mine.max_px <= 1.5:
-            raise SystemExit(f"MISMATCH on {name}: vsinv found {mine.found} of {mine.of} tags, corners up to {mine.max_px:.3f} px off")
+        mine, mine_d1 = accuracy(ours, reference), accuracy(vsinv_tags(image, 1), reference)
+        for d, a in ((decimation, mine), (1, mine_d1)):
+            if a.found < a.of or not a.max_px <= 1.5:
+                raise SystemExit(f"MISMATCH on {name}: vsinv (decimation {d}) found {a.found} of {a.of} tags, corners up to {a.max_px:.3f} px off")
         pupil_acc = {f"{d:g}": agreeing(name, f"pupil-apriltags (quad_decimate {d:g})", pupil_tags(p, image), reference) for d, p in pupils.items()}
         calls = {
             "vsinv": lambda: vsinv.vision.detect_tags(image, decimation=decimation),
+            "vsinv d1": lambda: vsinv.vision.detect_tags(image, decimation=1),
             "opencv": lambda: subpix.detectMarkers(image),
             "opencv_apriltag": lambda: april.detectMarkers(image),
         }
@@ -226,9 +238,11 @@ def measure(rounds: int, threads: int) -> list[Row]:
                 image=name if truth is not None else f"{name} (vs OpenCV subpix)",
                 size=f"{image.shape[1]}x{image.shape[0]}",
                 vsinv_ms=t["vsinv"] * 1e3,
+                vsinv_d1_ms=t["vsinv d1"] * 1e3,
                 opencv_ms=t["opencv"] * 1e3,
                 opencv_apriltag_ms=t["opencv_apriltag"] * 1e3,
                 vsinv=mine,
+                vsinv_d1=mine_d1,
                 opencv=accuracy(theirs, reference),
                 opencv_apriltag=accuracy(theirs_april, reference),
                 pupil_ms={d: t[f"pupil {d}"] * 1e3 for d in pupil_acc},
@@ -244,6 +258,8 @@ def print_table(rows: list[Row]) -> None:
 
     decimations = list(rows[0].pupil) if rows else []
     pupil_head = "".join(f" {'pupil d' + d + ' (ms)':>16} {'ratio':>6}" for d in decimations)
+    if "1" in decimations:  # like with like: vsinv at decimation 1 against quad_decimate 1
+        pupil_head += f" {'vsinv d1 (ms)':>13} {'ratio d1':>8}"
     pupil_acc_head = "".join(f" {'pupil d' + d:>20}" for d in decimations)
     head = (
         f"{'image':<45} {'vsinv (ms)':>10} {'OpenCV (ms)':>11} {'ratio':>6} {'CV april (ms)':>13}{pupil_head}  "
@@ -253,6 +269,8 @@ def print_table(rows: list[Row]) -> None:
     print("-" * len(head))
     for r in rows:
         pupil_cells = "".join(f" {r.pupil_ms[d]:>16.2f} {r.vsinv_ms / r.pupil_ms[d]:>6.2f}" for d in decimations)
+        if "1" in decimations:
+            pupil_cells += f" {r.vsinv_d1_ms:>13.2f} {r.vsinv_d1_ms / r.pupil_ms['1']:>8.2f}"
         pupil_accs = "".join(f" {acc(r.pupil[d]):>20}" for d in decimations)
         print(
             f"{r.image:<45} {r.vsinv_ms:>10.2f} {r.opencv_ms:>11.2f} {r.ratio:>6.2f} {r.opencv_apriltag_ms:>13.2f}{pupil_cells}  "

@@ -356,7 +356,13 @@ impl TagDecoder {
         let mut budget = budget::Budget::new();
         // The levels are kept in the decoder (their buffers reused), out of it while searched.
         let mut pyramid = std::mem::take(&mut self.pyramid);
-        let candidates = self.search_levels(&mut pyramid, &mut budget, image, decimation);
+        // One hand-off to vsinv's pool a frame: kornia's threshold, components and decoding of
+        // every level (and the regions' count) run with rayon there, where their own `install`s
+        // stay on the worker. Each hand-off wakes a pool thread, which on a loaded machine
+        // waits to be scheduled: one a level and one a count cost more than the search of a
+        // small image's coarse levels.
+        let search = || self.search_levels(&mut pyramid, &mut budget, image, decimation);
+        let candidates = crate::parallel::install(search)?;
         self.pyramid = pyramid;
         let mut candidates = candidates?;
         let border =
