@@ -6,6 +6,7 @@
 
 use vsinv::core::se3::{exp_twist, pose_error};
 use vsinv::nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use vsinv::servo::session::BASIS_HOLD_IMAGES;
 use vsinv::servo::{Law, PathPlan, Servo, ServoConfig, ServoDepths, ServoReference, Status, Verdict};
 use vsinv::{Intrinsics, InvariantControllerConfig};
 
@@ -75,6 +76,8 @@ fn a_basis_point_occluded_mid_run_switches_the_basis() {
     assert_eq!(switches, 1);
     assert!(!servo.basis().contains(&first[0]), "{:?}", servo.basis());
     assert_eq!(servo.basis_switches(), 1);
+    // The first images without it were ridden out (the basis kept), then it changed.
+    assert_eq!(servo.basis_held_images(), BASIS_HOLD_IMAGES);
     // The new basis is the widest triangle of the visible points' reference pixels: the same
     // as a fresh session started without the hidden point would choose.
     let reference = servo.reference_pixels().to_vec();
@@ -82,6 +85,53 @@ fn a_basis_point_occluded_mid_run_switches_the_basis() {
     let subset: Vec<[f64; 2]> = kept.iter().map(|&i| reference[i]).collect();
     let b = vsinv::choose_basis(&subset).unwrap();
     assert_eq!(servo.basis(), b.map(|i| kept[i]));
+}
+
+/// A basis point missing for one image (a keypoint's track failing its checks once), then
+/// for `BASIS_HOLD_IMAGES` images in a row: the basis holds (no switch), the held images
+/// repeat the last twist and are judged no stop, and the run converges in the first basis.
+#[test]
+fn a_basis_point_missing_for_a_few_images_keeps_the_basis() {
+    let mut servo = session(None);
+    let first = servo.basis();
+    let gone = |it: usize| it == 20 || (40..40 + BASIS_HOLD_IMAGES).contains(&it);
+    let mut pose = start();
+    let mut last = None;
+    let verdict = loop {
+        let it = servo.iterations();
+        let pixels = view(&pose, &k_servo());
+        let visible: Vec<bool> = (0..12).map(|i| !(gone(it) && i == first[1])).collect();
+        let step = servo.step(&pixels, Some(&visible), None).unwrap();
+        if gone(it) {
+            assert!(step.verdict.is_running(), "iteration {it}: {:?}", step.verdict);
+            assert_eq!(Some(step.twist), last, "iteration {it}: the last twist is repeated");
+            assert!(!step.telemetry.law_ran);
+        }
+        if !step.verdict.is_running() {
+            break step.verdict;
+        }
+        last = Some(step.twist);
+        pose *= exp_twist(&(step.twist * DT).into()).unwrap();
+    };
+    assert_at_goal(&verdict, &pose);
+    assert_eq!((servo.basis(), servo.basis_switches()), (first, 0));
+    assert_eq!(servo.basis_held_images(), 1 + BASIS_HOLD_IMAGES);
+}
+
+/// With the hold off (`basis_hold = 0`) the same one-image loss switches the basis at once,
+/// as before the hold.
+#[test]
+fn without_the_hold_one_missing_image_switches_the_basis() {
+    let mut config = ServoConfig::new(Law::Invariant(InvariantControllerConfig::default()), k_servo());
+    config.stop.max_iterations = 1500;
+    config.basis_hold = 0;
+    let depths = object().iter().map(|p| p[2]).collect();
+    let reference = ServoReference { pixels: view(&Isometry3::identity(), &k_star()), depths: Some(depths) };
+    let mut servo = Servo::new(config, reference, ServoDepths::Reference).unwrap();
+    let first = servo.basis();
+    let (verdict, pose, switches) = run(&mut servo, |it, _| (0..12).map(|i| !(it == 20 && i == first[1])).collect());
+    assert_at_goal(&verdict, &pose);
+    assert_eq!((switches, servo.basis_held_images()), (1, 0));
 }
 
 /// Points leaving the image (from iteration 10 on, the image's right border moves in to

@@ -128,14 +128,16 @@ fn image_target(spec: &TargetSpec, args: &TargetArgs) -> PyResult<Box<dyn ImageT
 /// markers, no clicks: a spread of `max_points` (default 150) SIFT keypoints of the reference image, keypoint i
 /// under identity i, matched in the first frame by descriptors checked by the fundamental matrix (no intrinsics
 /// needed), then tracked (Lucas-Kanade, forward-backward check) and checked against the reference again each
-/// frame; a point failing a check is not visible, and the frame is matched afresh when fewer than `min_tracked`
-/// (default 24) remain; `point_ids` (None: all) keeps some of the points. The reference depths of natural
+/// frame; a point failing a check is not visible (never at a wrong place), and a point not found is looked for
+/// again in each frame where its found neighbours put it (aligned on its reference patch), so it comes back into
+/// view; the frame is matched afresh when fewer than `min_tracked` (default 24) remain; `point_ids` (None: all) keeps some of the points. The reference depths of natural
 /// keypoints are unknown: estimate them by appendix A (`depths=ResectionDepths(...)` over the points of a
 /// translation pair, those given to `point_ids`; `vsinv.vision.match_features` and `track_points` find them).
 ///
 /// `reference_K` and `reference_distortion` undistort the reference points. Every other keyword argument is the
 /// `Servo` session's (law, reference_depths, depths, basis, gain, ..., dt) and an unknown one is refused by name.
-/// A point not found in a frame is not visible for that step. The stall rule is on unless
+/// A point not found in a frame is not visible for that step; a basis point missing for at most 3 consecutive frames
+/// keeps the basis (the last twist is repeated, no stop is judged), longer changes it. The stall rule is on unless
 /// `stop={"stall": False}`: real detections of one pose by two lenses disagree, so the run ends when the error
 /// stopped decreasing and the camera is still, `converged` if the bound (with the measured disagreement floor) is
 /// within the tolerance. A first frame where no point is found (blank, dark) is the verdict `lost_features` with a

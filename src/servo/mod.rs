@@ -33,6 +33,7 @@
 //! # Ok::<(), vsinv::Error>(())
 //! ```
 
+pub(crate) mod basis_hold;
 pub mod certainty;
 pub mod depths;
 pub mod law;

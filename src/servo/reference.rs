@@ -3,6 +3,7 @@
 
 use nalgebra::Vector3;
 
+use crate::core::convex_hull::convex_hull;
 use crate::core::invariant::{BasisFrame, RzReference, choose_basis, non_basis_indices};
 use crate::error::Result;
 
@@ -25,11 +26,30 @@ impl ReferenceImage {
     }
 }
 
+/// Peeling a layer of convex hull off the candidates stops when fewer points would remain.
+pub(crate) const INSET_MIN_POINTS: usize = 12;
+
 /// The basis among the points flagged visible: the widest triangle of their *reference*
 /// pixels (the reference image fixes s*, so the choice does not depend on the current view);
-/// indices into all the points.
-pub(crate) fn choose_visible_basis(reference_pixels: &[[f64; 2]], visible: &[bool]) -> Result<[usize; 3]> {
-    let seen: Vec<usize> = (0..reference_pixels.len()).filter(|&i| visible[i]).collect();
+/// indices into all the points. With `inset` > 0, that many layers of convex hull are set
+/// aside first (while at least [`INSET_MIN_POINTS`] remain): the basis matrix Q of eq. (5)
+/// stays well conditioned (a wide triangle, sec. 5.1) without resting on the outermost
+/// points, which for keypoints on an object are the most foreshortened and the noisiest, and
+/// each of whose errors enters every invariant point q_k = Q^-1 m_k.
+pub(crate) fn choose_visible_basis(
+    reference_pixels: &[[f64; 2]],
+    visible: &[bool],
+    inset: usize,
+) -> Result<[usize; 3]> {
+    let mut seen: Vec<usize> = (0..reference_pixels.len()).filter(|&i| visible[i]).collect();
+    for _ in 0..inset {
+        let pixels: Vec<[f64; 2]> = seen.iter().map(|&i| reference_pixels[i]).collect();
+        let hull: Vec<usize> = convex_hull(&pixels).into_iter().map(|h| seen[h]).collect();
+        if seen.len() < INSET_MIN_POINTS + hull.len() {
+            break;
+        }
+        seen.retain(|i| !hull.contains(i));
+    }
     let pixels: Vec<[f64; 2]> = seen.iter().map(|&i| reference_pixels[i]).collect();
     let [a, b, c] = choose_basis(&pixels)?;
     Ok([seen[a], seen[b], seen[c]])
@@ -51,7 +71,7 @@ mod tests {
         };
         for hidden in 0..px.len() {
             let visible: Vec<bool> = (0..px.len()).map(|i| i != hidden).collect();
-            let got = choose_visible_basis(&px, &visible).unwrap();
+            let got = choose_visible_basis(&px, &visible, 0).unwrap();
             assert!(!got.contains(&hidden), "{got:?} uses hidden point {hidden}");
             let mut best = 0.0f64;
             for i in 0..px.len() {
@@ -66,6 +86,62 @@ mod tests {
             assert_eq!(area(got[0], got[1], got[2]), best, "hidden {hidden}: {got:?}");
         }
         let few = [true, true, false, false, false, false, false];
-        assert!(choose_visible_basis(&px, &few).is_err());
+        assert!(choose_visible_basis(&px, &few, 0).is_err());
+    }
+
+    /// With an inset of one layer, the basis is the widest triangle (brute force) of the
+    /// points that are not convex-hull vertices (a 6 x 6 grid: the 20 border points are the
+    /// hull's vertices or on its edges; strictly, only the 4 corners are vertices).
+    #[test]
+    fn inset_basis_leaves_out_the_hull() {
+        let mut px: Vec<[f64; 2]> = Vec::new();
+        for i in 0..6 {
+            for j in 0..6 {
+                // A slight bulge makes every border point a strict hull vertex.
+                let (x, y) = (f64::from(i) * 20.0, f64::from(j) * 20.0);
+                let bulge = |t: f64| 3.0 * (t / 100.0) * (1.0 - t / 100.0);
+                let dx = if i == 0 {
+                    -bulge(y)
+                } else if i == 5 {
+                    bulge(y)
+                } else {
+                    0.0
+                };
+                let dy = if j == 0 {
+                    -bulge(x)
+                } else if j == 5 {
+                    bulge(x)
+                } else {
+                    0.0
+                };
+                px.push([x + dx, y + dy]);
+            }
+        }
+        let visible = vec![true; px.len()];
+        let outer = choose_visible_basis(&px, &visible, 0).unwrap();
+        let inner = choose_visible_basis(&px, &visible, 1).unwrap();
+        let border = |k: usize| k / 6 == 0 || k / 6 == 5 || k % 6 == 0 || k % 6 == 5;
+        assert!(outer.iter().all(|&k| border(k)), "{outer:?}");
+        assert!(inner.iter().all(|&k| !border(k)), "{inner:?}");
+        let area = |t: [usize; 3]| {
+            let (a, b, c) = (px[t[0]], px[t[1]], px[t[2]]);
+            ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).abs()
+        };
+        let mut best = 0.0f64;
+        for i in 0..36 {
+            for j in i + 1..36 {
+                for k in j + 1..36 {
+                    if !border(i) && !border(j) && !border(k) {
+                        best = best.max(area([i, j, k]));
+                    }
+                }
+            }
+        }
+        assert_eq!(area(inner), best);
+        // A second layer takes the inner 4 x 4's corners (its only strict hull vertices), which
+        // leaves 12 points; a third would leave 4 (the octagon of 8 is the hull): it stops.
+        let second = choose_visible_basis(&px, &visible, 2).unwrap();
+        assert!(second.iter().all(|&k| !border(k) && ![7, 10, 25, 28].contains(&k)), "{second:?}");
+        assert_eq!(choose_visible_basis(&px, &visible, 3).unwrap(), second);
     }
 }

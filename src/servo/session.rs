@@ -13,6 +13,7 @@ use crate::core::invariant::{choose_basis, validate_basis};
 use crate::core::noise_meter::PixelNoiseMeter;
 use crate::core::uncertainty::Measurement;
 use crate::error::{Error, Result, check_finite_points, check_positive};
+use crate::servo::basis_hold::BasisHold;
 use crate::servo::certainty::Certainty;
 use crate::servo::depths::ServoDepths;
 use crate::servo::law::{Law, ServoLaw};
@@ -28,6 +29,11 @@ use crate::servo::verdict::{Status, Verdict};
 /// Images the noise meter looks back over.
 const NOISE_IMAGES: usize = 32;
 
+/// Consecutive images a basis point of a running session may be missing for before the
+/// basis changes (see [`ServoConfig::basis_hold`]): 0.12 s at 25 Hz, which covers a
+/// keypoint lost by its tracker for a frame or two and found again.
+pub const BASIS_HOLD_IMAGES: usize = 3;
+
 /// How a session is set up (everything but the reference image and the depth source).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ServoConfig {
@@ -40,6 +46,19 @@ pub struct ServoConfig {
     pub distortion: Distortion,
     /// Basis indices; None chooses the widest triangle of the reference image.
     pub basis: Option<[usize; 3]>,
+    /// Consecutive images a basis point may be missing for while the basis is kept (0: the
+    /// basis changes in the first image without it). The invariant points q_k = Q^-1 m_k
+    /// (sec. 2.2, eq. 5) are defined by the basis's three points, so each change of basis
+    /// moves the error e = s - s* (eq. 10) to another space and restarts the controller; a
+    /// basis point lost for an image or two (a keypoint's track failing its checks) is
+    /// therefore ridden out: the session repeats its last twist, judges no stop on those
+    /// images, and keeps the basis when the point is back. A basis point missing longer, or
+    /// missing before the basis was ever seen, changes the basis.
+    pub basis_hold: usize,
+    /// Layers of convex hull set aside before the widest triangle is chosen as the basis, at
+    /// the start (when `basis` is None) and at each change (0: the widest triangle of all the
+    /// points, sec. 5.1). The keypoint target sets 1: see `choose_visible_basis`.
+    pub basis_inset: usize,
     /// Thresholds, averaging window, iteration limit, pose tolerance.
     pub stop: StopRules,
     /// The image rule; None: the law's own (invariant rule for the invariant law, pixel rule
@@ -59,6 +78,8 @@ impl ServoConfig {
             k_hat,
             distortion: Distortion::none(),
             basis: None,
+            basis_hold: BASIS_HOLD_IMAGES,
+            basis_inset: 0,
             stop: StopRules::default(),
             stop_rule: None,
             path: None,
@@ -86,6 +107,9 @@ pub struct Servo {
     reference_depths: Option<Vec<f64>>,
     basis_switches: usize,
     basis_lost: Option<String>,
+    /// How the session rides out a basis point's short loss (see [`ServoConfig::basis_hold`]).
+    hold: BasisHold,
+    basis_inset: usize,
     reference: ReferenceImage,
     rule: StopRule,
     stop: StopRules,
@@ -120,7 +144,8 @@ impl Servo {
         check_finite_points("reference_pixels", &pixels)?;
         let basis = match config.basis {
             Some(b) => validate_basis(b, n)?,
-            None => choose_basis(&pixels)?,
+            None if config.basis_inset == 0 => choose_basis(&pixels)?,
+            None => choose_visible_basis(&pixels, &vec![true; n], config.basis_inset)?,
         };
         let reference_image = ReferenceImage::new(pixels, basis)?;
         if let Some(z) = &reference_depths {
@@ -141,6 +166,8 @@ impl Servo {
             reference_depths,
             basis_switches: 0,
             basis_lost: None,
+            hold: BasisHold::new(config.basis_hold),
+            basis_inset: config.basis_inset,
             reference: reference_image,
             stop: config.stop,
             k_hat: config.k_hat,
@@ -214,6 +241,11 @@ impl Servo {
         };
         let (rule, n_others, tau, moves) = (self.rule, self.reference.others.len(), m.tau, self.law.moves());
         let min_points = self.law.min_points();
+        if self.hold.holding() {
+            // No invariant point without the basis (eq. 5): nothing to judge a stop on.
+            self.rule_met = false;
+            return Ok(());
+        }
         if self.stop.stall {
             let error = if rule == StopRule::Pixel { m.image_error } else { m.invariant_error };
             self.stall.push_error(error);
@@ -228,8 +260,10 @@ impl Servo {
         Ok(())
     }
 
-    /// Keeps the basis of a law that needs one in view: when a basis point is not visible,
-    /// the basis becomes the widest triangle of the *reference* pixels of the visible points
+    /// Keeps the basis of a law that needs one in view. A basis point missing for at most
+    /// [`ServoConfig::basis_hold`] consecutive images of a basis seen before is ridden out
+    /// ([`BasisHold`]: the basis stays, the last twist is repeated, no stop is judged). Beyond
+    /// that (or a basis point missing from the start), the basis becomes the widest triangle of the *reference* pixels of the visible points
     /// (s* of the new basis comes from the reference image, so nothing is lost) and what
     /// depends on it is rebuilt: the reference measurements, the law's controller (its
     /// state starts afresh), the stop window (its rows are laid out by the basis). A planned
@@ -241,13 +275,18 @@ impl Servo {
         self.basis_lost = None;
         let visible = &self.visible;
         if !self.law.needs_basis() || self.reference.basis.iter().all(|&b| visible[b]) {
+            self.hold.observe(true);
             return Ok(());
         }
         let seen = visible.iter().filter(|&&v| v).count();
         if seen < self.law.min_points() {
+            self.hold.release();
             return Ok(()); // lost_features reports the count
         }
-        let basis = match choose_visible_basis(&self.reference.pixels, visible) {
+        if self.hold.observe(false) {
+            return Ok(());
+        }
+        let basis = match choose_visible_basis(&self.reference.pixels, visible, self.basis_inset) {
             Ok(b) => b,
             Err(e) => {
                 let why = format!(
@@ -266,6 +305,7 @@ impl Servo {
         self.stall.reset();
         (self.plan, self.path) = (None, None);
         self.basis_switches += 1;
+        self.hold.rebased();
         Ok(())
     }
 
@@ -321,12 +361,14 @@ impl Servo {
         if let Some(lost) = self.lost_features() {
             return lost;
         }
+        let holding = self.hold.holding();
         if self.rule_met
             && let Some(end) = self.certify(false)
         {
             return end;
         }
         if self.stop.stall
+            && !holding
             && self.law.moves()
             && self.stall.stalled(&self.stop, self.dt)
             && let Some(end) = self.certify(true)
@@ -354,7 +396,8 @@ impl Servo {
         }
         let (visible, basis) = (&self.visible, self.reference.basis);
         let seen = visible.iter().filter(|&&v| v).count();
-        if seen >= self.law.min_points() && (!self.law.needs_basis() || basis.iter().all(|&b| visible[b])) {
+        let basis_seen = !self.law.needs_basis() || self.hold.holding() || basis.iter().all(|&b| visible[b]);
+        if seen >= self.law.min_points() && basis_seen {
             return None;
         }
         let n = visible.len();
@@ -433,10 +476,16 @@ impl Servo {
 
     /// The control step on the last observed image: depths, the path's reference, the law.
     /// A failure of any of them is a stop verdict, not an error.
+    /// An image ridden out with a basis point missing ([`BasisHold`]) repeats the last twist.
     pub fn control(&mut self) -> ServoStep {
+        if self.hold.holding() {
+            self.iteration += 1;
+            return ServoStep { twist: self.hold.twist(), verdict: Verdict::Running, telemetry: self.telemetry };
+        }
         match self.try_control() {
             Ok(twist) => {
                 self.iteration += 1;
+                self.hold.record(twist);
                 if self.stop.stall {
                     self.stall.push_twist(twist);
                 }
@@ -519,6 +568,11 @@ impl Servo {
     /// How many times the basis changed because one of its points was not visible.
     pub fn basis_switches(&self) -> usize {
         self.basis_switches
+    }
+    /// How many images were ridden out with a basis point missing, the basis kept and the
+    /// last twist repeated (see [`ServoConfig::basis_hold`]).
+    pub fn basis_held_images(&self) -> usize {
+        self.hold.images()
     }
     /// The image rule that decides convergence.
     pub fn stop_rule(&self) -> StopRule {

@@ -75,6 +75,12 @@ pub trait ImageTargetKind: Send + Sync + std::fmt::Debug {
         Ok(())
     }
 
+    /// Layers of convex hull the session's basis choice sets aside
+    /// ([`ServoConfig::basis_inset`](crate::servo::ServoConfig::basis_inset); default 0).
+    fn basis_inset(&self) -> usize {
+        0
+    }
+
     /// The frames' detector, given the reference image and the points kept in it (default:
     /// [`detector`](Self::detector) of the frames, which needs neither; the keypoint target
     /// matches the frames to the reference image's descriptors).
@@ -204,6 +210,8 @@ impl ImageServo {
             .map_err(|e| hints_named(e, "reference_points"))?;
         let found = target.select(found)?;
         let first = target.first_hints(&found);
+        let mut config = config;
+        config.servo.basis_inset = config.servo.basis_inset.max(target.basis_inset());
         Self::with_detector(&found, target.frames_detector(&reference, &found)?, first, config, depths)
     }
 

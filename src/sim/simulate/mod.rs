@@ -114,6 +114,8 @@ fn start_servo(config: &SimulationConfig, pixels: Vec<[f64; 2]>, reference_depth
         k_hat: config.estimate,
         distortion: config.estimate_distortion,
         basis: config.basis,
+        basis_hold: crate::servo::session::BASIS_HOLD_IMAGES,
+        basis_inset: 0,
         stop: config.stop,
         stop_rule: same_camera.then_some(StopRule::Pixel),
         path: config.path,

@@ -15,6 +15,10 @@ use crate::vision::image_servo::ImageTargetKind;
 /// The most points the target may hold.
 pub const MAX_FEATURE_POINTS: u32 = 1000;
 
+/// Layers of convex hull the keypoint target's basis choice sets aside
+/// ([`ServoConfig::basis_inset`](crate::servo::ServoConfig::basis_inset)).
+pub const FEATURE_BASIS_INSET: usize = 1;
+
 /// The keypoint target's settings (its entry's arguments).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FeatureTarget {
@@ -51,6 +55,12 @@ impl ImageTargetKind for FeatureTarget {
             return Err(Error::InvalidParameter { name: "point_ids", reason }.into());
         }
         Ok(found.into_iter().filter(|d| ids.contains(&d.id)).collect())
+    }
+
+    /// One layer: the spread's outermost keypoints (at the object's silhouette, the most
+    /// foreshortened, measured with the largest errors) are left out of the basis.
+    fn basis_inset(&self) -> usize {
+        FEATURE_BASIS_INSET
     }
 
     fn validate(&self) -> Result<()> {
