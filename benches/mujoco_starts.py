@@ -65,6 +65,7 @@ BUILTINS: dict[str, str | None] = {
     "mujoco-arm-panda-zoom": None,
     "mujoco-arm-ur5e-ibvs-12-6": None,
     "mujoco-eye-to-hand-12-6": "lens-12-6",
+    "mujoco-arm-ur5e-zoom-stationary": "zoom-stationary",
 }
 
 
@@ -133,7 +134,9 @@ def kinematic_figures(twin_d: dict, poses: np.ndarray, times: np.ndarray) -> tup
     """vsinv's renderer per frame at `poses` (seconds), and the Rust simulator's whole iteration
     with images in the loop (seconds) for the kinematic twin `twin_d`."""
     d = dict(twin_d)
-    d.setdefault("vision", {})
+    if "vision" not in d:  # images in the loop; [vision] brings its own noise (vision.noise_sigma)
+        d["vision"] = {}
+        d.pop("noise", None)
     t0 = time.perf_counter()
     for pose, t in zip(poses, times):
         vsinv.vision.render(d, pose, float(t))

@@ -108,6 +108,71 @@ def test_the_urdf_arms_camera_site_jacobian_is_the_finite_difference(monkeypatch
             np.testing.assert_allclose(J, _finite_jacobian(m, data, _mounted.BELIEVED_SITE, q, np.arange(6)), atol=1e-6)
 
 
+@needs_mujoco
+@pytest.mark.slow
+def test_eye_to_hand_with_a_users_urdf_runs_as_the_built_in_arm(tmp_path: Path, monkeypatch) -> None:
+    """`[world.eye_to_hand] urdf = "ur5e.urdf"` (robots/ur5e.urdf as a user's file): the URDF
+    arm carries the dots (their body moved onto its `tool0`) before the fixed camera, and 40
+    frames of mujoco-eye-to-hand-12-6 follow the built-in arm's: the same first detections
+    (0.5 px; measured equal: the same start joints and target pose), joints within 1e-2 rad and F* within 2 mm of the built-in run's at every frame
+    (the actuators differ, as eye-in-hand above), the invariant error falling."""
+    monkeypatch.chdir(tmp_path)
+    _user_ur5e(tmp_path)
+    d = _half(vsinv.load_scenario("mujoco-eye-to-hand-12-6").to_dict())
+    user = {**d, "world": {**d["world"], "eye_to_hand": {**d["world"]["eye_to_hand"], "urdf": "ur5e.urdf"}}}
+    arm = vsinv.load_scenario(user).arm()
+    assert arm.source.endswith("ur5e.urdf") and vsinv.load_scenario(d).arm().source == "builtin:ur5e"
+    with pytest.warns(UserWarning, match="velocity actuators"):
+        mine = vm.run_loop(user, max_iterations=40)
+    builtin = vm.run_loop(d, max_iterations=40)
+    a, b = mine.result, builtin.result
+    assert len(a.time) == len(b.time) == 41
+    seen = a.visible[0]  # at half resolution one dot is lost in the first image by both
+    assert (seen == b.visible[0]).all() and seen.sum() >= 10
+    assert np.abs(a.pixels[0][seen] - b.pixels[0][seen]).max() < 0.5  # measured: equal
+    joints, target = np.abs(a.joints - b.joints).max(), np.abs(a.pose[:, :3, 3] - b.pose[:, :3, 3]).max()
+    assert joints < 1e-2 and target < 2e-3, (joints, target)
+    assert a.summary["final_invariant_error"] < 0.5 * a.invariant_error[0]
+
+
+@needs_mujoco
+def test_a_start_pose_is_reached_by_the_users_urdf_not_the_built_in_of_its_name(tmp_path: Path, monkeypatch) -> None:
+    """A user's `ur5e.urdf` (its `<robot name="ur5e">`, the built-in's name) with a longer upper
+    arm (0.47 m, the built-in 0.425 m): a start *pose* puts the arm where this URDF's forward
+    kinematics (`ScenarioArm.camera_pose`, and MuJoCo's camera site built from the same file)
+    reach it within 1e-6, not where the built-in UR5e's inverse kinematics would (the pose
+    through this URDF's kinematics at the built-in's joints is centimetres away)."""
+    from vsinv import geometry, kinematics
+    from vsinv.mujoco import _arm_loop
+
+    monkeypatch.chdir(tmp_path)
+    text = (ROOT / "robots" / "ur5e.urdf").read_text()
+    longer = text.replace('<origin xyz="-0.425 0 0" rpy="0 0 0"/>', '<origin xyz="-0.47 0 0" rpy="0 0 0"/>')
+    assert longer != text
+    _user_ur5e(tmp_path, longer)
+    d = _half(vsinv.load_scenario(str(UR5E)).to_dict())
+    d["robot"]["urdf"] = "ur5e.urdf"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        world = vm.World.from_scenario(d)
+    with world:
+        arm = world.arm
+        assert not arm.source.startswith("builtin:")
+        s = d["start"]
+        start = geometry.pose_from_position_thetau(s["position"], np.radians(s["rotation_deg"]))
+        pose = start @ geometry.pose_from_position_thetau([0.02, -0.01, 0.015], np.radians([3.0, -2.0, 4.0]))
+        q = _arm_loop.start_joints(arm, pose)
+        np.testing.assert_allclose(arm.camera_pose(q), pose, atol=1e-6)
+        world.data.qpos[:] = q
+        mujoco.mj_kinematics(world.model, world.data)
+        np.testing.assert_allclose(world.camera_pose(), pose, atol=1e-6)  # MuJoCo's own kinematics of the file
+        ee = np.linalg.inv(np.asarray(arm.base)) @ pose @ np.linalg.inv(np.asarray(arm.mount))
+        builtin_q = np.asarray(kinematics.ik("ur5e", ee, seed=arm.start).joints)  # what the built-in's IK gives
+        assert np.linalg.norm(np.asarray(arm.camera_pose(builtin_q))[:3, 3] - pose[:3, 3]) > 0.01
+        run = vm.run_loop(d, world=world, start=pose, max_iterations=1)
+        np.testing.assert_allclose(run.pose[0], pose, atol=1e-6)  # the run starts there
+
+
 def test_a_kinematics_only_urdf_is_refused_naming_the_link(tmp_path: Path, monkeypatch) -> None:
     """A moving link without <inertial>: vsinv's error names robot.urdf and the link, not
     MuJoCo's mjMINVAL message."""

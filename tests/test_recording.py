@@ -204,9 +204,10 @@ def _pose(transform: dict) -> np.ndarray:
     return out
 
 
-def _arm_rows(messages: list[tuple[str, int, dict]], result: vsinv.RunResult) -> list[dict[str, np.ndarray]]:
-    """Per row, the arm's frames (`base`, `flange`: 4x4 in their parents) after checking the
-    joint states against the run's joints and joint velocities."""
+def _arm_rows(messages: list[tuple[str, int, dict]], result: vsinv.RunResult) -> list[dict]:
+    """Per row, the arm's frames after checking the joint states against the run's joints and
+    joint velocities: `base` in its parent, `links` (each frame of base -> arm/<link> -> ... ->
+    flange composed into the base frame), `flange` (the last), `chain` (their names in order)."""
     states = [m for topic, _, m in messages if topic == "/arm/joint_states"]
     names = list(result.joint_limits["names"])
     for k, m in enumerate(states):
@@ -219,9 +220,17 @@ def _arm_rows(messages: list[tuple[str, int, dict]], result: vsinv.RunResult) ->
     rows = []
     for _, _, tf in (x for x in messages if x[0] == "/tf"):
         by_child = {x["child_frame_id"]: x for x in tf["transforms"]}
-        assert by_child["flange"]["parent_frame_id"] == "base"
+        links, frame = {}, "flange"  # walk flange -> ... -> base, composing each link in the one before
+        chain = []
+        while frame != "base":
+            chain.append(frame)
+            frame = by_child[frame]["parent_frame_id"]
+        pose = np.eye(4)
+        for child in reversed(chain):  # base -> arm/<link> -> ... -> flange
+            pose = pose @ _pose(by_child[child])
+            links[child] = pose
         rows.append({"parent": by_child["base"]["parent_frame_id"], "base": _pose(by_child["base"]),
-                     "flange": _pose(by_child["flange"])})
+                     "flange": links["flange"], "links": links, "chain": list(reversed(chain))})
     return rows
 
 
@@ -242,6 +251,10 @@ def test_an_arm_runs_frames_and_joint_states(tmp_path: Path) -> None:
         # target -> base -> flange -> camera_mount against the run's camera pose
         np.testing.assert_allclose(row["flange"], vsinv.kinematics.fk("ur5", result.joints[k]), atol=1e-9)
         np.testing.assert_allclose(row["base"] @ row["flange"] @ arm.mount, result.pose[k], atol=1e-9)
+        # every link of the chain, in order, against the built-in's kinematics of that link
+        names = [n for n, _ in arm.link_poses(result.joints[k])][1:-1]
+        assert row["chain"] == [f"arm/{n}" for n in names] + ["flange"]
+        assert names[0] == "shoulder_link" and names[-1] == "wrist_3_link"
 
 
 @pytest.mark.slow
@@ -251,6 +264,10 @@ def test_a_mujoco_arm_runs_frames_against_mujocos_poses(tmp_path: Path, name: st
     why = vm.available()
     if why is not None:
         pytest.skip(why)
+    import mujoco
+
+    from vsinv.mujoco._arms import LINKS
+
     run = vm.run_loop(name, max_iterations=4)
     result = run.result
     arm = result.scenario.arm()
@@ -260,6 +277,7 @@ def test_a_mujoco_arm_runs_frames_against_mujocos_poses(tmp_path: Path, name: st
     images = [m for topic, _, m in messages if topic == "/camera/image"]
     np.testing.assert_array_equal(_png(images[-1]), run.last_image)  # the arm at the last row's joints
     eye_to_hand = name == "mujoco-eye-to-hand-12-6"
+    world = vm.World.from_scenario(result.scenario)
     for k, row in enumerate(_arm_rows(messages, result)):
         assert row["parent"] == ("camera" if eye_to_hand else "target")
         np.testing.assert_allclose(row["flange"], vsinv.kinematics.fk("ur5e", result.joints[k]), atol=1e-9)
@@ -268,3 +286,14 @@ def test_a_mujoco_arm_runs_frames_against_mujocos_poses(tmp_path: Path, name: st
         # the target's site seen from the fixed camera)
         expected = np.linalg.inv(result.pose[k]) if eye_to_hand else result.pose[k]
         np.testing.assert_allclose(chain, expected, atol=1e-6)
+        # each link against MuJoCo's body of that name (xpos, xquat in MuJoCo's world: F*, or
+        # the fixed camera's frame eye-to-hand, the frame `base` hangs from)
+        world.data.qpos[:] = result.joints[k]
+        mujoco.mj_kinematics(world.model, world.data)
+        assert [b.removeprefix("arm/") for b in row["chain"][:-1]] == list(LINKS)
+        for frame in row["chain"][:-1]:
+            body, pose, rotation = world.data.body(frame.removeprefix("arm/")), np.eye(4), np.zeros(9)
+            mujoco.mju_quat2Mat(rotation, body.xquat)
+            pose[:3, :3], pose[:3, 3] = rotation.reshape(3, 3), body.xpos
+            np.testing.assert_allclose(row["base"] @ row["links"][frame], pose, atol=1e-6)
+    world.close()

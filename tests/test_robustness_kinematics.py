@@ -99,7 +99,7 @@ def test_damped_least_squares(data: Any) -> None:
 ARM_SCENARIO = vsinv.load_scenario("arm-ur5-12-6")
 
 
-@covers("Scenario.arm", "ScenarioArm", "ScenarioArm.model", "ScenarioArm.source", "ScenarioArm.end_effector", "ScenarioArm.joint_names", "ScenarioArm.base", "ScenarioArm.mount", "ScenarioArm.believed_mount", "ScenarioArm.start", "ScenarioArm.lower", "ScenarioArm.upper", "ScenarioArm.velocity", "ScenarioArm.damping", "ScenarioArm.min_manipulability", "ScenarioArm.camera_pose", "ScenarioArm.manipulability", "ScenarioArm.joint_velocities")
+@covers("Scenario.arm", "ScenarioArm", "ScenarioArm.model", "ScenarioArm.source", "ScenarioArm.end_effector", "ScenarioArm.joint_names", "ScenarioArm.base", "ScenarioArm.mount", "ScenarioArm.believed_mount", "ScenarioArm.start", "ScenarioArm.lower", "ScenarioArm.upper", "ScenarioArm.velocity", "ScenarioArm.damping", "ScenarioArm.min_manipulability", "ScenarioArm.camera_pose", "ScenarioArm.manipulability", "ScenarioArm.joint_velocities", "ScenarioArm.link_poses", "ScenarioArm.ik")
 @fuzz_settings(100)
 @given(st.data())
 def test_scenario_arm_joint_velocities(data: Any) -> None:
@@ -124,6 +124,15 @@ def test_scenario_arm_joint_velocities(data: Any) -> None:
         assert np.isfinite(getattr(arm, name)).all()
     fuzz(data, arm.joint_velocities, args, strategies, api="ScenarioArm.joint_velocities", ref=ref, rtol=1e-12,
          digest=lambda out: out[0] if isinstance(out, tuple) else out)
-    for method in (arm.camera_pose, arm.manipulability):
+    for method in (arm.camera_pose, arm.manipulability, arm.link_poses):
         call(method, data.draw(st.sampled_from([q[:5], np.r_[q, 0.0], np.full(6, np.nan), "abc"])),
              _api=f"ScenarioArm.{method.__name__}", _expect=INVALID, _names=("joints",), _finite=False)
+    # ik: the flange's pose at the start joints (base^-1 camera mount^-1) comes back to it;
+    # a bad pose or seed is refused by name
+    ee = np.linalg.inv(arm.base) @ arm.camera_pose(q) @ np.linalg.inv(arm.mount)
+    np.testing.assert_allclose(np.linalg.inv(arm.base) @ arm.camera_pose(arm.ik(ee, seed=q)) @ np.linalg.inv(arm.mount),
+                               ee, atol=1e-9)
+    call(arm.ik, data.draw(st.sampled_from([ee[:3], np.full((4, 4), np.nan), "abc"])), _api="ScenarioArm.ik",
+         _expect=INVALID, _names=("pose",), _finite=False)
+    call(arm.ik, ee, seed=data.draw(st.sampled_from([q[:5], np.r_[q, 0.0], np.full(6, np.nan), "abc"])),
+         _api="ScenarioArm.ik", _expect=INVALID, _names=("seed",), _finite=False)

@@ -784,6 +784,15 @@ class ScenarioArm:
         """A run ends `singular` below this manipulability (`robot.min_manipulability`)."""
     def camera_pose(self, joints: _ArrayLike) -> _F64Array:
         """The camera's pose in F* (4x4) at `joints`: `base * fk(joints) * mount`."""
+    def link_poses(self, joints: _ArrayLike) -> list[tuple[str, _F64Array]]:
+        """Every link of the chain at `joints`, base link first, end effector last: (name, its pose
+        in the base link's frame, 4x4), by this arm's own model (`fk` of each link)."""
+    def ik(self, pose: _ArrayLike, seed: _ArrayLike | None = None) -> _F64Array:
+        """Joints within the model's limits that put the end effector at `pose` (4x4, in the arm's
+        base frame, as `camera_pose` is `base * fk * mount`), by this arm's own model (a user's
+        URDF, or the built-in): the damped least squares of `kinematics.ik`, from `seed` (one
+        value per joint; default the middle of the limits), then from spread seeds. Raises
+        InvalidInput (kind 'unreachable') when no seed reaches the pose."""
     def manipulability(self, joints: _ArrayLike) -> float:
         """The manipulability sqrt(det(J J^T)) at `joints` (any frame's Jacobian gives it)."""
     def joint_velocities(self, jacobian: _ArrayLike, joints: _ArrayLike, twist: _ArrayLike) -> tuple[_F64Array, bool]:

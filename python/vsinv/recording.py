@@ -15,13 +15,15 @@ Topics (log time = the run's time, nanoseconds from 0):
 | ``/camera/image`` | ``foxglove.CompressedImage`` (PNG) | the camera's image (runs with images only) |
 | ``/camera/detections`` | ``foxglove.ImageAnnotations`` | detected points (green circles), reference points (red) |
 | ``/camera/calibration`` | ``foxglove.CameraCalibration`` | K(t) and the image size |
-| ``/tf`` | ``foxglove.FrameTransforms`` | ``target`` (F*, the frame of the target's points) to ``camera`` and to ``reference``; with an arm, ``base`` (the arm's base link) and ``flange`` (its ``robot.end_effector`` link) |
+| ``/tf`` | ``foxglove.FrameTransforms`` | ``target`` (F*, the frame of the target's points) to ``camera`` and to ``reference``; with an arm, ``base`` (the arm's base link), every link of its chain ``arm/<link>`` (the URDF's link names) and ``flange`` (its ``robot.end_effector`` link) |
 | ``/arm/joint_states`` | ``sensor_msgs/msg/JointState`` (JSON) | with an arm: the joints' names, positions and velocities (rad, m; per second) |
 | ``/servo`` | ``vsinv.Step`` | iteration, twist (v, w), the errors, the verdict (``running`` until the last) |
 | ``/summary`` | ``vsinv.Summary`` | the run's summary, once, at the last time |
 
 The arm's frames: eye-in-hand, ``base`` hangs from ``target`` (``robot.base``, F* coordinates)
-and ``flange`` from ``base`` (the kinematics at the recorded joints), so ``base -> flange`` composed
+and the chain ``base -> arm/<link> -> ... -> flange`` from it, each link in the one before
+(the arm's own kinematics at the recorded joints: a user's URDF or the built-in, as MuJoCo's
+bodies are), so ``base -> flange`` composed
 with ``robot.camera_mount`` is ``target -> camera``; eye-to-hand (``[world] eye_to_hand``), the
 fixed camera is the world: ``base`` hangs from ``camera`` and ``base -> flange -> target_mount`` is
 ``camera -> target``. Foxglove has no JSON schema for joint states: the joints are JSON messages
@@ -237,14 +239,20 @@ class _Arm:
         self.arm, self.names = arm, [str(n) for n in limits["names"]]
         self.parent = "camera" if (d.get("world") or {}).get("eye_to_hand") is not None else "target"
         self.base = np.asarray(arm.base, dtype=float)
-        self.to_flange = np.linalg.inv(self.base), np.linalg.inv(np.asarray(arm.mount, dtype=float))
 
     def transforms(self, ns: int, q: np.ndarray) -> list[dict[str, Any]]:
-        """`base` in its parent (F*, or the fixed camera's frame eye-to-hand) and `flange` in
-        `base`: base^-1 (base fk(q) mount) mount^-1, the kinematics `Scenario.arm()` runs."""
-        inv_base, inv_mount = self.to_flange
-        flange = inv_base @ np.asarray(self.arm.camera_pose(q), dtype=float) @ inv_mount
-        return [_transform(ns, "base", self.base, self.parent), _transform(ns, "flange", flange, "base")]
+        """`base` in its parent (F*, or the fixed camera's frame eye-to-hand), then each link of
+        the chain in the one before it (`ScenarioArm.link_poses`, the kinematics `Scenario.arm()`
+        runs): base -> arm/<link> -> ... -> flange (the end effector)."""
+        links = self.arm.link_poses(q)  # (name, pose in the base link), base link first
+        out = [_transform(ns, "base", self.base, self.parent)]
+        parent, before = "base", np.eye(4)
+        for k, (name, pose) in enumerate(links[1:], 1):
+            child = "flange" if k == len(links) - 1 else f"arm/{name}"
+            pose = np.asarray(pose, dtype=float)
+            out.append(_transform(ns, child, np.linalg.inv(before) @ pose, parent))
+            parent, before = child, pose
+        return out
 
     def joint_state(self, ns: int, q: np.ndarray, dq: Optional[np.ndarray]) -> dict[str, Any]:
         moving = dq is not None and bool(np.all(np.isfinite(dq)))

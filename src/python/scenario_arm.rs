@@ -7,6 +7,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
 use super::arrays::{f64_array, from_matrix, vec1};
+use crate::core::se3;
 use crate::sim::arm::ArmRobot;
 
 /// The arm of a scenario (`Scenario.arm()`): the built-in model or URDF, its base in F*, the
@@ -17,10 +18,10 @@ pub struct PyScenarioArm {
     pub inner: ArmRobot,
 }
 
-/// Joint values (n,) of `obj`, finite, one per joint of `arm`.
-fn joints_of(arm: &ArmRobot, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    let q = f64_array(obj, "joints", &[Some(arm.dof())])?.as_slice()?.to_vec();
-    crate::error::check_finite("joints", &q)?;
+/// Joint values (n,) of `obj`, finite, one per joint of `arm` (`what` names the argument).
+fn joints_of(arm: &ArmRobot, obj: &Bound<'_, PyAny>, what: &'static str) -> PyResult<Vec<f64>> {
+    let q = f64_array(obj, what, &[Some(arm.dof())])?.as_slice()?.to_vec();
+    crate::error::check_finite(what, &q)?;
     Ok(q)
 }
 
@@ -95,12 +96,12 @@ impl PyScenarioArm {
     }
     /// The camera's pose in F* (4x4) at `joints`: `base * fk(joints) * mount`.
     fn camera_pose<'py>(&self, py: Python<'py>, joints: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let q = joints_of(&self.inner, joints)?;
+        let q = joints_of(&self.inner, joints, "joints")?;
         from_matrix(py, &self.inner.camera_pose(&q)?.to_homogeneous())
     }
     /// The manipulability sqrt(det(J J^T)) at `joints` (any frame's Jacobian gives it).
     fn manipulability(&self, joints: &Bound<'_, PyAny>) -> PyResult<f64> {
-        let q = joints_of(&self.inner, joints)?;
+        let q = joints_of(&self.inner, joints, "joints")?;
         Ok(self.inner.model.manipulability(&q)?)
     }
     /// Joint velocities (n,) for the camera `twist` (6,: in the camera frame the controller
@@ -118,10 +119,44 @@ impl PyScenarioArm {
         let n = self.inner.dof();
         let j = f64_array(jacobian, "jacobian", &[Some(6), Some(n)])?;
         let jac = nalgebra::Matrix6xX::from_row_slice(j.as_slice()?);
-        let q = joints_of(&self.inner, joints)?;
+        let q = joints_of(&self.inner, joints, "joints")?;
         let v = nalgebra::Vector6::from_column_slice(f64_array(twist, "twist", &[Some(6)])?.as_slice()?);
         let (dq, limited) = self.inner.camera_joint_velocities(&jac, &q, &v)?;
         Ok((vec1(py, dq.as_slice()), limited))
+    }
+    /// Every link of the chain at `joints`, base link first, end effector last: (name, its pose
+    /// in the base link's frame, 4x4), by this arm's own model (`fk` of each link).
+    fn link_poses<'py>(
+        &self,
+        py: Python<'py>,
+        joints: &Bound<'py, PyAny>,
+    ) -> PyResult<Vec<(String, Bound<'py, PyArray2<f64>>)>> {
+        let q = joints_of(&self.inner, joints, "joints")?;
+        let model = &self.inner.model;
+        let mut out = Vec::new();
+        for name in model.link_names() {
+            out.push((name.to_string(), from_matrix(py, &model.fk_link(&q, name)?.to_homogeneous())?));
+        }
+        Ok(out)
+    }
+    /// Joints within the model's limits that put the end effector at `pose` (4x4, in the arm's
+    /// base frame, as `camera_pose` is `base * fk * mount`), by this arm's own model (a user's
+    /// URDF, or the built-in): the damped least squares of `kinematics.ik`, from `seed` (one
+    /// value per joint; default the middle of the limits), then from spread seeds. Raises
+    /// InvalidInput (kind 'unreachable') when no seed reaches the pose.
+    #[pyo3(signature = (pose, seed = None))]
+    fn ik<'py>(
+        &self,
+        py: Python<'py>,
+        pose: &Bound<'py, PyAny>,
+        seed: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
+        let target = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
+        let seed = seed.map(|s| joints_of(&self.inner, s, "seed")).transpose()?;
+        let model = &self.inner.model;
+        let solution = py.detach(|| model.ik(&target, seed.as_deref()))?;
+        Ok(vec1(py, &solution.joints))
     }
     fn __repr__(&self) -> String {
         format!("ScenarioArm(model={:?}, end_effector={:?})", self.inner.model.name(), self.inner.model.end_effector())

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import geometry, kinematics
+from .. import geometry
 from .._core import InvalidInput, RunResult
 from . import _mounted
 from ._effects import degraded
@@ -35,7 +35,8 @@ LIMIT_MARGIN = 1e-3
 
 def start_joints(arm: Any, start: Any) -> np.ndarray:
     """The start joints: `arm.start`, or given (n,), or those that put the camera at the 4x4
-    pose `start` in F* (the kinematic arm's inverse kinematics from `arm.start`)."""
+    pose `start` in F* (the inverse kinematics of the arm's own model, a user's URDF or the
+    built-in, from `arm.start`)."""
     if start is None:
         return np.asarray(arm.start, dtype=float)
     start = np.asarray(start, dtype=float)
@@ -44,7 +45,7 @@ def start_joints(arm: Any, start: Any) -> np.ndarray:
     if start.shape != (4, 4):
         raise InvalidInput(f"start: expected the camera's 4x4 pose or {len(arm.joint_names)} joints, got shape {start.shape}")
     ee = np.linalg.inv(np.asarray(arm.base)) @ start @ np.linalg.inv(np.asarray(arm.mount))
-    return np.asarray(kinematics.ik(arm.model, ee, seed=arm.start).joints)
+    return np.asarray(arm.ik(ee, seed=arm.start))
 
 
 def _event(arm: Any, q: np.ndarray) -> tuple[str, str] | None:
@@ -104,10 +105,10 @@ def believed_camera_to_base(world: World, d: dict[str, Any] | None) -> np.ndarra
 
 def goal_joints(arm: Any) -> np.ndarray:
     """Eye-to-hand: the joints that put the target's frame F* on the fixed camera's (the
-    reference image's view), by the kinematic arm's inverse kinematics from the start joints."""
+    reference image's view), by the inverse kinematics of the arm's own model from the start joints."""
     ee = np.linalg.inv(np.asarray(arm.base)) @ np.linalg.inv(np.asarray(arm.mount))
     try:
-        return np.asarray(kinematics.ik(arm.model, ee, seed=arm.start).joints)
+        return np.asarray(arm.ik(ee, seed=arm.start))
     except InvalidInput as e:
         raise InvalidInput(f"world.eye_to_hand: the arm cannot hold the target at the reference view ({e})") from e
 

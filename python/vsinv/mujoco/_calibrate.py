@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import calibration, geometry, kinematics, vision
+from .. import calibration, geometry, vision
 from .._core import InvalidInput
 from ._arm_loop import goal_joints
 from ._world import World
@@ -86,7 +86,7 @@ def station_joints(arm: Any, count: int, seed: int, angle_deg: float = 20.0, off
         centre[2, 3] = 0.6  # turn about the dots' middle, so they stay in view
         pose = home @ centre @ geometry.pose_from_position_thetau(move, turn) @ np.linalg.inv(centre)
         try:
-            out.append(np.asarray(kinematics.ik(arm.model, base_inv @ pose @ mount_inv, seed=goal).joints))
+            out.append(np.asarray(arm.ik(base_inv @ pose @ mount_inv, seed=goal)))
         except InvalidInput:
             continue
     return np.array(out)
@@ -100,6 +100,7 @@ def measure_stations(world: World, joints: np.ndarray) -> HandEyeStations:
     if not world.eye_to_hand:
         raise InvalidInput("world: not an eye-to-hand world ([world.eye_to_hand])")
     arm, points, K = world.arm, np.asarray(world.target_points), np.asarray(world.K.matrix)
+    base_inv, mount_inv = np.linalg.inv(np.asarray(arm.base)), np.linalg.inv(np.asarray(arm.mount))
     gripper, measured, truth = [], [], []
     for q in joints:
         world.data.qpos[:], world.data.qvel[:] = q, 0.0
@@ -108,7 +109,7 @@ def measure_stations(world: World, joints: np.ndarray) -> HandEyeStations:
         cam = (true_pose[:3, :3] @ points.T).T + true_pose[:3, 3]  # (names the dots only)
         predicted = (K @ (cam / cam[:, 2:]).T).T[:, :2]
         measured.append(target_pose(world.render(np.eye(4)), points, K, predicted))
-        gripper.append(np.asarray(kinematics.fk(arm.model, q)))
+        gripper.append(base_inv @ true_pose @ mount_inv)  # the flange in the base: the arm's own fk(q)
         truth.append(true_pose)
     return HandEyeStations(np.asarray(joints), np.array(gripper), np.array(measured), np.array(truth))
 

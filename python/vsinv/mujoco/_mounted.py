@@ -83,23 +83,31 @@ def tool_xml(arm: Any, ee: np.ndarray, width: int, height: int, focal: float, pa
             f'<site name="{BELIEVED_SITE}" pos="{_v(believed[:3, 3])}" quat="{quat(believed)}" size="0.005"/>'
             f'<camera name="{CAMERA}" pos="{_v(camera[:3, 3])}" quat="{quat(camera @ flip)}" resolution="{width} {height}" '
             f'sensorsize="{width * PIXEL} {height * PIXEL}" focalpixel="{focal} {focal}"/>')
-    if payload:  # a 0.3 kg target whose weight the controller compensates, as the arm's own
-        payload = payload.replace("<geom ", '<geom mass="0" ')
-        inertial = f'<inertial pos="0 0 {PAYLOAD_DEPTH}" mass="{PAYLOAD_MASS}" diaginertia="0.005 0.005 0.01"/>'
-        tool += (f'<body name="{TARGET}" pos="{_v(camera[:3, 3])}" quat="{quat(camera)}" gravcomp="1">'
-                 f"{inertial}{payload}</body>")
-    return tool
+    return tool + payload_xml(camera, payload)
+
+
+def payload_xml(at: np.ndarray, payload: str) -> str:
+    """Eye-to-hand: the body `TARGET` holding `payload` (the target's geoms, in F*) at `at` (F* in
+    the body carrying it): a 0.3 kg target whose weight the controller compensates, as the
+    arm's own. Empty without a payload."""
+    if not payload:
+        return ""
+    payload = payload.replace("<geom ", '<geom mass="0" ')
+    inertial = f'<inertial pos="0 0 {PAYLOAD_DEPTH}" mass="{PAYLOAD_MASS}" diaginertia="0.005 0.005 0.01"/>'
+    return f'<body name="{TARGET}" pos="{_v(at[:3, 3])}" quat="{quat(at)}" gravcomp="1">{inertial}{payload}</body>'
 
 
 def arm_xml(arm: Any, width: int, height: int, focal: float, payload: str = "") -> tuple[str, str, np.ndarray]:
     """The worldbody XML of `arm` (a `ScenarioArm`: model, end effector, base, mount), its
     actuators' XML and the gravity vector in the world frame (the base's -z); `tool_xml` on
-    its end effector. A user's URDF arm (`is_builtin` false) is the empty base body here:
-    `_urdf.attach` puts the arm, its tool and its actuators in it."""
+    its end effector. A user's URDF arm (`is_builtin` false) is the empty base body here, and
+    eye-to-hand the target's body beside it at the mount (`payload_xml`): `_urdf.attach` puts
+    the arm, its tool and its actuators in the base and moves the target onto the end effector."""
     base = np.asarray(arm.base)
     gravity = base[:3, :3] @ np.array([0.0, 0.0, -GRAVITY])
     if not is_builtin(arm):
-        return f'<body name="{BASE}" pos="{_v(base[:3, 3])}" quat="{quat(base)}"/>', "", gravity
+        held = payload_xml(np.asarray(arm.mount), payload)
+        return f'<body name="{BASE}" pos="{_v(base[:3, 3])}" quat="{quat(base)}"/>{held}', "", gravity
     tool = tool_xml(arm, end_effector(arm.model, arm.end_effector), width, height, focal, payload)
     here = "<!--tool-->"
     if arm.model == "panda":

@@ -78,7 +78,9 @@ def _weld_off_chain(spec: Any, chain: list[str]) -> None:
 def attach(scene: Any, arm: Any, width: int, height: int, focal: float) -> Any:
     """Puts the URDF arm `arm` (a `ScenarioArm` whose `source` is a file) into the scene spec
     `scene` (made from `_scene.scene`'s XML, whose base body `_mounted.BASE` is empty), its
-    names prefixed with `PREFIX`, and returns the compiled model."""
+    names prefixed with `PREFIX`, and returns the compiled model. Eye-to-hand, the target's
+    body `_mounted.TARGET` (beside the base, at the mount) moves onto the end effector, its
+    geoms outside the arm's group (the fixed camera sees them)."""
     import mujoco
 
     path = str(arm.source)
@@ -100,6 +102,11 @@ def attach(scene: Any, arm: Any, width: int, height: int, focal: float) -> Any:
             body.gravcomp = 1.0
             for geom in body.geoms:
                 geom.group = _mounted.GROUP
+    held = scene.body(_mounted.TARGET)  # eye-to-hand: the target's body, onto the end effector
+    if held is not None:
+        scene.copy_during_attach = True
+        ee.add_frame().attach_body(held, PREFIX, "")
+        scene.delete(held)
     model = _compile(scene, path)
     for joint, gain in zip(chain, _gains(model, arm)):
         act = scene.add_actuator(name=f"v_{joint}", target=PREFIX + joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)

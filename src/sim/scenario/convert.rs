@@ -144,11 +144,6 @@ impl Scenario {
             let reason = "a fixed camera and an arm carrying the target are simulated by the \"mujoco\" engine only";
             return Err(scenario_error("world.eye_to_hand", reason));
         }
-        if let Some(e) = w.eye_to_hand.as_ref().filter(|e| !crate::sim::arm::BUILTIN_ARMS.contains(&e.urdf.as_str())) {
-            let arms = crate::sim::arm::BUILTIN_ARMS.join(", ");
-            let reason = format!("`{}`: expected a built-in arm ({arms}), whose MJCF models MuJoCo runs", e.urdf);
-            return Err(scenario_error("world.eye_to_hand.urdf", reason));
-        }
         if w.eye_to_hand.is_some() && self.robot.kind != RobotKind::Free {
             let reason = "the camera is fixed: [robot] must be the free camera (the arm is world.eye_to_hand's)";
             return Err(scenario_error("world.eye_to_hand", reason));

@@ -275,7 +275,7 @@ mod tests {
         let e = Scenario::from_toml(&format!("{e2h_text}\n[robot]\nkind = \"cartesian\"\n")).unwrap_err();
         assert!(e.to_string().contains("world.eye_to_hand: "), "{e}");
         let e = Scenario::from_toml(&e2h_text.replace("urdf = \"ur5e\"", "urdf = \"ur7\"")).unwrap_err();
-        assert!(e.to_string().contains("world.eye_to_hand.urdf: "), "{e}");
+        assert!(e.to_string().contains("world.eye_to_hand.urdf: ") && e.to_string().contains("nor a file"), "{e}");
         let bad =
             e2h_text.replace("target_mount = {", "camera_to_base = { position = [0.0, nan, 0.0] }\ntarget_mount = {");
         let e = Scenario::from_toml(&bad).unwrap_err();

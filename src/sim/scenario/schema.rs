@@ -329,13 +329,14 @@ impl Engine {
     }
 }
 
-/// `[world] eye_to_hand`: the camera is fixed and a built-in arm carries the target (the
+/// `[world] eye_to_hand`: the camera is fixed and an arm carries the target (the
 /// `mujoco` engine only). The scenario's `[start]` stays the camera's pose in F*, the frame of
 /// the reference view rigid with the target; the world frame is the fixed camera's.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EyeToHandSpec {
-    /// The built-in arm carrying the target (`ur5`, `ur5e`, `panda`).
+    /// The arm carrying the target: a built-in arm (`ur5`, `ur5e`, `panda`) or a URDF file with
+    /// inertias (resolved as `robot.urdf` is; `end_effector` then names the link).
     pub urdf: String,
     /// The link carrying the target (default: the built-in model's end effector).
     #[serde(default, skip_serializing_if = "Option::is_none")]
