@@ -10,9 +10,9 @@ How to run (from the repository root, with the package installed)::
 The sweep is the one of the performance page: ``lens-12-6`` with ``focal_error`` on a grid
 and ``roll_deg`` drawn uniformly (``--runs`` runs in all). Its peer is
 ``vsinv.sim.run_batch`` of the very scenarios the sweep runs (``vsinv.sweep.build_scenarios``,
-written as JSON texts before the clock starts): the same Rust runs, each text parsed twice
-(validated before any runs, parsed again to run). The sweep applies its keys in Rust to the base
-scenario read once and parses each run's scenario once. Before timing, the script checks that
+written as JSON texts before the clock starts): the same Rust runs, each text parsed once
+(all validated before any runs; up to 4,096 configurations kept until they run). The sweep
+applies its keys in Rust to the base scenario read once and parses each run's scenario once. Before timing, the script checks that
 both give the same table (every column, bit for bit).
 
 Timing: the four calls (batch and sweep on 1 and 2 threads) alternate within each round so

@@ -509,8 +509,8 @@ fn threads_text(threads: Option<usize>) -> String {
     threads.map_or_else(|| "all cores".into(), |n| format!("{n} threads"))
 }
 
-/// The batch's scenarios as JSON texts (compact, and parsed again when each runs: a batch
-/// keeps no configuration). Dictionaries are read here (the GIL is needed) and written as
+/// The batch's scenarios as JSON texts (compact; a large batch keeps no configuration: see
+/// `run_json_batch`). Dictionaries are read here (the GIL is needed) and written as
 /// text in Rust; parsing, validation and the runs happen in parallel with the GIL released.
 fn batch_texts(scenarios: &Bound<'_, PyAny>, access: FileAccess) -> PyResult<Vec<String>> {
     let py = scenarios.py();

@@ -66,8 +66,17 @@ fn seed_list(seeds: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<Option<u64>>> {
         .collect()
 }
 
-fn sweep_of(base: &Bound<'_, PyAny>, keys: &[String], allow_outside_files: bool) -> PyResult<Sweep> {
-    Ok(Sweep::new(scenario_value(base)?, keys, access(allow_outside_files))?)
+/// The sweep of `base` over `keys` and its runs of `values` and `seeds`: the parameters both
+/// bindings take, read in one place (`InvalidInput` naming the argument or key at fault).
+fn planned(
+    base: &Bound<'_, PyAny>,
+    keys: &[String],
+    values: &Bound<'_, PyAny>,
+    seeds: Option<&Bound<'_, PyAny>>,
+    allow_outside_files: bool,
+) -> PyResult<(Sweep, Vec<Run>)> {
+    let sweep = Sweep::new(scenario_value(base)?, keys, access(allow_outside_files))?;
+    Ok((sweep, runs(keys.len(), values, seeds)?))
 }
 
 /// The scenarios of a sweep's runs as dictionaries: the scenario dictionary `base` with, for
@@ -83,8 +92,8 @@ pub fn sweep_scenarios<'py>(
     values: &Bound<'py, PyAny>,
     seeds: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Vec<Bound<'py, PyAny>>> {
-    let sweep = sweep_of(base, &keys, false)?;
-    runs(keys.len(), values, seeds)?.iter().map(|run| values::to_python(py, &sweep.scenario(run)?)).collect()
+    let (sweep, runs) = planned(base, &keys, values, seeds, false)?;
+    runs.iter().map(|run| values::to_python(py, &sweep.scenario(run)?)).collect()
 }
 
 /// Runs a sweep's runs (the scenarios `sweep_scenarios` gives for the same arguments) with the
@@ -96,7 +105,6 @@ pub fn sweep_scenarios<'py>(
 #[pyo3(signature = (base, keys, values, seeds = None, threads = None, allow_outside_files = false, progress = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn run_sweep_runs<'py>(
-    py: Python<'py>,
     base: &Bound<'py, PyAny>,
     keys: Vec<String>,
     values: &Bound<'py, PyAny>,
@@ -106,8 +114,8 @@ pub fn run_sweep_runs<'py>(
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     super::sim::check_progress(progress.as_ref())?;
-    let sweep = sweep_of(base, &keys, allow_outside_files)?;
-    let runs = runs(keys.len(), values, seeds)?;
+    let (sweep, runs) = planned(base, &keys, values, seeds, allow_outside_files)?;
+    let py = base.py();
     let results = run_watched(py, runs.len(), threads, progress.as_ref(), |watch| sweep.run(&runs, threads, watch))?;
     let mut table = BatchTable::with_capacity(results.len());
     results.iter().for_each(|r| table.push(r));

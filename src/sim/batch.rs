@@ -27,7 +27,9 @@ pub fn run_batch(configs: &[SimulationConfig], threads: Option<usize>) -> Result
 
 /// Like [`run_batch`] for scenarios given as JSON texts, parsed in parallel too. Every
 /// scenario is validated before any runs: the first invalid one fails the whole batch with
-/// its index in the key (`[17].control.gain`).
+/// its index in the key (`[17].control.gain`). Each text is parsed once when the batch holds
+/// at most 4,096 of them (the configurations kept until they run), twice beyond (checked, then
+/// parsed again to run: memory stays flat).
 pub fn run_json_batch(texts: &[String], threads: Option<usize>) -> Result<Vec<Result<Summary>>> {
     run_json_batch_with(texts, threads, FileAccess::ScenarioFolder)
 }
@@ -71,6 +73,12 @@ pub(crate) fn at_index(err: SimError, i: usize) -> SimError {
     }
 }
 
+/// Batches of at most this many scenarios keep each parsed configuration until its run (each
+/// text parsed once); larger ones parse each text to check it before any runs and again when
+/// it runs, so that memory stays flat: a configuration is about 15 KB (4096 of them, 60 MB; a
+/// batch of 10^5 kept 1.5 GB before its first run).
+const KEPT_CONFIGS: usize = 4096;
+
 fn json_batch_on_pool(
     texts: &[String],
     threads: Option<usize>,
@@ -78,9 +86,14 @@ fn json_batch_on_pool(
     watch: &BatchWatch,
 ) -> Result<Vec<Result<Summary>>> {
     pool(threads)?.install(|| {
-        // Every scenario is checked before any runs (the first error names its index), but the
-        // configurations are not kept: each is parsed again when it runs (a batch of 10^5 kept
-        // 15 KB each, 1.5 GB, before its first run).
+        // Every scenario is checked before any runs; the first error names its index.
+        if texts.len() <= KEPT_CONFIGS {
+            let configs: Vec<Result<SimulationConfig>> =
+                texts.par_iter().map(|t| Scenario::config_from_json_with(t, access)).collect();
+            let configs: Vec<SimulationConfig> =
+                configs.into_iter().enumerate().map(|(i, c)| c.map_err(|e| at_index(e, i))).collect::<Result<_>>()?;
+            return Ok(configs.into_par_iter().map(|c| run_config(c, watch)).collect());
+        }
         let first_error = texts
             .par_iter()
             .enumerate()

@@ -56,9 +56,9 @@ pub(crate) struct ImageLoop {
 }
 
 impl ImageLoop {
-    pub(crate) fn new(config: RenderConfig, scene: &Scene, size: (u32, u32)) -> Result<Self> {
-        let vision = scene_vision(scene, &config)?;
-        Ok(Self::with(Renderer::new(config)?, vision, size))
+    pub(crate) fn new(renderer: Renderer, scene: &Scene, size: (u32, u32)) -> Result<Self> {
+        let vision = scene_vision(scene, renderer.config())?;
+        Ok(Self::with(renderer, vision, size))
     }
 
     /// A loop over any target and detector.
@@ -70,15 +70,14 @@ impl ImageLoop {
     /// The reference image rendered with K* at F*, its points detected around their
     /// projected positions: the reference pixels become the detected ones.
     pub(crate) fn reference(
-        config: RenderConfig,
+        renderer: &Renderer,
         scene: &Scene,
         k_star: &Intrinsics,
         distortion: &Distortion,
         size: (u32, u32),
         obs: &mut Observation,
     ) -> Result<GreyImage> {
-        let renderer = Renderer::new(config)?;
-        let SceneVision { target, mut detector } = scene_vision(scene, &config)?;
+        let SceneVision { target, mut detector } = scene_vision(scene, renderer.config())?;
         let view = CameraView { pose: &Isometry3::identity(), intrinsics: k_star, distortion, size };
         let rendered = renderer.render(&*target, Some(&obs.visible), &view, 0)?;
         let points = target.points();
@@ -308,7 +307,7 @@ mod tests {
         let mut obs = Observation::default();
         scene.observe(&pose, &k, Some(ImageSize { width: 320.0, height: 240.0 }), &mut obs);
         assert!(obs.visible.iter().all(|&v| v));
-        let mut images = ImageLoop::new(config, &scene, (320, 240)).unwrap();
+        let mut images = ImageLoop::new(Renderer::new(config).unwrap(), &scene, (320, 240)).unwrap();
         let (mut pixels, mut visible, mut detection) = (vec![[0.0; 2]; 8], vec![false; 8], vec![0.0; 8]);
         let tracked = Tracked { pixels: &mut pixels, visible: &mut visible, detection: &mut detection };
         images.observe(&pose, &k, &Distortion::none(), &obs, tracked).unwrap();

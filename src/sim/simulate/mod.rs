@@ -20,6 +20,7 @@ use crate::sim::error::Result;
 use crate::sim::image_loop::{ImageLoop, pixel_size};
 use crate::sim::outcome::Outcome;
 use crate::sim::scene::Observation;
+use crate::vision::render::Renderer;
 
 use self::pixel_noise::PixelNoise;
 use self::run::Run;
@@ -28,8 +29,8 @@ use self::run::Run;
 /// stops the run (its status is then `max_iterations`).
 pub fn simulate(config: &SimulationConfig, progress: &mut dyn FnMut(usize, usize) -> bool) -> Result<Outcome> {
     validate(config)?;
-    let (reference, reference_depths) = take_reference_image(config)?;
-    let mut run = Run::new(config, reference, reference_depths)?;
+    let (reference, reference_depths, renderer) = take_reference_image(config)?;
+    let mut run = Run::new(config, reference, reference_depths, renderer)?;
     let end = loop {
         if let Some(end) = run.iterate(progress)? {
             break end;
@@ -54,9 +55,13 @@ fn validate(config: &SimulationConfig) -> Result<()> {
     Ok(())
 }
 
+/// The observation of the reference image, its depths zeta* and the run's renderer.
+type Reference = (Observation, Vec<f64>, Option<Renderer>);
+
 /// The reference image, taken at F* with K*: every point must be in view. Returns the
-/// observation (pixels still noise-free) and the reference depths zeta*.
-fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f64>)> {
+/// observation (pixels still noise-free), the reference depths zeta* and the renderer of the
+/// `[vision]` table (one for the run: the reference image and every image of the loop).
+fn take_reference_image(config: &SimulationConfig) -> Result<Reference> {
     let camera = &config.reference_camera;
     let k_star = camera.at(0.0)?;
     let mut obs = Observation::default();
@@ -75,12 +80,13 @@ fn take_reference_image(config: &SimulationConfig) -> Result<(Observation, Vec<f
         }
         .into());
     }
-    if let Some(vision) = config.vision {
+    let renderer = config.vision.map(Renderer::new).transpose()?;
+    if let Some(renderer) = &renderer {
         let size = pixel_size(config.reference_camera.image, "reference_camera")?;
-        ImageLoop::reference(vision, &config.scene, &k_star, &camera.distortion, size, &mut obs)?;
+        ImageLoop::reference(renderer, &config.scene, &k_star, &camera.distortion, size, &mut obs)?;
     }
     let depths = obs.depths.clone();
-    Ok((obs, depths))
+    Ok((obs, depths, renderer))
 }
 
 /// The reference pixels as the servo takes them: with the reference image's noise, through

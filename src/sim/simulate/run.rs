@@ -17,6 +17,7 @@ use crate::sim::record_budget::RecordBudget;
 use crate::sim::robot::{RobotEvent, RobotMotion};
 use crate::sim::scenario::DEPTHS_REMEDY;
 use crate::sim::scene::Observation;
+use crate::vision::render::Renderer;
 
 use super::pixel_noise::PixelNoise;
 use super::prop3::Prop3Figures;
@@ -56,15 +57,22 @@ pub(super) struct Run<'a> {
 }
 
 impl<'a> Run<'a> {
-    pub(super) fn new(config: &'a SimulationConfig, mut obs: Observation, reference_depths: Vec<f64>) -> Result<Self> {
+    /// The run of `config` from its reference; `renderer` (the configuration's `[vision]`
+    /// one, None without it) renders the loop's images.
+    pub(super) fn new(
+        config: &'a SimulationConfig,
+        mut obs: Observation,
+        reference_depths: Vec<f64>,
+        renderer: Option<Renderer>,
+    ) -> Result<Self> {
         let mut noise = PixelNoise::new(config.noise.pixel_sigma, config.noise.seed)?;
         let pixels = reference_pixels(config, &mut obs, &mut noise)?;
         let n = pixels.len();
         let servo = start_servo(config, pixels, &reference_depths)?;
         let gain = servo.law().gain();
         let (prop1, prop2, _) = stability_verdicts(&config.camera.schedule()?, &config.estimate.matrix(), 1.0, gain)?;
-        let images = match config.vision {
-            Some(v) => Some(ImageLoop::new(v, &config.scene, pixel_size(config.camera.image, "camera")?)?),
+        let images = match renderer {
+            Some(r) => Some(ImageLoop::new(r, &config.scene, pixel_size(config.camera.image, "camera")?)?),
             None => None,
         };
         let (joints, min_manipulability) = config.robot.as_robot().start(&config.start)?;
