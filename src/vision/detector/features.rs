@@ -288,7 +288,7 @@ impl Detector for FeatureTracking {
     /// Matches the first frame to the reference (the hints are ignored).
     fn start(&mut self, image: &GreyView<'_>, _expected: &[Expected]) -> Result<Vec<Detection>> {
         self.last.fill(None);
-        let next = FramePyramid::new(&plane("image", image)?, self.settings.flow.levels)?;
+        let next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels)?;
         self.rematch(image, next.image())?;
         self.check_epipolar();
         self.reacquire(next.image());
@@ -300,7 +300,7 @@ impl Detector for FeatureTracking {
     /// Tracks the points from the last frame, checks them, and matches the frame afresh
     /// when too few remain.
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
-        let mut next = FramePyramid::new(&plane("image", image)?, self.settings.flow.levels)?;
+        let mut next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels)?;
         let same_size = self.previous.as_ref().is_some_and(|p| p.image().size() == next.image().size());
         if same_size && let Some(previous) = &mut self.previous {
             let which: Vec<usize> = (0..self.last.len()).filter(|&i| self.last[i].is_some()).collect();

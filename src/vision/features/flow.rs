@@ -3,13 +3,12 @@
 //! pixels of where it started (Kalal et al.'s forward-backward error), else it is lost.
 
 use kornia_image::{Image, ImageSize};
-use kornia_imgproc::filter::scharr_spatial_gradient_float;
 use kornia_imgproc::optical_flow_pyr_lk::{
     BorderMode, PyrLKError, PyrLKParams, PyrLKPrecomputed, PyrLKResult, calc_optical_flow_pyr_lk_with_precomputed,
 };
-use kornia_imgproc::pyramid::pyrdown_f32;
 
 use crate::vision::error::{Result, VisionError};
+use crate::vision::features::pyramid::{pyrdown, scharr};
 use crate::vision::image::GreyView;
 
 /// The tracker's settings.
@@ -40,7 +39,7 @@ pub fn plane(what: &str, image: &GreyView<'_>) -> Result<Image<f32, 1>> {
 /// it (as `previous`, forward and backward), where kornia's one-call API rebuilds both
 /// frames' pyramids at every call (four pyramids and two gradient sets per forward-backward
 /// pair instead of one of each). The levels are kornia's own (`build_lk_precomputed`'s
-/// `pyrdown_f32` and `scharr_spatial_gradient_float`), so the tracks are the same.
+/// `pyrdown_f32` and `scharr_spatial_gradient_float`, bit for bit), so the tracks are the same.
 pub struct FramePyramid {
     levels: Vec<Image<f32, 1>>,
     grad_x: Vec<Image<f32, 1>>,
@@ -56,22 +55,22 @@ impl std::fmt::Debug for FramePyramid {
 impl FramePyramid {
     /// The pyramid of `image` with `levels` levels above it, and its gradients.
     pub fn new(image: &Image<f32, 1>, levels: usize) -> Result<Self> {
+        Self::of(image.clone(), levels)
+    }
+
+    /// [`FramePyramid::new`] of an image given away (not copied). The filters are kornia's,
+    /// computed by [`pyramid`](crate::vision::features::pyramid) (the same bits, faster).
+    pub fn of(image: Image<f32, 1>, levels: usize) -> Result<Self> {
         let error =
             |e: kornia_image::ImageError| VisionError::InvalidImage { what: "image".into(), reason: e.to_string() };
         let mut pyramid = Vec::with_capacity(levels + 1);
-        pyramid.push(image.clone());
+        pyramid.push(image);
         for l in 1..=levels {
-            let source = &pyramid[l - 1];
-            let size = ImageSize { width: source.width().div_ceil(2), height: source.height().div_ceil(2) };
-            let mut down = Image::from_size_val(size, 0.0f32).map_err(error)?;
-            pyrdown_f32(source, &mut down).map_err(error)?;
-            pyramid.push(down);
+            pyramid.push(pyrdown(&pyramid[l - 1]).map_err(error)?);
         }
         let (mut grad_x, mut grad_y) = (Vec::with_capacity(levels + 1), Vec::with_capacity(levels + 1));
         for level in &pyramid {
-            let mut ix = Image::from_size_val(level.size(), 0.0f32).map_err(error)?;
-            let mut iy = Image::from_size_val(level.size(), 0.0f32).map_err(error)?;
-            scharr_spatial_gradient_float(level, &mut ix, &mut iy).map_err(error)?;
+            let (ix, iy) = scharr(level).map_err(error)?;
             grad_x.push(ix);
             grad_y.push(iy);
         }

@@ -34,9 +34,11 @@
 //! | matches across two cameras, checked by the fundamental matrix | [`matching`] |
 //! | a match refined to a fraction of a pixel (the reference's patch, warped, aligned) | [`refine`] |
 //! | frame-to-frame tracks, forward-backward checked | [`flow`] |
+//! | the pyramid's filters (kornia's, vectorised) | [`pyramid`] |
 
 pub mod flow;
 pub mod keypoints;
 pub mod matching;
+pub mod pyramid;
 pub mod refine;
 pub mod spread;

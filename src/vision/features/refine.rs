@@ -24,12 +24,17 @@ pub fn sample(image: &Image<f32, 1>, u: f64, v: f64) -> Option<f64> {
     if !(u >= 0.0 && v >= 0.0 && u <= (w - 1) as f64 && v <= (h - 1) as f64) {
         return None;
     }
+    Some(bilinear(image.as_slice(), w, h, u, v))
+}
+
+/// [`sample`] at a point known to be inside the `w x h` image `px`.
+#[inline]
+fn bilinear(px: &[f32], w: usize, h: usize, u: f64, v: f64) -> f64 {
     let (u0, v0) = (u.floor() as usize, v.floor() as usize);
     let (u1, v1) = ((u0 + 1).min(w - 1), (v0 + 1).min(h - 1));
     let (a, b) = (u - u0 as f64, v - v0 as f64);
-    let px = image.as_slice();
     let at = |x: usize, y: usize| f64::from(px[y * w + x]);
-    Some((1.0 - b) * ((1.0 - a) * at(u0, v0) + a * at(u1, v0)) + b * ((1.0 - a) * at(u0, v1) + a * at(u1, v1)))
+    (1.0 - b) * ((1.0 - a) * at(u0, v0) + a * at(u1, v0)) + b * ((1.0 - a) * at(u0, v1) + a * at(u1, v1))
 }
 
 /// The pixel in `frame` of the reference point `at` (pixels of level 0 of `pyramid`, the
@@ -66,14 +71,25 @@ pub fn refine(
 /// offset fitted at each step).
 fn align(template: &[f64], frame: &Image<f32, 1>, start: [f64; 2]) -> Option<[f64; 2]> {
     let mut p = Vector2::new(start[0], start[1]);
+    let (w, h, px) = (frame.width(), frame.height(), frame.as_slice());
+    let (mut values, mut grads) = (Vec::with_capacity(template.len()), Vec::with_capacity(template.len()));
     for _ in 0..20 {
-        let (mut values, mut grads) = (Vec::with_capacity(template.len()), Vec::with_capacity(template.len()));
+        // Every sample below lies within half a pixel of the patch: the patch inside the
+        // frame, or the refinement fails (as [`sample`] would at its first sample outside).
+        let (left, top) = (p.x + f64::from(-HALF) - 0.5, p.y + f64::from(-HALF) - 0.5);
+        let (right, bottom) = (p.x + f64::from(HALF) + 0.5, p.y + f64::from(HALF) + 0.5);
+        if !(left >= 0.0 && top >= 0.0 && right <= (w - 1) as f64 && bottom <= (h - 1) as f64) {
+            return None;
+        }
+        let at = |u: f64, v: f64| bilinear(px, w, h, u, v);
+        values.clear();
+        grads.clear();
         for dv in -HALF..=HALF {
             for du in -HALF..=HALF {
                 let (u, v) = (p.x + f64::from(du), p.y + f64::from(dv));
-                values.push(sample(frame, u, v)?);
-                let gx = (sample(frame, u + 0.5, v)? - sample(frame, u - 0.5, v)?) / 1.0;
-                let gy = (sample(frame, u, v + 0.5)? - sample(frame, u, v - 0.5)?) / 1.0;
+                values.push(at(u, v));
+                let gx = (at(u + 0.5, v) - at(u - 0.5, v)) / 1.0;
+                let gy = (at(u, v + 0.5) - at(u, v - 0.5)) / 1.0;
                 grads.push(Vector2::new(gx, gy));
             }
         }

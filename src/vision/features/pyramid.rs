@@ -1,0 +1,150 @@
+//! The two image filters of pyramidal Lucas-Kanade, computed as kornia-rs computes them
+//! (`kornia_imgproc::pyramid::pyrdown_f32`, `kornia_imgproc::filter::scharr_spatial_gradient_float`:
+//! the same kernels, the same borders, the same order of the sums, so the same bits), in
+//! loops the compiler can vectorise: kornia's per-pixel loops check the border and index
+//! with bounds checks (pyrdown) or run one rayon task a row (Scharr). The tests compare both
+//! with kornia's, bit for bit; the gain is measured by `benches/features_tracking.py`.
+
+use kornia_image::{Image, ImageError, ImageSize};
+
+/// OpenCV's `pyrDown` kernel (1 4 6 4 1) / 16, in each direction.
+const GAUSS: [f32; 5] = [0.0625, 0.25, 0.375, 0.25, 0.0625];
+/// The normalised Scharr kernels (kornia's `normalized_scharr_kernel3`), row by row.
+const SCHARR_X: [f32; 9] = [-0.09375, 0.0, 0.09375, -0.3125, 0.0, 0.3125, -0.09375, 0.0, 0.09375];
+const SCHARR_Y: [f32; 9] = [-0.09375, -0.3125, -0.09375, 0.0, 0.0, 0.0, 0.09375, 0.3125, 0.09375];
+
+/// OpenCV's `BORDER_REFLECT_101` index (`-1` is `1`, `len` is `len - 2`).
+fn reflect_101(p: i64, len: i64) -> usize {
+    if len == 1 {
+        return 0;
+    }
+    let period = 2 * (len - 1);
+    let p = p.abs() % period;
+    (if p >= len { period - p } else { p }) as usize
+}
+
+/// `src` blurred by the 5 x 5 Gaussian and halved (sizes rounded up), borders reflected
+/// (OpenCV's `pyrDown`).
+pub fn pyrdown(src: &Image<f32, 1>) -> Result<Image<f32, 1>, ImageError> {
+    let (sw, sh) = (src.width(), src.height());
+    let (dw, dh) = (sw.div_ceil(2), sh.div_ceil(2));
+    let mut dst = Image::from_size_val(ImageSize { width: dw, height: dh }, 0.0f32)?;
+    let (s, d) = (src.as_slice(), dst.as_slice_mut());
+    let mut weights = [0.0f32; 25];
+    for (k, w) in weights.iter_mut().enumerate() {
+        *w = GAUSS[k / 5] * GAUSS[k % 5];
+    }
+    // Interior: every tap inside the source.
+    for y in 1..dh.saturating_sub(1) {
+        let rows: [&[f32]; 5] = std::array::from_fn(|k| &s[(2 * y + k - 2) * sw..(2 * y + k - 1) * sw]);
+        let out = &mut d[y * dw..(y + 1) * dw];
+        for x in 1..dw.saturating_sub(1) {
+            let mut sum = 0.0f32;
+            for (ky, row) in rows.iter().enumerate() {
+                for (tap, weight) in row[2 * x - 2..2 * x + 3].iter().zip(&weights[ky * 5..ky * 5 + 5]) {
+                    sum += tap * weight;
+                }
+            }
+            out[x] = sum;
+        }
+    }
+    // The border (first and last rows and columns): indices reflected.
+    let (w, h) = (sw as i64, sh as i64);
+    for y in 0..dh {
+        let border_y = y == 0 || y + 1 >= dh;
+        for x in 0..dw {
+            if !(border_y || x == 0 || x + 1 >= dw) {
+                continue;
+            }
+            let mut sum = 0.0f32;
+            for ky in 0..5 {
+                let sy = reflect_101(2 * y as i64 + ky as i64 - 2, h);
+                for kx in 0..5 {
+                    let sx = reflect_101(2 * x as i64 + kx as i64 - 2, w);
+                    sum += s[sy * sw + sx] * weights[ky * 5 + kx];
+                }
+            }
+            d[y * dw + x] = sum;
+        }
+    }
+    Ok(dst)
+}
+
+/// The normalised Scharr gradients of `src` along x and y, borders replicated.
+pub fn scharr(src: &Image<f32, 1>) -> Result<(Image<f32, 1>, Image<f32, 1>), ImageError> {
+    let (w, h) = (src.width(), src.height());
+    let mut gx = Image::from_size_val(src.size(), 0.0f32)?;
+    let mut gy = Image::from_size_val(src.size(), 0.0f32)?;
+    let s = src.as_slice();
+    let (ox, oy) = (gx.as_slice_mut(), gy.as_slice_mut());
+    let at = |r: usize, c: usize| s[r * w + c];
+    // One pixel: the nine taps in kornia's order (rows, then columns).
+    let one = |taps: [f32; 9]| {
+        let (mut sx, mut sy) = (0.0f32, 0.0f32);
+        for ((tap, kx), ky) in taps.iter().zip(&SCHARR_X).zip(&SCHARR_Y) {
+            sx += tap * kx;
+            sy += tap * ky;
+        }
+        (sx, sy)
+    };
+    for r in 0..h {
+        let interior_row = h >= 2 && w >= 2 && r > 0 && r + 1 < h;
+        if interior_row {
+            let (up, mid, down) = (&s[(r - 1) * w..r * w], &s[r * w..(r + 1) * w], &s[(r + 1) * w..(r + 2) * w]);
+            let (rx, ry) = (&mut ox[r * w..(r + 1) * w], &mut oy[r * w..(r + 1) * w]);
+            for c in 1..w - 1 {
+                let taps =
+                    [up[c - 1], up[c], up[c + 1], mid[c - 1], mid[c], mid[c + 1], down[c - 1], down[c], down[c + 1]];
+                (rx[c], ry[c]) = one(taps);
+            }
+        }
+        for c in 0..w {
+            if interior_row && c > 0 && c + 1 < w {
+                continue;
+            }
+            // Replicated border: row and column clamped into the image.
+            let clamp = |i: usize, n: usize| (i.min(n).max(1)) - 1;
+            let taps = std::array::from_fn(|k| at(clamp(r + k / 3, h), clamp(c + k % 3, w)));
+            (ox[r * w + c], oy[r * w + c]) = one(taps);
+        }
+    }
+    Ok((gx, gy))
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
+mod tests {
+    use kornia_imgproc::filter::scharr_spatial_gradient_float;
+    use kornia_imgproc::pyramid::pyrdown_f32;
+
+    use super::*;
+
+    fn noise(w: usize, h: usize, seed: u64) -> Image<f32, 1> {
+        let mut state = seed;
+        let data = (0..w * h)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                ((state >> 33) % 25600) as f32 / 100.0
+            })
+            .collect();
+        Image::new(ImageSize { width: w, height: h }, data).unwrap()
+    }
+
+    /// Bit for bit kornia's, on even, odd and tiny sizes.
+    #[test]
+    fn the_filters_are_kornias_to_the_bit() {
+        for (w, h) in [(64, 48), (37, 23), (6, 5), (3, 2), (1, 1), (2, 7)] {
+            let src = noise(w, h, (w * 131 + h) as u64);
+            let mut down =
+                Image::from_size_val(ImageSize { width: w.div_ceil(2), height: h.div_ceil(2) }, 0.0).unwrap();
+            pyrdown_f32(&src, &mut down).unwrap();
+            assert_eq!(pyrdown(&src).unwrap().as_slice(), down.as_slice(), "pyrdown {w}x{h}");
+            let (mut ix, mut iy) =
+                (Image::from_size_val(src.size(), 0.0).unwrap(), Image::from_size_val(src.size(), 0.0).unwrap());
+            scharr_spatial_gradient_float(&src, &mut ix, &mut iy).unwrap();
+            let (gx, gy) = scharr(&src).unwrap();
+            assert_eq!(gx.as_slice(), ix.as_slice(), "scharr x {w}x{h}");
+            assert_eq!(gy.as_slice(), iy.as_slice(), "scharr y {w}x{h}");
+        }
+    }
+}
