@@ -47,6 +47,17 @@ def test_the_engine_key_defaults_to_kinematic_and_is_read_once() -> None:
     assert 'engine = "mujoco"' in s.to_toml()
 
 
+def test_supersample_defaults_to_one_and_is_written_when_set() -> None:
+    """`[world] supersample`: 1 unless said (not written then), kept by to_dict and to_toml, and
+    the kinematic simulator takes `supersample = 1` (its default) with `engine = "kinematic"`."""
+    assert "supersample" not in vsinv.load_scenario("mujoco-lens-12-6").to_dict()["world"]
+    s = vsinv.sim.Scenario.from_dict(_scenario(supersample=3))
+    assert s.to_dict()["world"] == {"engine": "mujoco", "latency_frames": 0, "supersample": 3}
+    assert "supersample = 3" in s.to_toml()
+    d = vsinv.load_scenario("lens-12-6").to_dict() | {"world": {"engine": "kinematic", "supersample": 1}}
+    assert "world" not in vsinv.sim.Scenario.from_dict(d).to_dict()
+
+
 @pytest.mark.parametrize(
     ("world", "key", "words"),
     [
@@ -54,6 +65,10 @@ def test_the_engine_key_defaults_to_kinematic_and_is_read_once() -> None:
         ({"engine": "kinematic", "latency_frames": 1}, "world.latency_frames", "mujoco"),
         ({"engine": "mujoco", "latency_frames": 1001}, "world.latency_frames", "1000"),
         ({"engine": "mujoco", "lag": 1}, "world", "lag"),
+        ({"engine": "mujoco", "supersample": 0}, "world.supersample", "positive whole number"),
+        ({"engine": "mujoco", "supersample": -2}, "world.supersample", ""),
+        ({"engine": "mujoco", "supersample": 1.5}, "world.supersample", ""),
+        ({"engine": "kinematic", "supersample": 2}, "world.supersample", "mujoco"),
     ],
 )
 def test_bad_world_keys_are_refused_by_name(world: dict, key: str, words: str) -> None:
@@ -203,6 +218,45 @@ def test_the_views_are_mujocos_renders(mujoco_run: vsinv.RunResult) -> None:
     assert gap.max() < 0.5, gap
     own = vsinv.vision.render(r.scenario.to_dict() | {"world": {"engine": "kinematic"}}, pose=r.pose[-1], time=float(r.time[-1]))
     assert np.abs(image.astype(float) - own.astype(float)).mean() > 1.0
+
+
+# -- supersample ---------------------------------------------------------------------------------
+@needs_mujoco
+def test_supersample_past_the_render_bound_is_refused_by_its_key() -> None:
+    """`world.supersample` beyond `MAX_SUPERSAMPLE`, or making the rendered side exceed
+    `MAX_RENDER_SIDE`, is refused naming the key when the world is made; the argument
+    `supersample=` overrides the key (and is then the name in the error)."""
+    with pytest.raises(vsinv.InvalidInput, match=f"^world.supersample: .*1 to {vm.MAX_SUPERSAMPLE}, got 5"):
+        vm.World.from_scenario(_scenario(supersample=vm.MAX_SUPERSAMPLE + 1))
+    wide = _scenario(supersample=4)
+    for lens in ("reference_camera", "camera"):
+        wide[lens]["width"] = vm.MAX_RENDER_SIDE // 4 + 1
+    with pytest.raises(vsinv.InvalidInput, match=f"^world.supersample: expected 1 to {vm.MAX_RENDER_SIDE} pixels"):
+        vm.World.from_scenario(wide)
+    with pytest.raises(vsinv.InvalidInput, match="^supersample: "):
+        vm.World.from_scenario(_scenario(supersample=2), supersample=0)
+    with vm.World.from_scenario(_scenario(supersample=2), supersample=1) as world:
+        assert world.supersample == 1
+
+
+@needs_mujoco
+def test_every_layer_renders_with_the_scenario_supersample(tmp_path: Path) -> None:
+    """The key is read wherever a MuJoCo scenario is rendered: the loop's frames are the world's
+    k x k means (not its one-sample frames), `vsinv.mujoco.run`'s `supersample=` defaults to it,
+    and the recording re-renders the loop's frames pixel for pixel."""
+    from vsinv.mujoco._effects import camera_image
+    from vsinv.recording import frames
+
+    d = _scenario(supersample=2)
+    run = vm.run_loop(d, max_iterations=2)
+    n = len(run.result.time)
+    with vm.World.from_scenario(d) as world:
+        assert world.supersample == 2
+        np.testing.assert_array_equal(run.last_image, camera_image(world, d, run.result.pose[-1], n))
+    with vm.World.from_scenario(d, supersample=1) as plain:
+        assert np.abs(run.last_image.astype(float) - camera_image(plain, d, run.result.pose[-1], n)).max() > 10
+    np.testing.assert_array_equal(vm.run(d, max_iterations=2).pose, run.result.pose)
+    np.testing.assert_array_equal(list(frames(run.result))[-1], run.last_image)
 
 
 # -- latency (issue 31, item 2) -------------------------------------------------------------------

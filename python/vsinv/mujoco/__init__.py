@@ -19,12 +19,12 @@ from ._camera import FLIP, k_of_fovy, k_of_intrinsics
 from ._loop import MujocoRun, run, run_loop
 from ._panda import panda_mjcf
 from ._views import Views
-from ._world import MAX_MJCF_BYTES, MAX_RENDER_SIDE, World, available
+from ._world import MAX_MJCF_BYTES, MAX_RENDER_SIDE, MAX_SUPERSAMPLE, World, available
 
 __all__ = [
     "FLIP",
     "HandEyeStations",
     "MAX_MJCF_BYTES",
-    "MAX_RENDER_SIDE", "MujocoRun", "Views", "World", "available", "calibrate_eye_to_hand", "k_of_fovy", "k_of_intrinsics", "joint_velocities",
+    "MAX_RENDER_SIDE", "MAX_SUPERSAMPLE", "MujocoRun", "Views", "World", "available", "calibrate_eye_to_hand", "k_of_fovy", "k_of_intrinsics", "joint_velocities",
     "panda_mjcf", "run", "run_loop", "ur5_mjcf", "ur5e_mjcf", "with_camera_to_base",
 ]

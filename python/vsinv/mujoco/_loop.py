@@ -18,7 +18,7 @@ from ._session import MujocoRun, _arrays, _intrinsics, _Options, _record, _sessi
 from ._world import World
 
 
-def run(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int = 1,
+def run(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int | None = None,
         max_iterations: int | None = None, world: World | None = None, record: bool = True,
         progress: Callable[[int, int], object] | None = None) -> RunResult:
     """Runs `scenario` (a `Scenario`, dict, built-in name or path) through MuJoCo's images and
@@ -26,14 +26,15 @@ def run(scenario: Any, *, law: str | None = None, start: Any = None, supersample
     the reference image rendered at F* with `[reference_camera]`'s K, the servo camera with
     `[camera]`'s, `ImageServo` with `[estimate]` as K_hat and `[control]`/`[stop]` as its
     session, from `start` (4x4; default the scenario's `[start]`), the twist of frame k applied
-    after frame k + `[world] latency_frames`. `law` overrides `[control] law`; `world` reuses a
+    after frame k + `[world] latency_frames`, each frame rendered with `[world] supersample`
+    samples a side per pixel unless `supersample` overrides it. `law` overrides `[control] law`; `world` reuses a
     `World.from_scenario` of the same scenario; `record=False` keeps no rows (the summary
     only); `progress(done, total)` is called after each frame."""
     return run_loop(scenario, law=law, start=start, supersample=supersample, max_iterations=max_iterations,
                     world=world, record=record, progress=progress).result
 
 
-def run_loop(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int = 1,
+def run_loop(scenario: Any, *, law: str | None = None, start: Any = None, supersample: int | None = None,
              max_iterations: int | None = None, world: World | None = None, record: bool = True,
              progress: Callable[[int, int], object] | None = None) -> MujocoRun:
     """`run`, with what only the MuJoCo loop records (`MujocoRun`: K per frame, timings)."""

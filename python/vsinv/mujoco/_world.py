@@ -21,17 +21,30 @@ MAX_MJCF_BYTES = 16 << 20
 MAX_RENDER_SIDE = 8192
 
 
-def _check_size(width: Any, height: Any, supersample: Any) -> None:
-    """The rendered image's size: whole numbers, at most `MAX_RENDER_SIDE` a side once supersampled."""
-    if not 1 <= int(supersample) <= 4:
-        raise InvalidInput(f"supersample: expected 1 to 4, got {supersample!r}")
+#: The largest supersampling factor (`[world] supersample`, `supersample=`): k x k samples a pixel.
+MAX_SUPERSAMPLE = 4
+
+
+def _check_size(width: Any, height: Any, supersample: Any, key: str | None = None) -> None:
+    """The rendered image's size: whole numbers, at most `MAX_RENDER_SIDE` a side once
+    supersampled. The error names the arguments, or `key` (a scenario key: `world.supersample`)."""
+    whole = isinstance(supersample, (int, np.integer)) and not isinstance(supersample, bool)
+    if not whole or not 1 <= supersample <= MAX_SUPERSAMPLE:
+        raise InvalidInput(f"{key or 'supersample'}: expected a whole number from 1 to {MAX_SUPERSAMPLE}, "
+                           f"got {supersample!r}")
     if not all(isinstance(n, (int, np.integer)) and not isinstance(n, bool) for n in (width, height)):
         raise InvalidInput(f"width, height: expected whole numbers, got {width!r} x {height!r}")
     if not (1 <= width * int(supersample) <= MAX_RENDER_SIDE and 1 <= height * int(supersample) <= MAX_RENDER_SIDE):
         raise InvalidInput(
-            f"width, height: expected 1 to {MAX_RENDER_SIDE} pixels a side once supersampled, "
+            f"{key or 'width, height'}: expected 1 to {MAX_RENDER_SIDE} pixels a side once supersampled, "
             f"got {width} x {height} (supersample {supersample})"
         )
+
+
+def scenario_supersample(d: dict[str, Any]) -> Any:
+    """The scenario dict's `[world] supersample` (1 when absent): how many samples a side each
+    pixel of its MuJoCo images integrates."""
+    return (d.get("world") or {}).get("supersample", 1)
 
 
 def _mujoco() -> Any:
@@ -123,12 +136,16 @@ class World:
 
     # -- construction -----------------------------------------------------------------------
     @classmethod
-    def from_scenario(cls, scenario: Any, *, supersample: int = 1) -> World:
+    def from_scenario(cls, scenario: Any, *, supersample: int | None = None) -> World:
         """The scenario's target (dots as white discs facing F*, or its tag rig textured with the
         tags' bit patterns) lit by two lights, and a free camera with the scenario's `[camera]`
-        resolution and K (10 um pixels). `scenario`: a `Scenario`, dict, built-in name or path."""
+        resolution and K (10 um pixels). `scenario`: a `Scenario`, dict, built-in name or path;
+        `supersample` overrides its `[world] supersample` (default: the scenario's, else 1)."""
         mujoco = _mujoco()
         d = load_scenario(scenario).to_dict()
+        key = None
+        if supersample is None:
+            supersample, key = scenario_supersample(d), "world.supersample"
         K, width, height = _k_of(d, "camera")
         K_ref, w_ref, h_ref = _k_of(d, "reference_camera")
         if (w_ref, h_ref) != (width, height):
@@ -137,6 +154,7 @@ class World:
         eye_to_hand = (d.get("world") or {}).get("eye_to_hand") is not None
         has_arm = eye_to_hand or d.get("robot", {}).get("kind") == "urdf"
         arm = load_scenario(scenario).arm() if has_arm else None
+        _check_size(width, height, supersample, key)
         w, h = width * supersample, height * supersample
         xml, assets, kind, points = _scene.scene(d, w, h, arm)
         if arm is not None and not _mounted.is_builtin(arm):  # a user's URDF arm

@@ -140,6 +140,15 @@ impl Scenario {
                 "a latency is applied by the \"mujoco\" engine only (world.engine); the kinematic simulator has none";
             return Err(scenario_error("world.latency_frames", reason));
         }
+        if w.supersample == 0 {
+            // The largest factor is the MuJoCo world's (`vsinv.mujoco`: the supersampled side).
+            return Err(scenario_error("world.supersample", "expected a positive whole number, got 0"));
+        }
+        if w.supersample > 1 && w.engine == Engine::Kinematic {
+            let reason = "MuJoCo's images are supersampled (world.engine = \"mujoco\"); the kinematic \
+                          simulator's renderer already integrates each pixel's area";
+            return Err(scenario_error("world.supersample", reason));
+        }
         if w.eye_to_hand.is_some() && w.engine == Engine::Kinematic {
             let reason = "a fixed camera and an arm carrying the target are simulated by the \"mujoco\" engine only";
             return Err(scenario_error("world.eye_to_hand", reason));

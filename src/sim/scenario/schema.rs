@@ -357,7 +357,7 @@ pub struct EyeToHandSpec {
 }
 
 /// `[world]`: which world runs the scenario, and what it adds to the loop.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WorldSpec {
     /// `"kinematic"` (default: this crate's simulator) or `"mujoco"` (Python's `vsinv.mujoco`).
@@ -370,6 +370,25 @@ pub struct WorldSpec {
     /// Eye-to-hand: a fixed camera watching a target carried by an arm (the `mujoco` engine only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub eye_to_hand: Option<EyeToHandSpec>,
+    /// Each pixel of a MuJoCo image is the mean of a k x k block rendered k times larger, as a
+    /// sensor's pixel integrates the light over its area (default 1: one sample a pixel, whose
+    /// edge aliasing the detections carry; the `mujoco` engine only).
+    #[serde(default = "one_sample", skip_serializing_if = "is_one_sample")]
+    pub supersample: u32,
+}
+
+fn one_sample() -> u32 {
+    1
+}
+
+fn is_one_sample(k: &u32) -> bool {
+    *k == 1
+}
+
+impl Default for WorldSpec {
+    fn default() -> Self {
+        Self { engine: Engine::default(), latency_frames: 0, eye_to_hand: None, supersample: 1 }
+    }
 }
 
 impl WorldSpec {
