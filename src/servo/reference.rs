@@ -120,7 +120,7 @@ mod tests {
         let visible = vec![true; px.len()];
         let outer = choose_visible_basis(&px, &visible, 0).unwrap();
         let inner = choose_visible_basis(&px, &visible, 1).unwrap();
-        let border = |k: usize| k / 6 == 0 || k / 6 == 5 || k % 6 == 0 || k % 6 == 5;
+        let border = |k: usize| k / 6 == 0 || k / 6 == 5 || k.is_multiple_of(6) || k % 6 == 5;
         assert!(outer.iter().all(|&k| border(k)), "{outer:?}");
         assert!(inner.iter().all(|&k| !border(k)), "{inner:?}");
         let area = |t: [usize; 3]| {

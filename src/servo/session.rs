@@ -476,7 +476,7 @@ impl Servo {
 
     /// The control step on the last observed image: depths, the path's reference, the law.
     /// A failure of any of them is a stop verdict, not an error.
-    /// An image ridden out with a basis point missing ([`BasisHold`]) repeats the last twist.
+    /// An image ridden out with a basis point missing (see [`ServoConfig::basis_hold`]) repeats the last twist.
     pub fn control(&mut self) -> ServoStep {
         if self.hold.holding() {
             self.iteration += 1;
