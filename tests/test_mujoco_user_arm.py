@@ -57,6 +57,20 @@ def _half(d: dict) -> dict:
     return d
 
 
+def _forty_frames_beside_the_builtin(user: dict, d: dict):
+    """40 frames of the scenario with the user's URDF arm (`user`) and with the built-in UR5e
+    (`d`): the two results, after checking which arm each loaded and the warning about the
+    actuators vsinv adds to a URDF arm."""
+    arm = vsinv.load_scenario(user).arm()
+    assert arm.source.endswith("ur5e.urdf") and vsinv.load_scenario(d).arm().source == "builtin:ur5e"
+    with pytest.warns(UserWarning, match="velocity actuators"):
+        mine = vm.run_loop(user, max_iterations=40)
+    builtin = vm.run_loop(d, max_iterations=40)
+    a, b = mine.result, builtin.result
+    assert len(a.time) == len(b.time) == 41  # the start and 40 steps
+    return a, b
+
+
 @needs_mujoco
 @pytest.mark.slow
 def test_the_projects_ur5e_urdf_as_a_users_file_runs_as_the_built_in_arm(tmp_path: Path, monkeypatch) -> None:
@@ -71,13 +85,7 @@ def test_the_projects_ur5e_urdf_as_a_users_file_runs_as_the_built_in_arm(tmp_pat
     _user_ur5e(tmp_path)
     d = _half(vsinv.load_scenario(str(UR5E)).to_dict())
     user = {**d, "robot": {**d["robot"], "urdf": "ur5e.urdf"}}
-    arm = vsinv.load_scenario(user).arm()
-    assert arm.source.endswith("ur5e.urdf") and vsinv.load_scenario(d).arm().source == "builtin:ur5e"
-    with pytest.warns(UserWarning, match="velocity actuators"):
-        mine = vm.run_loop(user, max_iterations=40)
-    builtin = vm.run_loop(d, max_iterations=40)
-    a, b = mine.result, builtin.result
-    assert len(a.time) == len(b.time) == 41  # the start and 40 steps
+    a, b = _forty_frames_beside_the_builtin(user, d)
     assert a.summary["status"] == b.summary["status"]
     joints, camera = np.abs(a.joints - b.joints).max(), np.abs(a.pose[:, :3, 3] - b.pose[:, :3, 3]).max()
     assert joints < 1e-2 and camera < 2e-3, (joints, camera)  # measured: 6.8e-3 rad, 0.99 mm
@@ -120,13 +128,7 @@ def test_eye_to_hand_with_a_users_urdf_runs_as_the_built_in_arm(tmp_path: Path, 
     _user_ur5e(tmp_path)
     d = _half(vsinv.load_scenario("mujoco-eye-to-hand-12-6").to_dict())
     user = {**d, "world": {**d["world"], "eye_to_hand": {**d["world"]["eye_to_hand"], "urdf": "ur5e.urdf"}}}
-    arm = vsinv.load_scenario(user).arm()
-    assert arm.source.endswith("ur5e.urdf") and vsinv.load_scenario(d).arm().source == "builtin:ur5e"
-    with pytest.warns(UserWarning, match="velocity actuators"):
-        mine = vm.run_loop(user, max_iterations=40)
-    builtin = vm.run_loop(d, max_iterations=40)
-    a, b = mine.result, builtin.result
-    assert len(a.time) == len(b.time) == 41
+    a, b = _forty_frames_beside_the_builtin(user, d)
     seen = a.visible[0]  # at half resolution one dot is lost in the first image by both
     assert (seen == b.visible[0]).all() and seen.sum() >= 10
     assert np.abs(a.pixels[0][seen] - b.pixels[0][seen]).max() < 0.5  # measured: equal

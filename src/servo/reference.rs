@@ -100,20 +100,12 @@ mod tests {
                 // A slight bulge makes every border point a strict hull vertex.
                 let (x, y) = (f64::from(i) * 20.0, f64::from(j) * 20.0);
                 let bulge = |t: f64| 3.0 * (t / 100.0) * (1.0 - t / 100.0);
-                let dx = if i == 0 {
-                    -bulge(y)
-                } else if i == 5 {
-                    bulge(y)
-                } else {
-                    0.0
+                let side = |k: i32, t: f64| match k {
+                    0 => -bulge(t),
+                    5 => bulge(t),
+                    _ => 0.0,
                 };
-                let dy = if j == 0 {
-                    -bulge(x)
-                } else if j == 5 {
-                    bulge(x)
-                } else {
-                    0.0
-                };
+                let (dx, dy) = (side(i, y), side(j, x));
                 px.push([x + dx, y + dy]);
             }
         }
