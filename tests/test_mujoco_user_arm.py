@@ -57,6 +57,18 @@ def _half(d: dict) -> dict:
     return d
 
 
+def _users_ur5e_world(tmp_path: Path, urdf_text: str | None = None) -> tuple[dict, vm.World]:
+    """mujoco-arm-ur5e-12-6 at half resolution with `ur5e.urdf` written in `tmp_path` as the
+    user's arm (the project's file, or `urdf_text`), and its MuJoCo world (the warning about
+    the actuators vsinv adds left out)."""
+    _user_ur5e(tmp_path, urdf_text)
+    d = _half(vsinv.load_scenario(str(UR5E)).to_dict())
+    d["robot"]["urdf"] = "ur5e.urdf"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return d, vm.World.from_scenario(d)
+
+
 def _forty_frames_beside_the_builtin(user: dict, d: dict):
     """40 frames of the scenario with the user's URDF arm (`user`) and with the built-in UR5e
     (`d`): the two results, after checking which arm each loaded and the warning about the
@@ -99,12 +111,7 @@ def test_the_urdf_arms_camera_site_jacobian_is_the_finite_difference(monkeypatch
     from vsinv.mujoco import _mounted
 
     monkeypatch.chdir(tmp_path)
-    _user_ur5e(tmp_path)
-    d = _half(vsinv.load_scenario(str(UR5E)).to_dict())
-    d["robot"]["urdf"] = "ur5e.urdf"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        world = vm.World.from_scenario(d)
+    d, world = _users_ur5e_world(tmp_path)
     with world:
         arm, m, data = world.arm, world.model, world.data
         assert m.nu == 6 and m.nq == 6
@@ -151,12 +158,7 @@ def test_a_start_pose_is_reached_by_the_users_urdf_not_the_built_in_of_its_name(
     text = (ROOT / "robots" / "ur5e.urdf").read_text()
     longer = text.replace('<origin xyz="-0.425 0 0" rpy="0 0 0"/>', '<origin xyz="-0.47 0 0" rpy="0 0 0"/>')
     assert longer != text
-    _user_ur5e(tmp_path, longer)
-    d = _half(vsinv.load_scenario(str(UR5E)).to_dict())
-    d["robot"]["urdf"] = "ur5e.urdf"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        world = vm.World.from_scenario(d)
+    d, world = _users_ur5e_world(tmp_path, longer)
     with world:
         arm = world.arm
         assert not arm.source.startswith("builtin:")
