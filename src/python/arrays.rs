@@ -170,6 +170,12 @@ pub(crate) fn pixels_arg<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<F
     f64_array(obj, what, &[None, Some(2)])
 }
 
+/// A 4x4 homogeneous pose argument (`pose`), finite and rigid: its isometry.
+pub(crate) fn pose_arg(obj: &Bound<'_, PyAny>) -> PyResult<nalgebra::Isometry3<f64>> {
+    let a = f64_array(obj, "pose", &[Some(4), Some(4)])?;
+    Ok(crate::core::se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?)
+}
+
 /// An `(n,)` depth array argument.
 pub(crate) fn depths_arg<'py>(obj: &Bound<'py, PyAny>) -> PyResult<F64Array<'py>> {
     f64_array(obj, "depths", &[None])

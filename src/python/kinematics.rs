@@ -5,9 +5,8 @@
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, from_matrix, vec1};
+use super::arrays::{f64_array, from_matrix, pose_arg, vec1};
 use super::errors::invalid_argument;
-use crate::core::se3;
 use crate::sim::arm::{ArmModel, BUILTIN_ARMS, DEFAULT_DAMPING, IkSolution};
 
 /// A built-in arm by name (its default end-effector).
@@ -128,8 +127,7 @@ fn ik(
     seed: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<PyIkSolution> {
     let model = builtin_arm(arm)?;
-    let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
-    let target = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
+    let target = pose_arg(pose)?;
     let seed = seed.map(|s| joints_arg(s, "seed", &model)).transpose()?;
     let inner = py.detach(|| model.ik(&target, seed.as_deref()))?;
     Ok(PyIkSolution { inner })

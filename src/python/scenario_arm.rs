@@ -6,8 +6,7 @@
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, from_matrix, vec1};
-use crate::core::se3;
+use super::arrays::{f64_array, from_matrix, pose_arg, vec1};
 use crate::sim::arm::ArmRobot;
 
 /// The arm of a scenario (`Scenario.arm()`): the built-in model or URDF, its base in F*, the
@@ -151,8 +150,7 @@ impl PyScenarioArm {
         pose: &Bound<'py, PyAny>,
         seed: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
-        let target = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
+        let target = pose_arg(pose)?;
         let seed = seed.map(|s| joints_of(&self.inner, s, "seed")).transpose()?;
         let model = &self.inner.model;
         let solution = py.detach(|| model.ik(&target, seed.as_deref()))?;

@@ -5,7 +5,7 @@
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, from_matrix, mat, vec1};
+use super::arrays::{f64_array, from_matrix, mat, pose_arg, vec1};
 use super::errors::{PyError, Value, invalid_argument};
 use crate::core::se3;
 use crate::error::{Error, Short, check_finite, check_finite_matrix, check_overflow};
@@ -56,8 +56,7 @@ pub fn thetau_from_pose<'py>(
     py: Python<'py>,
     pose: &Bound<'py, PyAny>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
-    let a = f64_array(pose, "pose", &[Some(4), Some(4)])?;
-    let pose = se3::pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?;
+    let pose = pose_arg(pose)?;
     Ok((vec1(py, pose.translation.vector.as_slice()), vec1(py, &se3::thetau_from_pose(&pose))))
 }
 

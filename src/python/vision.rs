@@ -6,11 +6,10 @@
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
 
-use super::arrays::{f64_array, mat, points2};
+use super::arrays::{f64_array, mat, points2, pose_arg};
 use super::image_arg::{image_arg, image_error};
 use super::shared::Shared;
 use super::sim::scenario_arg;
-use crate::core::se3::pose_from_matrix;
 use crate::sim::views::{Shot, View, render_view as render_scenario_view};
 use crate::vision::dots::{DetectConfig, Dot, detect_dots as detect};
 use crate::vision::image::{GreyImage, load_image as load_image_file, save_png};
@@ -38,13 +37,7 @@ fn scenario_view(
     reference: bool,
 ) -> PyResult<View> {
     let config = scenario_arg(scenario)?.to_config()?;
-    let pose = match pose {
-        Some(p) => {
-            let a = f64_array(p, "pose", &[Some(4), Some(4)])?;
-            Some(pose_from_matrix(&nalgebra::Matrix4::from_row_slice(a.as_slice()?))?)
-        }
-        None => None,
-    };
+    let pose = pose.map(pose_arg).transpose()?;
     let shot = if reference { Shot::Reference } else { Shot::Servo { time } };
     Ok(py.detach(|| render_scenario_view(&config, shot, pose.as_ref()))?)
 }

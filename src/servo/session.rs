@@ -9,7 +9,7 @@ use nalgebra::Vector6;
 use crate::core::camera::Intrinsics;
 use crate::core::control::ControlState;
 use crate::core::distortion::{Distortion, undistort_point};
-use crate::core::invariant::{choose_basis, validate_basis};
+use crate::core::invariant::validate_basis;
 use crate::core::noise_meter::PixelNoiseMeter;
 use crate::core::uncertainty::Measurement;
 use crate::error::{Error, Result, check_finite_points, check_positive};
@@ -144,7 +144,6 @@ impl Servo {
         check_finite_points("reference_pixels", &pixels)?;
         let basis = match config.basis {
             Some(b) => validate_basis(b, n)?,
-            None if config.basis_inset == 0 => choose_basis(&pixels)?,
             None => choose_visible_basis(&pixels, &vec![true; n], config.basis_inset)?,
         };
         let reference_image = ReferenceImage::new(pixels, basis)?;
