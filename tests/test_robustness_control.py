@@ -397,7 +397,7 @@ def test_servo_steps(data: Any) -> None:
         assert step.twist.shape == (6,) and np.all(np.isfinite(step.twist))
 
 
-@covers("Servo.basis", "Servo.basis_switches", "Servo.certainty", "Servo.iterations", "Servo.law", "Servo.pixel_sigma",
+@covers("Servo.basis", "Servo.basis_switches", "Servo.basis_held_images", "Servo.certainty", "Servo.iterations", "Servo.law", "Servo.pixel_sigma",
         "Servo.reference_pixels", "Servo.stop_rule")
 @fuzz_settings(20)
 @given(st.data())
@@ -408,7 +408,7 @@ def test_servo_state(data: Any) -> None:
     for _ in range(steps):
         servo.step(CUR_PX)
     assert servo.law == law and len(servo.basis) == 3 and servo.reference_pixels.shape == (N, 2)
-    assert servo.iterations == steps and servo.basis_switches == 0
+    assert servo.iterations == steps and servo.basis_switches == 0 and servo.basis_held_images == 0
     assert (servo.pixel_sigma is None) == (steps < 3)
     c = servo.certainty()
     # floor_pixel_sigma is None with the stall rule off (a plain Servo's default).

@@ -253,7 +253,8 @@ def test_tag_tracker(data: Any) -> None:
 
 
 @covers("ImageServo", "ImageServo.step", "ImageServo.ids", "ImageServo.reference_pixels", "ImageServo.iterations",
-        "ImageServo.basis", "ImageServo.basis_switches", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.stopped_early", "ImageStep.twist",
+        "ImageServo.basis", "ImageServo.basis_switches",
+        "ImageServo.basis_held_images", "ImageServo.pixel_sigma", "ImageServo.certainty", "ImageStep", "ImageStep.found", "ImageStep.pixels", "ImageStep.stopped_early", "ImageStep.twist",
         "ImageStep.verdict", "ImageStep.reason", "ImageStep.running", "ImageStep.telemetry")
 @fuzz_settings(60)
 @given(st.data())
@@ -281,6 +282,7 @@ def test_image_servo(data: Any) -> None:
     assert call(getattr, pipeline, "iterations", _api="ImageServo.iterations") == 0
     assert len(call(getattr, pipeline, "basis", _api="ImageServo.basis")) == 3
     assert call(getattr, pipeline, "basis_switches", _api="ImageServo.basis_switches") >= 0
+    assert call(getattr, pipeline, "basis_held_images", _api="ImageServo.basis_held_images") == 0
     nxt = data.draw(image_variants(image), label="step image")
     step = call(pipeline.step, nxt.value, _api="ImageServo.step", _expect=ANY, _names=("image", "first_points"))
     if returned(step):

@@ -102,6 +102,35 @@ def test_lost_features_and_the_iteration_limit():
     assert verdicts == ["running", "running", "observed"]
 
 
+@pytest.mark.parametrize("hold", [None, 0, 2])
+def test_a_basis_point_missing_for_two_images_is_ridden_out_as_basis_hold_says(hold):
+    """A basis point seen before and then missing: `basis_hold` images (default 3) keep the
+    basis and repeat the last twist; 0 changes the basis at once."""
+    px, z = reference()
+    servo = vsinv.Servo(px, K_HAT, reference_depths=z, **({} if hold is None else {"basis_hold": hold}))
+    pixels, _ = view(vsinv.geometry.exp_twist(START))
+    first = servo.step(pixels)
+    basis, visible = servo.basis, np.ones(12, bool)
+    visible[basis[0]] = False
+    twists = [servo.step(pixels, visible=visible).twist for _ in range(2)]
+    if hold == 0:
+        assert servo.basis_switches == 1 and basis[0] not in servo.basis and servo.basis_held_images == 0
+    else:  # the default (3) and 2 both cover two images
+        assert servo.basis == basis and servo.basis_switches == 0 and servo.basis_held_images == 2
+        assert all(np.array_equal(t, first.twist) for t in twists)
+    if hold == 2:  # a third image is past the hold: the basis changes
+        servo.step(pixels, visible=visible)
+        assert servo.basis_switches == 1 and basis[0] not in servo.basis
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, "3"])
+def test_a_bad_basis_hold_is_refused_by_name(bad):
+    px, z = reference()
+    with pytest.raises(vsinv.InvalidInput, match="^basis_hold: ") as err:
+        vsinv.Servo(px, K_HAT, reference_depths=z, basis_hold=bad)
+    assert err.value.argument == "basis_hold"
+
+
 @pytest.mark.parametrize(
     ("law", "kwargs", "name"),
     [

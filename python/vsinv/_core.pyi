@@ -441,12 +441,14 @@ class Servo:
     `step(pixels, depths, visible)` returns the twist to send and the verdict.
 
     The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
-    `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`: `gain` to
-    `max_angular_speed`; None or absent: the law's default); arguments of another law are refused
-    by name. A step runs the loop logic the simulator runs too: stop rules certified by the pose
-    uncertainty, lost features, the rz = pi trap, the iteration limit, depth estimation, path
-    following. A stop is final: once a step has returned one, every later step returns the same
-    verdict with a zero twist.
+    `stop_rule`, `path_samples`, `basis_hold`, `dt`) and the laws' options
+    (`vsinv.laws.LAW_OPTIONS`: `gain` to `max_angular_speed`; None or absent: the law's default);
+    arguments of another law are refused by name. `basis_hold` (default 3) is how many
+    consecutive images a missing basis point is ridden out, the basis kept and the last twist
+    repeated with no stop judged; 0 changes the basis at once. A step runs the loop logic the
+    simulator runs too: stop rules certified by the pose uncertainty, lost features, the rz = pi
+    trap, the iteration limit, depth estimation, path following. A stop is final: once a step has
+    returned one, every later step returns the same verdict with a zero twist.
 
     Works from several threads: each call holds the GIL, so calls take turns."""
 
@@ -471,6 +473,7 @@ class Servo:
         stop: dict[str, float | int | None] | None = None,
         stop_rule: Literal["pixel", "invariant"] | None = None,
         path_samples: int | None = None,
+        basis_hold: int | None = None,
         dt: float = 0.04,
     ) -> Servo: ...
     def step(
@@ -489,6 +492,10 @@ class Servo:
     @property
     def basis_switches(self) -> int:
         """How many times the basis changed because one of its points was not visible."""
+    @property
+    def basis_held_images(self) -> int:
+        """How many images were ridden out with a basis point missing: the basis kept and the last
+        twist repeated (`basis_hold`)."""
     @property
     def law(self) -> Literal["invariant", "ibvs", "none"]:
         """The law: "invariant", "ibvs" or "none"."""
@@ -608,6 +615,10 @@ class ImageServo:
     @property
     def basis_switches(self) -> int:
         """How many times the basis changed because one of its points was not visible."""
+    @property
+    def basis_held_images(self) -> int:
+        """How many images were ridden out with a basis point missing: the basis kept and the last
+        twist repeated (`basis_hold`)."""
     @property
     def pixel_sigma(self) -> float | None:
         """The pixel noise measured on the last frames (None before three), pixels."""

@@ -247,6 +247,12 @@ impl PyImageServo {
     fn basis_switches(&self, py: Python<'_>) -> PyResult<usize> {
         Ok(self.inner.lock(py)?.servo().basis_switches())
     }
+    /// How many images were ridden out with a basis point missing: the basis kept and the last
+    /// twist repeated (`basis_hold`).
+    #[getter]
+    fn basis_held_images(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.inner.lock(py)?.servo().basis_held_images())
+    }
     /// The pixel noise measured on the last frames (None before three), pixels.
     #[getter]
     fn pixel_sigma(&self, py: Python<'_>) -> PyResult<Option<f64>> {

@@ -125,13 +125,14 @@ pub(super) struct ServoOptions<'py> {
     stop: Option<Bound<'py, PyDict>>,
     stop_rule: Option<String>,
     path_samples: Option<usize>,
+    basis_hold: Option<usize>,
     dt: f64,
 }
 
 /// The session's keyword arguments `ServoOptions::from_kwargs` knows besides the laws'
 /// options ([`LAW_OPTIONS`]), in `Servo`'s order.
-pub(super) const SESSION_OPTIONS: [&str; 8] =
-    ["law", "reference_depths", "depths", "basis", "stop", "stop_rule", "path_samples", "dt"];
+pub(super) const SESSION_OPTIONS: [&str; 9] =
+    ["law", "reference_depths", "depths", "basis", "stop", "stop_rule", "path_samples", "basis_hold", "dt"];
 
 /// Every keyword argument of the session: its own, then the laws' options.
 pub(super) fn servo_option_names() -> Vec<&'static str> {
@@ -151,6 +152,7 @@ impl<'py> ServoOptions<'py> {
             stop: None,
             stop_rule: None,
             path_samples: None,
+            basis_hold: None,
             dt: 0.04,
         };
         let Some(kwargs) = kwargs else { return Ok(o) };
@@ -175,6 +177,7 @@ impl<'py> ServoOptions<'py> {
             }
             "stop_rule" => self.stop_rule = value.extract().map_err(bad)?,
             "path_samples" => self.path_samples = value.extract().map_err(bad)?,
+            "basis_hold" => self.basis_hold = value.extract().map_err(bad)?,
             "dt" => self.dt = value.extract().map_err(bad)?,
             _ if option(key).is_some() => self.set_law_option(key, &value)?,
             _ => {
@@ -217,6 +220,9 @@ impl<'py> ServoOptions<'py> {
         config.stop = stop_rules(self.stop.as_ref())?;
         (config.stop_rule, config.dt) = (parse_stop_rule(self.stop_rule.as_deref())?, self.dt);
         config.path = self.path_samples.map(|samples| PathPlan { samples });
+        if let Some(images) = self.basis_hold {
+            config.basis_hold = images;
+        }
         config.basis = match self.basis {
             BasisArg::Fixed(b) => Some(b),
             BasisArg::Auto => None,
@@ -229,12 +235,14 @@ impl<'py> ServoOptions<'py> {
 /// `step(pixels, depths, visible)` returns the twist to send and the verdict.
 ///
 /// The keyword arguments are the session's (`reference_depths`, `depths`, `basis`, `stop`,
-/// `stop_rule`, `path_samples`, `dt`) and the laws' options (`vsinv.laws.LAW_OPTIONS`: `gain` to
-/// `max_angular_speed`; None or absent: the law's default); arguments of another law are refused
-/// by name. A step runs the loop logic the simulator runs too: stop rules certified by the pose
-/// uncertainty, lost features, the rz = pi trap, the iteration limit, depth estimation, path
-/// following. A stop is final: once a step has returned one, every later step returns the same
-/// verdict with a zero twist.
+/// `stop_rule`, `path_samples`, `basis_hold`, `dt`) and the laws' options
+/// (`vsinv.laws.LAW_OPTIONS`: `gain` to `max_angular_speed`; None or absent: the law's default);
+/// arguments of another law are refused by name. `basis_hold` (default 3) is how many
+/// consecutive images a missing basis point is ridden out, the basis kept and the last twist
+/// repeated with no stop judged; 0 changes the basis at once. A step runs the loop logic the
+/// simulator runs too: stop rules certified by the pose uncertainty, lost features, the rz = pi
+/// trap, the iteration limit, depth estimation, path following. A stop is final: once a step has
+/// returned one, every later step returns the same verdict with a zero twist.
 ///
 /// Works from several threads: each call holds the GIL, so calls take turns.
 #[pyclass(name = "Servo", module = "vsinv._core")]
@@ -306,6 +314,12 @@ impl PyServo {
     #[getter]
     fn basis_switches(&self) -> usize {
         self.inner.basis_switches()
+    }
+    /// How many images were ridden out with a basis point missing: the basis kept and the last
+    /// twist repeated (`basis_hold`).
+    #[getter]
+    fn basis_held_images(&self) -> usize {
+        self.inner.basis_held_images()
     }
     /// The law: "invariant", "ibvs" or "none".
     #[getter]

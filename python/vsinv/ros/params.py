@@ -149,6 +149,8 @@ PARAMETERS: tuple[Parameter, ...] = (
     _P("stop.stall_motion", "float", None, "the stall rule's motion over the window, as a fraction of the pose tolerance"),
     _P("stop_rule", "str", None, "the image rule that decides convergence", ("pixel", "invariant")),
     _P("path_samples", "int", None, "path following: images along the path"),
+    _P("basis_hold", "int", None, "images a missing basis point is ridden out, the last twist repeated (unset: 3; 0: "
+       "change the basis at once)"),
     _P("dt", "float", 1.0 / 30.0, "the camera period, seconds (the path's time step)"),
     # the output
     _P("output_frame", "str", "camera", "the twist's frame: the camera's optical frame, or the end effector's through hand_eye", ("camera", "end_effector")),
@@ -182,7 +184,7 @@ _ROS_OWN = ("use_sim_time", "start_type_description_service")
 
 #: ImageServo's keyword arguments given by a parameter of the same name, besides the laws'
 #: options.
-_SERVO_SCALARS = ("law", "depths", "stop_rule", "path_samples", "dt")
+_SERVO_SCALARS = ("law", "depths", "stop_rule", "path_samples", "basis_hold", "dt")
 
 
 @dataclass
