@@ -42,7 +42,7 @@ AREAS = {
     "calibration": ["test_distortion.py", "test_fisheye.py", "test_hand_eye.py", "test_hand_eye_to_hand.py"],
     "ros": [
         "test_ros_bridge.py", "test_ros_compressed.py", "test_ros_gate.py", "test_ros_lifecycle.py", "test_ros_loop.py",
-        "test_ros_package.py",
+        "test_ros_package.py", "test_ros_features.py",
     ],
     "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py", "test_features_replay.py"],
     "docs": ["test_docs.py", "test_readme_blocks.py"],
