@@ -68,6 +68,7 @@ SLOW = {
     "test_arm.py::test_arm_figures",
     "test_docs.py::test_page_code_runs[getting-started.md]",
     "test_docs.py::test_page_code_runs[guides/mujoco.md]",
+    "test_docs.py::test_page_code_runs[guides/markerless.md]",
     "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
     "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
     "test_mujoco_api.py::test_the_lens_change_converges_through_mujoco_images",
