@@ -42,7 +42,7 @@ AREAS = {
     "calibration": ["test_distortion.py", "test_fisheye.py", "test_hand_eye.py", "test_hand_eye_to_hand.py"],
     "ros": [
         "test_ros_bridge.py", "test_ros_compressed.py", "test_ros_gate.py", "test_ros_lifecycle.py", "test_ros_loop.py",
-        "test_ros_package.py",
+        "test_ros_package.py", "test_ros_features.py",
     ],
     "cli": ["test_cli.py", "test_cli_images.py", "test_examples.py", "test_features_replay.py"],
     "docs": ["test_docs.py", "test_readme_blocks.py"],
@@ -68,6 +68,7 @@ SLOW = {
     "test_arm.py::test_arm_figures",
     "test_docs.py::test_page_code_runs[getting-started.md]",
     "test_docs.py::test_page_code_runs[guides/mujoco.md]",
+    "test_docs.py::test_page_code_runs[guides/markerless.md]",
     "test_figures.py::test_gif_is_small_and_time_stamped[tags-12-6]",
     "test_fork_safety.py::test_fork_after_dot_detection_on_a_large_image",
     "test_mujoco_api.py::test_the_lens_change_converges_through_mujoco_images",

@@ -26,8 +26,14 @@ def _mujoco_missing() -> str | None:
     return vsinv.mujoco.available()
 
 
+def _textured_box_missing() -> str | None:
+    import feature_world
+
+    return feature_world.available()
+
+
 # Pages whose code needs an optional extra: skipped, saying what to install, without it.
-NEEDS = {"guides/mujoco.md": _mujoco_missing}
+NEEDS = {"guides/mujoco.md": _mujoco_missing, "guides/markerless.md": _textured_box_missing}
 
 
 def nav_pages() -> list[str]:

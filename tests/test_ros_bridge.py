@@ -424,3 +424,38 @@ def test_a_new_camera_info_is_used_from_the_next_session(views: dict[str, Any]) 
     assert s.start(1.0)[0]  # the next session: the new lens in use
     status = json.loads(s.status_json())
     assert status["K_hat"] == [500.0, 500.0, 416.0, 312.0] and status["K_hat_next"] is None
+
+
+def test_every_default_is_of_its_parameters_type() -> None:
+    """A default is what the node declares: of the parameter's ROS type (a target's count, which
+    vsinv.TARGETS says as text, an integer), so a value set by the user of that type is taken."""
+    from vsinv.ros.params import PARAMETERS, _typed
+
+    for p in PARAMETERS:
+        if p.default is not None:
+            assert _typed(p, p.default) == p.default and type(_typed(p, p.default)) is type(p.default), p
+
+
+def test_feature_parameters_are_read_with_their_kinds(views: dict[str, Any]) -> None:
+    """The keypoint target's arguments (vsinv.TARGETS) as parameters: counts as integers (their
+    defaults too), point_ids as identities; out of range refused at start by name."""
+    base = {"reference_image": views["reference"], "target": "features", "camera_frame": "camera"}
+    c = parse_parameters(base)
+    assert c.target == "features" and c.servo_options["max_points"] == 150 and c.servo_options["min_tracked"] == 24
+    c = parse_parameters({**base, "max_points": 40, "min_tracked": 12, "point_ids": [3, 1, 2]})
+    assert (c.servo_options["max_points"], c.servo_options["min_tracked"], c.servo_options["point_ids"]) == (40, 12, [3, 1, 2])
+    for change, words in (({"max_points": 40.0}, "parameter max_points: expected an integer"),
+                          ({"point_ids": [1.5]}, "parameter point_ids: expected an array of integers"),
+                          ({"tag_ids": [1]}, "parameter tag_ids: not a parameter of target 'features'"),
+                          ({"reference_points": [1.0, 2.0]}, "parameter reference_points: not a parameter of target 'features'"),
+                          ({"point_ids": [1]}, None)):
+        if words is None:  # a features parameter with another target
+            with pytest.raises(vsinv.InvalidInput, match="parameter point_ids: not a parameter of target 'dots'"):
+                parse_parameters(good(views, **change))
+            continue
+        with pytest.raises(vsinv.InvalidInput) as e:
+            parse_parameters({**base, **change})
+        assert words in str(e.value), str(e.value)
+    for change, words in (({"max_points": 5}, "max_points"), ({"min_tracked": 5000}, "min_tracked")):
+        with pytest.raises(vsinv.InvalidInput, match="^parameters: .*" + words):
+            validate_pipeline(parse_parameters({**base, **change}))
