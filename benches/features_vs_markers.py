@@ -99,7 +99,7 @@ def main() -> int:
             e = ms.run(w, lens, "invariant", start, k, session)
             rows[m].append((e.verdict, e.error_mm, e.error_deg))
         print(f"start {k}: " + "; ".join(f"{m} {v[-1][0]} {v[-1][1]:.2f} mm {v[-1][2]:.3f} deg" for m, v in rows.items()), flush=True)
-    print(f"\n| target | converged | final translation median / max | final rotation median / max |\n|---|---|---|---|")
+    print("\n| target | converged | final translation median / max | final rotation median / max |\n|---|---|---|---|")
     for m, v in rows.items():
         mm, deg = np.array([r[1] for r in v]), np.array([r[2] for r in v])
         done = sum(r[0] == "converged" for r in v)
