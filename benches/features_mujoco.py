@@ -5,7 +5,11 @@ reference depths are the scene's. Prints, per start, the session's verdict, the 
 final pose error against the reference pose (mm, degrees), whether it is within the issue's goal
 (2 mm and 0.3 degrees), the basis switches, the points found at the end, the
 points ever reported found beyond 4 px of their true pixel ("wrong") and the step's mean and worst
-time (ms; the first frame, matched by descriptors, left out).
+time (ms; the first frame, matched by descriptors, left out), and the correspondence error at the
+final frame (each found point's pixel minus the true projection of its reference keypoint's surface
+point): its mean vector ("bias u, v"), median norm and spread (standard deviation per axis), px.
+`--truth` runs each start again fed the true pixels of the same points (with the visibility of the
+image loop's step of the same index): the law and stop rules alone, without the vision's error.
 
 How to run (from the repository root, with mujoco, opencv-python-headless and Debian's
 visp-images-data installed)::
@@ -14,6 +18,7 @@ visp-images-data installed)::
     MUJOCO_GL=egl python benches/features_mujoco.py --starts 12  # starts 0-11
     MUJOCO_GL=egl python benches/features_mujoco.py 0 1 2    # some starts
     MUJOCO_GL=egl python benches/features_mujoco.py --quick  # start 0, 30 frames (make bench-quick)
+    MUJOCO_GL=egl python benches/features_mujoco.py --truth 0 1  # and the loop fed the true pixels
 """
 
 from __future__ import annotations
@@ -34,20 +39,25 @@ import vsinv  # noqa: E402
 SESSION = {**t.SESSION, "stop": {**t.SESSION["stop"], "max_iterations": 800}}
 
 
+def reference_pixels(reference: np.ndarray) -> np.ndarray:
+    """The keypoint target's points in the reference image."""
+    return vsinv.ImageServo(reference, "features", t.K_HAT, depths="per_step").reference_pixels
+
+
 def run(world: fw.TexturedBox, reference: np.ndarray, start: np.ndarray, session: dict) -> dict:
-    probe = vsinv.ImageServo(reference, "features", t.K_HAT, depths="per_step")
-    points = world.surface_point(t.REFERENCE_POSE, t.FOVY_REFERENCE, probe.reference_pixels)
+    points = world.surface_point(t.REFERENCE_POSE, t.FOVY_REFERENCE, reference_pixels(reference))
     _, z = mw.project(t.REFERENCE_POSE, world.intrinsics(t.FOVY_REFERENCE), points)
     servo = vsinv.ImageServo(reference, "features", t.K_HAT, law="invariant", reference_depths=z, **session)
-    pose, times, wrong = start, [], 0
+    pose, times, wrong, visible = start, [], 0, []
     image = world.render(pose, t.FOVY_SERVO)
     while True:
         t0 = time.perf_counter()
         step = servo.step(image)
         times.append(1e3 * (time.perf_counter() - t0))
         found = step.found
-        truth = t.true_pixels(world, servo.reference_pixels[found], pose)
-        wrong += int((np.linalg.norm(step.pixels[found] - truth, axis=1) > t.WRONG_PX).sum())
+        visible.append(found.copy())
+        error = step.pixels[found] - t.true_pixels(world, servo.reference_pixels[found], pose)
+        wrong += int((np.linalg.norm(error, axis=1) > t.WRONG_PX).sum())
         if not step.running:
             break
         pose = pose @ vsinv.geometry.exp_twist(step.twist, session["dt"])
@@ -56,12 +66,31 @@ def run(world: fw.TexturedBox, reference: np.ndarray, start: np.ndarray, session
     tracked = times[1:] or [float("nan")]
     return {"verdict": step.verdict, "iterations": servo.iterations, "mm": mm, "deg": deg, "found": int(found.sum()),
             "switches": servo.basis_switches,
-            "wrong": wrong, "mean_ms": float(np.mean(tracked)), "worst_ms": float(np.max(tracked))}
+            "wrong": wrong, "mean_ms": float(np.mean(tracked)), "worst_ms": float(np.max(tracked)),
+            "bias": error.mean(axis=0), "median_px": float(np.median(np.linalg.norm(error, axis=1))),
+            "spread": error.std(axis=0), "visible": visible, "points": points, "depths": z}
+
+
+def run_truth(world: fw.TexturedBox, reference_pixels: np.ndarray, start: np.ndarray, session: dict, image_run: dict) -> dict:
+    """The same session fed the true pixels of the image run's points from the same start, each
+    step with the visibility of the image run's step of that index (its last one after it)."""
+    servo = vsinv.Servo(reference_pixels, t.K_HAT, "invariant", reference_depths=image_run["depths"], **session)
+    pose, visible = start, image_run["visible"]
+    K = world.intrinsics(t.FOVY_SERVO)
+    while True:
+        pixels, _ = mw.project(pose, K, image_run["points"])
+        step = servo.step(pixels, None, visible[min(servo.iterations, len(visible) - 1)])
+        if not step.running:
+            break
+        pose = pose @ vsinv.geometry.exp_twist(step.twist, session["dt"])
+    mm, deg = mw.pose_error(pose, t.REFERENCE_POSE)
+    return {"verdict": step.verdict, "iterations": servo.iterations, "mm": mm, "deg": deg}
 
 
 def main() -> int:
     args = sys.argv[1:]
     quick = "--quick" in args  # make bench-quick: start 0, 30 frames
+    truth = "--truth" in args  # each start again, fed the true pixels
     why = fw.available()
     if why is not None:
         print(f"skipped: {why}")
@@ -75,7 +104,7 @@ def main() -> int:
     poses = t.start_poses(world, max(starts) + 1)
     print(f"load average {os.getloadavg()[0]:.2f} (times are wall-clock on a shared machine)")
     print(f"{'start':>5} {'verdict':>15} {'it':>5} {'mm':>8} {'deg':>7} {'goal':>4} {'found':>5} {'wrong':>5} {'switch':>6} "
-          f"{'mean ms':>8} {'worst ms':>8}")
+          f"{'mean ms':>8} {'worst ms':>8} {'bias u':>7} {'bias v':>7} {'med px':>6} {'sd u':>5} {'sd v':>5}")
     wrong, within = 0, 0
     for k in starts:
         r = run(world, reference, poses[k], session)
@@ -83,7 +112,11 @@ def main() -> int:
         goal = r["mm"] < t.GOAL_MM and r["deg"] < t.GOAL_DEG
         within += goal
         print(f"{k:5d} {r['verdict']:>15} {r['iterations']:5d} {r['mm']:8.3f} {r['deg']:7.3f} {'yes' if goal else 'no':>4} "
-              f"{r['found']:5d} {r['wrong']:5d} {r['switches']:6d} {r['mean_ms']:8.2f} {r['worst_ms']:8.2f}", flush=True)
+              f"{r['found']:5d} {r['wrong']:5d} {r['switches']:6d} {r['mean_ms']:8.2f} {r['worst_ms']:8.2f} "
+              f"{r['bias'][0]:+7.3f} {r['bias'][1]:+7.3f} {r['median_px']:6.3f} {r['spread'][0]:5.3f} {r['spread'][1]:5.3f}", flush=True)
+        if truth:
+            p = run_truth(world, reference_pixels(reference), poses[k], session, r)
+            print(f"{'truth':>5} {p['verdict']:>15} {p['iterations']:5d} {p['mm']:8.3f} {p['deg']:7.3f}", flush=True)
     print(f"{within} of {len(starts)} starts within {t.GOAL_MM} mm and {t.GOAL_DEG} deg; load average {os.getloadavg()[0]:.2f}")
     world.close()
     if wrong:  # the agreement: a point reported found is on its true pixel (within t.WRONG_PX)
