@@ -1048,7 +1048,10 @@ def depths_from_translation(
 @final
 class ResectionDepths:
     """Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera
-    against the reconstruction from the translation pair."""
+    against the reconstruction from the translation pair. A NaN in `first_depths` marks a
+    point without a usable depth (depths_from_translation with pixel_noise): the reference
+    camera is resected from the others and that point placed on its ray of the first image
+    where the reference image sees it."""
 
     def __new__(
         cls,
