@@ -21,7 +21,7 @@ settings.load_profile(os.environ.get("VSINV_HYPOTHESIS", "ci"))
 # The areas are registered in pyproject.toml ([tool.pytest.ini_options] markers, --strict-markers).
 AREAS = {
     "core": [
-        "test_api.py", "test_planning.py", "test_reference_depths.py", "test_scaling.py", "test_se3.py",
+        "test_api.py", "test_planning.py", "test_reference_depths.py", "test_robust_depth.py", "test_scaling.py", "test_se3.py",
     ],
     "servo": [
         "test_commands.py", "test_law_options.py", "test_parity.py", "test_servo.py", "test_uncertainty.py",
@@ -35,7 +35,7 @@ AREAS = {
     ],
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
-        "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_features_mujoco.py",
+        "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_features_mujoco.py", "test_robust_depth_mujoco.py",
         "test_mujoco_user_arm.py",
         "test_recording.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
     ],

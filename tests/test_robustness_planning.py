@@ -117,7 +117,7 @@ def test_resection_depths(data: Any) -> None:
     args = {"first_pixels": FIRST_PX, "first_depths": rz, "reference_pixels": REF_PX, "reference_mean_depth": 1.0}
     over = {"fewer": RAISE, "negative": ANY}
     name, v, out = fuzz(data, vsinv.calibration.ResectionDepths, args,
-                        {"first_pixels": pixel_variants(FIRST_PX, ANY, overrides=over), "first_depths": depth_variants(rz),
+                        {"first_pixels": pixel_variants(FIRST_PX, ANY, overrides=over), "first_depths": depth_variants(rz, {"nan": ANY}),  # NaN: no usable depth there
                          "reference_pixels": pixel_variants(REF_PX, ANY, overrides=over),
                          "reference_mean_depth": floats(1.0, overrides={"zero": INVALID, "negative": INVALID,
                                                                         "neghuge": INVALID, "neginf": INVALID,

@@ -1041,15 +1041,28 @@ def reference_depths(object_points: _ArrayLike, reference_pixels: _ArrayLike, K:
     resection); points on one plane (at least 4) need `K`, the photo's camera matrix (3x3 or
     Intrinsics)."""
 
-def depths_from_translation(first_pixels: _ArrayLike, second_pixels: _ArrayLike) -> tuple[_F64Array, _F64Array, float]:
+def depths_from_translation(
+    first_pixels: _ArrayLike, second_pixels: _ArrayLike, pixel_noise: float | None = None
+) -> tuple[_F64Array, _F64Array, float]:
     """Eq. (26): depths of the first image of a pure-translation pair (any camera), up to one
-    positive scale (mean 1). Returns (depths (n,), epipole (3,), residual)."""
+    positive scale (mean 1). Returns (depths (n,), epipole (3,), residual). Without
+    `pixel_noise` the pixels must be exact (the epipole is a least-squares fit of every
+    point's motion). With `pixel_noise` (pixels, standard deviation per coordinate of the
+    tracking error; about 0.1-0.15 for keypoints tracked by the features target) the
+    estimate is robust: a consensus on the epipole, then a depth only for the points whose
+    residual is below 4 sqrt(2) pixel_noise and whose parallax fixes the depth to 10 % (three
+    standard deviations); the other depths are NaN (`np.isfinite(depths)` is the mask of the
+    usable points, which ResectionDepths accepts as is), the mean over the usable ones is 1
+    and the residual is their RMS distance from the epipolar lines (pixels)."""
 
 
 @final
 class ResectionDepths:
     """Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera
-    against the reconstruction from the translation pair."""
+    against the reconstruction from the translation pair. A NaN in `first_depths` marks a
+    point without a usable depth (depths_from_translation with pixel_noise): the reference
+    camera is resected from the others and that point placed on its ray of the first image
+    where the reference image sees it."""
 
     def __new__(
         cls,

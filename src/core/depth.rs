@@ -18,23 +18,29 @@ const DEGENERATE: f64 = 1e-10;
 /// Depths of the first image of a pure-translation pair, up to one positive scale.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TranslationDepths {
-    /// `zeta^I_k`, scaled to a mean of 1.
+    /// `zeta^I_k`, scaled to a mean of 1 over the usable points (NaN where not usable).
     pub depths: Vec<f64>,
     /// The epipole `e = K_bar t` (homogeneous pixels, unit norm).
     pub epipole: Vector3<f64>,
-    /// RMS residual of eq. (26) in pixels (homogeneous, first two coordinates).
+    /// RMS residual of eq. (26) in pixels (homogeneous, first two coordinates), over the
+    /// usable points.
     pub residual: f64,
+    /// Each point's distance from its epipolar line ([`epipolar_residual`], pixels).
+    pub residuals: Vec<f64>,
+    /// Whether each point's depth is usable; `depths` is NaN where it is not (robust estimate
+    /// only: [`depths_from_translation`] marks every point usable or fails).
+    pub usable: Vec<bool>,
 }
 
-const EPIPOLE: (&str, &str) =
+pub(crate) const EPIPOLE: (&str, &str) =
     ("epipole of the translation pair (eq. 26)", "the camera did not move, or all points lie on one line");
 const RESECTION: (&str, &str) = ("resection (DLT)", "the visible points are coplanar or fewer than 6");
 
-fn degenerate((what, hint): (&'static str, &'static str), ratio: f64) -> Error {
+pub(crate) fn degenerate((what, hint): (&'static str, &'static str), ratio: f64) -> Error {
     Error::DegenerateEstimate { what, ratio, hint }
 }
 
-fn homog(p: [f64; 2]) -> Vector3<f64> {
+pub(crate) fn homog(p: [f64; 2]) -> Vector3<f64> {
     Vector3::new(p[0], p[1], 1.0)
 }
 
@@ -49,8 +55,44 @@ pub(crate) fn normalise_2d(points: &[[f64; 2]]) -> Matrix3<f64> {
 
 /// Eq. (26): from the two images of a pure translation (any camera), the depths of the
 /// points in the first image up to one positive scale. The epipole is the least-squares
-/// common point of the lines through `p^I_k` and `p^II_k`.
+/// common point of the lines through `p^I_k` and `p^II_k`: exact pixels only (one bad track
+/// pulls it; with tracked keypoints use
+/// [`robust_depths_from_translation`](crate::core::robust_depth::robust_depths_from_translation)).
 pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Result<TranslationDepths> {
+    check_pair(first, second, 3)?;
+    let n = first.len();
+    let e = epipole_least_squares(first, second)?;
+    // p^I = a p^II + b e with b = |e| / zeta^I (eq. 26): depths ~ 1 / b.
+    let mut inv_depth = Vec::with_capacity(n);
+    let mut err2 = 0.0;
+    for k in 0..n {
+        let (b, r2) = inverse_depth(first[k], second[k], &e)?;
+        err2 += r2;
+        inv_depth.push(b);
+    }
+    let sign = inv_depth.iter().sum::<f64>().signum();
+    if let Some(index) = inv_depth.iter().position(|&b| !(b * sign > 0.0)) {
+        return Err(Error::InvalidParameter {
+            name: "depth_estimation",
+            reason: format!(
+                "point {index} shows no parallax of the right sign: the two images are not related by a \
+                 translation with every point in front of both cameras"
+            ),
+        });
+    }
+    let depths: Vec<f64> = inv_depth.iter().map(|b| 1.0 / (b * sign)).collect();
+    let mean = depths.iter().sum::<f64>() / n as f64;
+    Ok(TranslationDepths {
+        depths: depths.iter().map(|d| d / mean).collect(),
+        epipole: e,
+        residual: (err2 / n as f64).sqrt(),
+        residuals: (0..n).map(|k| epipolar_residual(first[k], second[k], &e)).collect(),
+        usable: vec![true; n],
+    })
+}
+
+/// The shapes and values of a translation pair: finite, as many points in both, at least `needed`.
+pub(crate) fn check_pair(first: &[[f64; 2]], second: &[[f64; 2]], needed: usize) -> Result<()> {
     check_finite_points("first image", first)?;
     check_finite_points("second image", second)?;
     let n = first.len();
@@ -61,13 +103,16 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
             got: format!("{}", second.len()),
         });
     }
-    if n < 3 {
-        return Err(Error::TooFewPoints {
-            needed: 3,
-            got: n,
-            why: "the epipole of a translation needs several points",
-        });
+    if n < needed {
+        return Err(Error::TooFewPoints { needed, got: n, why: "the epipole of a translation needs several points" });
     }
+    Ok(())
+}
+
+/// The least-squares common point (unit norm, homogeneous pixels) of the lines through
+/// `p^I_k` and `p^II_k`, in Hartley-normalised coordinates.
+pub(crate) fn epipole_least_squares(first: &[[f64; 2]], second: &[[f64; 2]]) -> Result<Vector3<f64>> {
+    let n = first.len();
     let all: Vec<[f64; 2]> = first.iter().chain(second).copied().collect();
     let t = normalise_2d(&all);
     let mut lines = DMatrix::zeros(n.max(3), 3);
@@ -90,34 +135,24 @@ pub fn depths_from_translation(first: &[[f64; 2]], second: &[[f64; 2]]) -> Resul
     }
     let e_n = Vector3::from_iterator(v_t.row(order[2]).iter().copied());
     let t_inv = t.try_inverse().ok_or(degenerate(EPIPOLE, 0.0))?;
-    let e = (t_inv * e_n).normalize();
-    // p^I = a p^II + b e with b = |e| / zeta^I (eq. 26): depths ~ 1 / b.
-    let mut inv_depth = Vec::with_capacity(n);
-    let mut err2 = 0.0;
-    for k in 0..n {
-        let a = nalgebra::Matrix3x2::from_columns(&[homog(second[k]), e]);
-        let rhs = homog(first[k]);
-        let sol = (a.transpose() * a).lu().solve(&(a.transpose() * rhs)).ok_or(degenerate(EPIPOLE, 0.0))?;
-        err2 += (a * sol - rhs).norm_squared();
-        inv_depth.push(sol.y);
-    }
-    let sign = inv_depth.iter().sum::<f64>().signum();
-    if let Some(index) = inv_depth.iter().position(|&b| !(b * sign > 0.0)) {
-        return Err(Error::InvalidParameter {
-            name: "depth_estimation",
-            reason: format!(
-                "point {index} shows no parallax of the right sign: the two images are not related by a \
-                 translation with every point in front of both cameras"
-            ),
-        });
-    }
-    let depths: Vec<f64> = inv_depth.iter().map(|b| 1.0 / (b * sign)).collect();
-    let mean = depths.iter().sum::<f64>() / n as f64;
-    Ok(TranslationDepths {
-        depths: depths.iter().map(|d| d / mean).collect(),
-        epipole: e,
-        residual: (err2 / n as f64).sqrt(),
-    })
+    Ok((t_inv * e_n).normalize())
+}
+
+/// Eq. (26) for one point: `p^I = a p^II + b e` by least squares; returns `b` (proportional
+/// to `1 / zeta^I_k`) and the squared residual (homogeneous pixels).
+pub(crate) fn inverse_depth(first: [f64; 2], second: [f64; 2], e: &Vector3<f64>) -> Result<(f64, f64)> {
+    let a = nalgebra::Matrix3x2::from_columns(&[homog(second), *e]);
+    let rhs = homog(first);
+    let sol = (a.transpose() * a).lu().solve(&(a.transpose() * rhs)).ok_or(degenerate(EPIPOLE, 0.0))?;
+    Ok((sol.y, (a * sol - rhs).norm_squared()))
+}
+
+/// The residual of eq. (26) in pixels: the distance of `p^I` from the line through `p^II` and
+/// the epipole `e` (for a pure translation both lie on it; 0 when `p^II` is the epipole).
+pub fn epipolar_residual(first: [f64; 2], second: [f64; 2], e: &Vector3<f64>) -> f64 {
+    let m = homog(second).cross(e);
+    let across = m.x.hypot(m.y);
+    if across > 0.0 { m.dot(&homog(first)).abs() / across } else { 0.0 }
 }
 
 /// Normalised DLT resection of a 3x4 camera from `X_k <-> p_k` (at least 6 non-coplanar
@@ -166,6 +201,33 @@ pub fn resect(points: &[Vector3<f64>], pixels: &[[f64; 2]]) -> Result<Matrix3x4<
     Ok(t2_inv * p_n * t3)
 }
 
+/// The depth `z` of the point `X' = z p^I` of the reconstruction that the camera `p` sees at
+/// `pixel` (least squares over the two rows of `pixel x P X' = 0`); point `index` of the first
+/// image, which must end up in front of it.
+fn depth_on_ray(p: &Matrix3x4<f64>, first: [f64; 2], pixel: [f64; 2], index: usize) -> Result<f64> {
+    let ray = p.fixed_view::<3, 3>(0, 0) * homog(first);
+    let (mut num, mut den) = (0.0, 0.0);
+    for (row, coord) in [(0, pixel[0]), (1, pixel[1])] {
+        let a = coord * ray.z - ray[row];
+        let c = coord * p[(2, 3)] - p[(row, 3)];
+        num -= a * c;
+        den += a * a;
+    }
+    let z = num / den;
+    if z.is_finite() && z > 0.0 {
+        Ok(z)
+    } else {
+        Err(Error::InvalidParameter {
+            name: "first_depths",
+            reason: format!(
+                "point {index} has no depth (NaN) and the reference image does not place it in front of the first \
+                 camera (got {}): the two views see it along the same line",
+                Short(z)
+            ),
+        })
+    }
+}
+
 /// The on-line part of appendix A: depths of the current image up to `kappa(t) > 0`.
 #[derive(Debug, Clone)]
 pub struct ResectionDepths {
@@ -176,8 +238,9 @@ pub struct ResectionDepths {
 }
 
 impl ResectionDepths {
-    /// From the first image of the translation pair with its depths up to scale, and the
-    /// reference image, which fixes the scale of every later resection: the estimated depths
+    /// From the first image of the translation pair with its depths up to scale (NaN for a
+    /// point without a usable depth: it is placed on its ray where the reference image sees
+    /// it), and the reference image, which fixes the scale of every later resection: the estimated depths
     /// of the reference image average `reference_mean_depth` (a rough guess of the distance
     /// to the object in metres, or 1 for "unknown"; the law is stable for any positive scale,
     /// which only sets the speed of the translation, sec. 4.1).
@@ -200,8 +263,19 @@ impl ResectionDepths {
                 got: format!("{} depths, {} reference pixels", first_depths.len(), reference_pixels.len()),
             });
         }
-        let reconstruction: Vec<Vector3<f64>> = first.iter().zip(first_depths).map(|(p, z)| homog(*p) * *z).collect();
-        let p = resect(&reconstruction, reference_pixels)?;
+        // The resection of the reference camera from the points with a depth; a point without
+        // one (NaN: unusable, see `robust_depths_from_translation`) is then placed on its ray of
+        // the first image where the reference camera sees it.
+        let known: Vec<usize> = (0..first.len()).filter(|&k| first_depths[k].is_finite()).collect();
+        let mut reconstruction: Vec<Vector3<f64>> =
+            first.iter().zip(first_depths).map(|(p, z)| homog(*p) * *z).collect();
+        let p = resect(
+            &known.iter().map(|&k| reconstruction[k]).collect::<Vec<_>>(),
+            &known.iter().map(|&k| reference_pixels[k]).collect::<Vec<_>>(),
+        )?;
+        for k in (0..first.len()).filter(|&k| !first_depths[k].is_finite()) {
+            reconstruction[k] = homog(first[k]) * depth_on_ray(&p, first[k], reference_pixels[k], k)?;
+        }
         let det = p.fixed_view::<3, 3>(0, 0).determinant().abs();
         if !(det > 0.0 && det.is_finite()) {
             return Err(degenerate(RESECTION, 0.0));

@@ -14,6 +14,7 @@
 //! | Props. 1-3, appendix B | [`stability`] |
 //! | plane + parallax (eq. 9), the invariant-space path (eq. 10), sec. 3 | [`planning`] |
 //! | depths up to scale: pure translation (eq. 26), resection, appendix A | [`depth`] |
+//! | eq. (26) from tracked keypoints: a consensus on the epipole, unusable depths flagged | [`robust_depth`] |
 //! | the reference depths of a photo from any camera, from the object's model (not in the paper) | [`reference_depths`] |
 //! | the depth estimator a servo session runs each step (appendix A's resection, or yours) | [`depth_estimator`] |
 //! | rigid motions, exact twist integration | [`se3`] |
@@ -38,6 +39,7 @@ pub mod jacobian;
 pub mod noise_meter;
 pub mod planning;
 pub mod reference_depths;
+pub mod robust_depth;
 pub mod rz_task;
 pub mod saturation;
 pub mod se3;

@@ -13,6 +13,7 @@ use crate::core::depth::{ResectionDepths, depths_from_translation as core_depths
 use crate::core::invariant::{BasisFrame, non_basis_indices, validate_basis};
 use crate::core::planning::{InvariantPath, PlaneParallax, estimate_plane_parallax as core_estimate};
 use crate::core::reference_depths::reference_depths as core_reference_depths;
+use crate::core::robust_depth::robust_depths_from_translation;
 
 /// Invariant points of the non-basis points of a current and a reference image.
 fn invariant_pairs(
@@ -147,12 +148,22 @@ impl PyInvariantPath {
 }
 
 /// Eq. (26): depths of the first image of a pure-translation pair (any camera), up to one
-/// positive scale (mean 1). Returns (depths (n,), epipole (3,), residual).
+/// positive scale (mean 1). Returns (depths (n,), epipole (3,), residual). Without
+/// `pixel_noise` the pixels must be exact (the epipole is a least-squares fit of every
+/// point's motion). With `pixel_noise` (pixels, standard deviation per coordinate of the
+/// tracking error; about 0.1-0.15 for keypoints tracked by the features target) the
+/// estimate is robust: a consensus on the epipole, then a depth only for the points whose
+/// residual is below 4 sqrt(2) pixel_noise and whose parallax fixes the depth to 10 % (three
+/// standard deviations); the other depths are NaN (`np.isfinite(depths)` is the mask of the
+/// usable points, which ResectionDepths accepts as is), the mean over the usable ones is 1
+/// and the residual is their RMS distance from the epipolar lines (pixels).
 #[pyfunction]
+#[pyo3(signature = (first_pixels, second_pixels, pixel_noise = None))]
 pub fn depths_from_translation<'py>(
     py: Python<'py>,
     first_pixels: &Bound<'py, PyAny>,
     second_pixels: &Bound<'py, PyAny>,
+    pixel_noise: Option<f64>,
 ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>, f64)> {
     let (a, b) = (pixels_arg(first_pixels, "first_pixels")?, pixels_arg(second_pixels, "second_pixels")?);
     crate::error::check_finite_points("first_pixels", points2(&a)?)?;
@@ -166,7 +177,12 @@ pub fn depths_from_translation<'py>(
         );
         return Err(shape_error_saying("second_pixels", expected, got, msg));
     }
-    let d = core_depths_from_translation(points2(&a)?, points2(&b)?).map_err(|e| match e {
+    let (first, second) = (points2(&a)?, points2(&b)?);
+    let d = match pixel_noise {
+        None => core_depths_from_translation(first, second),
+        Some(sigma) => robust_depths_from_translation(first, second, sigma),
+    }
+    .map_err(|e| match e {
         crate::Error::InvalidParameter { name: "depth_estimation", reason } => {
             let msg = format!("first_pixels, second_pixels: {reason}");
             let err =
@@ -175,12 +191,16 @@ pub fn depths_from_translation<'py>(
         }
         e => e.into(),
     })?;
-    super::arrays::finite_out("first_pixels, second_pixels", &d.depths)?;
+    let usable: Vec<f64> = d.depths.iter().zip(&d.usable).filter(|(_, u)| **u).map(|(z, _)| *z).collect();
+    super::arrays::finite_out("first_pixels, second_pixels", &usable)?;
     Ok((PyArray1::from_vec(py, d.depths), vec1(py, d.epipole.as_slice()), d.residual))
 }
 
 /// Appendix A on line: the current depths up to kappa(t) > 0 by resecting the current camera
-/// against the reconstruction from the translation pair.
+/// against the reconstruction from the translation pair. A NaN in `first_depths` marks a
+/// point without a usable depth (depths_from_translation with pixel_noise): the reference
+/// camera is resected from the others and that point placed on its ray of the first image
+/// where the reference image sees it.
 #[pyclass(name = "ResectionDepths", module = "vsinv._core")]
 pub struct PyResectionDepths {
     pub(super) inner: ResectionDepths,
@@ -207,7 +227,10 @@ impl PyResectionDepths {
             let expected = format!("{} values (one per row of first_pixels)", first.len());
             return Err(shape_error("first_depths", expected, z.shape()[0].to_string()));
         }
-        crate::error::check_depths(z.as_slice()?, first.len())?;
+        // NaN marks a point without a usable depth (depths_from_translation with pixel_noise).
+        // NaN at a point: no usable depth there; the others finite and > 0.
+        let known: Vec<f64> = z.as_slice()?.iter().map(|v| if v.is_nan() { 1.0 } else { *v }).collect();
+        crate::error::check_depths(&known, first.len())?;
         let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth)?;
         Ok(Self { inner, n: first.len() })
     }
