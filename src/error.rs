@@ -402,7 +402,7 @@ pub(crate) fn check_step_inputs(pixels: &[[f64; 2]], depths: &[f64], visible: Op
     Ok(())
 }
 
-/// Checks that a gain is finite and positive.
+/// Checks that a parameter (a gain, a depth, a noise) is finite and positive.
 pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 {
         Ok(())

@@ -20,7 +20,7 @@ from rclpy.qos import QoSProfile
 from sensor_msgs.msg import CameraInfo, Image
 
 import feature_world as fw
-from ros_loop_sim import SimCamera, SimRobot, Supervisor, call, spin_until
+from ros_loop_sim import SimCamera, SimRobot, Supervisor, call, spin_until, spinning
 from vsinv.ros.gate import stamp_seconds
 
 
@@ -102,15 +102,10 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
     camera = FeatureCamera(world, config["fovy"], config["K"], start)
     robot = SimRobot(camera, start, np.eye(4), config["dt"], "camera_optical_frame")
     sup = Viewer()
-    executor = SingleThreadedExecutor()
-    for node in (camera, robot, sup):
-        executor.add_node(node)
     try:
-        out = lock_step(executor, camera, robot, sup, deadline)
+        with spinning(camera, robot, sup) as executor:
+            out = lock_step(executor, camera, robot, sup, deadline)
     finally:
-        executor.shutdown()
-        for node in (camera, robot, sup):
-            node.destroy_node()
         world.close()
     np.savez_compressed(Path(config["frames"]), frames=np.array([g for _, g in camera.sent]),
                         **{f"annotated {t!r}": rgb for t, rgb in sup.annotated.items()})

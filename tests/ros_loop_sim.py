@@ -22,7 +22,8 @@ from __future__ import annotations
 import json
 import math
 import time
-from typing import Any
+from contextlib import contextmanager
+from typing import Any, Iterator
 
 import numpy as np
 import rclpy
@@ -255,6 +256,20 @@ def sized_scenario(name: str, size: list[int] | None) -> vsinv.sim.Scenario:
     return vsinv.sim.Scenario.from_dict(d)
 
 
+@contextmanager
+def spinning(*nodes: Node) -> Iterator[SingleThreadedExecutor]:
+    """One executor holding `nodes`; on leaving, the executor shut down and the nodes destroyed."""
+    executor = SingleThreadedExecutor()
+    for node in nodes:
+        executor.add_node(node)
+    try:
+        yield executor
+    finally:
+        executor.shutdown()
+        for node in nodes:
+            node.destroy_node()
+
+
 def run(config: dict[str, Any]) -> dict[str, Any]:
     """The three phases, the nodes destroyed at the end."""
     deadline = time.monotonic() + config["timeout"]
@@ -263,19 +278,12 @@ def run(config: dict[str, Any]) -> dict[str, Any]:
     camera = SimCamera(sized_scenario(config["scenario"], config.get("size")), config["K"], start, config.get("encoding", "mono8"))
     robot = SimRobot(camera, start @ np.linalg.inv(hand_eye), hand_eye, config["dt"], config["frame"])
     sup = Supervisor()
-    executor = SingleThreadedExecutor()
-    for node in (camera, robot, sup):
-        executor.add_node(node)
-    try:
+    with spinning(camera, robot, sup) as executor:
         out = converge(executor, camera, robot, sup, deadline)
         if out["start"][0] and not config.get("converge_only"):
             out.update(annotated_and_refused(executor, camera, sup, deadline))
             out.update(watchdog(executor, camera, robot, sup, deadline))
         return out
-    finally:
-        executor.shutdown()
-        for node in (camera, robot, sup):
-            node.destroy_node()
 
 
 if __name__ == "__main__":

@@ -10,7 +10,7 @@
 
 use nalgebra::{DMatrix, Matrix3, Matrix3x4, Vector3, Vector4};
 
-use crate::error::{Error, Result, Short, check_finite_points, check_finite_rows, check_overflow};
+use crate::error::{Error, Result, Short, check_finite_points, check_finite_rows, check_overflow, check_positive};
 
 /// Below this ratio of singular values a resection or an epipole counts as degenerate.
 const DEGENERATE: f64 = 1e-10;
@@ -250,12 +250,7 @@ impl ResectionDepths {
         reference_pixels: &[[f64; 2]],
         reference_mean_depth: f64,
     ) -> Result<Self> {
-        if !(reference_mean_depth.is_finite() && reference_mean_depth > 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "reference_mean_depth",
-                reason: format!("must be finite and > 0, got {}", Short(reference_mean_depth)),
-            });
-        }
+        check_positive("reference_mean_depth", reference_mean_depth)?;
         if first_depths.len() != first.len() || reference_pixels.len() != first.len() {
             return Err(Error::Shape {
                 what: "depth estimation",

@@ -22,7 +22,7 @@ use nalgebra::Vector3;
 use crate::core::depth::{
     EPIPOLE, TranslationDepths, check_pair, degenerate, epipolar_residual, epipole_least_squares, homog,
 };
-use crate::error::{Error, Result, Short};
+use crate::error::{Error, Result, check_positive};
 
 /// A track whose residual exceeds this many standard deviations of a good track's residual
 /// (`sqrt(2) sigma`) is wrong: a Gaussian good track goes beyond with probability 6e-5.
@@ -66,12 +66,7 @@ pub fn robust_depths_from_translation(
     second: &[[f64; 2]],
     pixel_noise: f64,
 ) -> Result<TranslationDepths> {
-    if !(pixel_noise.is_finite() && pixel_noise > 0.0) {
-        return Err(Error::InvalidParameter {
-            name: "pixel_noise",
-            reason: format!("must be finite and > 0 (pixels), got {}", Short(pixel_noise)),
-        });
-    }
+    check_positive("pixel_noise", pixel_noise)?;
     check_pair(first, second, MIN_USABLE)?;
     let n = first.len();
     let sigma = std::f64::consts::SQRT_2 * pixel_noise;
