@@ -74,9 +74,8 @@ pub fn robust_depths_from_translation(
     let min_parallax = 3.0 * sigma / MAX_RELATIVE_DEPTH_ERROR;
     let residuals =
         |e: &Vector3<f64>| -> Vec<f64> { (0..n).map(|k| epipolar_residual(first[k], second[k], e)).collect() };
-    let e = consensus(first, second, max_residual)?;
-    // Least squares over the inliers, then once more over the refined epipole's inliers.
-    let mut e = e;
+    // Least squares over the consensus' inliers, then once more over the refined epipole's.
+    let mut e = consensus(first, second, max_residual)?;
     for _ in 0..2 {
         let inliers: Vec<usize> =
             residuals(&e).iter().enumerate().filter(|(_, r)| **r <= max_residual).map(|(k, _)| k).collect();

@@ -227,8 +227,8 @@ impl PyResectionDepths {
             let expected = format!("{} values (one per row of first_pixels)", first.len());
             return Err(shape_error("first_depths", expected, z.shape()[0].to_string()));
         }
-        // NaN marks a point without a usable depth (depths_from_translation with pixel_noise).
-        // NaN at a point: no usable depth there; the others finite and > 0.
+        // NaN marks a point without a usable depth (depths_from_translation with pixel_noise);
+        // the others must be finite and > 0.
         let known: Vec<f64> = z.as_slice()?.iter().map(|v| if v.is_nan() { 1.0 } else { *v }).collect();
         crate::error::check_depths(&known, first.len())?;
         let inner = ResectionDepths::new(first, z.as_slice()?, reference, reference_mean_depth)?;
