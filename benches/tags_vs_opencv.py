@@ -5,7 +5,7 @@ How to run (from the repository root, with the package, ``opencv-python-headless
 aruco module) and Debian's ``visp-images-data`` installed)::
 
     python benches/tags_vs_opencv.py                  # about a minute
-    python benches/tags_vs_opencv.py --quick          # 2 rounds instead of 5
+    python benches/tags_vs_opencv.py --quick          # 2 rounds instead of 5, every detector on one thread
     python benches/tags_vs_opencv.py --threads 1      # both on one thread
     python benches/tags_vs_opencv.py --json out.json  # also write the numbers as JSON
 
@@ -44,7 +44,10 @@ taking at least 50 ms; a round is ``Timer.repeat(5, number)`` and gives the medi
 call; the detectors alternate from round to round and each cell is the minimum over rounds of
 the medians. Both detectors use the machine's cores by default (vsinv's through rayon inside
 kornia-apriltag, OpenCV's through its own threads); ``--threads 1`` sets
-``RAYON_NUM_THREADS=1``, ``cv2.setNumThreads(1)`` and pupil-apriltags' ``nthreads=1``. The
+``RAYON_NUM_THREADS=1``, ``cv2.setNumThreads(1)`` and pupil-apriltags' ``nthreads=1``.
+``--quick`` (the CI run, ``make bench-quick``) means ``--threads 1`` unless ``--threads`` is
+given: the AprilTag library's threaded quad search races on its union-find (AprilRobotics/apriltag
+issues 184 and 387), and one CI run of this script died of it with SIGSEGV. The
 ratios are vsinv time / peer time (below 1: vsinv is faster).
 
 Accuracy: the distance of each published corner to the detector's corner of the same tag and
@@ -65,8 +68,13 @@ import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
+import faulthandler
+
+faulthandler.enable()  # a crash inside a peer's C code prints where it happened
 if "--threads" in sys.argv:  # before rayon's pool starts
     os.environ["RAYON_NUM_THREADS"] = sys.argv[sys.argv.index("--threads") + 1]
+elif "--quick" in sys.argv:  # --quick means --threads 1 (the docstring says why)
+    os.environ["RAYON_NUM_THREADS"] = "1"
 
 import cv2
 import numpy as np
@@ -280,13 +288,15 @@ def print_table(rows: list[Row]) -> None:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--quick", action="store_true", help="2 rounds instead of 5")
-    parser.add_argument("--threads", type=int, default=0, help="threads for both (0: the machine's)")
+    parser.add_argument("--quick", action="store_true", help="2 rounds instead of 5, on one thread unless --threads")
+    parser.add_argument("--threads", type=int, default=0, help="threads for every detector (0: the machine's)")
     parser.add_argument("--json", help="also write the numbers to this JSON file")
     args = parser.parse_args()
     if not VISP.is_dir():
         print(f"skipped: ViSP's AprilTag images are not installed ({VISP}): apt-get install visp-images-data")
         return 0
+    if args.quick and not args.threads:
+        args.threads = 1  # RAYON_NUM_THREADS was set at import
     if args.threads:
         cv2.setNumThreads(args.threads)
     threads = args.threads or os.cpu_count()
