@@ -26,7 +26,6 @@ from contextlib import contextmanager
 from typing import Any, Iterator
 
 import numpy as np
-import rclpy
 from geometry_msgs.msg import PoseStamped, TwistStamped
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node

@@ -41,6 +41,8 @@ def test_the_table_is_whole():
             assert (a["kind"] == "choice") == bool(a["choices"]), a
             if a["default"] is not None and a["kind"] == "choice":
                 assert a["default"] in a["choices"], a
+            if a["default"] is not None and a["kind"] == "count":  # an int, as the ROS parameter's type
+                assert type(a["default"]) is int and a["min"] <= a["default"] <= a["max"], a
     assert {a["name"]: a["choices"] for t in TARGETS for a in t["args"]}["family"] == _core.TAG_FAMILIES
 
 
@@ -93,7 +95,7 @@ def _arguments(target: dict[str, Any], pixels: np.ndarray) -> dict[str, Any]:
         elif kind == "choice":
             values[a["name"]] = a["default"] or a["choices"][0]
         elif kind == "count":
-            values[a["name"]] = int(a["default"]) if a["default"] is not None else a["min"]
+            values[a["name"]] = a["default"] if a["default"] is not None else a["min"]
         elif kind == "tracker":
             values[a["name"]] = {}
     return values

@@ -7,10 +7,11 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::vision::targets::{ArgKind, TARGETS, TargetArg, TargetSpec};
+use crate::vision::targets::{ArgDefault, ArgKind, TARGETS, TargetArg, TargetSpec};
 use crate::vision::tracker::{SettingKind, TRACKER_SETTINGS, TrackerSetting};
 
-/// One argument as a dict: name, kind, choices, min, max, default, required, doc.
+/// One argument as a dict: name, kind, choices, min, max, default (a str, an int or None),
+/// required, doc.
 fn arg_dict<'py>(py: Python<'py>, a: &TargetArg) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("name", a.name)?;
@@ -20,7 +21,11 @@ fn arg_dict<'py>(py: Python<'py>, a: &TargetArg) -> PyResult<Bound<'py, PyDict>>
     let (min, max) = if let ArgKind::Count { min, max } = a.kind { (Some(min), Some(max)) } else { (None, None) };
     d.set_item("min", min)?;
     d.set_item("max", max)?;
-    d.set_item("default", a.default)?;
+    match a.default {
+        None => d.set_item("default", py.None())?,
+        Some(ArgDefault::Name(name)) => d.set_item("default", name)?,
+        Some(ArgDefault::Count(n)) => d.set_item("default", n)?,
+    }
     d.set_item("required", a.required)?;
     d.set_item("doc", a.doc)?;
     Ok(d)

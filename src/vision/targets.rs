@@ -39,7 +39,7 @@
 use crate::error::Error;
 use crate::vision::detector::Detector;
 use crate::vision::detector::dot_tracking::DotTracking;
-use crate::vision::detector::features::FeatureSettings;
+use crate::vision::detector::features::{DEFAULT_MAX_POINTS, DEFAULT_MIN_TRACKED, FeatureSettings};
 use crate::vision::detector::tags::TagDetector;
 use crate::vision::error::Result;
 use crate::vision::features::matching::MIN_MATCHES;
@@ -93,12 +93,22 @@ pub struct TargetArg {
     pub name: &'static str,
     /// The values it takes.
     pub kind: ArgKind,
-    /// Its value when not given, in words (None: unset).
-    pub default: Option<&'static str>,
+    /// Its value when not given (None: unset).
+    pub default: Option<ArgDefault>,
     /// Whether it must be given.
     pub required: bool,
     /// One line of documentation.
     pub doc: &'static str,
+}
+
+/// An argument's value when it is not given, typed as its [`ArgKind`] (Python, the ROS
+/// parameters and the command's help read it as it is).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArgDefault {
+    /// One of an [`ArgKind::Choice`]'s names.
+    Name(&'static str),
+    /// An [`ArgKind::Count`]'s value.
+    Count(usize),
 }
 
 /// A given argument's value, as its [`ArgKind`] says.
@@ -224,7 +234,7 @@ const TAG_ARGS: &[TargetArg] = &[
     TargetArg {
         name: "family",
         kind: ArgKind::Choice(&TagFamily::NAMES),
-        default: Some("tag36h11"),
+        default: Some(ArgDefault::Name(TagFamily::NAMES[0])), // the default family is the first
         required: false,
         doc: "the AprilTag family",
     },
@@ -249,14 +259,14 @@ const FEATURE_ARGS: &[TargetArg] = &[
     TargetArg {
         name: "max_points",
         kind: ArgKind::Count { min: MIN_MATCHES as u32, max: MAX_FEATURE_POINTS },
-        default: Some("150"),
+        default: Some(ArgDefault::Count(DEFAULT_MAX_POINTS)),
         required: false,
         doc: "how many keypoints of the reference image the target holds (a spread over the image)",
     },
     TargetArg {
         name: "min_tracked",
         kind: ArgKind::Count { min: MIN_MATCHES as u32, max: MAX_FEATURE_POINTS },
-        default: Some("24"),
+        default: Some(ArgDefault::Count(DEFAULT_MIN_TRACKED)),
         required: false,
         doc: "fewer points tracked than this (or than half of the last match's) and the frame is matched afresh",
     },
@@ -463,6 +473,25 @@ mod tests {
         for (i, a) in args.iter().enumerate() {
             assert!(!args[..i].contains(a), "argument {a} in two targets");
         }
+    }
+
+    /// Every default is a value of its argument's kind, and the one the builder uses when the
+    /// argument is not given.
+    #[test]
+    fn each_default_is_of_its_kind_and_is_the_builders() {
+        for a in TARGETS.iter().flat_map(|t| t.args) {
+            match (a.kind, a.default) {
+                (_, None) => {}
+                (ArgKind::Choice(names), Some(ArgDefault::Name(n))) => assert!(names.contains(&n), "{}", a.name),
+                (ArgKind::Count { min, max }, Some(ArgDefault::Count(n))) => {
+                    assert!((min as usize..=max as usize).contains(&n), "{}", a.name);
+                }
+                (kind, default) => panic!("{}: default {default:?} for a {}", a.name, kind.name()),
+            }
+        }
+        assert_eq!(TagFamily::default(), TagFamily::ALL[0]);
+        let settings = FeatureSettings::default();
+        assert_eq!((settings.max_points, settings.min_tracked), (DEFAULT_MAX_POINTS, DEFAULT_MIN_TRACKED));
     }
 
     #[test]

@@ -90,14 +90,7 @@ def _arg_parameters(target: str, a: dict[str, Any]) -> tuple[Parameter, ...]:
     if kind == "points":
         flat = Parameter(name, "floats", None, doc + ", flat [u0, v0, u1, v1, ...]")
         return flat, Parameter(f"{name}_file", "str", None, f"{scope}the same as a CSV file with u, v columns")
-    return (Parameter(name, _ROS_TARGET_KINDS[kind], _target_default(a), doc),)
-
-
-def _target_default(a: dict[str, Any]) -> Any:
-    """A target argument's default as its parameter's type (``vsinv.TARGETS`` says every
-    default as text: a count's ``"150"`` is the integer 150)."""
-    default = a["default"]
-    return int(default) if default is not None and a["kind"] == "count" else default
+    return (Parameter(name, _ROS_TARGET_KINDS[kind], a["default"], doc),)
 
 
 def _target_parameters() -> tuple[Parameter, ...]:

@@ -28,6 +28,11 @@ use crate::vision::image::GreyView;
 /// The reference pyramid's levels above the image (focal ratios up to 16 between the lenses).
 pub const REFINE_LEVELS: usize = 4;
 
+/// [`FeatureSettings::max_points`] when not given (the target's argument reads it too).
+pub const DEFAULT_MAX_POINTS: usize = 150;
+/// [`FeatureSettings::min_tracked`] when not given (the target's argument reads it too).
+pub const DEFAULT_MIN_TRACKED: usize = 24;
+
 /// The settings of the keypoint target.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FeatureSettings {
@@ -49,8 +54,8 @@ pub struct FeatureSettings {
 impl Default for FeatureSettings {
     fn default() -> Self {
         Self {
-            max_points: 150,
-            min_tracked: 24,
+            max_points: DEFAULT_MAX_POINTS,
+            min_tracked: DEFAULT_MIN_TRACKED,
             match_threshold: 1.5,
             track_threshold: 2.0,
             flow: FlowConfig::default(),
