@@ -46,7 +46,6 @@ result and ``found`` counts its ``found`` flags.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics

@@ -5,7 +5,6 @@ import re
 import tomllib
 from pathlib import Path
 
-import pytest
 from conftest import AREA_OF, AREAS, SLOW
 
 TESTS = Path(__file__).parent

@@ -524,7 +524,7 @@ def test_attributes_of_bad_parameters(scene):
 
 
 def test_attributes_of_degenerate_geometry(scene):
-    px, z = scene["ref"], scene["z_star"]
+    px = scene["ref"]
     err = raised(lambda: vsinv.laws.InvariantController(px[:5], scene["k"]))
     assert isinstance(err, vsinv.DegenerateGeometry)
     assert (err.kind, err.needed, err.count) == ("too_few_points", 6, 5) and "five dof" in err.reason

@@ -13,7 +13,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import vsinv
-from robustness_harness import ANY, INVALID, V, arrays, call, choices, covers, floats, fuzz, fuzz_settings, returned
+from robustness_harness import ANY, INVALID, arrays, call, choices, covers, floats, fuzz, fuzz_settings, returned
 
 Q = np.array([0.1, -1.2, 1.0, -0.5, 1.4, 0.3])
 SEED = Q + np.array([0.05, -0.04, 0.03, -0.02, 0.05, 0.01])
