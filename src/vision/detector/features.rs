@@ -141,6 +141,8 @@ pub struct FeatureTracking {
     keypoints: Vec<usize>,
     /// The last frame's pyramid (kept: it is the next track's start).
     previous: Option<FramePyramid>,
+    /// The pyramid before it, done with: its buffers hold the next frame's.
+    spare: Option<FramePyramid>,
     last: Vec<Option<[f64; 2]>>,
     matched: usize,
     since_match: u32,
@@ -174,6 +176,7 @@ impl FeatureTracking {
             ids,
             keypoints,
             previous: None,
+            spare: None,
             last: vec![None; n],
             matched: 0,
             since_match: 0,
@@ -293,11 +296,11 @@ impl Detector for FeatureTracking {
     /// Matches the first frame to the reference (the hints are ignored).
     fn start(&mut self, image: &GreyView<'_>, _expected: &[Expected]) -> Result<Vec<Detection>> {
         self.last.fill(None);
-        let next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels)?;
+        let next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels, self.spare.take())?;
         self.rematch(image, next.image())?;
         self.check_epipolar();
         self.reacquire(next.image());
-        self.previous = Some(next);
+        self.spare = self.previous.replace(next);
         self.check_epipolar();
         Ok(self.report())
     }
@@ -305,7 +308,7 @@ impl Detector for FeatureTracking {
     /// Tracks the points from the last frame, checks them, and matches the frame afresh
     /// when too few remain.
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
-        let mut next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels)?;
+        let mut next = FramePyramid::of(plane("image", image)?, self.settings.flow.levels, self.spare.take())?;
         let same_size = self.previous.as_ref().is_some_and(|p| p.image().size() == next.image().size());
         if same_size && let Some(previous) = &mut self.previous {
             let which: Vec<usize> = (0..self.last.len()).filter(|&i| self.last[i].is_some()).collect();
@@ -323,7 +326,7 @@ impl Detector for FeatureTracking {
             self.rematch(image, next.image())?;
         }
         self.reacquire(next.image());
-        self.previous = Some(next);
+        self.spare = self.previous.replace(next);
         self.check_epipolar();
         Ok(self.report())
     }

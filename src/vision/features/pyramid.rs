@@ -23,21 +23,60 @@ fn reflect_101(p: i64, len: i64) -> usize {
     (if p >= len { period - p } else { p }) as usize
 }
 
+/// A plane of `width x height` grey levels inside a larger row-major buffer: row `r` starts at
+/// `offset + r * stride` (a level with a margin around it, or a whole image).
+#[derive(Debug, Clone, Copy)]
+pub struct Plane {
+    /// Pixels a row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// The buffer's pixels a row.
+    pub stride: usize,
+    /// The first pixel's index in the buffer.
+    pub offset: usize,
+}
+
+impl Plane {
+    /// A whole image's plane.
+    pub fn of(image: &Image<f32, 1>) -> Self {
+        Self { width: image.width(), height: image.height(), stride: image.width(), offset: 0 }
+    }
+
+    /// The plane's row `r` in `buffer`.
+    #[inline]
+    fn row<'a>(&self, buffer: &'a [f32], r: usize) -> &'a [f32] {
+        &buffer[self.offset + r * self.stride..][..self.width]
+    }
+
+    #[inline]
+    fn row_mut<'a>(&self, buffer: &'a mut [f32], r: usize) -> &'a mut [f32] {
+        &mut buffer[self.offset + r * self.stride..][..self.width]
+    }
+}
+
 /// `src` blurred by the 5 x 5 Gaussian and halved (sizes rounded up), borders reflected
 /// (OpenCV's `pyrDown`).
 pub fn pyrdown(src: &Image<f32, 1>) -> Result<Image<f32, 1>, ImageError> {
-    let (sw, sh) = (src.width(), src.height());
-    let (dw, dh) = (sw.div_ceil(2), sh.div_ceil(2));
+    let (dw, dh) = (src.width().div_ceil(2), src.height().div_ceil(2));
     let mut dst = Image::from_size_val(ImageSize { width: dw, height: dh }, 0.0f32)?;
-    let (s, d) = (src.as_slice(), dst.as_slice_mut());
+    let to = Plane { width: dw, height: dh, stride: dw, offset: 0 };
+    pyrdown_into(src.as_slice(), Plane::of(src), dst.as_slice_mut(), to);
+    Ok(dst)
+}
+
+/// [`pyrdown`] of the plane `from` of `s` into the plane `to` of `d` (its size
+/// `from`'s halved, rounded up).
+pub fn pyrdown_into(s: &[f32], from: Plane, d: &mut [f32], to: Plane) {
+    let (dw, dh) = (to.width, to.height);
     let mut weights = [0.0f32; 25];
     for (k, w) in weights.iter_mut().enumerate() {
         *w = GAUSS[k / 5] * GAUSS[k % 5];
     }
     // Interior: every tap inside the source.
     for y in 1..dh.saturating_sub(1) {
-        let rows: [&[f32]; 5] = std::array::from_fn(|k| &s[(2 * y + k - 2) * sw..(2 * y + k - 1) * sw]);
-        let out = &mut d[y * dw..(y + 1) * dw];
+        let rows: [&[f32]; 5] = std::array::from_fn(|k| from.row(s, 2 * y + k - 2));
+        let out = to.row_mut(d, y);
         for x in 1..dw.saturating_sub(1) {
             let mut sum = 0.0f32;
             for (ky, row) in rows.iter().enumerate() {
@@ -49,7 +88,7 @@ pub fn pyrdown(src: &Image<f32, 1>) -> Result<Image<f32, 1>, ImageError> {
         }
     }
     // The border (first and last rows and columns): indices reflected.
-    let (w, h) = (sw as i64, sh as i64);
+    let (w, h) = (from.width as i64, from.height as i64);
     for y in 0..dh {
         let border_y = y == 0 || y + 1 >= dh;
         for x in 0..dw {
@@ -58,26 +97,28 @@ pub fn pyrdown(src: &Image<f32, 1>) -> Result<Image<f32, 1>, ImageError> {
             }
             let mut sum = 0.0f32;
             for ky in 0..5 {
-                let sy = reflect_101(2 * y as i64 + ky as i64 - 2, h);
+                let row = from.row(s, reflect_101(2 * y as i64 + ky as i64 - 2, h));
                 for kx in 0..5 {
-                    let sx = reflect_101(2 * x as i64 + kx as i64 - 2, w);
-                    sum += s[sy * sw + sx] * weights[ky * 5 + kx];
+                    sum += row[reflect_101(2 * x as i64 + kx as i64 - 2, w)] * weights[ky * 5 + kx];
                 }
             }
-            d[y * dw + x] = sum;
+            to.row_mut(d, y)[x] = sum;
         }
     }
-    Ok(dst)
 }
 
 /// The normalised Scharr gradients of `src` along x and y, borders replicated.
 pub fn scharr(src: &Image<f32, 1>) -> Result<(Image<f32, 1>, Image<f32, 1>), ImageError> {
-    let (w, h) = (src.width(), src.height());
     let mut gx = Image::from_size_val(src.size(), 0.0f32)?;
     let mut gy = Image::from_size_val(src.size(), 0.0f32)?;
-    let s = src.as_slice();
-    let (ox, oy) = (gx.as_slice_mut(), gy.as_slice_mut());
-    let at = |r: usize, c: usize| s[r * w + c];
+    let plane = Plane::of(src);
+    scharr_into(src.as_slice(), plane, gx.as_slice_mut(), gy.as_slice_mut(), plane);
+    Ok((gx, gy))
+}
+
+/// [`scharr`] of the plane `from` of `s` into the planes `to` of `ox` and `oy` (one size).
+pub fn scharr_into(s: &[f32], from: Plane, ox: &mut [f32], oy: &mut [f32], to: Plane) {
+    let (w, h) = (from.width, from.height);
     // One pixel: the nine taps in kornia's order (rows, then columns).
     let one = |taps: [f32; 9]| {
         let (mut sx, mut sy) = (0.0f32, 0.0f32);
@@ -89,9 +130,9 @@ pub fn scharr(src: &Image<f32, 1>) -> Result<(Image<f32, 1>, Image<f32, 1>), Ima
     };
     for r in 0..h {
         let interior_row = h >= 2 && w >= 2 && r > 0 && r + 1 < h;
+        let (rx, ry) = (to.row_mut(ox, r), to.row_mut(oy, r));
         if interior_row {
-            let (up, mid, down) = (&s[(r - 1) * w..r * w], &s[r * w..(r + 1) * w], &s[(r + 1) * w..(r + 2) * w]);
-            let (rx, ry) = (&mut ox[r * w..(r + 1) * w], &mut oy[r * w..(r + 1) * w]);
+            let (up, mid, down) = (from.row(s, r - 1), from.row(s, r), from.row(s, r + 1));
             for c in 1..w - 1 {
                 let taps =
                     [up[c - 1], up[c], up[c + 1], mid[c - 1], mid[c], mid[c + 1], down[c - 1], down[c], down[c + 1]];
@@ -104,11 +145,10 @@ pub fn scharr(src: &Image<f32, 1>) -> Result<(Image<f32, 1>, Image<f32, 1>), Ima
             }
             // Replicated border: row and column clamped into the image.
             let clamp = |i: usize, n: usize| (i.min(n).max(1)) - 1;
-            let taps = std::array::from_fn(|k| at(clamp(r + k / 3, h), clamp(c + k % 3, w)));
-            (ox[r * w + c], oy[r * w + c]) = one(taps);
+            let taps = std::array::from_fn(|k| from.row(s, clamp(r + k / 3, h))[clamp(c + k % 3, w)]);
+            (rx[c], ry[c]) = one(taps);
         }
     }
-    Ok((gx, gy))
 }
 
 #[cfg(test)]
