@@ -131,8 +131,9 @@ impl<'a> Canvas<'a> {
     }
 
     /// Draws textured faces (their grey levels replace the background; faces turned away
-    /// are culled, the nearest face shows); false when none is drawn.
-    pub fn draw_textured_faces(&mut self, faces: &[TexturedFace]) -> bool {
+    /// are culled, the nearest face shows); per face, whether it is drawn (seen from its
+    /// front, in front of the camera, its image meeting the image).
+    pub fn draw_textured_faces(&mut self, faces: &[TexturedFace]) -> Vec<bool> {
         paint_faces(&mut self.image, faces, (self.view.pose, self.view.intrinsics), &self.warp, &self.paint)
     }
 

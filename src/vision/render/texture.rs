@@ -13,7 +13,8 @@ use nalgebra::{Isometry3, Matrix3, Point3, SMatrix, SVector, Vector2, Vector3};
 
 use super::lens::Warp;
 use super::polygon::ImagePolygon;
-use super::raster::{Paint, Patch, Shape as _, blur};
+use super::raster::{Paint, Patch, blur};
+use super::{Canvas, Drawing};
 use crate::core::camera::Intrinsics;
 use crate::error::Error;
 use crate::vision::error::Result;
@@ -72,6 +73,25 @@ impl TexturedFace {
     /// The vertices.
     pub fn vertices(&self) -> &[Point3<f64>] {
         &self.vertices
+    }
+}
+
+/// Textured faces as a [`Drawing`]: one point per face, drawn as
+/// [`Canvas::draw_textured_faces`] draws them (a face flagged off is left out).
+#[derive(Debug, Clone)]
+pub struct TexturedFaces(pub Vec<TexturedFace>);
+
+impl Drawing for TexturedFaces {
+    fn point_count(&self) -> usize {
+        self.0.len()
+    }
+
+    fn draw_on(&self, canvas: &mut Canvas<'_>, visible: Option<&[bool]>) -> Vec<bool> {
+        let Some(visible) = visible else { return canvas.draw_textured_faces(&self.0) };
+        let shown: Vec<TexturedFace> =
+            self.0.iter().zip(visible).filter(|(_, v)| **v).map(|(f, _)| f.clone()).collect();
+        let mut drawn = canvas.draw_textured_faces(&shown).into_iter();
+        visible.iter().map(|v| *v && drawn.next().unwrap_or(false)).collect()
     }
 }
 
@@ -205,28 +225,29 @@ impl<'f> SeenFace<'f> {
 }
 
 /// Paints textured faces (culled, nearest first per sample, area-averaged, blurred and
-/// noised) over the image; false when none is drawn.
+/// noised) over the image; per face, whether it is drawn (seen from its front, in front of
+/// the camera, and its image meets the image).
 pub(super) fn paint_faces(
     image: &mut GreyImage,
     faces: &[TexturedFace],
     view: (&Isometry3<f64>, &Intrinsics),
     warp: &Warp,
     paint: &Paint<'_>,
-) -> bool {
-    let seen: Vec<SeenFace> = faces.iter().filter_map(|f| SeenFace::of(f, view.0, view.1, warp)).collect();
-    if seen.is_empty() {
-        return false;
+) -> Vec<bool> {
+    let (w, h) = (i64::from(image.width()), i64::from(image.height()));
+    let inside = |b: &[f64; 4]| b[2] >= -0.5 && b[3] >= -0.5 && b[0] <= w as f64 - 0.5 && b[1] <= h as f64 - 0.5;
+    let seen: Vec<Option<SeenFace>> = faces.iter().map(|f| SeenFace::of(f, view.0, view.1, warp)).collect();
+    let drawn: Vec<bool> = seen.iter().map(|s| s.as_ref().is_some_and(|s| inside(&s.bbox))).collect();
+    let seen: Vec<SeenFace> = seen.into_iter().flatten().collect();
+    if !drawn.contains(&true) {
+        return drawn;
     }
     let bbox = seen.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, s| {
         [b[0].min(s.bbox[0]), b[1].min(s.bbox[1]), b[2].max(s.bbox[2]), b[3].max(s.bbox[3])]
     });
     let margin = (paint.kernel.len() / 2) as i64 + 1;
-    let (w, h) = (i64::from(image.width()), i64::from(image.height()));
     let (u0, v0) = ((bbox[0].floor() as i64 - margin).max(0), (bbox[1].floor() as i64 - margin).max(0));
     let (u1, v1) = ((bbox[2].ceil() as i64 + margin).min(w - 1), (bbox[3].ceil() as i64 + margin).min(h - 1));
-    if u0 > u1 || v0 > v1 {
-        return false;
-    }
     let patch = Patch { u0, v0, w: (u1 - u0 + 1) as usize, h: (v1 - v0 + 1) as usize };
     let bg = f64::from(paint.background);
     let (mut value, mut coverage) = (vec![0.0f32; patch.w * patch.h], vec![0.0f32; patch.w * patch.h]);
@@ -248,7 +269,7 @@ pub(super) fn paint_faces(
             }
         }
     }
-    true
+    drawn
 }
 
 /// The share of a pixel's samples on a face and the sum of their grey levels divided by the
@@ -277,6 +298,7 @@ fn pixel_samples(seen: &[SeenFace], local: &super::lens::Local) -> (f64, f64) {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::super::noise::{Noise, quantised_pool};
     use super::*;
@@ -286,7 +308,7 @@ mod tests {
     }
 
     /// Renders faces without blur or noise on a 0 background, camera at the origin of F*.
-    fn render(faces: &[TexturedFace], pose: Isometry3<f64>, f: f64, size: u32) -> (GreyImage, bool) {
+    fn render(faces: &[TexturedFace], pose: Isometry3<f64>, f: f64, size: u32) -> (GreyImage, Vec<bool>) {
         let k =
             Intrinsics::new(f, f, f64::from(size) / 2.0, f64::from(size) / 2.0, std::f64::consts::FRAC_PI_2).unwrap();
         let pool = quantised_pool(0, 0.0);
@@ -315,7 +337,7 @@ mod tests {
         // Texel (i, j) at pixel (i + 10, j + 12) of a 48 x 48 image with centre 24.
         let face = fronto(&tex, 2.0, 300.0, [-14.0, -12.0]);
         let (image, drawn) = render(&[face], Isometry3::identity(), 300.0, 48);
-        assert!(drawn);
+        assert_eq!(drawn, vec![true]);
         for j in 0..16 {
             for i in 0..20 {
                 assert_eq!(image.get_pixel(i + 10, j + 12).0[0], tex.get_pixel(i, j).0[0], "texel {i} {j}");
@@ -333,7 +355,7 @@ mod tests {
         reversed.reverse();
         let uv = vec![[19.5, -0.5], [19.5, 15.5], [-0.5, 15.5], [-0.5, -0.5]];
         let back = TexturedFace::new(reversed, uv, tex.clone()).unwrap();
-        assert!(!render(&[back], Isometry3::identity(), 300.0, 48).1);
+        assert_eq!(render(&[back], Isometry3::identity(), 300.0, 48).1, vec![false]);
         let flat = Arc::new(GreyImage::from_pixel(4, 4, [200].into()));
         let near = fronto(&flat, 1.0, 300.0, [-2.0, -2.0]);
         for order in [[face.clone(), near.clone()], [near, face]] {
@@ -341,6 +363,33 @@ mod tests {
             assert_eq!(image.get_pixel(23, 23).0[0], 200);
             assert_eq!(image.get_pixel(12, 14).0[0], tex.get_pixel(2, 2).0[0]);
         }
+    }
+
+    #[test]
+    fn the_renderer_draws_textured_faces_with_one_flag_per_face() {
+        use crate::core::distortion::Distortion;
+        use crate::vision::render::{CameraView, RenderConfig, Renderer};
+        let tex = texture(20, 16);
+        let face = fronto(&tex, 2.0, 300.0, [-14.0, -12.0]);
+        let mut reversed = face.vertices().iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
+        reversed.reverse();
+        let uv = vec![[19.5, -0.5], [19.5, 15.5], [-0.5, 15.5], [-0.5, -0.5]];
+        let back = TexturedFace::new(reversed, uv, tex.clone()).unwrap();
+        let faces = TexturedFaces(vec![face, back]);
+        let config = RenderConfig { blur_sigma: 0.0, noise_sigma: 0.0, background: 7, ..RenderConfig::default() };
+        let renderer = Renderer::new(config).unwrap();
+        let k = Intrinsics::pinhole(300.0, 300.0, 24.0, 24.0).unwrap();
+        let (pose, none) = (Isometry3::identity(), Distortion::none());
+        let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (48, 48) };
+        let out = renderer.render(&faces, None, &view, 0).unwrap();
+        assert_eq!(out.drawn, vec![true, false]);
+        assert_eq!(out.image.get_pixel(9, 12).0[0], 7);
+        for (i, j) in [(0, 0), (19, 0), (7, 9), (19, 15)] {
+            assert_eq!(out.image.get_pixel(i + 10, j + 12).0[0], tex.get_pixel(i, j).0[0], "texel {i} {j}");
+        }
+        let hidden = renderer.render(&faces, Some(&[false, true]), &view, 0).unwrap();
+        assert_eq!(hidden.drawn, vec![false, false]);
+        assert!(hidden.image.iter().all(|g| *g == 7));
     }
 
     #[test]
