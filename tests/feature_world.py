@@ -112,6 +112,31 @@ class TexturedBox:
         return out
 
 
+class RenderedBox:
+    """The same box drawn by the project's renderer (`tiles()`, the renderer's default blur and
+    noise, a new noise draw each frame): TexturedBox's interface without MuJoCo or its light."""
+
+    def __init__(self, width: int = 640, height: int = 480) -> None:
+        self.width, self.height = width, height
+        self.tiles = tiles()
+        self.frame = 0
+
+    def close(self) -> None:
+        pass
+
+    def intrinsics(self, fovy_deg: float) -> tuple[float, float, float, float]:
+        return mw.intrinsics(fovy_deg, self.width, self.height)
+
+    def render(self, pose: np.ndarray, fovy_deg: float) -> np.ndarray:
+        import vsinv
+
+        self.frame += 1
+        k = vsinv.Intrinsics(*self.intrinsics(fovy_deg))
+        return vsinv.vision.render_faces(self.tiles, pose, k, self.width, self.height, frame=self.frame)
+
+    surface_point = TexturedBox.surface_point
+
+
 def photograph(face: str) -> np.ndarray:
     """The colour (BGR) photograph on `face`: a square crop of the centre of ViSP's image."""
     import cv2
