@@ -8,6 +8,8 @@ points ever reported found beyond 4 px of their true pixel ("wrong") and the ste
 time (ms; the first frame, matched by descriptors, left out), and the correspondence error at the
 final frame (each found point's pixel minus the true projection of its reference keypoint's surface
 point): its mean vector ("bias u, v"), median norm and spread (standard deviation per axis), px.
+`--renderer` has the project's renderer draw the same box (`feature_world.RenderedBox`:
+`vsinv.vision.render_faces` with its default blur and noise, no light) instead of MuJoCo.
 `--truth` runs each start again fed the true pixels of the same points (with the visibility of the
 image loop's step of the same index): the law and stop rules alone, without the vision's error.
 
@@ -19,6 +21,7 @@ visp-images-data installed)::
     MUJOCO_GL=egl python benches/features_mujoco.py 0 1 2    # some starts
     MUJOCO_GL=egl python benches/features_mujoco.py --quick  # start 0, 30 frames (make bench-quick)
     MUJOCO_GL=egl python benches/features_mujoco.py --truth 0 1  # and the loop fed the true pixels
+    python benches/features_mujoco.py --renderer 0  # the project's renderer draws the box instead
 """
 
 from __future__ import annotations
@@ -99,7 +102,7 @@ def main() -> int:
     picked = [int(a) for a in args if a.isdigit() and "--starts" not in args]
     starts = picked or ([0] if quick else list(range(count)))
     session = {**SESSION, "stop": {**SESSION["stop"], "max_iterations": 30}} if quick else SESSION
-    world = fw.TexturedBox(t.WIDTH, t.HEIGHT)
+    world = fw.RenderedBox(t.WIDTH, t.HEIGHT) if "--renderer" in args else fw.TexturedBox(t.WIDTH, t.HEIGHT)
     reference = world.render(t.REFERENCE_POSE, t.FOVY_REFERENCE)
     poses = t.start_poses(world, max(starts) + 1)
     print(f"load average {os.getloadavg()[0]:.2f} (times are wall-clock on a shared machine)")

@@ -32,6 +32,7 @@ AREAS = {
         "test_tag_tracking.py", "test_tags.py", "test_tags_robustness.py", "test_tracker_border.py",
         "test_tracker_lost.py", "test_tracker_shape.py", "test_vision.py", "test_camera_source.py",
         "test_colour_images.py", "test_decode_image.py", "test_dots_upscaled.py", "test_features.py",
+        "test_texture_render.py",
     ],
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",

@@ -62,11 +62,8 @@ class TexturedBox:
 
         assets: dict[str, bytes] = {}
         asset_xml, geoms = [], []
-        for k, (face, path) in enumerate(TEXTURES.items()):
-            image = cv2.imread(str(VISP / path), cv2.IMREAD_COLOR)
-            side = min(image.shape[:2])  # a square crop of the photograph's centre
-            top, left = (image.shape[0] - side) // 2, (image.shape[1] - side) // 2
-            ok, png = cv2.imencode(".png", image[top : top + side, left : left + side])
+        for k, face in enumerate(TEXTURES):
+            ok, png = cv2.imencode(".png", photograph(face))
             if not ok:
                 raise RuntimeError("cv2.imencode failed")
             assets[f"face{k}.png"] = png.tobytes()
@@ -113,6 +110,58 @@ class TexturedBox:
                 hit = pose[:3, 3] + ray * ((-mw.HALF - pose[2, 3]) / ray[2])
             out[i] = hit
         return out
+
+
+class RenderedBox:
+    """The same box drawn by the project's renderer (`tiles()`, the renderer's default blur and
+    noise, a new noise draw each frame): TexturedBox's interface without MuJoCo or its light."""
+
+    def __init__(self, width: int = 640, height: int = 480) -> None:
+        self.width, self.height = width, height
+        self.tiles = tiles()
+        self.frame = 0
+
+    def close(self) -> None:
+        pass
+
+    def intrinsics(self, fovy_deg: float) -> tuple[float, float, float, float]:
+        return mw.intrinsics(fovy_deg, self.width, self.height)
+
+    def render(self, pose: np.ndarray, fovy_deg: float) -> np.ndarray:
+        import vsinv
+
+        self.frame += 1
+        k = vsinv.Intrinsics(*self.intrinsics(fovy_deg))
+        return vsinv.vision.render_faces(self.tiles, pose, k, self.width, self.height, frame=self.frame)
+
+    surface_point = TexturedBox.surface_point
+
+
+def photograph(face: str) -> np.ndarray:
+    """The colour (BGR) photograph on `face`: a square crop of the centre of ViSP's image."""
+    import cv2
+
+    image = cv2.imread(str(VISP / TEXTURES[face]), cv2.IMREAD_COLOR)
+    side = min(image.shape[:2])
+    top, left = (image.shape[0] - side) // 2, (image.shape[1] - side) // 2
+    return image[top : top + side, left : left + side]
+
+
+def tiles() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The photograph tiles as the project's renderer draws them (`vsinv.vision.render_faces`):
+    per face the tile's outer square (1 mm out of the box, half side 0.98 HALF) counter-clockwise
+    about the outward normal, and where MuJoCo puts the photograph on it (measured: column u
+    along the face's axis a, row 0 at the +b edge)."""
+    out = []
+    for face in TEXTURES:
+        c, a, b, n = (np.asarray(v, float) for v in mw.FACES[face])
+        q, h = c + 0.001 * n, 0.98 * mw.HALF
+        image = photograph(face)
+        s = image.shape[0]
+        vertices = np.array([q - h * a - h * b, q + h * a - h * b, q + h * a + h * b, q - h * a + h * b])
+        coords = np.array([[-0.5, s - 0.5], [s - 0.5, s - 0.5], [s - 0.5, -0.5], [-0.5, -0.5]])
+        out.append((vertices, coords, image))
+    return out
 
 
 def _hit_box(origin: np.ndarray, ray: np.ndarray, half: float) -> np.ndarray:

@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 import vsinv
 from robustness_harness import (
     ANY, INVALID, RAISE, RETURN, SAME, TYPE, V, VISION, arrays, call, choices, covers, cv2, floats, fuzz,
-    fuzz_settings, ints, returned,
+    fuzz_settings, ints, k_variants, returned,
 )
 
 
@@ -514,3 +514,51 @@ def test_track_points(data: Any) -> None:
           "max_error": floats(0.5, overrides=positive)},
          digest=lambda out: out, ref=ref, finite=False,
          names={"previous_image": ("previous_image", "next_image"), "next_image": ("next_image", "previous_image")})
+
+
+def textured_square(tex: np.ndarray, z: float = 0.5) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A 0.1 m square at depth `z` facing a camera at F* (vertices counter-clockwise about -z),
+    the whole texture on it."""
+    h, w = tex.shape[:2]
+    vertices = np.array([[-0.05, -0.05, z], [-0.05, 0.05, z], [0.05, 0.05, z], [0.05, -0.05, z]])
+    coords = np.array([[-0.5, -0.5], [-0.5, h - 0.5], [w - 0.5, h - 0.5], [w - 0.5, -0.5]])
+    return vertices, coords, tex
+
+
+@covers("render_faces")
+@fuzz_settings(80)
+@given(st.data())
+def test_render_faces(data: Any) -> None:
+    tex = texture()[:40, :50].copy()
+    good = textured_square(tex)
+    v, c, _ = good
+    k = vsinv.Intrinsics(400.0, 400.0, 31.5, 23.5)
+    args = {"faces": [good], "pose": np.eye(4), "K": k, "width": 64, "height": 48, "blur_sigma": 0.8,
+            "noise_sigma": 2.0, "background": 30, "seed": 3, "frame": 5}
+    ref = vsinv.vision.render_faces(**args)
+    bent = v.copy()
+    bent[2, 2] += 0.01
+    bow = v[[0, 2, 1, 3]]
+    faces = st.sampled_from([
+        V([good], SAME, "list"), V((good,), SAME, "tuple"), V([(v, c, np.stack([tex] * 3, -1))], SAME, "colour texture"),
+        V([(v.tolist(), c.tolist(), tex)], SAME, "nested lists"), V([], ANY, "no face"), V(None, INVALID, "none"),
+        V(3, INVALID, "int"), V("abc", INVALID, "str"), V([good, (v[:2], c[:2], tex)], INVALID, "two vertices"),
+        V([(bent, c, tex)], INVALID, "bent"), V([(bow, c, tex)], INVALID, "bow tie"), V([(v, c)], INVALID, "pair"),
+        V([(v, c, tex.astype(float))], INVALID, "float texture"), V([(v, c, tex[:0])], INVALID, "empty texture"),
+        V([(v, c[:, :1], tex)], INVALID, "one coordinate"), V([(np.where(v == v[1, 1], np.nan, v), c, tex)], INVALID, "nan"),
+        V([(v, c[[0, 0, 2, 3]], tex)], INVALID, "folded coordinates"), V([(v[::-1], c[::-1], tex)], ANY, "turned away"),
+    ])
+    pose_over = {"zero": INVALID, "negative": INVALID, "fewer": INVALID, "empty": INVALID, "flat": INVALID, "huge": INVALID,
+                 "bool": INVALID, "tiny": INVALID, "float32": ANY}
+    ranged = {kind: INVALID for kind in ("nan", "posinf", "neginf", "negative", "neghuge", "huge")}
+    sides = {"zero": INVALID, "negative": INVALID, "huge": INVALID, "bool": ANY}
+
+    def check(out: Any) -> None:
+        assert out.dtype == np.uint8 and out.ndim == 2 and out.flags.c_contiguous
+
+    fuzz(data, vsinv.vision.render_faces, args,
+         {"faces": faces, "pose": arrays(np.eye(4), overrides=pose_over), "K": k_variants(k),
+          "width": ints(64, overrides=sides), "height": ints(48, overrides=sides),
+          "blur_sigma": floats(0.8, overrides=ranged), "noise_sigma": floats(2.0, overrides=ranged),
+          "background": ints(30, overrides={"huge": INVALID}), "seed": ints(3), "frame": ints(5)},
+         ref=ref, check=check, names={"K": ("K", "intrinsics", "fku", "fkv", "skew", "matrix")})

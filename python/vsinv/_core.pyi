@@ -114,6 +114,7 @@ __all__ = [
     "depths_from_translation",
     "reference_depths",
     "render",
+    "render_faces",
     "render_view",
     "degrade",
     "Dots",
@@ -1100,6 +1101,31 @@ def render_view(
 ) -> tuple[_U8Image, _F64Array, npt.NDArray[np.bool_]]:
     """`render` with what it shows: `(image, pixels (n, 2), visible (n,))`, the true
     projections of the dots' centres and which dots are in the image."""
+
+def render_faces(
+    faces: Sequence[tuple[_ArrayLike, _ArrayLike, _U8Image]],
+    pose: _ArrayLike,
+    K: _IntrinsicsLike,
+    width: int,
+    height: int,
+    blur_sigma: float = 0.8,
+    noise_sigma: float = 2.0,
+    background: int = 30,
+    seed: int = 0,
+    frame: int = 0,
+) -> _U8Image:
+    """The image a camera sees of textured faces: `faces` a sequence of `(vertices (n, 3),
+    texture_coords (n, 2), texture)`, each a convex planar polygon of F* (metres, n >= 3, front
+    side the one its vertices turn counter-clockwise around) whose vertex `k` shows texture pixel
+    `texture_coords[k]` (`(u, v)`, the texel `(i, j)` covering `[i - 0.5, i + 0.5] x [j - 0.5,
+    j + 0.5]`; a projective map from the face: affine for a triangle, the homography of the first
+    four otherwise), `texture` a grey or colour uint8 image (as `to_grey` reads it). The camera
+    frame `pose` (4x4, in F*), its intrinsics `K` (`Intrinsics` or 3x3; a pinhole, no
+    distortion), an image of `width` x `height` pixels. A pixel shows
+    the area average of the texture over its footprint (the nearest face per sample; faces seen
+    from behind are not drawn), on a background of grey level `background`, then the Gaussian PSF
+    of `blur_sigma` pixels and the noise of `noise_sigma` grey levels (draw `frame` of `seed`), as
+    `render`. Returns the `(height, width)` uint8 image."""
 
 def degrade(
     image: _U8Image,

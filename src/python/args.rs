@@ -73,6 +73,21 @@ pub fn min_contrast(obj: &Bound<'_, PyAny>) -> PyResult<u8> {
     Ok(int_in_range(obj, "min_contrast", 0, 255)? as u8)
 }
 
+/// An image's width in pixels: an integer in [1, 65536] (`vision::image::MAX_IMAGE_SIDE`).
+pub fn width(obj: &Bound<'_, PyAny>) -> PyResult<u32> {
+    Ok(int_in_range(obj, "width", 1, i128::from(crate::vision::image::MAX_IMAGE_SIDE))? as u32)
+}
+
+/// An image's height in pixels: an integer in [1, 65536] (`vision::image::MAX_IMAGE_SIDE`).
+pub fn height(obj: &Bound<'_, PyAny>) -> PyResult<u32> {
+    Ok(int_in_range(obj, "height", 1, i128::from(crate::vision::image::MAX_IMAGE_SIDE))? as u32)
+}
+
+/// A background grey level in [0, 254] (below the renderer's foreground, 255).
+pub fn background(obj: &Bound<'_, PyAny>) -> PyResult<u8> {
+    Ok(int_in_range(obj, "background", 0, 254)? as u8)
+}
+
 /// A seed of the sensor noise: an integer in [0, 2^64 - 1].
 pub fn seed(obj: &Bound<'_, PyAny>) -> PyResult<u64> {
     Ok(int_in_range(obj, "seed", 0, i128::from(u64::MAX))? as u64)

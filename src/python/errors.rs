@@ -579,3 +579,15 @@ pub(crate) fn reraise(cause: &PyErr, msg: String, argument: Option<&str>) -> PyE
         err.into()
     })
 }
+
+/// [`reraise`] about item `index` of the sequence `argument`: `argument` set and `location`
+/// `(argument, index)`.
+pub(crate) fn reraise_item(cause: &PyErr, msg: String, argument: &str, index: usize) -> PyErr {
+    let err = reraise(cause, msg, Some(argument));
+    let location = Value::Location(crate::Location::key(argument).then_index(index));
+    let set = Python::attach(|py| err.value(py).setattr("location", location.to_object(py)?));
+    match set {
+        Ok(()) => err,
+        Err(e) => e,
+    }
+}

@@ -35,6 +35,7 @@ mod sweep;
 mod tag_tracker;
 mod tags;
 mod targets;
+mod textured;
 mod uncertainty;
 mod values;
 mod vision;
@@ -62,6 +63,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     sim::register(m)?;
     sweep::register(m)?;
     vision::register(m)?;
+    textured::register(m)?;
     features::register(m)?;
     grey::register(m)?;
     compressed::register(m)?;

@@ -12,6 +12,7 @@
 //! | the lens between the ideal pinhole image and the rendered one | `render/lens.rs` |
 //! | coverage, supersampling, blur, quantisation | `render/raster.rs` |
 //! | the sensor noise | `render/noise.rs` |
+//! | textured planar faces ([`TexturedFace`]): homography, area sampling, culling, depth | `render/texture.rs` |
 //! | the PSF and noise on an image drawn elsewhere ([`Renderer::degrade`]) | `render/sensor.rs` |
 
 mod canvas;
@@ -21,12 +22,14 @@ mod noise;
 mod polygon;
 mod raster;
 mod sensor;
+mod texture;
 
 use nalgebra::Isometry3;
 
 pub use self::canvas::{Canvas, Disc, Polygon};
 use self::noise::{Noise, frame_seed, quantised_pool};
 use self::raster::{Paint, gaussian_kernel};
+pub use self::texture::{TexturedFace, TexturedFaces};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::{Error, Short};

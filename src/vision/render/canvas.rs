@@ -10,6 +10,7 @@ use super::conic::ImageEllipse;
 use super::lens::Warp;
 use super::polygon::{ImagePolygon, ImagePolygons};
 use super::raster::{Paint, paint};
+use super::texture::{TexturedFace, paint_faces};
 use crate::error::{Error, Short};
 use crate::vision::error::Result;
 use crate::vision::image::GreyImage;
@@ -127,6 +128,13 @@ impl<'a> Canvas<'a> {
             }
         }
         !images.is_empty() && paint(&mut self.image, &ImagePolygons { polygons: images }, &self.warp, &self.paint)
+    }
+
+    /// Draws textured faces (their grey levels replace the background; faces turned away
+    /// are culled, the nearest face shows); per face, whether it is drawn (seen from its
+    /// front, in front of the camera, its image meeting the image).
+    pub fn draw_textured_faces(&mut self, faces: &[TexturedFace]) -> Vec<bool> {
+        paint_faces(&mut self.image, faces, (self.view.pose, self.view.intrinsics), &self.warp, &self.paint)
     }
 
     /// The image of a polygon: None when it cannot be drawn, Some(None) when seen edge-on.

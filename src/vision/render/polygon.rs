@@ -29,6 +29,11 @@ pub(super) struct ImagePolygon {
 }
 
 impl ImagePolygon {
+    /// `[u_min, v_min, u_max, v_max]` in the rendered image.
+    pub(super) fn bbox(&self) -> [f64; 4] {
+        self.bbox
+    }
+
     /// The image of a convex polygon of F* seen from `pose`; None when a vertex is not in
     /// front of the camera or part of it lies beyond the lens model's fold, Some(None) when it
     /// is seen edge-on (no area).
