@@ -42,7 +42,7 @@ pub fn plane(what: &str, image: &GreyView<'_>) -> Result<Image<f32, 1>> {
 /// `pyrdown_f32` and `scharr_spatial_gradient_float`, bit for bit).
 ///
 /// Each level (and its gradients) is then given a margin of its edge pixels repeated
-/// ([`margin`]), so that every window of a point inside the image is inside the padded level:
+/// (`margin`), so that every window of a point inside the image is inside the padded level:
 /// kornia samples a window that crosses a level's edge one pixel at a time through its
 /// border mode (`sample_at`, most of a frame's time at 640 x 480, where a level-3 window
 /// crosses the edge for half of the image's points), and an inside one with its vectorised
