@@ -347,14 +347,20 @@ mod tests {
         assert_eq!(image.get_pixel(30, 12).0[0], 0);
     }
 
+    /// The 20 x 16 texture's face of [`fronto`] with its vertices in the other order: seen
+    /// from its back.
+    fn back_of(face: &TexturedFace, tex: &Arc<GreyImage>) -> TexturedFace {
+        let mut reversed = face.vertices().iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
+        reversed.reverse();
+        let uv = vec![[19.5, -0.5], [19.5, 15.5], [-0.5, 15.5], [-0.5, -0.5]];
+        TexturedFace::new(reversed, uv, tex.clone()).unwrap()
+    }
+
     #[test]
     fn a_face_turned_away_is_culled_and_the_nearer_face_hides_the_farther() {
         let tex = texture(20, 16);
         let face = fronto(&tex, 2.0, 300.0, [-14.0, -12.0]);
-        let mut reversed = face.vertices().iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
-        reversed.reverse();
-        let uv = vec![[19.5, -0.5], [19.5, 15.5], [-0.5, 15.5], [-0.5, -0.5]];
-        let back = TexturedFace::new(reversed, uv, tex.clone()).unwrap();
+        let back = back_of(&face, &tex);
         assert_eq!(render(&[back], Isometry3::identity(), 300.0, 48).1, vec![false]);
         let flat = Arc::new(GreyImage::from_pixel(4, 4, [200].into()));
         let near = fronto(&flat, 1.0, 300.0, [-2.0, -2.0]);
@@ -371,10 +377,7 @@ mod tests {
         use crate::vision::render::{CameraView, RenderConfig, Renderer};
         let tex = texture(20, 16);
         let face = fronto(&tex, 2.0, 300.0, [-14.0, -12.0]);
-        let mut reversed = face.vertices().iter().map(|p| [p.x, p.y, p.z]).collect::<Vec<_>>();
-        reversed.reverse();
-        let uv = vec![[19.5, -0.5], [19.5, 15.5], [-0.5, 15.5], [-0.5, -0.5]];
-        let back = TexturedFace::new(reversed, uv, tex.clone()).unwrap();
+        let back = back_of(&face, &tex);
         let faces = TexturedFaces(vec![face, back]);
         let config = RenderConfig { blur_sigma: 0.0, noise_sigma: 0.0, background: 7, ..RenderConfig::default() };
         let renderer = Renderer::new(config).unwrap();
