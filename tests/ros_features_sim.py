@@ -86,7 +86,10 @@ def lock_step(executor: SingleThreadedExecutor, camera: FeatureCamera, robot: Si
     camera.recording = True
     camera.publish()
     spin_until(executor, lambda: sup.status.get("state") == "stopped", deadline)
-    spin_until(executor, lambda: False, time.monotonic() + 0.5)  # the last twists and annotated image
+    # The verdict's zero twist may come after the status under load: wait (at most 10 s) until
+    # there is a twist for every frame published, then half a second for the annotated image.
+    spin_until(executor, lambda: len(robot.received) - n0 >= len(camera.sent), min(deadline, time.monotonic() + 10.0))
+    spin_until(executor, lambda: False, time.monotonic() + 0.5)
     out.update(status=dict(sup.status), twists=[tw for _, tw, _ in robot.received[n0:]],
                frame_ids=sorted({f for _, _, f in robot.received}), camera_pose=robot.camera_pose().tolist(),
                stamps=[t for t, _ in camera.sent])
