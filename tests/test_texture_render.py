@@ -18,6 +18,8 @@ the background by coverage).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -153,6 +155,8 @@ def test_a_bad_face_is_refused_naming_faces_and_its_position() -> None:
         ("faces[1] texture: expected a uint8 NumPy array", 1, [good, (v, c, tex.astype(float))]),
         ("faces[0]: invalid parameter `texture coordinates`: coordinate 2", 0, [(v, c[[0, 0, 2, 3]], tex)]),
         ("faces[1]: face vertices: non-finite value at index 10", 1, [good, (nan, c, tex)]),
+        # An endless face is read to its fourth part, not forever.
+        ("faces[0]: expected (vertices, texture_coords, texture)", 0, [itertools.repeat(v)]),
     ]
     for start, index, faces in cases:
         with pytest.raises(vsinv.InvalidInput) as err:

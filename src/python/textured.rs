@@ -80,7 +80,8 @@ fn faces_arg(obj: &Bound<'_, PyAny>) -> PyResult<TexturedFaces> {
 /// Face `i`: `(vertices (n, 3), texture_coords (n, 2), texture)`.
 fn face_arg(item: &Bound<'_, PyAny>, i: usize) -> PyResult<TexturedFace> {
     let parts: Vec<Bound<'_, PyAny>> = match item.try_iter() {
-        Ok(parts) => parts.collect::<PyResult<_>>()?,
+        // At most one part past the three: an endless iterable is refused, not read forever.
+        Ok(parts) => parts.take(4).collect::<PyResult<_>>()?,
         Err(_) => Vec::new(),
     };
     let [vertices, coords, texture] = parts.as_slice() else {
