@@ -12,6 +12,11 @@ point): its mean vector ("bias u, v"), median norm and spread (standard deviatio
 `vsinv.vision.render_faces` with its default blur and noise, no light) instead of MuJoCo.
 `--truth` runs each start again fed the true pixels of the same points (with the visibility of the
 image loop's step of the same index): the law and stop rules alone, without the vision's error.
+`--estimated` gives the session no depth from the scene: at each start the camera first makes a
+3 cm pure translation, the keypoints tracked across it give their depths by appendix A
+(`depths_from_translation` with `pixel_noise`, then `ResectionDepths` every step), and the loop
+servoes from where the translation ended; the line "depths" gives the usable points and the
+estimated depths' error against the truth (up to their common scale).
 
 How to run (from the repository root, with mujoco, opencv-python-headless and Debian's
 visp-images-data installed)::
@@ -22,6 +27,7 @@ visp-images-data installed)::
     MUJOCO_GL=egl python benches/features_mujoco.py --quick  # start 0, 30 frames (make bench-quick)
     MUJOCO_GL=egl python benches/features_mujoco.py --truth 0 1  # and the loop fed the true pixels
     python benches/features_mujoco.py --renderer 0  # the project's renderer draws the box instead
+    MUJOCO_GL=egl python benches/features_mujoco.py --estimated 0 1  # depths by appendix A
 """
 
 from __future__ import annotations
@@ -34,6 +40,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 import feature_world as fw  # noqa: E402
 import mujoco_world as mw  # noqa: E402
 import numpy as np  # noqa: E402
+import test_features_estimated_depths as ed  # noqa: E402
 import test_features_mujoco as t  # noqa: E402
 import time  # noqa: E402
 
@@ -47,11 +54,16 @@ def reference_pixels(reference: np.ndarray) -> np.ndarray:
     return vsinv.ImageServo(reference, "features", t.K_HAT, depths="per_step").reference_pixels
 
 
-def run(world: fw.TexturedBox, reference: np.ndarray, start: np.ndarray, session: dict) -> dict:
+def run(world: fw.TexturedBox, reference: np.ndarray, start: np.ndarray, session: dict, estimated: bool = False) -> dict:
     points = world.surface_point(t.REFERENCE_POSE, t.FOVY_REFERENCE, reference_pixels(reference))
     _, z = mw.project(t.REFERENCE_POSE, world.intrinsics(t.FOVY_REFERENCE), points)
-    servo = vsinv.ImageServo(reference, "features", t.K_HAT, law="invariant", reference_depths=z, **session)
-    pose, times, wrong, visible = start, [], 0, []
+    pose, depths = start, {"reference_depths": z}
+    if estimated:  # no depth from the scene: appendix A over a 3 cm translation first
+        pair = ed.translation_pair(world, reference, start)
+        pose, points, z = pair.moved, points[pair.ids], z[pair.ids]
+        depths = {"depths": pair.estimator, "point_ids": pair.ids.tolist()}
+    servo = vsinv.ImageServo(reference, "features", t.K_HAT, law="invariant", **depths, **session)
+    begin, times, wrong, visible = pose, [], 0, []
     image = world.render(pose, t.FOVY_SERVO)
     while True:
         t0 = time.perf_counter()
@@ -71,7 +83,9 @@ def run(world: fw.TexturedBox, reference: np.ndarray, start: np.ndarray, session
             "switches": servo.basis_switches,
             "wrong": wrong, "mean_ms": float(np.mean(tracked)), "worst_ms": float(np.max(tracked)),
             "bias": error.mean(axis=0), "median_px": float(np.median(np.linalg.norm(error, axis=1))),
-            "spread": error.std(axis=0), "visible": visible, "points": points, "depths": z}
+            "spread": error.std(axis=0), "visible": visible, "points": points, "depths": z,
+            "pair": pair if estimated else None, "start": begin,
+            "reference_pixels": servo.reference_pixels}
 
 
 def run_truth(world: fw.TexturedBox, reference_pixels: np.ndarray, start: np.ndarray, session: dict, image_run: dict) -> dict:
@@ -94,6 +108,7 @@ def main() -> int:
     args = sys.argv[1:]
     quick = "--quick" in args  # make bench-quick: start 0, 30 frames
     truth = "--truth" in args  # each start again, fed the true pixels
+    estimated = "--estimated" in args  # depths by appendix A over a 3 cm translation, none from the scene
     why = fw.available()
     if why is not None:
         print(f"skipped: {why}")
@@ -110,15 +125,20 @@ def main() -> int:
           f"{'mean ms':>8} {'worst ms':>8} {'bias u':>7} {'bias v':>7} {'med px':>6} {'sd u':>5} {'sd v':>5}")
     wrong, within = 0, 0
     for k in starts:
-        r = run(world, reference, poses[k], session)
+        r = run(world, reference, poses[k], session, estimated)
         wrong += r["wrong"]
         goal = r["mm"] < t.GOAL_MM and r["deg"] < t.GOAL_DEG
         within += goal
         print(f"{k:5d} {r['verdict']:>15} {r['iterations']:5d} {r['mm']:8.3f} {r['deg']:7.3f} {'yes' if goal else 'no':>4} "
               f"{r['found']:5d} {r['wrong']:5d} {r['switches']:6d} {r['mean_ms']:8.2f} {r['worst_ms']:8.2f} "
               f"{r['bias'][0]:+7.3f} {r['bias'][1]:+7.3f} {r['median_px']:6.3f} {r['spread'][0]:5.3f} {r['spread'][1]:5.3f}", flush=True)
+        if r["pair"] is not None:
+            pair = r["pair"]
+            errors = pair.depth_errors(world)
+            print(f"{'depths':>5} {np.isfinite(pair.depths).sum()} usable of {len(pair.ids)} tracked across 3 cm, "
+                  f"error median {100 * np.median(errors):.2f} %, max {100 * errors.max():.2f} %, residual {pair.residual:.3f} px", flush=True)
         if truth:
-            p = run_truth(world, reference_pixels(reference), poses[k], session, r)
+            p = run_truth(world, r["reference_pixels"], r["start"], session, r)
             print(f"{'truth':>5} {p['verdict']:>15} {p['iterations']:5d} {p['mm']:8.3f} {p['deg']:7.3f}", flush=True)
     print(f"{within} of {len(starts)} starts within {t.GOAL_MM} mm and {t.GOAL_DEG} deg; load average {os.getloadavg()[0]:.2f}")
     world.close()

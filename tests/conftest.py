@@ -37,7 +37,7 @@ AREAS = {
     "sim": [
         "test_arm.py", "test_batch_progress.py", "test_distortion_loop.py", "test_figures.py", "test_ik.py",
         "test_mount_error.py", "test_mujoco_batch.py", "test_mujoco_vision.py", "test_mujoco_world.py", "test_features_mujoco.py", "test_robust_depth_mujoco.py",
-        "test_mujoco_user_arm.py",
+        "test_features_estimated_depths.py", "test_mujoco_user_arm.py",
         "test_recording.py", "test_scenarios.py", "test_schema.py", "test_sweep.py",
     ],
     "calibration": ["test_distortion.py", "test_fisheye.py", "test_hand_eye.py", "test_hand_eye_to_hand.py"],
