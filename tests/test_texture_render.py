@@ -157,6 +157,8 @@ def test_a_bad_face_is_refused_naming_faces_and_its_position() -> None:
         ("faces[1]: face vertices: non-finite value at index 10", 1, [good, (nan, c, tex)]),
         # An endless face is read to its fourth part, not forever.
         ("faces[0]: expected (vertices, texture_coords, texture)", 0, [itertools.repeat(v)]),
+        # An endless sequence of faces is read to one past the limit, not forever.
+        ("faces[64]: more than 64 faces", 64, itertools.repeat(good)),
     ]
     for start, index, faces in cases:
         with pytest.raises(vsinv.InvalidInput) as err:

@@ -12,7 +12,7 @@ use super::errors::{invalid_argument, reraise_item};
 use super::image_arg::image_arg;
 use crate::core::distortion::Distortion;
 use crate::vision::image::{GreyImage, check_dimensions};
-use crate::vision::render::{CameraView, RenderConfig, Renderer, TexturedFace, TexturedFaces};
+use crate::vision::render::{CameraView, MAX_FACES, RenderConfig, Renderer, TexturedFace, TexturedFaces};
 
 /// The image a camera sees of textured faces: `faces` a sequence of `(vertices (n, 3),
 /// texture_coords (n, 2), texture)`, each a convex planar polygon of F* (metres, n >= 3, front
@@ -25,7 +25,8 @@ use crate::vision::render::{CameraView, RenderConfig, Renderer, TexturedFace, Te
 /// the area average of the texture over its footprint (the nearest face per sample; faces seen
 /// from behind are not drawn), on a background of grey level `background`, then the Gaussian PSF
 /// of `blur_sigma` pixels and the noise of `noise_sigma` grey levels (draw `frame` of `seed`), as
-/// `render`. Returns the `(height, width)` uint8 image.
+/// `render`. More faces than the limit (`MAX_FACES` of the crate's renderer) are refused.
+/// Returns the `(height, width)` uint8 image.
 #[pyfunction]
 #[pyo3(signature = (
     faces, pose, K, width, height, blur_sigma = 0.8, noise_sigma = 2.0,
@@ -67,6 +68,11 @@ fn faces_arg(obj: &Bound<'_, PyAny>) -> PyResult<TexturedFaces> {
     };
     let mut faces = Vec::new();
     for (i, item) in items.enumerate() {
+        // Read no further than one past the limit: an endless iterable is refused, not read forever.
+        if i == MAX_FACES {
+            let msg = format!("faces[{i}]: more than {MAX_FACES} faces");
+            return Err(reraise_item(&invalid_argument("faces", msg.clone()), msg, "faces", i));
+        }
         let face = item.and_then(|item| face_arg(&item, i)).map_err(|e| {
             let msg = e.value(obj.py()).to_string();
             let msg = if msg.starts_with("faces[") { msg } else { format!("faces[{i}]: {msg}") };

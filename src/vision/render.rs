@@ -29,7 +29,7 @@ use nalgebra::Isometry3;
 pub use self::canvas::{Canvas, Disc, Polygon};
 use self::noise::{Noise, frame_seed, quantised_pool};
 use self::raster::{Paint, gaussian_kernel};
-pub use self::texture::{TexturedFace, TexturedFaces};
+pub use self::texture::{MAX_FACES, TexturedFace, TexturedFaces};
 use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::{Error, Short};

@@ -20,6 +20,9 @@ use crate::error::Error;
 use crate::vision::error::Result;
 use crate::vision::image::GreyImage;
 
+/// The most faces one image is drawn with: each sample of a pixel is tested against every face
+/// that may meet it, so the time grows with their number (about 1 s a 640x480 frame for three).
+pub const MAX_FACES: usize = 64;
 /// Fewest and most samples per pixel and axis.
 const MIN_SAMPLES: usize = 4;
 const MAX_SAMPLES: usize = 16;
@@ -218,8 +221,9 @@ impl<'f> SeenFace<'f> {
     fn grey(&self, q: Vector2<f64>) -> f64 {
         let x = self.face.to_texture * Vector3::new(q.x, q.y, 1.0);
         let tex = &self.face.texture;
-        let i = (x.x / x.z).round().clamp(0.0, f64::from(tex.width() - 1)) as u32;
-        let j = (x.y / x.z).round().clamp(0.0, f64::from(tex.height() - 1)) as u32;
+        // Clamped first, then rounded half up by truncation: no libm call per sample.
+        let i = ((x.x / x.z).clamp(0.0, f64::from(tex.width() - 1)) + 0.5) as u32;
+        let j = ((x.y / x.z).clamp(0.0, f64::from(tex.height() - 1)) + 0.5) as u32;
         f64::from(tex.get_pixel(i, j).0[0])
     }
 }
@@ -251,9 +255,21 @@ pub(super) fn paint_faces(
     let patch = Patch { u0, v0, w: (u1 - u0 + 1) as usize, h: (v1 - v0 + 1) as usize };
     let bg = f64::from(paint.background);
     let (mut value, mut coverage) = (vec![0.0f32; patch.w * patch.h], vec![0.0f32; patch.w * patch.h]);
+    let mut near: Vec<&SeenFace> = Vec::with_capacity(seen.len());
     for (index, (u, v)) in patch.pixels().enumerate() {
+        // The faces whose image may meet this pixel's footprint (its square, one pixel of margin).
+        let (x, y) = (u as f64, v as f64);
+        near.clear();
+        near.extend(
+            seen.iter().filter(|s| {
+                x + 1.0 >= s.bbox[0] && y + 1.0 >= s.bbox[1] && x - 1.0 <= s.bbox[2] && y - 1.0 <= s.bbox[3]
+            }),
+        );
+        if near.is_empty() {
+            continue;
+        }
         let Some(local) = warp.local(u, v) else { continue };
-        let (c, g) = pixel_samples(&seen, &local);
+        let (c, g) = pixel_samples(&near, &local);
         coverage[index] = c as f32;
         value[index] = (bg * (1.0 - c) + g) as f32;
     }
@@ -273,8 +289,8 @@ pub(super) fn paint_faces(
 }
 
 /// The share of a pixel's samples on a face and the sum of their grey levels divided by the
-/// number of samples.
-fn pixel_samples(seen: &[SeenFace], local: &super::lens::Local) -> (f64, f64) {
+/// number of samples; `seen`: the faces that may meet the pixel, whose scales set the samples.
+fn pixel_samples(seen: &[&SeenFace], local: &super::lens::Local) -> (f64, f64) {
     let scale = seen.iter().map(|s| s.scale(local.ideal)).fold(0.0, f64::max)
         * local.jacobian.column(0).norm().max(local.jacobian.column(1).norm());
     let n = ((4.0 * scale).ceil() as usize).clamp(MIN_SAMPLES, MAX_SAMPLES);
