@@ -258,11 +258,10 @@ pub(super) fn paint_faces(
     let mut near: Vec<&SeenFace> = Vec::with_capacity(seen.len());
     for (index, (u, v)) in patch.pixels().enumerate() {
         // The faces whose image may meet this pixel's footprint (its square, one pixel of margin).
-        let (x, y) = (u as f64, v as f64);
         near.clear();
         near.extend(
             seen.iter().filter(|s| {
-                x + 1.0 >= s.bbox[0] && y + 1.0 >= s.bbox[1] && x - 1.0 <= s.bbox[2] && y - 1.0 <= s.bbox[3]
+                u + 1.0 >= s.bbox[0] && v + 1.0 >= s.bbox[1] && u - 1.0 <= s.bbox[2] && v - 1.0 <= s.bbox[3]
             }),
         );
         if near.is_empty() {
