@@ -51,6 +51,8 @@ pub(crate) struct ImageLoop {
     started: bool,
     size: (u32, u32),
     frame: u64,
+    /// The previous frame's pixels, the memory the next frame is rendered into.
+    spare: Vec<u8>,
     /// Every detection error of a found point, pixels.
     pub(crate) errors: Vec<f64>,
 }
@@ -64,7 +66,7 @@ impl ImageLoop {
     /// A loop over any target and detector.
     pub(crate) fn with(renderer: Renderer, vision: SceneVision, size: (u32, u32)) -> Self {
         let SceneVision { target, detector } = vision;
-        Self { renderer, target, detector, started: false, size, frame: 0, errors: Vec::new() }
+        Self { renderer, target, detector, started: false, size, frame: 0, spare: Vec::new(), errors: Vec::new() }
     }
 
     /// The reference image rendered with K* at F*, its points detected around their
@@ -111,7 +113,8 @@ impl ImageLoop {
     ) -> Result<()> {
         self.frame += 1;
         let view = CameraView { pose, intrinsics: k, distortion, size: self.size };
-        let rendered = self.renderer.render(&*self.target, Some(&obs.visible), &view, self.frame)?;
+        let spare = std::mem::take(&mut self.spare);
+        let rendered = self.renderer.render_in(&*self.target, Some(&obs.visible), &view, self.frame, spare)?;
         let image = view_of(&rendered.image)?;
         if !self.started {
             self.detector.start(&image, &expected(self.target.points(), &obs.pixels))?;
@@ -133,6 +136,7 @@ impl ImageLoop {
                 f64::NAN
             };
         }
+        self.spare = rendered.image.into_raw();
         Ok(())
     }
 

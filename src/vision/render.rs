@@ -158,6 +158,20 @@ impl Renderer {
         view: &CameraView<'_>,
         frame: u64,
     ) -> Result<Rendered> {
+        self.render_in(target, visible, view, frame, Vec::new())
+    }
+
+    /// [`Renderer::render`] into the memory of `buffer` (an earlier frame's pixels, e.g.
+    /// `rendered.image.into_raw()`; its contents do not matter): the same image, without a
+    /// fresh allocation per frame.
+    pub fn render_in<T: Drawing + ?Sized>(
+        &self,
+        target: &T,
+        visible: Option<&[bool]>,
+        view: &CameraView<'_>,
+        frame: u64,
+        buffer: Vec<u8>,
+    ) -> Result<Rendered> {
         let (width, height) = view.size;
         if width == 0 || height == 0 || u64::from(width) * u64::from(height) > MAX_RENDER_PIXELS {
             let reason = format!("{width} x {height}: at least 1 x 1 and at most {MAX_RENDER_PIXELS} pixels (2^28)");
@@ -177,7 +191,7 @@ impl Renderer {
             foreground: self.config.foreground,
             noise,
         };
-        let mut canvas = Canvas::new(noise.background_frame(width, height), *view, paint);
+        let mut canvas = Canvas::new(noise.background_frame_in(width, height, buffer), *view, paint);
         let drawn = target.draw_on(&mut canvas, visible);
         check_flags("drawn", drawn.len(), n)?;
         let mut image = canvas.into_image();
@@ -323,6 +337,12 @@ mod tests {
         let render = |frame| r.render(&Dots::new(vec![]), None, &pinhole(&k, (160, 120)), frame).unwrap().image;
         assert_eq!(render(3), render(3));
         assert_ne!(render(3), render(4));
+        // Into an earlier frame's memory: the same frame.
+        let dots = Dots::new(vec![Disc::facing_reference([0.01, 0.0, 0.5], 0.004).unwrap()]);
+        let fresh = r.render(&dots, None, &pinhole(&k, (160, 120)), 5).unwrap();
+        let reused = r.render_in(&dots, None, &pinhole(&k, (160, 120)), 5, render(4).into_raw()).unwrap();
+        assert_eq!(fresh, reused);
+        assert_eq!(fresh.drawn, vec![true]);
         let img = render(1);
         let n = f64::from(img.width() * img.height());
         let mean = img.pixels().map(|p| f64::from(p[0])).sum::<f64>() / n;

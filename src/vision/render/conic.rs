@@ -58,6 +58,11 @@ impl Shape for ImageEllipse {
         self.bbox
     }
 
+    /// The box of the tangent lines (without a lens) holds the ellipse (tested below).
+    fn bbox_holds_shape(&self) -> bool {
+        true
+    }
+
     #[inline]
     fn value(&self, u: f64, v: f64) -> f64 {
         let c = &self.conic;

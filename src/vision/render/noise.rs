@@ -148,9 +148,16 @@ impl Noise<'_> {
     /// The noise added to the pixels `start..start + len` (row-major), in order: the run's
     /// offset hashed once a run.
     pub(super) fn span(&self, start: usize, len: usize) -> impl Iterator<Item = f64> + '_ {
+        (start..start + len).map(self.reader())
+    }
+
+    /// The noise of pixel `index` (row-major), for pixels read in increasing order (any may
+    /// be skipped): the run's offset hashed when the run changes, so a pixel the caller does
+    /// not need costs nothing.
+    pub(super) fn reader(&self) -> impl FnMut(usize) -> f64 + '_ {
         let (draws, table) = (pool_indices(), gaussian_table());
         let mut cached = (usize::MAX, 0);
-        (start..start + len).map(move |index| {
+        move |index| {
             if self.sigma <= 0.0 {
                 return 0.0;
             }
@@ -158,29 +165,47 @@ impl Noise<'_> {
                 cached = (index / RUN, run_offset(self.seed, index / RUN));
             }
             self.sigma * f64::from(table[usize::from(draws[cached.1 + index % RUN])])
-        })
+        }
     }
 
     /// The background with its noise: each run of [`RUN`] pixels copied from the quantised
-    /// pool at the run's offset.
+    /// pool at the run's offset (what the tests read; the renderer writes into a buffer).
+    #[cfg(test)]
     pub(super) fn background_frame(&self, width: u32, height: u32) -> GreyImage {
+        self.background_frame_in(width, height, Vec::new())
+    }
+
+    /// The background with its noise written into `buffer` (its contents dropped, its memory
+    /// kept: a run renders every frame into the previous frame's pixels, without a fresh
+    /// allocation, page faults and zeroing per frame): each run of [`RUN`] pixels copied from
+    /// the quantised pool at the run's offset, the offsets of a block of runs hashed before
+    /// its copies.
+    pub(super) fn background_frame_in(&self, width: u32, height: u32, mut buffer: Vec<u8>) -> GreyImage {
+        const BLOCK: usize = 64;
         let n = width as usize * height as usize;
-        let data = if self.sigma > 0.0 && !self.pool.is_empty() {
-            // Zeroed by the allocator (fresh pages), then each run a fixed-size copy.
-            let mut data = vec![0u8; n];
-            let mut runs = data.chunks_exact_mut(RUN);
-            for (run, pixels) in runs.by_ref().enumerate() {
-                let start = run_offset(self.seed, run);
-                pixels.copy_from_slice(&self.pool[start..start + RUN]);
+        buffer.clear();
+        buffer.reserve_exact(n);
+        if self.sigma > 0.0 && !self.pool.is_empty() {
+            let runs = n.div_ceil(RUN);
+            let mut starts = [0usize; BLOCK];
+            for first in (0..runs).step_by(BLOCK) {
+                let block = &mut starts[..BLOCK.min(runs - first)];
+                for (k, start) in block.iter_mut().enumerate() {
+                    *start = run_offset(self.seed, first + k);
+                }
+                for (k, &start) in block.iter().enumerate() {
+                    let len = RUN.min(n - (first + k) * RUN);
+                    match <&[u8; RUN]>::try_from(&self.pool[start..start + len]) {
+                        // A whole run: a fixed-size copy (no call to memcpy).
+                        Ok(run) => buffer.extend_from_slice(run),
+                        Err(_) => buffer.extend_from_slice(&self.pool[start..start + len]),
+                    }
+                }
             }
-            let last = runs.into_remainder();
-            let start = run_offset(self.seed, n / RUN);
-            last.copy_from_slice(&self.pool[start..start + last.len()]);
-            data
         } else {
-            vec![self.background; n]
-        };
-        GreyImage::from_raw(width, height, data).unwrap_or_else(|| GreyImage::new(width, height))
+            buffer.resize(n, self.background);
+        }
+        GreyImage::from_raw(width, height, buffer).unwrap_or_else(|| GreyImage::new(width, height))
     }
 }
 
@@ -220,6 +245,11 @@ mod tests {
         let span: Vec<f64> = n.span(37, 150).collect();
         assert_eq!(span, (37..187).map(|i| n.at(i)).collect::<Vec<f64>>());
         assert!(Noise { sigma: 0.0, ..n }.span(0, 9).all(|x| x == 0.0));
+        // Read with pixels skipped (within a run and across runs): each pixel's draw.
+        let mut read = n.reader();
+        for i in (3..400).step_by(7).chain([401, 402, 530]) {
+            assert_eq!(read(i), n.at(i), "pixel {i}");
+        }
         let flat = Noise { sigma: 0.0, ..n }.background_frame(5, 3);
         assert!(flat.as_raw().iter().all(|&p| p == 30));
         assert_eq!(Noise { sigma: 0.0, ..n }.at(4), 0.0);
@@ -310,5 +340,12 @@ mod tests {
         let frame = |f| noise(&pool, 30, 4.0, frame_seed(5, f)).background_frame(64, 48);
         assert_eq!(frame(2), frame(2));
         assert_ne!(frame(2), frame(3));
+        // Into a reused buffer (larger, smaller, of another frame): the same pixels.
+        let n = noise(&pool, 30, 4.0, frame_seed(5, 2));
+        for buffer in [vec![7u8; 64 * 48 + 1000], vec![9u8; 10], frame(3).into_raw(), Vec::new()] {
+            assert_eq!(n.background_frame_in(64, 48, buffer), frame(2));
+        }
+        let flat = Noise { sigma: 0.0, ..n };
+        assert_eq!(flat.background_frame_in(64, 48, frame(3).into_raw()), flat.background_frame(64, 48));
     }
 }
