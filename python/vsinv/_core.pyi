@@ -1125,7 +1125,8 @@ def render_faces(
     the area average of the texture over its footprint (the nearest face per sample; faces seen
     from behind are not drawn), on a background of grey level `background`, then the Gaussian PSF
     of `blur_sigma` pixels and the noise of `noise_sigma` grey levels (draw `frame` of `seed`), as
-    `render`. Returns the `(height, width)` uint8 image."""
+    `render`. More faces than the limit (`MAX_FACES` of the crate's renderer) are refused.
+    Returns the `(height, width)` uint8 image."""
 
 def degrade(
     image: _U8Image,
