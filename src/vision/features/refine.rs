@@ -46,6 +46,13 @@ const ITERATIONS: usize = 20;
 /// The step below which the alignment has converged, pixels.
 const CONVERGED: f64 = 1e-3;
 
+/// The pyramid level (of `levels`) whose pixels are the nearest to a frame pixel in size, for
+/// the local map `inverse` from the frame to the reference.
+fn level_for(inverse: &Matrix2<f64>, levels: usize) -> Option<usize> {
+    let scale = inverse.determinant().abs().sqrt();
+    Some((scale.log2().round().max(0.0) as usize).min(levels.checked_sub(1)?))
+}
+
 /// The pixel in `frame` of the reference point `at` (pixels of level 0 of `pyramid`, the
 /// reference image halved at each level), starting from `start`, where `map` is the local
 /// linear map from the reference to the frame. None: dropped (see the module documentation).
@@ -57,9 +64,7 @@ pub fn refine(
     start: [f64; 2],
 ) -> Option<[f64; 2]> {
     let inverse = map.try_inverse()?;
-    // The level whose pixels are the nearest to a frame pixel in size.
-    let scale = inverse.determinant().abs().sqrt();
-    let level = (scale.log2().round().max(0.0) as usize).min(pyramid.len().checked_sub(1)?);
+    let level = level_for(&inverse, pyramid.len())?;
     let image = pyramid.get(level)?;
     // Level l's pixel (u, v) is level 0's (2^l u, 2^l v): the pyramid's kernel is centred on
     // every other pixel (OpenCV's pyrDown).
@@ -279,8 +284,7 @@ mod tests {
         start: [f64; 2],
     ) -> Option<[f64; 2]> {
         let inverse = map.try_inverse()?;
-        let scale = inverse.determinant().abs().sqrt();
-        let level = (scale.log2().round().max(0.0) as usize).min(pyramid.len() - 1);
+        let level = level_for(&inverse, pyramid.len())?;
         let shrink = f64::from(1u32 << level);
         let mut template = Vec::new();
         for dv in -HALF..=HALF {
