@@ -178,28 +178,19 @@ impl Noise<'_> {
     /// The background with its noise written into `buffer` (its contents dropped, its memory
     /// kept: a run renders every frame into the previous frame's pixels, without a fresh
     /// allocation, page faults and zeroing per frame): each run of [`RUN`] pixels copied from
-    /// the quantised pool at the run's offset, the offsets of a block of runs hashed before
-    /// its copies.
+    /// the quantised pool at the run's offset.
     pub(super) fn background_frame_in(&self, width: u32, height: u32, mut buffer: Vec<u8>) -> GreyImage {
-        const BLOCK: usize = 64;
         let n = width as usize * height as usize;
         buffer.clear();
         buffer.reserve_exact(n);
         if self.sigma > 0.0 && !self.pool.is_empty() {
-            let runs = n.div_ceil(RUN);
-            let mut starts = [0usize; BLOCK];
-            for first in (0..runs).step_by(BLOCK) {
-                let block = &mut starts[..BLOCK.min(runs - first)];
-                for (k, start) in block.iter_mut().enumerate() {
-                    *start = run_offset(self.seed, first + k);
-                }
-                for (k, &start) in block.iter().enumerate() {
-                    let len = RUN.min(n - (first + k) * RUN);
-                    match <&[u8; RUN]>::try_from(&self.pool[start..start + len]) {
-                        // A whole run: a fixed-size copy (no call to memcpy).
-                        Ok(run) => buffer.extend_from_slice(run),
-                        Err(_) => buffer.extend_from_slice(&self.pool[start..start + len]),
-                    }
+            for run in 0..n.div_ceil(RUN) {
+                let start = run_offset(self.seed, run);
+                let len = RUN.min(n - run * RUN);
+                match <&[u8; RUN]>::try_from(&self.pool[start..start + len]) {
+                    // A whole run: a fixed-size copy (no call to memcpy).
+                    Ok(whole) => buffer.extend_from_slice(whole),
+                    Err(_) => buffer.extend_from_slice(&self.pool[start..start + len]),
                 }
             }
         } else {
