@@ -95,10 +95,11 @@ fn copy_into(image: &Image<f32, 1>, buffer: &mut [f32], p: Plane) {
     }
 }
 
-/// A buffer of `len` values from `pool` (a spare pyramid's), or a new one.
+/// A buffer of `len` values from `pool` (a spare pyramid's), or a new one. A spare buffer
+/// keeps its old values: every value of a level and of its gradients is written (the plane by
+/// its filter, the margin by [`fill_margin`]), so it is not cleared first.
 fn take(pool: &mut Vec<Vec<f32>>, len: usize) -> Vec<f32> {
     let mut buffer = pool.pop().unwrap_or_default();
-    buffer.clear();
     buffer.resize(len, 0.0);
     buffer
 }

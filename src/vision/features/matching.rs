@@ -108,20 +108,31 @@ pub const NEIGHBOURS: usize = 8;
 pub fn locally_consistent(first: &[[f64; 2]], second: &[[f64; 2]], tolerance: f64) -> Vec<bool> {
     (0..first.len().min(second.len()))
         .map(|i| {
-            let mut near: Vec<(f64, usize)> = (0..first.len())
-                .filter(|&j| j != i)
-                .map(|j| ((first[j][0] - first[i][0]).hypot(first[j][1] - first[i][1]), j))
-                .collect();
-            near.sort_by(|a, b| a.0.total_cmp(&b.0));
-            near.truncate(NEIGHBOURS);
-            if near.len() < NEIGHBOURS {
+            let ids = neighbours(first, first[i], Some(i));
+            if ids.len() < NEIGHBOURS {
                 return false;
             }
-            let ids: Vec<usize> = near.iter().map(|&(_, j)| j).collect();
             affine_prediction(first, second, &ids, first[i])
                 .is_some_and(|p| (p[0] - second[i][0]).hypot(p[1] - second[i][1]) <= tolerance)
         })
         .collect()
+}
+
+/// The indices of the (at most) [`NEIGHBOURS`] points of `points` nearest to `at`, but
+/// `skip`, nearest first (equal distances by index): the [`NEIGHBOURS`] smallest are chosen
+/// in linear time, then only they are sorted.
+fn neighbours(points: &[[f64; 2]], at: [f64; 2], skip: Option<usize>) -> Vec<usize> {
+    let mut near: Vec<(f64, usize)> = (0..points.len())
+        .filter(|&j| Some(j) != skip)
+        .map(|j| ((points[j][0] - at[0]).hypot(points[j][1] - at[1]), j))
+        .collect();
+    let order = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    if near.len() > NEIGHBOURS {
+        near.select_nth_unstable_by(NEIGHBOURS, order);
+        near.truncate(NEIGHBOURS);
+    }
+    near.sort_unstable_by(order);
+    near.into_iter().map(|(_, j)| j).collect()
 }
 
 /// The affine map fitted to the pairs `ids` (least squares, centred on `at`), applied to `at`.
@@ -161,24 +172,14 @@ fn affine_fit(
 /// `at` in the first image: its linear part and its value at `at` (where the second image
 /// should show the first image's `at`); None with fewer matches or collinear ones.
 pub fn map_at(first: &[[f64; 2]], second: &[[f64; 2]], at: [f64; 2]) -> Option<(nalgebra::Matrix2<f64>, [f64; 2])> {
-    let mut near: Vec<(f64, usize)> =
-        (0..first.len().min(second.len())).map(|j| ((first[j][0] - at[0]).hypot(first[j][1] - at[1]), j)).collect();
-    near.sort_by(|a, b| a.0.total_cmp(&b.0));
-    near.truncate(NEIGHBOURS);
-    let ids: Vec<usize> = near.iter().map(|&(_, j)| j).collect();
+    let ids = neighbours(&first[..first.len().min(second.len())], at, None);
     (ids.len() == NEIGHBOURS).then(|| affine_fit(first, second, &ids, at)).flatten()
 }
 
 /// The local linear map (first image to second) at match `i`, fitted to its
 /// [`NEIGHBOURS`] nearest matches.
 pub fn local_map(first: &[[f64; 2]], second: &[[f64; 2]], i: usize) -> Option<nalgebra::Matrix2<f64>> {
-    let mut near: Vec<(f64, usize)> = (0..first.len().min(second.len()))
-        .filter(|&j| j != i)
-        .map(|j| ((first[j][0] - first[i][0]).hypot(first[j][1] - first[i][1]), j))
-        .collect();
-    near.sort_by(|a, b| a.0.total_cmp(&b.0));
-    near.truncate(NEIGHBOURS);
-    let ids: Vec<usize> = near.iter().map(|&(_, j)| j).collect();
+    let ids = neighbours(&first[..first.len().min(second.len())], first[i], Some(i));
     (ids.len() == NEIGHBOURS).then(|| affine_fit(first, second, &ids, first[i]).map(|(m, _)| m)).flatten()
 }
 
@@ -186,6 +187,29 @@ pub fn local_map(first: &[[f64; 2]], second: &[[f64; 2]], i: usize) -> Option<na
 #[allow(clippy::unwrap_used, clippy::expect_used)]
 mod tests {
     use super::*;
+
+    /// The linear-time choice of neighbours is the full sort's (distance, then index), with
+    /// ties (a grid) and fewer points than neighbours.
+    #[test]
+    fn neighbours_are_the_sorted_prefix() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 40) % 64) as f64 / 4.0
+        };
+        for n in [0, 1, 5, NEIGHBOURS, NEIGHBOURS + 1, 40, 150] {
+            let points: Vec<[f64; 2]> = (0..n).map(|_| [next(), next()]).collect();
+            for (at, skip) in [([3.0, 4.0], None), ([8.0, 8.0], Some(n / 2)), ([0.0, 0.0], Some(0))] {
+                let mut all: Vec<(f64, usize)> = (0..n)
+                    .filter(|&j| Some(j) != skip)
+                    .map(|j| ((points[j][0] - at[0]).hypot(points[j][1] - at[1]), j))
+                    .collect();
+                all.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let expected: Vec<usize> = all.iter().take(NEIGHBOURS).map(|&(_, j)| j).collect();
+                assert_eq!(neighbours(&points, at, skip), expected, "n = {n}, at {at:?}, skip {skip:?}");
+            }
+        }
+    }
 
     /// A grid of points, its image under a homography (a plane seen by another camera), one
     /// match moved 6 px: only that one is refused by its neighbours; the fundamental matrix of
