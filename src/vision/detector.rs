@@ -50,4 +50,9 @@ pub trait Detector: Send + Sync {
     fn stopped_early(&self) -> bool {
         false
     }
+
+    /// The points, by identity, that the caller leans on most from the next image on (the
+    /// invariant law's basis: their errors enter every invariant coordinate, eq. 8): a
+    /// detector may measure them with more care. Ignored by default.
+    fn favour(&mut self, _ids: &[u32]) {}
 }

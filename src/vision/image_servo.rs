@@ -245,6 +245,8 @@ impl ImageServo {
     /// it again.
     pub fn step<C: Pixels>(&mut self, image: &GreyBuffer<C>) -> Result<ServoStep> {
         let image = view_of(image)?;
+        let basis = self.servo.basis().map(|i| self.ids[i]);
+        self.detector.favour(&basis);
         let detections = if self.started {
             self.detector.detect(&image)?
         } else {
