@@ -113,12 +113,13 @@ class TexturedBox:
 
 
 class RenderedBox:
-    """The same box drawn by the project's renderer (`tiles()`, the renderer's default blur and
-    noise, a new noise draw each frame): TexturedBox's interface without MuJoCo or its light."""
+    """The same box drawn by the project's renderer (`tiles()` on the box's grey faces,
+    `box_faces()`, the renderer's default blur and noise, a new noise draw each frame):
+    TexturedBox's interface without MuJoCo or its light."""
 
     def __init__(self, width: int = 640, height: int = 480) -> None:
         self.width, self.height = width, height
-        self.tiles = tiles()
+        self.tiles = tiles() + box_faces()
         self.frame = 0
 
     def close(self) -> None:
@@ -161,6 +162,20 @@ def tiles() -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         vertices = np.array([q - h * a - h * b, q + h * a - h * b, q + h * a + h * b, q - h * a + h * b])
         coords = np.array([[-0.5, s - 0.5], [s - 0.5, s - 0.5], [s - 0.5, -0.5], [-0.5, -0.5]])
         out.append((vertices, coords, image))
+    return out
+
+
+def box_faces(grey: int = 128) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The box's faces under the tiles (`render_faces`' form), plain `grey`, as MuJoCo's grey box
+    shows around them: without them the background shows between two tiles, and the corners it
+    makes with their edges are where the tiles' edges cross in the image, no point of the box
+    (they move as the camera does)."""
+    out = []
+    for c, a, b, _ in mw.FACES.values():
+        c, a, b, h = np.asarray(c, float), np.asarray(a, float), np.asarray(b, float), mw.HALF
+        vertices = np.array([c - h * a - h * b, c + h * a - h * b, c + h * a + h * b, c - h * a + h * b])
+        coords = np.array([[-0.5, 1.5], [1.5, 1.5], [1.5, -0.5], [-0.5, -0.5]])
+        out.append((vertices, coords, np.full((2, 2), grey, np.uint8)))
     return out
 
 
