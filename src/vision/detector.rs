@@ -52,7 +52,7 @@ pub trait Detector: Send + Sync {
     }
 
     /// The points, by identity, that the caller leans on most from the next image on (the
-    /// invariant law's basis: their errors enter every invariant coordinate, eq. 8): a
-    /// detector may measure them with more care. Ignored by default.
+    /// invariant law's basis: their errors enter every invariant coordinate `q = Q^-1 p`,
+    /// sec. 2.3): a detector may measure them with more care. Ignored by default.
     fn favour(&mut self, _ids: &[u32]) {}
 }
