@@ -404,6 +404,46 @@ mod tests {
         Image::new(ImageSize { width: w, height: h }, data).unwrap()
     }
 
+    /// The tests' random draws (xorshift64).
+    struct Draw(u64);
+
+    impl Draw {
+        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            lo + (hi - lo) * (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A random view of a texture: the local map (a scale in `[lo, hi]`, a rotation and a
+    /// shear), the reference point `r0` it puts at the frame's `c`, and the 100 x 90 frame (a
+    /// gain and an offset drawn, plus `noise` grey levels of a hashed noise).
+    struct Case {
+        map: Matrix2<f64>,
+        r0: Vector2<f64>,
+        c: Vector2<f64>,
+        frame: Image<f32, 1>,
+    }
+
+    impl Case {
+        fn draw(draw: &mut Draw, lo: f64, hi: f64, texture: &dyn Fn(f64, f64) -> f64, noise: f64) -> Self {
+            let (scale, angle, shear) = (draw.uniform(lo, hi), draw.uniform(-0.4, 0.4), draw.uniform(-0.1, 0.1));
+            let rotation = Matrix2::new(angle.cos(), -angle.sin(), angle.sin(), angle.cos());
+            let map = scale * rotation * Matrix2::new(1.0, shear, 0.0, 1.0);
+            let inverse = map.try_inverse().unwrap();
+            let r0 = Vector2::new(draw.uniform(100.0, 140.0), draw.uniform(80.0, 120.0));
+            let c = Vector2::new(draw.uniform(40.0, 60.0), draw.uniform(35.0, 55.0));
+            let (gain, offset) = (draw.uniform(0.6, 1.3), draw.uniform(-20.0, 20.0));
+            let frame = plane(100, 90, &|u, v| {
+                let r = inverse * (Vector2::new(u, v) - c) + r0;
+                let hashed = ((u * 12.9898 + v * 78.233).sin() * 43758.5453).fract();
+                gain * texture(r.x, r.y) + offset + noise * hashed
+            });
+            Self { map, r0, c, frame }
+        }
+    }
+
     /// A smooth texture seen through a known affine map: the refinement lands on the true pixel
     /// from 1.5 px off, through a change of exposure.
     #[test]
@@ -495,13 +535,7 @@ mod tests {
     /// one within 0.15 px. Both refuse a flat frame.
     #[test]
     fn the_alignment_agrees_with_the_forward_formulation() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut uniform = |lo: f64, hi: f64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut draw = Draw(0x2545_f491_4f6c_dd1d);
         let texture = |x: f64, y: f64| {
             120.0
                 + 45.0 * (0.23 * x + 0.07 * y).sin() * (0.19 * y - 0.04 * x).cos()
@@ -512,19 +546,8 @@ mod tests {
         let (mut apart, mut new_off, mut old_off) = (0.0f64, 0.0f64, 0.0f64);
         for case in 0..24 {
             let amplitude = if case < 12 { 0.0 } else { 2.0 };
-            let (scale, angle, shear) = (uniform(0.35, 1.4), uniform(-0.4, 0.4), uniform(-0.1, 0.1));
-            let rotation = Matrix2::new(angle.cos(), -angle.sin(), angle.sin(), angle.cos());
-            let map = scale * rotation * Matrix2::new(1.0, shear, 0.0, 1.0);
-            let inverse = map.try_inverse().unwrap();
-            let r0 = Vector2::new(uniform(100.0, 140.0), uniform(80.0, 120.0));
-            let c = Vector2::new(uniform(40.0, 60.0), uniform(35.0, 55.0));
-            let (gain, offset) = (uniform(0.6, 1.3), uniform(-20.0, 20.0));
-            let frame = plane(100, 90, &|u, v| {
-                let r = inverse * (Vector2::new(u, v) - c) + r0;
-                let noise = ((u * 12.9898 + v * 78.233).sin() * 43758.5453).fract();
-                gain * texture(r.x, r.y) + offset + amplitude * noise
-            });
-            let start = [c.x + uniform(-1.0, 1.0), c.y + uniform(-1.0, 1.0)];
+            let Case { map, r0, c, frame } = Case::draw(&mut draw, 0.35, 1.4, &texture, amplitude);
+            let start = [c.x + draw.uniform(-1.0, 1.0), c.y + draw.uniform(-1.0, 1.0)];
             let off = |p: [f64; 2]| (p[0] - c.x).hypot(p[1] - c.y);
             let new = refine(&reference, &frame, [r0.x, r0.y], &map, start).unwrap();
             new_off = new_off.max(off(new));
@@ -618,31 +641,16 @@ mod tests {
     /// 40 % off is dropped.
     #[test]
     fn the_affine_alignment_corrects_a_wrong_local_map() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut uniform = |lo: f64, hi: f64| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            lo + (hi - lo) * (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut draw = Draw(0x9e37_79b9_7f4a_7c15);
         let reference = pyramid(&plane(240, 200, &photograph), 2).unwrap();
         let (mut apart, mut affine_off, mut shift_off, mut compared) = (0.0f64, 0.0f64, 0.0f64, 0);
         for _ in 0..16 {
-            let (scale, angle, shear) = (uniform(0.45, 1.3), uniform(-0.4, 0.4), uniform(-0.1, 0.1));
-            let rotation = Matrix2::new(angle.cos(), -angle.sin(), angle.sin(), angle.cos());
-            let map = scale * rotation * Matrix2::new(1.0, shear, 0.0, 1.0);
-            let inverse = map.try_inverse().unwrap();
-            let r0 = Vector2::new(uniform(100.0, 140.0), uniform(80.0, 120.0));
-            let c = Vector2::new(uniform(40.0, 60.0), uniform(35.0, 55.0));
-            let (gain, offset) = (uniform(0.6, 1.3), uniform(-20.0, 20.0));
-            let frame = plane(100, 90, &|u, v| {
-                let r = inverse * (Vector2::new(u, v) - c) + r0;
-                gain * photograph(r.x, r.y) + offset
-            });
+            let Case { map, r0, c, frame } = Case::draw(&mut draw, 0.45, 1.3, &photograph, 0.0);
             // The neighbours' map: 3-5 % off in each entry.
-            let wrong =
-                map.component_mul(&Matrix2::from_fn(|_, _| 1.0 + uniform(0.03, 0.05) * uniform(-1.0, 1.0).signum()));
-            let start = [c.x + uniform(-0.7, 0.7), c.y + uniform(-0.7, 0.7)];
+            let wrong = map.component_mul(&Matrix2::from_fn(|_, _| {
+                1.0 + draw.uniform(0.03, 0.05) * draw.uniform(-1.0, 1.0).signum()
+            }));
+            let start = [c.x + draw.uniform(-0.7, 0.7), c.y + draw.uniform(-0.7, 0.7)];
             let off = |p: [f64; 2]| (p[0] - c.x).hypot(p[1] - c.y);
             let at = [r0.x, r0.y];
             let affine = refine_with(&reference, &frame, at, &wrong, start, Precision::Fine).unwrap();
