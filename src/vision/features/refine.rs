@@ -467,60 +467,66 @@ mod tests {
         assert!(refine(&[plane(120, 100, &texture)], &flat, [r0.x, r0.y], &map, [c.x, c.y]).is_none());
     }
 
-    /// The forward-additive formulation the alignment replaced, kept as the reference: each
-    /// iteration samples the frame's patch and its gradients (half-pixel differences of the
-    /// bilinear interpolant) at the current pixel, fits the gain and offset, and takes the
-    /// Gauss-Newton step of the frame's gradients.
-    fn forward_refine(
+    /// The forward-additive formulation (Baker and Matthews 2004, sec. 2), the reference of the
+    /// inverse-compositional alignment: each iteration samples the frame at the warped samples
+    /// `p + (I + d) x` of a patch of half side `half` with its gradients there (half-pixel
+    /// differences of the bilinear interpolant), fits the gain and offset, and solves the
+    /// Gauss-Newton system of the frame's steepest-descent images, of the translation alone
+    /// (`d` stays 0; 20 iterations, converged below 1e-3 px) or of the whole affine warp (60
+    /// iterations, below 1e-6); `p` and `d` move additively.
+    fn forward(
         pyramid: &[Image<f32, 1>],
         frame: &Image<f32, 1>,
-        at: [f64; 2],
-        map: &Matrix2<f64>,
-        start: [f64; 2],
+        (at, map, start): ([f64; 2], &Matrix2<f64>, [f64; 2]),
+        half: i32,
+        affine: bool,
     ) -> Option<[f64; 2]> {
         let inverse = map.try_inverse()?;
         let level = level_for(&inverse, pyramid.len())?;
         let shrink = f64::from(1u32 << level);
-        let mut template = Vec::new();
-        for dv in -HALF..=HALF {
-            for du in -HALF..=HALF {
-                let p = (Vector2::new(at[0], at[1]) + inverse * Vector2::new(f64::from(du), f64::from(dv))) / shrink;
-                template.push(sample(&pyramid[level], p.x, p.y)?);
-            }
-        }
-        let mut p = Vector2::new(start[0], start[1]);
-        for _ in 0..ITERATIONS {
+        let template: Vec<f64> = offsets(half)
+            .map(|(du, dv)| {
+                let p = (Vector2::new(at[0], at[1]) + inverse * Vector2::new(du, dv)) / shrink;
+                sample(&pyramid[level], p.x, p.y)
+            })
+            .collect::<Option<_>>()?;
+        let (iterations, converged) = if affine { (60, 1e-6) } else { (ITERATIONS, CONVERGED) };
+        let origin = Vector2::new(start[0], start[1]);
+        let (mut p, mut d) = (origin, Matrix2::zeros());
+        for _ in 0..iterations {
             let (mut values, mut grads) = (Vec::new(), Vec::new());
-            for dv in -HALF..=HALF {
-                for du in -HALF..=HALF {
-                    let (u, v) = (p.x + f64::from(du), p.y + f64::from(dv));
-                    values.push(sample(frame, u, v)?);
-                    let gx = sample(frame, u + 0.5, v)? - sample(frame, u - 0.5, v)?;
-                    let gy = sample(frame, u, v + 0.5)? - sample(frame, u, v - 0.5)?;
-                    grads.push(Vector2::new(gx, gy));
-                }
+            for (du, dv) in offsets(half) {
+                let q = p + (Matrix2::identity() + d) * Vector2::new(du, dv);
+                values.push(sample(frame, q.x, q.y)?);
+                let gu = sample(frame, q.x + 0.5, q.y)? - sample(frame, q.x - 0.5, q.y)?;
+                let gv = sample(frame, q.x, q.y + 0.5)? - sample(frame, q.x, q.y - 0.5)?;
+                grads.push(Vector2::new(gu, gv));
             }
             let n = template.len() as f64;
             let (mt, mv) = (template.iter().sum::<f64>() / n, values.iter().sum::<f64>() / n);
-            let (mut stt, mut svv, mut stv) = (0.0, 0.0, 0.0);
-            for (t, v) in template.iter().zip(&values) {
-                stt += (t - mt) * (t - mt);
-                svv += (v - mv) * (v - mv);
-                stv += (t - mt) * (v - mv);
-            }
+            let stt: f64 = template.iter().map(|t| (t - mt) * (t - mt)).sum();
+            let svv: f64 = values.iter().map(|v| (v - mv) * (v - mv)).sum();
+            let stv: f64 = template.iter().zip(&values).map(|(t, v)| (t - mt) * (v - mv)).sum();
             let (gain, correlation) = (stv / stt, stv / (stt * svv).sqrt());
             let offset = mv - gain * mt;
-            let (mut h, mut b) = (Matrix2::zeros(), Vector2::zeros());
-            for ((t, f), g) in template.iter().zip(&values).zip(&grads) {
-                h += g * g.transpose();
-                b += g * (gain * t + offset - f);
+            let (mut h, mut b) = (Matrix6::zeros(), Vector6::zeros());
+            for (((t, f), g), (du, dv)) in template.iter().zip(&values).zip(&grads).zip(offsets(half)) {
+                let j = Vector6::new(g.x, g.y, g.x * du, g.x * dv, g.y * du, g.y * dv);
+                h += j * j.transpose();
+                b += j * (gain * t + offset - f);
             }
-            let step = h.try_inverse()? * b;
-            p += step;
-            if (p - Vector2::new(start[0], start[1])).norm() > MAX_SHIFT {
+            let step = if affine {
+                h.cholesky()?.solve(&b)
+            } else {
+                let shift = h.fixed_view::<2, 2>(0, 0).into_owned().try_inverse()? * b.fixed_rows::<2>(0);
+                Vector6::new(shift.x, shift.y, 0.0, 0.0, 0.0, 0.0)
+            };
+            p += Vector2::new(step[0], step[1]);
+            d += Matrix2::new(step[2], step[3], step[4], step[5]);
+            if (p - origin).norm() > MAX_SHIFT || d.amax() > MAX_DEFORM {
                 return None;
             }
-            if step.norm() < CONVERGED {
+            if step.norm() < converged {
                 return (correlation >= MIN_CORRELATION).then_some([p.x, p.y]);
             }
         }
@@ -552,7 +558,7 @@ mod tests {
             let new = refine(&reference, &frame, [r0.x, r0.y], &map, start).unwrap();
             new_off = new_off.max(off(new));
             // The forward formulation does not always converge in its 20 iterations.
-            if let Some(old) = forward_refine(&reference, &frame, [r0.x, r0.y], &map, start) {
+            if let Some(old) = forward(&reference, &frame, ([r0.x, r0.y], &map, start), HALF, false) {
                 old_off = old_off.max(off(old));
                 if amplitude == 0.0 {
                     apart = apart.max((new[0] - old[0]).hypot(new[1] - old[1]));
@@ -563,63 +569,7 @@ mod tests {
         let flat = plane(100, 90, &|_, _| 90.0);
         let (at, map) = ([120.0, 100.0], Matrix2::identity());
         assert!(refine(&reference, &flat, at, &map, [50.0, 45.0]).is_none());
-        assert!(forward_refine(&reference, &flat, at, &map, [50.0, 45.0]).is_none());
-    }
-
-    /// The forward-additive formulation of the affine warp (Baker and Matthews 2004, sec. 2),
-    /// the reference of the inverse-compositional one: each iteration samples the frame at the
-    /// warped samples `p + (I + d) x` with its gradients there (half-pixel differences of the
-    /// bilinear interpolant), fits the gain and offset, and solves the 6x6 Gauss-Newton system
-    /// of the frame's steepest-descent images; `p` and `d` move additively.
-    fn forward_affine(
-        pyramid: &[Image<f32, 1>],
-        frame: &Image<f32, 1>,
-        at: [f64; 2],
-        map: &Matrix2<f64>,
-        start: [f64; 2],
-    ) -> Option<[f64; 2]> {
-        let inverse = map.try_inverse()?;
-        let level = level_for(&inverse, pyramid.len())?;
-        let shrink = f64::from(1u32 << level);
-        let template: Vec<f64> = offsets(FINE_HALF)
-            .map(|(du, dv)| {
-                let p = (Vector2::new(at[0], at[1]) + inverse * Vector2::new(du, dv)) / shrink;
-                sample(&pyramid[level], p.x, p.y)
-            })
-            .collect::<Option<_>>()?;
-        let origin = Vector2::new(start[0], start[1]);
-        let (mut p, mut d) = (origin, Matrix2::zeros());
-        for _ in 0..60 {
-            let (mut values, mut grads) = (Vec::new(), Vec::new());
-            for (du, dv) in offsets(FINE_HALF) {
-                let q = p + (Matrix2::identity() + d) * Vector2::new(du, dv);
-                values.push(sample(frame, q.x, q.y)?);
-                let gu = sample(frame, q.x + 0.5, q.y)? - sample(frame, q.x - 0.5, q.y)?;
-                let gv = sample(frame, q.x, q.y + 0.5)? - sample(frame, q.x, q.y - 0.5)?;
-                grads.push(Vector2::new(gu, gv));
-            }
-            let n = template.len() as f64;
-            let (mt, mv) = (template.iter().sum::<f64>() / n, values.iter().sum::<f64>() / n);
-            let stt: f64 = template.iter().map(|t| (t - mt) * (t - mt)).sum();
-            let stv: f64 = template.iter().zip(&values).map(|(t, v)| (t - mt) * (v - mv)).sum();
-            let (gain, offset) = (stv / stt, mv - stv / stt * mt);
-            let (mut h, mut b) = (Matrix6::zeros(), Vector6::zeros());
-            for (((t, f), g), (du, dv)) in template.iter().zip(&values).zip(&grads).zip(offsets(FINE_HALF)) {
-                let j = Vector6::new(g.x, g.y, g.x * du, g.x * dv, g.y * du, g.y * dv);
-                h += j * j.transpose();
-                b += j * (gain * t + offset - f);
-            }
-            let step = h.cholesky()?.solve(&b);
-            p += Vector2::new(step[0], step[1]);
-            d += Matrix2::new(step[2], step[3], step[4], step[5]);
-            if (p - origin).norm() > MAX_SHIFT || d.amax() > MAX_DEFORM {
-                return None;
-            }
-            if step.amax() < 1e-6 {
-                return Some([p.x, p.y]);
-            }
-        }
-        None
+        assert!(forward(&reference, &flat, (at, &map, [50.0, 45.0]), HALF, false).is_none());
     }
 
     /// A textured patch like a photograph's (sinusoids of many frequencies and directions,
@@ -658,7 +608,7 @@ mod tests {
             if let Some(shift) = refine_with(&reference, &frame, at, &wrong, start, Precision::Fast) {
                 shift_off = shift_off.max(off(shift));
             }
-            if let Some(forward) = forward_affine(&reference, &frame, at, &wrong, start) {
+            if let Some(forward) = forward(&reference, &frame, (at, &wrong, start), FINE_HALF, true) {
                 apart = apart.max((affine[0] - forward[0]).hypot(affine[1] - forward[1]));
                 compared += 1;
             }
