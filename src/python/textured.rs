@@ -17,13 +17,14 @@ use crate::vision::render::{CameraView, MAX_FACES, RenderConfig, Renderer, Textu
 /// The image a camera sees of textured faces: `faces` a sequence of `(vertices (n, 3),
 /// texture_coords (n, 2), texture)`, each a convex planar polygon of F* (metres, n >= 3, front
 /// side the one its vertices turn counter-clockwise around) whose vertex `k` shows texture pixel
-/// `texture_coords[k]` (`(u, v)`, the texel `(i, j)` covering `[i - 0.5, i + 0.5] x [j - 0.5,
-/// j + 0.5]`; a projective map from the face: affine for a triangle, the homography of the first
-/// four otherwise), `texture` a grey or colour uint8 image (as `to_grey` reads it). The camera
-/// frame `pose` (4x4, in F*), its intrinsics `K` (`Intrinsics` or 3x3; a pinhole, no
-/// distortion), an image of `width` x `height` pixels. A pixel shows
-/// the area average of the texture over its footprint (the nearest face per sample; faces seen
-/// from behind are not drawn), on a background of grey level `background`, then the Gaussian PSF
+/// `texture_coords[k]` (`(u, v)`, the texel `(i, j)` centred on `(i, j)`, a texture of w x h
+/// texels spanning `[-0.5, w - 0.5] x [-0.5, h - 0.5]`; a projective map from the face: affine
+/// for a triangle, the homography of the first four otherwise), `texture` a grey or colour uint8
+/// image (as `to_grey` reads it). The camera frame `pose` (4x4, in F*), its intrinsics `K`
+/// (`Intrinsics` or 3x3; a pinhole, no distortion), an image of `width` x `height` pixels. A
+/// pixel shows the area average over its footprint of the texture read bilinearly between texel
+/// centres (OpenGL's linear filter; the nearest face per sample; faces seen from behind are not
+/// drawn), on a background of grey level `background`, then the Gaussian PSF
 /// of `blur_sigma` pixels and the noise of `noise_sigma` grey levels (draw `frame` of `seed`), as
 /// `render`. More faces than the limit (`MAX_FACES` of the crate's renderer) are refused.
 /// Returns the `(height, width)` uint8 image.

@@ -1,11 +1,15 @@
 //! Textured planar faces: a convex planar polygon of the object frame (F*) carrying a grey
 //! texture. The map from the ideal image to a face's plane is a homography (the plane's
 //! projection inverted), composed with the homography from the plane to the texture given by
-//! the corners' texture coordinates. A pixel's grey level is the area average of the
-//! piecewise-constant texture over the pixel's footprint (texel `(i, j)` covers
-//! `[i - 0.5, i + 0.5] x [j - 0.5, j + 0.5]`), estimated by `n x n` samples with `n` chosen from
-//! the local scale (at least 4 samples per texel and axis: a minification by 2 does not
-//! alias). Faces turned away from the camera are culled; the nearest face wins per sample.
+//! the corners' texture coordinates. The texture is the continuous surface its texels sample:
+//! texel `(i, j)` is its value at `(i, j)`, read between texels by bilinear interpolation
+//! (clamped to the edge texels), as OpenGL's and MuJoCo's linear filter reads a texture. A
+//! pixel's grey level is the area average of that surface over the pixel's footprint, estimated
+//! by `n x n` samples with `n` chosen from the local scale (at least 4 samples per texel and
+//! axis: a minification by 2 does not alias). A nearest-texel (piecewise-constant) texture would
+//! put a step at every texel edge, whose place in a magnified pixel `n x n` samples find only to
+//! `1 / (2n)` of a pixel. Faces turned away from the camera are culled; the nearest face wins
+//! per sample.
 
 use std::sync::Arc;
 
@@ -216,15 +220,24 @@ impl<'f> SeenFace<'f> {
         (t(p[0] + 1.0, p[1]) - c).norm().max((t(p[0], p[1] + 1.0) - c).norm())
     }
 
-    /// The texel under plane point `q` (nearest: the texture is piecewise constant; clamped
-    /// to the edge).
+    /// The texture's grey level at plane point `q`: bilinear between the four texels around
+    /// it, clamped to the edge texels.
     fn grey(&self, q: Vector2<f64>) -> f64 {
         let x = self.face.to_texture * Vector3::new(q.x, q.y, 1.0);
         let tex = &self.face.texture;
-        // Clamped first, then rounded half up by truncation: no libm call per sample.
-        let i = ((x.x / x.z).clamp(0.0, f64::from(tex.width() - 1)) + 0.5) as u32;
-        let j = ((x.y / x.z).clamp(0.0, f64::from(tex.height() - 1)) + 0.5) as u32;
-        f64::from(tex.get_pixel(i, j).0[0])
+        let (w, h) = (tex.width() as usize, tex.height() as usize);
+        // Clamped first, then floored by truncation (non-negative): no libm call per sample.
+        let u = (x.x / x.z).clamp(0.0, (w - 1) as f64);
+        let v = (x.y / x.z).clamp(0.0, (h - 1) as f64);
+        let (i, j) = (u as usize, v as usize);
+        let (fu, fv) = (u - i as f64, v - j as f64);
+        let (di, dj) = (usize::from(i + 1 < w), if j + 1 < h { w } else { 0 });
+        let texels: &[u8] = tex.as_raw();
+        let at = |k: usize| f64::from(texels[k]);
+        let k = j * w + i;
+        let top = at(k) + fu * (at(k + di) - at(k));
+        let bottom = at(k + dj) + fu * (at(k + dj + di) - at(k + dj));
+        top + fv * (bottom - top)
     }
 }
 
@@ -346,8 +359,32 @@ mod tests {
         TexturedFace::new(vertices, uv, tex.clone()).unwrap()
     }
 
+    /// The pixel centred on texel `(i, j)` at one texel a pixel, in closed form: the mean of the
+    /// bilinear surface over `[i - 1/2, i + 1/2]` weighs texels `i - 1, i, i + 1` by
+    /// `1/8, 3/4, 1/8` per axis (edge texels clamped).
+    fn filtered(tex: &GreyImage, i: u32, j: u32) -> f64 {
+        const WEIGHTS: [(i64, f64); 3] = [(-1, 0.125), (0, 0.75), (1, 0.125)];
+        let clamp = |x: i64, n: u32| x.clamp(0, i64::from(n) - 1) as u32;
+        let mut sum = 0.0;
+        for (dj, wj) in WEIGHTS {
+            for (di, wi) in WEIGHTS {
+                let texel =
+                    tex.get_pixel(clamp(i64::from(i) + di, tex.width()), clamp(i64::from(j) + dj, tex.height()));
+                sum += wi * wj * f64::from(texel.0[0]);
+            }
+        }
+        sum
+    }
+
+    /// Pixel `(u, v)` of `image` is the closed form [`filtered`] of texel `(i, j)`, up to the
+    /// renderer's rounding.
+    fn assert_filtered(image: &GreyImage, (u, v): (u32, u32), tex: &GreyImage, (i, j): (u32, u32)) {
+        let (got, expected) = (f64::from(image.get_pixel(u, v).0[0]), filtered(tex, i, j));
+        assert!((got - expected).abs() <= 0.5 + 1e-9, "texel {i} {j}: pixel {got}, closed form {expected}");
+    }
+
     #[test]
-    fn a_fronto_parallel_face_at_one_to_one_reproduces_the_texture() {
+    fn a_fronto_parallel_face_at_one_to_one_is_the_bilinear_texture_averaged_over_each_pixel() {
         let tex = texture(20, 16);
         // Texel (i, j) at pixel (i + 10, j + 12) of a 48 x 48 image with centre 24.
         let face = fronto(&tex, 2.0, 300.0, [-14.0, -12.0]);
@@ -355,7 +392,7 @@ mod tests {
         assert_eq!(drawn, vec![true]);
         for j in 0..16 {
             for i in 0..20 {
-                assert_eq!(image.get_pixel(i + 10, j + 12).0[0], tex.get_pixel(i, j).0[0], "texel {i} {j}");
+                assert_filtered(&image, (i + 10, j + 12), &tex, (i, j));
             }
         }
         assert_eq!(image.get_pixel(9, 12).0[0], 0);
@@ -382,7 +419,7 @@ mod tests {
         for order in [[face.clone(), near.clone()], [near, face]] {
             let (image, _) = render(&order, Isometry3::identity(), 300.0, 48);
             assert_eq!(image.get_pixel(23, 23).0[0], 200);
-            assert_eq!(image.get_pixel(12, 14).0[0], tex.get_pixel(2, 2).0[0]);
+            assert_filtered(&image, (12, 14), &tex, (2, 2));
         }
     }
 
@@ -403,7 +440,7 @@ mod tests {
         assert_eq!(out.drawn, vec![true, false]);
         assert_eq!(out.image.get_pixel(9, 12).0[0], 7);
         for (i, j) in [(0, 0), (19, 0), (7, 9), (19, 15)] {
-            assert_eq!(out.image.get_pixel(i + 10, j + 12).0[0], tex.get_pixel(i, j).0[0], "texel {i} {j}");
+            assert_filtered(&out.image, (i + 10, j + 12), &tex, (i, j));
         }
         let hidden = renderer.render(&faces, Some(&[false, true]), &view, 0).unwrap();
         assert_eq!(hidden.drawn, vec![false, false]);
