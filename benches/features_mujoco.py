@@ -9,7 +9,8 @@ time (ms; the first frame, matched by descriptors, left out), and the correspond
 final frame (each found point's pixel minus the true projection of its reference keypoint's surface
 point): its mean vector ("bias u, v"), median norm and spread (standard deviation per axis), px.
 `--renderer` has the project's renderer draw the same box (`feature_world.RenderedBox`:
-`vsinv.vision.render_faces` with its default blur and noise, no light) instead of MuJoCo.
+`vsinv.vision.render_faces` with its default blur and noise, no light) instead of MuJoCo, at most
+1600 images a start (its noise keeps the stall rule waiting longer).
 `--truth` runs each start again fed the true pixels of the same points (with the visibility of the
 image loop's step of the same index): the law and stop rules alone, without the vision's error.
 `--estimated` gives the session no depth from the scene: at each start the camera first makes a
@@ -116,8 +117,11 @@ def main() -> int:
     count = int(args[args.index("--starts") + 1]) if "--starts" in args else 10  # --starts N: starts 0..N-1
     picked = [int(a) for a in args if a.isdigit() and "--starts" not in args]
     starts = picked or ([0] if quick else list(range(count)))
-    session = {**SESSION, "stop": {**SESSION["stop"], "max_iterations": 30}} if quick else SESSION
-    world = fw.RenderedBox(t.WIDTH, t.HEIGHT) if "--renderer" in args else fw.TexturedBox(t.WIDTH, t.HEIGHT)
+    renderer = "--renderer" in args
+    # The renderer's noise in every image keeps the stall rule waiting longer: 1600 images at most.
+    most = 30 if quick else 1600 if renderer else SESSION["stop"]["max_iterations"]
+    session = {**SESSION, "stop": {**SESSION["stop"], "max_iterations": most}}
+    world = fw.RenderedBox(t.WIDTH, t.HEIGHT) if renderer else fw.TexturedBox(t.WIDTH, t.HEIGHT)
     reference = world.render(t.REFERENCE_POSE, t.FOVY_REFERENCE)
     poses = t.start_poses(world, max(starts) + 1)
     print(f"load average {os.getloadavg()[0]:.2f} (times are wall-clock on a shared machine)")

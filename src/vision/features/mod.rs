@@ -33,9 +33,11 @@
 //! | a spread of points over the image (one per cell, the strongest) | [`spread`] |
 //! | matches across two cameras, checked by the fundamental matrix | [`matching`] |
 //! | a match refined to a fraction of a pixel (the reference's patch, warped, aligned) | [`refine`] |
+//! | the reference blurred as the frame is (measured on the first frame's matches) | [`blur`] |
 //! | frame-to-frame tracks, forward-backward checked | [`flow`] |
 //! | the pyramid's filters (kornia's, vectorised) | [`pyramid`] |
 
+pub mod blur;
 pub mod flow;
 pub mod keypoints;
 pub mod matching;

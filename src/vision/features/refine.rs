@@ -2,8 +2,8 @@
 //! so across two lenses (a focal ratio of 2) the same scene point is found up to 2 px apart,
 //! and the invariant law, which needs the same points in both images, settles off the goal.
 //! The reference's patch around the keypoint, warped into the frame by the local affine map
-//! of the neighbouring matches (at the reference's pyramid level nearest that map's scale, so
-//! that it is blurred as the frame's lens blurs it), is aligned with the frame by Gauss-Newton
+//! of the neighbouring matches (at the reference's pyramid level nearest that map's scale, the
+//! reference first blurred as the frames are: [`blur`](super::blur)), is aligned with the frame by Gauss-Newton
 //! with a gain and an offset for the exposure (Lucas-Kanade on a warped template, inverse
 //! compositional). [`Precision::Fast`] moves the translation of a small patch (every point,
 //! every frame); [`Precision::Fine`] moves the whole affine warp of a larger patch (the few
@@ -105,10 +105,12 @@ pub fn refine(
     map: &Matrix2<f64>,
     start: [f64; 2],
 ) -> Option<[f64; 2]> {
-    refine_with(pyramid, frame, at, map, start, Precision::Fast)
+    refine_with(pyramid, frame, at, map, start, Precision::Fast).map(|(pixel, _)| pixel)
 }
 
-/// [`refine`] at the given precision.
+/// [`refine`] at the given precision, with the normalised correlation of the aligned patches
+/// (how alike the reference's patch and the frame's are once aligned: [`blur`](super::blur)
+/// reads it).
 pub fn refine_with(
     pyramid: &[Image<f32, 1>],
     frame: &Image<f32, 1>,
@@ -116,7 +118,7 @@ pub fn refine_with(
     map: &Matrix2<f64>,
     start: [f64; 2],
     precision: Precision,
-) -> Option<[f64; 2]> {
+) -> Option<([f64; 2], f64)> {
     match precision {
         Precision::Fast => refine_patch::<N_FAST, G_FAST>(pyramid, frame, at, map, start, Model::Translation),
         Precision::Fine => refine_patch::<N_FINE, G_FINE>(pyramid, frame, at, map, start, Model::Affine),
@@ -132,7 +134,7 @@ fn refine_patch<const N: usize, const G: usize>(
     map: &Matrix2<f64>,
     start: [f64; 2],
     model: Model,
-) -> Option<[f64; 2]> {
+) -> Option<([f64; 2], f64)> {
     let inverse = map.try_inverse()?;
     let level = level_for(&inverse, pyramid.len())?;
     let image = pyramid.get(level)?;
@@ -269,13 +271,13 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 /// inverted, `W <- W o W_delta^-1` (Baker and Matthews 2004, eq. 32): `A <- A (I + dD)^-1`,
 /// `p <- p - A dp`. Dropped: not converged in [`ITERATIONS`], moved more than [`MAX_SHIFT`],
 /// `A` more than [`MAX_DEFORM`] from `I`, a patch leaving the frame, or a correlation below
-/// [`MIN_CORRELATION`].
+/// [`MIN_CORRELATION`]. Returns the pixel and the correlation.
 fn align<const N: usize>(
     template: &Template<N>,
     frame: &Image<f32, 1>,
     start: [f64; 2],
     model: Model,
-) -> Option<[f64; 2]> {
+) -> Option<([f64; 2], f64)> {
     let start = Vector2::new(start[0], start[1]);
     let (mut p, mut a) = (start, Matrix2::identity());
     let mut values = [0.0; N];
@@ -303,7 +305,7 @@ fn align<const N: usize>(
             return None;
         }
         if moved < CONVERGED {
-            return (correlation >= MIN_CORRELATION).then_some([p.x, p.y]);
+            return (correlation >= MIN_CORRELATION).then_some(([p.x, p.y], correlation));
         }
     }
     None
@@ -603,9 +605,9 @@ mod tests {
             let start = [c.x + draw.uniform(-0.7, 0.7), c.y + draw.uniform(-0.7, 0.7)];
             let off = |p: [f64; 2]| (p[0] - c.x).hypot(p[1] - c.y);
             let at = [r0.x, r0.y];
-            let affine = refine_with(&reference, &frame, at, &wrong, start, Precision::Fine).unwrap();
+            let (affine, _) = refine_with(&reference, &frame, at, &wrong, start, Precision::Fine).unwrap();
             affine_off = affine_off.max(off(affine));
-            if let Some(shift) = refine_with(&reference, &frame, at, &wrong, start, Precision::Fast) {
+            if let Some((shift, _)) = refine_with(&reference, &frame, at, &wrong, start, Precision::Fast) {
                 shift_off = shift_off.max(off(shift));
             }
             if let Some(forward) = forward(&reference, &frame, (at, &wrong, start), FINE_HALF, true) {
