@@ -99,7 +99,7 @@ docs:
 # (benches/tracker_mire2.rs runs from tracker_mire2.py). soak.py takes the longest (100,000 runs).
 BENCH_SCRIPTS := bench_step compare vision tags_vs_opencv tags_tracked tags_robustness image_servo dots_vs_opencv \
 	grey noise_honesty mount_error tracker_mire2 lens_change_accuracy hand_eye_vs_opencv ik hostile_rerun \
-	ros_latency soak sweep mujoco_starts mujoco_sweep features_tracking features_mujoco features_vs_markers
+	ros_latency soak sweep mujoco_starts mujoco_sweep features_tracking features_matching features_mujoco features_vs_markers
 bench: install
 	cargo bench --bench vsinv
 	for b in $(BENCH_SCRIPTS); do echo "== benches/$$b.py"; $(PYTHON) benches/$$b.py || exit 1; done

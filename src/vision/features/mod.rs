@@ -24,8 +24,10 @@
 //! Rust. OpenCV is used by the tests only, as the independent computation
 //! (`cv2.calcOpticalFlowPyrLK`, SIFT + `findFundamentalMat`). The price, measured by
 //! `benches/features_tracking.py`: kornia's tracks agree with OpenCV's to 1e-4 px (median) but
-//! take about 9 times OpenCV's time (forward and backward, 150 points at 640 x 480), above the
-//! issue's 10 ms a frame on this machine: its pyramids and gradients are rebuilt at each call.
+//! take about 5 times OpenCV's time at 640 x 480 and 11 times at 1920 x 1080 (forward and
+//! backward, 150 points, both pyramids built at each call). A servo session builds one pyramid
+//! a frame and keeps it: a whole tracked step at 640 x 480 takes about 8 ms, under the issue's
+//! 10 ms (docs/results/performance.md).
 //!
 //! | concept | module |
 //! |---|---|
