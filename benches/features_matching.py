@@ -36,20 +36,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 
 import feature_world as fw  # noqa: E402
 import numpy as np  # noqa: E402
-
-
-def opencv_matches(cv2, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # noqa: ANN001
-    """OpenCV's SIFT, Lowe's ratio 0.8 and its MAGSAC fundamental matrix: the kept pairs."""
-    sift = cv2.SIFT_create()
-    ka, da = sift.detectAndCompute(a, None)
-    kb, db = sift.detectAndCompute(b, None)
-    pairs = cv2.BFMatcher(cv2.NORM_L2).knnMatch(da, db, k=2)
-    good = [m for m, n in pairs if m.distance < 0.8 * n.distance]
-    pa = np.array([ka[m.queryIdx].pt for m in good])
-    pb = np.array([kb[m.trainIdx].pt for m in good])
-    _, mask = cv2.findFundamentalMat(pa, pb, cv2.USAC_MAGSAC, 1.0, 0.999, 10000)
-    keep = mask.ravel() == 1
-    return pa[keep], pb[keep]
+from opencv_matching import opencv_matches  # noqa: E402
 
 
 def off_the_box(world, pixels: np.ndarray) -> np.ndarray:  # noqa: ANN001
@@ -109,7 +96,7 @@ def main() -> int:
         for pose in t.start_poses(world, starts):
             frame = world.render(pose, t.FOVY_SERVO)
             calls = {"vsinv": lambda f=frame: vsinv.vision.match_features(reference, f),
-                     "OpenCV": lambda f=frame: opencv_matches(cv2, reference, f)}
+                     "OpenCV": lambda f=frame: opencv_matches(reference, f)[:2]}
             for pipeline, call in calls.items():
                 ms, (ref_px, px) = timed(call, rounds)
                 error = np.linalg.norm(px - t.true_pixels(world, ref_px, pose), axis=1)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import vsinv
+from opencv_matching import opencv_matches
 
 cv2 = pytest.importorskip("cv2", reason="OpenCV is the oracle: pip install opencv-python-headless")
 
@@ -82,20 +83,6 @@ def test_a_point_that_cannot_be_tracked_is_not_found() -> None:
     assert found.sum() <= 3, found.sum()
 
 
-def opencv_matches(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """OpenCV's SIFT, Lowe's ratio 0.8 and its MAGSAC fundamental matrix: (pixels in a, pixels in b, F)."""
-    sift = cv2.SIFT_create(nfeatures=4000)
-    ka, da = sift.detectAndCompute(a, None)
-    kb, db = sift.detectAndCompute(b, None)
-    pairs = cv2.BFMatcher(cv2.NORM_L2).knnMatch(da, db, k=2)
-    good = [m for m, n in pairs if m.distance < 0.8 * n.distance]
-    pa = np.array([ka[m.queryIdx].pt for m in good])
-    pb = np.array([kb[m.trainIdx].pt for m in good])
-    F, mask = cv2.findFundamentalMat(pa, pb, cv2.USAC_MAGSAC, 1.0, 0.999, 10000)
-    keep = mask.ravel() == 1
-    return pa[keep], pb[keep], F
-
-
 def sampson(F: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The first-order distance (pixels) of the pairs (a, b) to F's epipolar geometry."""
     x1 = np.column_stack([a, np.ones(len(a))])
@@ -112,7 +99,7 @@ def test_matches_agree_with_an_independent_opencv_pipeline(k: int) -> None:
     many as OpenCV keeps; a frame half the size (another "lens") is matched as well."""
     a, b = frame(0), frame(k)
     mine_a, mine_b = vsinv.vision.match_features(a, b)
-    cv_a, cv_b, F = opencv_matches(a, b)
+    cv_a, cv_b, F = opencv_matches(a, b, nfeatures=4000)
     d = sampson(F, mine_a, mine_b)
     print(f"frame {k}: vsinv {len(mine_a)} matches, OpenCV {len(cv_a)}; Sampson distance to OpenCV's F: "
           f"median {np.median(d):.3f} px, {int((d > 3).sum())} beyond 3 px")
