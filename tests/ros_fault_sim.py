@@ -85,7 +85,7 @@ def spin_until(ex: SingleThreadedExecutor, done: Callable[[], bool], timeout: fl
 
 
 def call(ex: SingleThreadedExecutor, client: Any, request: Any) -> Any:
-    if not spin_until(ex, client.service_is_ready, 30.0):
+    if not spin_until(ex, client.service_is_ready, 60.0):
         raise RuntimeError(f"service {client.srv_name} not available")
     future = client.call_async(request)
     spin_until(ex, future.done, 30.0)
@@ -136,7 +136,12 @@ def faults(ex: SingleThreadedExecutor, rig: Rig) -> dict[str, Any]:
         "duplicate": lambda: rig.last,
         "out of order": older,
     }
-    out = {name: fault(ex, rig, lambda make=make: rig.image_pub.publish(make())) for name, make in cases.items()}
+    out = {}
+    for name, make in cases.items():
+        try:
+            out[name] = fault(ex, rig, lambda make=make: rig.image_pub.publish(make()))
+        except RuntimeError as e:
+            raise RuntimeError(f"at the fault {name!r}, the status {rig.status}: {e}") from e
     info = CameraInfo(height=480, width=640, k=list(rig.info.k), distortion_model="plumb_bob")
     out["camera_info 640x480"] = fault(ex, rig, lambda: rig.info_pub.publish(info))
     return out

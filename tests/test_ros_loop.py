@@ -210,7 +210,7 @@ def run_bridge_with(tmp_path: Path, parameters: dict[str, Any], script: str, con
                              env=env, capture_output=True, text=True, timeout=timeout)
     finally:
         _, err = stop(bridge)
-    assert sim.returncode == 0, sim.stderr[-3000:]
+    assert sim.returncode == 0, f"{sim.stderr[-3000:]}\nthe bridge (exit {bridge.returncode}) said:\n{err[-3000:]}"
     return json.loads((tmp_path / "out.json").read_text()), err
 
 
