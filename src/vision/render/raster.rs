@@ -176,76 +176,76 @@ fn supersampled(shape: &impl Shape, local: &Local) -> f32 {
     counted(shape, local)
 }
 
-/// The share of the pixel's `SUBSAMPLES x SUBSAMPLES` samples inside the shape, every sample
-/// counted.
+/// The share of the pixel's `SUBSAMPLES x SUBSAMPLES` samples inside the shape: the count of
+/// every sample evaluated. A quadratic shape counts them from its expansion about the pixel
+/// ([`SampleQuadratic`]); a sample it cannot decide, or another shape, evaluates every one.
 fn counted(shape: &impl Shape, local: &Local) -> f32 {
-    let step = 1.0 / SUBSAMPLES as f64;
-    let (j, [u, v]) = (&local.jacobian, local.ideal);
-    // Sample (du, dv) of the pixel, inside the shape or not.
-    let sample = |du: f64, dv: f64| {
-        let (uu, vv) = (u + j[(0, 0)] * du + j[(0, 1)] * dv, v + j[(1, 0)] * du + j[(1, 1)] * dv);
-        usize::from(shape.value(uu, vv) <= 0.0)
-    };
-    let offset = |k: usize| (k as f64 + 0.5) * step - 0.5;
-    let inside: usize = match RowQuadratics::of(shape, local) {
-        Some(rows) => (0..SUBSAMPLES).map(|a| rows.count_row(offset(a), &offset, &sample)).sum(),
-        None => (0..SUBSAMPLES)
-            .flat_map(|a| (0..SUBSAMPLES).map(move |b| (offset(b), offset(a))))
-            .map(|(du, dv)| sample(du, dv))
-            .sum(),
-    };
+    let inside =
+        SampleQuadratic::of(shape, local).and_then(|q| q.count()).unwrap_or_else(|| every_sample(shape, local));
     inside as f32 / (SUBSAMPLES * SUBSAMPLES) as f32
 }
 
-/// A quadratic shape along the rows of a pixel's samples: on the row at `dv`, the sample at
-/// `du` is `p(dv) + du d` with `d = J (1, 0)`, where the implicit function is exactly
-/// `value(p) + du gradient(p) . d + du^2 d^T A d` (the second-order part `A` of
-/// [`Shape::second_order`]). Evaluated by Horner's rule, it decides every sample farther than
-/// the rounding margin of [`one_side`] from the boundary; the few within it are evaluated as
-/// [`counted`] evaluates every sample, so the count is the same, at a fraction of the cost.
-struct RowQuadratics<'a, S: Shape> {
-    shape: &'a S,
-    local: &'a Local,
-    /// `d^T A d`.
-    curvature: f64,
+/// The offset of sample `k` from the pixel's centre along one axis, pixels.
+fn sample_offset(k: usize) -> f64 {
+    (k as f64 + 0.5) / SUBSAMPLES as f64 - 0.5
+}
+
+/// The samples of the pixel inside the shape, each evaluated: sample `(s, t)` is at
+/// `p + J (s, t)`.
+fn every_sample(shape: &impl Shape, local: &Local) -> usize {
+    let (j, [u, v]) = (&local.jacobian, local.ideal);
+    let inside =
+        |s: f64, t: f64| shape.value(u + j[(0, 0)] * s + j[(0, 1)] * t, v + j[(1, 0)] * s + j[(1, 1)] * t) <= 0.0;
+    (0..SUBSAMPLES)
+        .flat_map(|a| (0..SUBSAMPLES).map(move |b| (sample_offset(b), sample_offset(a))))
+        .filter(|&(s, t)| inside(s, t))
+        .count()
+}
+
+/// A quadratic shape over the samples of one pixel: exactly,
+/// `value(p + J (s, t)) = value(p) + g_s s + g_t t + a s^2 + 2 b s t + c t^2`, with
+/// `(g_s, g_t) = J^T gradient(p)` and `[a, b; b, c] = J^T A J` (`A` of
+/// [`Shape::second_order`]). Evaluated in floating point, each sample's value is off by a few
+/// 1e-16 of the size of the terms ([`Shape::quadratic_scale`]); `margin`, 1e-9 of it (as in
+/// [`one_side`]), decides every sample farther than that from the boundary as its own
+/// evaluation does. All 64 in straight-line arithmetic, without a branch a sample.
+struct SampleQuadratic {
+    value: f64,
+    gradient: [f64; 2],
+    /// `[a, b, c]` in sample offsets.
+    second: [f64; 3],
     margin: f64,
 }
 
-impl<'a, S: Shape> RowQuadratics<'a, S> {
-    /// None for a shape that is not a quadratic, or where the margin is not finite.
-    fn of(shape: &'a S, local: &'a Local) -> Option<Self> {
+impl SampleQuadratic {
+    /// None for a shape that is not a quadratic.
+    fn of(shape: &impl Shape, local: &Local) -> Option<Self> {
         let (j, [u, v]) = (&local.jacobian, local.ideal);
         let (du, dv) = (0.5 * (j[(0, 0)].abs() + j[(0, 1)].abs()), 0.5 * (j[(1, 0)].abs() + j[(1, 1)].abs()));
         let margin = 1e-9 * shape.quadratic_scale(u.abs() + du + 1.0, v.abs() + dv + 1.0)?;
         let [a, b, c] = shape.second_order();
-        let d = [j[(0, 0)], j[(1, 0)]];
-        let curvature = a * d[0] * d[0] + 2.0 * b * d[0] * d[1] + c * d[1] * d[1];
-        (margin.is_finite() && curvature.is_finite()).then_some(Self { shape, local, curvature, margin })
+        let g = shape.gradient(u, v);
+        let (s, t) = ([j[(0, 0)], j[(1, 0)]], [j[(0, 1)], j[(1, 1)]]);
+        let form = |x: [f64; 2], y: [f64; 2]| a * x[0] * y[0] + b * (x[0] * y[1] + x[1] * y[0]) + c * x[1] * y[1];
+        let gradient = [g.x * s[0] + g.y * s[1], g.x * t[0] + g.y * t[1]];
+        Some(Self { value: shape.value(u, v), gradient, second: [form(s, s), form(s, t), form(t, t)], margin })
     }
 
-    /// The samples of the row at `dv` inside the shape (`offset(b)`: the `du` of sample `b`).
-    fn count_row(&self, dv: f64, offset: &impl Fn(usize) -> f64, sample: &impl Fn(f64, f64) -> usize) -> usize {
-        let (j, [u, v]) = (&self.local.jacobian, self.local.ideal);
-        let (pu, pv) = (u + j[(0, 1)] * dv, v + j[(1, 1)] * dv);
-        let value = self.shape.value(pu, pv);
-        let g = self.shape.gradient(pu, pv);
-        let slope = g.x * j[(0, 0)] + g.y * j[(1, 0)];
-        if !(value.is_finite() && slope.is_finite()) {
-            return (0..SUBSAMPLES).map(|b| sample(offset(b), dv)).sum();
+    /// The samples inside, or None when one lies within the margin of the boundary (or a
+    /// value is not finite): those are evaluated one by one.
+    fn count(&self) -> Option<usize> {
+        let ([gs, gt], [a, b, c], m) = (self.gradient, self.second, self.margin);
+        let offsets: [f64; SUBSAMPLES] = std::array::from_fn(sample_offset);
+        let (mut inside, mut unsure) = (0usize, false);
+        for &t in &offsets {
+            let (row, slope) = (self.value + t * (gt + c * t), gs + 2.0 * b * t);
+            for &s in &offsets {
+                let q = row + s * (slope + a * s);
+                inside += usize::from(q < -m);
+                unsure |= !(q < -m || q > m);
+            }
         }
-        (0..SUBSAMPLES)
-            .map(|b| {
-                let du = offset(b);
-                let q = value + du * (slope + du * self.curvature);
-                if q < -self.margin {
-                    1
-                } else if q > self.margin {
-                    0
-                } else {
-                    sample(du, dv)
-                }
-            })
-            .sum()
+        (!unsure && m.is_finite()).then_some(inside)
     }
 }
 
