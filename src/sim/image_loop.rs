@@ -55,6 +55,8 @@ pub(crate) struct ImageLoop {
     spare: Vec<u8>,
     /// Every detection error of a found point, pixels.
     pub(crate) errors: Vec<f64>,
+    /// The frames rendered and searched only in the detector's windows.
+    pub(crate) windowed_frames: u64,
 }
 
 impl ImageLoop {
@@ -66,7 +68,17 @@ impl ImageLoop {
     /// A loop over any target and detector.
     pub(crate) fn with(renderer: Renderer, vision: SceneVision, size: (u32, u32)) -> Self {
         let SceneVision { target, detector } = vision;
-        Self { renderer, target, detector, started: false, size, frame: 0, spare: Vec::new(), errors: Vec::new() }
+        Self {
+            renderer,
+            target,
+            detector,
+            started: false,
+            size,
+            frame: 0,
+            spare: Vec::new(),
+            errors: Vec::new(),
+            windowed_frames: 0,
+        }
     }
 
     /// The reference image rendered with K* at F*, its points detected around their
@@ -113,14 +125,7 @@ impl ImageLoop {
     ) -> Result<()> {
         self.frame += 1;
         let view = CameraView { pose, intrinsics: k, distortion, size: self.size };
-        let spare = std::mem::take(&mut self.spare);
-        let rendered = self.renderer.render_in(&*self.target, Some(&obs.visible), &view, self.frame, spare)?;
-        let image = view_of(&rendered.image)?;
-        if !self.started {
-            self.detector.start(&image, &expected(self.target.points(), &obs.pixels))?;
-            self.started = true;
-        }
-        let detections = self.detector.detect(&image)?;
+        let (detections, image) = self.render_and_detect(&view, &obs.visible, &obs.pixels)?;
         let hits = per_point(self.target.points(), &detections);
         for i in 0..run.pixels.len() {
             let hit = hits.get(i).copied().flatten();
@@ -136,8 +141,40 @@ impl ImageLoop {
                 f64::NAN
             };
         }
-        self.spare = rendered.image.into_raw();
+        self.spare = image.into_raw();
         Ok(())
+    }
+
+    /// Renders the frame of `view` and detects the points in it. Once the detector is started
+    /// and reads only windows ([`Detector::reads`]), only those are rendered; when it needs
+    /// more ([`Detector::detect_within`] gives `None`) the whole frame is rendered and searched:
+    /// the points are those of the whole frame either way, bit for bit.
+    fn render_and_detect(
+        &mut self,
+        view: &CameraView<'_>,
+        visible: &[bool],
+        pixels: &[[f64; 2]],
+    ) -> Result<(Vec<Detection>, GreyImage)> {
+        let spare = std::mem::take(&mut self.spare);
+        let (target, frame) = (&*self.target, self.frame);
+        let spare = match self.detector.reads().filter(|_| self.started) {
+            Some(windows) => {
+                let rendered = self.renderer.render_windows_in(target, Some(visible), view, frame, spare, &windows)?;
+                if let Some(found) = self.detector.detect_within(&view_of(&rendered.image)?)? {
+                    self.windowed_frames += 1;
+                    return Ok((found, rendered.image));
+                }
+                rendered.image.into_raw()
+            }
+            None => spare,
+        };
+        let rendered = self.renderer.render_in(target, Some(visible), view, frame, spare)?;
+        let image = view_of(&rendered.image)?;
+        if !self.started {
+            self.detector.start(&image, &expected(self.target.points(), pixels))?;
+            self.started = true;
+        }
+        Ok((self.detector.detect(&image)?, rendered.image))
     }
 
     /// The median and largest detection error of the found points, pixels (NaN if none).
@@ -288,6 +325,57 @@ mod tests {
             assert!(detection[i] < 0.1, "point {i}: {} px", detection[i]);
             assert!((pixels[i][0] - obs.pixels[i][0]).abs() < 0.1, "point {i}");
         }
+    }
+
+    /// The dot tracker seen whole: its windows not declared, so every frame is rendered and
+    /// searched whole.
+    struct Whole(DotTracking);
+
+    impl Detector for Whole {
+        fn start(
+            &mut self,
+            image: &GreyView<'_>,
+            expected: &[Expected],
+        ) -> crate::vision::error::Result<Vec<Detection>> {
+            self.0.start(image, expected)
+        }
+
+        fn detect(&mut self, image: &GreyView<'_>) -> crate::vision::error::Result<Vec<Detection>> {
+            self.0.detect(image)
+        }
+    }
+
+    /// A moving camera (small steps, then a jump of several windows and back): the loop that
+    /// renders only the tracker's windows gives the points, visibility and errors of the loop
+    /// that renders every frame whole, bit for bit, and renders most frames in windows.
+    #[test]
+    fn rendering_only_the_trackers_windows_changes_no_detection() {
+        let discs = || scene_discs(&scene_object(&scene()), 0.004).unwrap();
+        let renderer = || Renderer::new(RenderConfig { noise_sigma: 3.0, ..RenderConfig::default() }).unwrap();
+        let tracking = || DotTracking::new(TrackerConfig::default());
+        let vision = |detector: Box<dyn Detector>| SceneVision { target: Box::new(Dots::new(discs())), detector };
+        let mut windowed = ImageLoop::with(renderer(), vision(Box::new(tracking())), (320, 240));
+        let mut whole = ImageLoop::with(renderer(), vision(Box::new(Whole(tracking()))), (320, 240));
+        let k = Intrinsics::pinhole(800.0, 800.0, 160.0, 120.0).unwrap();
+        let frames = 24;
+        for f in 0..frames {
+            let x = if (12..15).contains(&f) { 0.03 } else { 0.0005 * f as f64 };
+            let pose = Isometry3::translation(x, -0.0003 * f as f64, 0.0);
+            let mut obs = Observation::default();
+            scene().observe(&pose.inverse(), &k, Some(ImageSize { width: 320.0, height: 240.0 }), &mut obs);
+            let n = obs.pixels.len();
+            let mut got = (vec![[0.0; 2]; n], vec![false; n], vec![0.0; n]);
+            let mut want = got.clone();
+            for (images, out) in [(&mut windowed, &mut got), (&mut whole, &mut want)] {
+                let tracked = Tracked { pixels: &mut out.0, visible: &mut out.1, detection: &mut out.2 };
+                images.observe(&pose, &k, &Distortion::none(), &obs, tracked).unwrap();
+            }
+            let bits = |d: &[f64]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!((&got.0, &got.1, bits(&got.2)), (&want.0, &want.1, bits(&want.2)), "frame {f}");
+        }
+        assert_eq!(whole.windowed_frames, 0);
+        let w = windowed.windowed_frames;
+        assert!(w >= frames - 4 && w < frames - 1, "{w} of {frames} frames in windows");
     }
 
     #[test]

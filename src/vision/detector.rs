@@ -13,6 +13,7 @@ pub mod tags;
 
 use crate::vision::error::Result;
 use crate::vision::image::GreyView;
+use crate::vision::image::Window;
 
 /// Where a point is expected in the first image: its identity and a pixel near it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,6 +50,20 @@ pub trait Detector: Send + Sync {
     /// `false` for a detector without such a bound.
     fn stopped_early(&self) -> bool {
         false
+    }
+
+    /// The windows of the next image that [`Detector::detect_within`] reads, when the
+    /// detector reads only parts of an image (a tracker's windows around its predictions);
+    /// `None` (the default): it reads the whole image. A simulation renders only these.
+    fn reads(&self) -> Option<Vec<Window>> {
+        None
+    }
+
+    /// [`Detector::detect`] on an image right only inside [`Detector::reads`] (its other
+    /// pixels may hold anything): the same points, or `None`, the detector unchanged, when it
+    /// needs pixels beyond them (then call `detect` on the whole image). `None` by default.
+    fn detect_within(&mut self, _image: &GreyView<'_>) -> Result<Option<Vec<Detection>>> {
+        Ok(None)
     }
 
     /// The points, by identity, that the caller leans on most from the next image on (the

@@ -18,6 +18,7 @@ use crate::error::Error;
 use crate::vision::background::TileThresholds;
 use crate::vision::centroid::{MARGIN, RingFit, Weighted, weighted_centroid};
 use crate::vision::error::{Result, VisionError};
+pub use crate::vision::image::Window;
 use crate::vision::image::{GreyBuffer, GreyImage, MAX_IMAGE_PIXELS, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 use crate::vision::runs::{Component, label};
@@ -76,43 +77,6 @@ pub struct Dot {
     pub area: f64,
     /// `[u_min, v_min, u_max, v_max]` of the pixels above the threshold (inclusive).
     pub bbox: [u32; 4],
-}
-
-/// A rectangle of pixels, inclusive bounds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Window {
-    /// First column.
-    pub u0: u32,
-    /// First row.
-    pub v0: u32,
-    /// Last column.
-    pub u1: u32,
-    /// Last row.
-    pub v1: u32,
-}
-
-impl Window {
-    /// The whole image.
-    pub fn full<C: Pixels>(image: &GreyBuffer<C>) -> Self {
-        Self { u0: 0, v0: 0, u1: image.width() - 1, v1: image.height() - 1 }
-    }
-
-    /// The square of half-side `radius` around `(u, v)`, clipped to the image; None when it
-    /// falls outside.
-    pub fn around<C: Pixels>(image: &GreyBuffer<C>, center: [f64; 2], radius: f64) -> Option<Self> {
-        let (w, h) = (f64::from(image.width()), f64::from(image.height()));
-        let (u0, u1) = ((center[0] - radius).round().max(0.0), (center[0] + radius).round().min(w - 1.0));
-        let (v0, v1) = ((center[1] - radius).round().max(0.0), (center[1] + radius).round().min(h - 1.0));
-        (u0 <= u1 && v0 <= v1).then_some(Self { u0: u0 as u32, v0: v0 as u32, u1: u1 as u32, v1: v1 as u32 })
-    }
-
-    fn width(&self) -> u32 {
-        self.u1 - self.u0 + 1
-    }
-
-    fn height(&self) -> u32 {
-        self.v1 - self.v0 + 1
-    }
 }
 
 /// The most pixels [`detect_dots`] reads: 2^26 (8192 x 8192), a quarter of

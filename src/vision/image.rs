@@ -31,6 +31,45 @@ pub fn view_of<C: Pixels>(image: &GreyBuffer<C>) -> Result<GreyView<'_>> {
 pub trait Pixels: std::ops::Deref<Target = [u8]> + Sync {}
 impl<C: std::ops::Deref<Target = [u8]> + Sync> Pixels for C {}
 
+/// A rectangle of pixels, inclusive bounds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Window {
+    /// First column.
+    pub u0: u32,
+    /// First row.
+    pub v0: u32,
+    /// Last column.
+    pub u1: u32,
+    /// Last row.
+    pub v1: u32,
+}
+
+impl Window {
+    /// The whole image.
+    pub fn full<C: Pixels>(image: &GreyBuffer<C>) -> Self {
+        Self { u0: 0, v0: 0, u1: image.width() - 1, v1: image.height() - 1 }
+    }
+
+    /// The square of half-side `radius` around `(u, v)`, clipped to the image; None when it
+    /// falls outside.
+    pub fn around<C: Pixels>(image: &GreyBuffer<C>, center: [f64; 2], radius: f64) -> Option<Self> {
+        let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+        let (u0, u1) = ((center[0] - radius).round().max(0.0), (center[0] + radius).round().min(w - 1.0));
+        let (v0, v1) = ((center[1] - radius).round().max(0.0), (center[1] + radius).round().min(h - 1.0));
+        (u0 <= u1 && v0 <= v1).then_some(Self { u0: u0 as u32, v0: v0 as u32, u1: u1 as u32, v1: v1 as u32 })
+    }
+
+    /// Columns.
+    pub fn width(&self) -> u32 {
+        self.u1 - self.u0 + 1
+    }
+
+    /// Rows.
+    pub fn height(&self) -> u32 {
+        self.v1 - self.v0 + 1
+    }
+}
+
 /// Borrows row-major bytes as an image; `what` names the argument in errors.
 pub fn view<'a>(what: &str, width: u32, height: u32, data: &'a [u8]) -> Result<GreyBuffer<&'a [u8]>> {
     check_size(what, width, height, data.len())?;

@@ -34,7 +34,7 @@ use crate::core::camera::Intrinsics;
 use crate::core::distortion::Distortion;
 use crate::error::{Error, Short};
 use crate::vision::error::Result;
-use crate::vision::image::GreyImage;
+use crate::vision::image::{GreyImage, Window};
 use crate::vision::polarity::Polarity;
 
 /// The largest image the renderer draws (width x height, 2^28: 256 MiB of grey levels); larger
@@ -172,6 +172,35 @@ impl Renderer {
         frame: u64,
         buffer: Vec<u8>,
     ) -> Result<Rendered> {
+        self.render_with(target, visible, view, frame, buffer, None)
+    }
+
+    /// [`Renderer::render_in`] right only inside `windows` (clipped to the image): there
+    /// each pixel is the whole frame's, bit for bit; elsewhere the image holds anything (the
+    /// shapes drawn over what `buffer` held). For a detector that reads only windows
+    /// ([`Detector::reads`](crate::vision::detector::Detector::reads)): the background of the
+    /// rest of the frame, most of a frame's time, is not written.
+    pub fn render_windows_in<T: Drawing + ?Sized>(
+        &self,
+        target: &T,
+        visible: Option<&[bool]>,
+        view: &CameraView<'_>,
+        frame: u64,
+        buffer: Vec<u8>,
+        windows: &[Window],
+    ) -> Result<Rendered> {
+        self.render_with(target, visible, view, frame, buffer, Some(windows))
+    }
+
+    fn render_with<T: Drawing + ?Sized>(
+        &self,
+        target: &T,
+        visible: Option<&[bool]>,
+        view: &CameraView<'_>,
+        frame: u64,
+        buffer: Vec<u8>,
+        windows: Option<&[Window]>,
+    ) -> Result<Rendered> {
         let (width, height) = view.size;
         if width == 0 || height == 0 || u64::from(width) * u64::from(height) > MAX_RENDER_PIXELS {
             let reason = format!("{width} x {height}: at least 1 x 1 and at most {MAX_RENDER_PIXELS} pixels (2^28)");
@@ -191,7 +220,11 @@ impl Renderer {
             foreground: self.config.foreground,
             noise,
         };
-        let mut canvas = Canvas::new(noise.background_frame_in(width, height, buffer), *view, paint);
+        let background = match windows {
+            Some(windows) => noise.background_windows_in(width, height, buffer, windows),
+            None => noise.background_frame_in(width, height, buffer),
+        };
+        let mut canvas = Canvas::new(background, *view, paint);
         let drawn = target.draw_on(&mut canvas, visible);
         check_flags("drawn", drawn.len(), n)?;
         let mut image = canvas.into_image();

@@ -5,7 +5,8 @@ use crate::error::Error;
 use crate::vision::detector::{Detection, Detector, Expected};
 use crate::vision::error::Result;
 use crate::vision::image::GreyView;
-use crate::vision::tracker::{DotTracker, TrackerConfig};
+use crate::vision::image::Window;
+use crate::vision::tracker::{DotTracker, TrackResult, TrackerConfig};
 
 /// Dots tracked from image to image.
 #[derive(Debug, Clone)]
@@ -51,6 +52,13 @@ impl DotTracking {
         }
     }
 
+    /// The tracker, once started.
+    fn started(&mut self) -> Result<&mut DotTracker> {
+        self.tracker
+            .as_mut()
+            .ok_or_else(|| Error::InvalidParameter { name: "detector", reason: "detect before start".into() }.into())
+    }
+
     fn detections(&self, pixels: &[[f64; 2]], found: impl Fn(usize) -> bool) -> Vec<Detection> {
         self.ids
             .iter()
@@ -75,11 +83,21 @@ impl Detector for DotTracking {
     }
 
     fn detect(&mut self, image: &GreyView<'_>) -> Result<Vec<Detection>> {
-        let Some(tracker) = self.tracker.as_mut() else {
-            return Err(Error::InvalidParameter { name: "detector", reason: "detect before start".into() }.into());
-        };
-        let tracked = tracker.track(image)?;
+        let tracked = self.started()?.track(image)?;
         Ok(self.detections(&tracked.pixels, |i| tracked.found[i]))
+    }
+
+    /// The tracker's first windows ([`DotTracker::first_windows`]).
+    fn reads(&self) -> Option<Vec<Window>> {
+        self.tracker.as_ref().map(DotTracker::first_windows)
+    }
+
+    fn detect_within(&mut self, image: &GreyView<'_>) -> Result<Option<Vec<Detection>>> {
+        let mut tracked = TrackResult::default();
+        if !self.started()?.track_in_first_windows(image, &mut tracked)? {
+            return Ok(None);
+        }
+        Ok(Some(self.detections(&tracked.pixels, |i| tracked.found[i])))
     }
 }
 
@@ -102,6 +120,47 @@ mod tests {
         let (pose, none) = (Isometry3::identity(), Distortion::none());
         let view = CameraView { pose: &pose, intrinsics: &k, distortion: &none, size: (120, 80) };
         Renderer::new(RenderConfig::default()).unwrap().render(&dots, None, &view, 0).unwrap().image
+    }
+
+    /// Detected within the tracker's first windows (the rest of the image garbage): the
+    /// detections of the whole image, or `None` and the detector unchanged when a dot needs a
+    /// larger window (a jump of several windows).
+    #[test]
+    fn detects_within_its_windows_as_in_the_whole_image() {
+        let expected = [Expected { id: 9, pixel: [21.0, 40.0] }, Expected { id: 4, pixel: [99.0, 50.0] }];
+        let mut windowed = DotTracking::new(TrackerConfig::default());
+        let mut whole = DotTracking::new(TrackerConfig::default());
+        assert!(windowed.reads().is_none(), "no windows before start");
+        let first = image(0.0);
+        windowed.start(&view_of(&first).unwrap(), &expected).unwrap();
+        whole.start(&view_of(&first).unwrap(), &expected).unwrap();
+        let (mut within, mut beyond) = (0, 0);
+        for shift in [0.0, 0.001, 0.003, 0.004, 0.02, 0.021, 0.022] {
+            let next = image(shift);
+            let windows = windowed.reads().unwrap();
+            assert_eq!(windows.len(), 2);
+            // Every pixel outside the windows spoilt: bright, a dot everywhere.
+            let mut spoilt = next.clone();
+            for (i, g) in spoilt.iter_mut().enumerate() {
+                let (u, v) = (i as u32 % 120, i as u32 / 120);
+                if !windows.iter().any(|w| (w.u0..=w.u1).contains(&u) && (w.v0..=w.v1).contains(&v)) {
+                    *g = 255;
+                }
+            }
+            let want = whole.detect(&view_of(&next).unwrap()).unwrap();
+            match windowed.detect_within(&view_of(&spoilt).unwrap()).unwrap() {
+                Some(got) => {
+                    within += 1;
+                    assert_eq!(got, want, "shift {shift}");
+                }
+                None => {
+                    beyond += 1;
+                    assert_eq!(windowed.reads().unwrap(), windows, "unchanged");
+                    assert_eq!(windowed.detect(&view_of(&next).unwrap()).unwrap(), want, "shift {shift}");
+                }
+            }
+        }
+        assert!(within >= 5 && beyond >= 1, "{within} within, {beyond} beyond");
     }
 
     #[test]

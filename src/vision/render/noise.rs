@@ -16,6 +16,7 @@
 use std::sync::{Arc, Mutex, OnceLock};
 
 use crate::vision::image::GreyImage;
+use crate::vision::image::Window;
 
 /// Pixels read from one offset of the pool.
 pub(super) const RUN: usize = 64;
@@ -168,6 +169,48 @@ impl Noise<'_> {
         }
     }
 
+    /// [`Noise::background_frame_in`] inside `windows` only (clipped to the image): there each
+    /// pixel is what the whole frame has; elsewhere `buffer` keeps what it held (zero where
+    /// it was shorter). A frame of which a tracker reads a few windows costs those windows.
+    pub(super) fn background_windows_in(
+        &self,
+        width: u32,
+        height: u32,
+        mut buffer: Vec<u8>,
+        windows: &[Window],
+    ) -> GreyImage {
+        let (w, n) = (width as usize, width as usize * height as usize);
+        buffer.resize(n, 0);
+        let noisy = self.sigma > 0.0 && !self.pool.is_empty();
+        for window in windows {
+            let (u0, u1) = (window.u0 as usize, (window.u1 as usize).min(w.saturating_sub(1)));
+            if u0 > u1 {
+                continue;
+            }
+            for v in window.v0 as usize..=(window.v1 as usize).min((height as usize).saturating_sub(1)) {
+                let (first, end) = (v * w + u0, v * w + u1 + 1);
+                if !noisy {
+                    buffer[first..end].fill(self.background);
+                    continue;
+                }
+                // Every run the row's piece meets, whole (a fixed-size copy, as the whole frame
+                // is written; the pixels of a run beyond the window get their own values).
+                for run in first / RUN..=(end - 1) / RUN {
+                    let (at, start) = (run * RUN, run_offset(self.seed, run));
+                    let len = RUN.min(n - at);
+                    match (
+                        <&mut [u8; RUN]>::try_from(&mut buffer[at..at + len]),
+                        <&[u8; RUN]>::try_from(&self.pool[start..start + len]),
+                    ) {
+                        (Ok(to), Ok(from)) => *to = *from,
+                        _ => buffer[at..at + len].copy_from_slice(&self.pool[start..start + len]),
+                    }
+                }
+            }
+        }
+        GreyImage::from_raw(width, height, buffer).unwrap_or_else(|| GreyImage::new(width, height))
+    }
+
     /// The background with its noise: each run of [`RUN`] pixels copied from the quantised
     /// pool at the run's offset (what the tests read; the renderer writes into a buffer).
     #[cfg(test)]
@@ -220,6 +263,38 @@ mod tests {
         }
         for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -0.5, 0.5, 254.5, 255.49, 1e300] {
             assert_eq!(quantise(v), v.round().clamp(0.0, 255.0) as u8, "{v}");
+        }
+    }
+
+    /// Inside the windows (any place and size, clipped to the image, at the frame's ends),
+    /// the pixels of the whole frame; outside, what the buffer held or a background value.
+    #[test]
+    fn background_windows_are_the_whole_frames_pixels() {
+        let pool = quantised_pool(30, 3.0);
+        let mut state = 11u64;
+        let mut below = |n: u32| (splitmix64(&mut state) % u64::from(n)) as u32;
+        for sigma in [3.0, 0.0] {
+            for k in 0..200 {
+                let (w, h) = (1 + below(90), 1 + below(40));
+                let n = noise(&pool, 30, sigma, 77 + k);
+                let whole = n.background_frame(w, h);
+                let windows: Vec<Window> = (0..below(4))
+                    .map(|_| {
+                        let (u0, v0) = (below(w), below(h));
+                        Window { u0, v0, u1: u0 + below(w + 5), v1: v0 + below(h + 5) }
+                    })
+                    .collect();
+                let stale = vec![7u8; below(2 * w * h) as usize];
+                let part = n.background_windows_in(w, h, stale, &windows);
+                for (i, (&a, &b)) in part.as_raw().iter().zip(whole.as_raw()).enumerate() {
+                    let (u, v) = (i as u32 % w, i as u32 / w);
+                    if windows.iter().any(|r| (r.u0..=r.u1).contains(&u) && (r.v0..=r.v1).contains(&v)) {
+                        assert_eq!(a, b, "pixel ({u}, {v}) of {w} x {h}, sigma {sigma}");
+                    } else {
+                        assert!(a == b || a == 7 || a == 0, "pixel ({u}, {v}): {a}");
+                    }
+                }
+            }
         }
     }
 

@@ -31,8 +31,9 @@ pub use self::start::MAX_START_PIXELS;
 use self::shape::Shape;
 use self::window_search::{Component, Level, WindowSearch};
 use crate::error::Error;
-use crate::vision::dots::{MAX_DOT_PIXELS, Window};
+use crate::vision::dots::MAX_DOT_PIXELS;
 use crate::vision::error::{Result, VisionError};
+use crate::vision::image::Window;
 use crate::vision::image::{GreyBuffer, Pixels, check_image};
 use crate::vision::polarity::Polarity;
 
@@ -184,6 +185,34 @@ impl DotTracker {
     /// [`DotTracker::track`] writing into `out` (its vectors are reused: no allocation once
     /// they hold one entry per dot).
     pub fn track_into<C: Pixels>(&mut self, image: &GreyBuffer<C>, out: &mut TrackResult) -> Result<()> {
+        self.track_with(image, out, false).map(|_| ())
+    }
+
+    /// The windows the next image is searched in first, one per dot: its search window around
+    /// its prediction (the largest while the dot is lost), clipped to the image; a dot whose
+    /// window falls outside the image has none. A [`DotTracker::track`] that finds each dot
+    /// there, or concludes it is lost there, reads no pixel outside them (its larger windows
+    /// are read only when a dot is in none of its components).
+    pub fn first_windows(&self) -> Vec<Window> {
+        self.dots.iter().filter_map(|dot| window_in(self.size, dot.predicted, self.first_half(dot))).collect()
+    }
+
+    /// [`DotTracker::track_into`] reading only the pixels of [`DotTracker::first_windows`]
+    /// (the others may hold anything, e.g. a frame rendered only there): `Ok(true)` with `out`
+    /// as `track_into` gives it, or `Ok(false)`, the tracker unchanged, when a dot needs a
+    /// larger window: then track the whole image with `track_into`.
+    pub fn track_in_first_windows<C: Pixels>(&mut self, image: &GreyBuffer<C>, out: &mut TrackResult) -> Result<bool> {
+        self.track_with(image, out, true)
+    }
+
+    /// Tracks into `out`; with `first_only`, stops before a larger window than the first
+    /// and returns false, the dots not updated.
+    fn track_with<C: Pixels>(
+        &mut self,
+        image: &GreyBuffer<C>,
+        out: &mut TrackResult,
+        first_only: bool,
+    ) -> Result<bool> {
         if image.dimensions() != self.size {
             return Err(VisionError::InvalidImage {
                 what: "image".into(),
@@ -203,10 +232,21 @@ impl DotTracker {
         }
         let mut hits = std::mem::take(&mut self.hits);
         let dots = std::mem::take(&mut self.dots);
+        let mut within = true;
         for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = self.search(image, i, &dots);
+            match self.search(image, i, &dots, first_only) {
+                Ok(found) => *hit = found,
+                Err(Beyond) => {
+                    within = false;
+                    break;
+                }
+            }
         }
         self.dots = dots;
+        if !within {
+            self.hits = hits;
+            return Ok(false);
+        }
         drop_shared_components(&mut hits);
         drop_hits_over_other_dots(&mut hits, &self.dots);
         for ((dot, hit), position) in self.dots.iter_mut().zip(&hits).zip(self.positions.iter_mut()) {
@@ -218,9 +258,19 @@ impl DotTracker {
         out.found.clear();
         out.found.extend(hits.iter().map(Option::is_some));
         self.hits = hits;
-        Ok(())
+        Ok(true)
+    }
+
+    /// The half-sides of a dot's first search window: the largest while it is lost.
+    fn first_half(&self, dot: &TrackedDot) -> [f64; 2] {
+        let half = dot.window_half(&self.config);
+        let limit = half.map(|h| h.max(self.config.max_search_radius));
+        if dot.lost_for > 0 { limit } else { half }
     }
 }
+
+/// A search that needs a window larger than the first (in [`DotTracker::track_in_first_windows`]).
+struct Beyond;
 
 impl DotTracker {
     /// The component taken for a dot in this image, or None (lost). First the component
@@ -228,7 +278,13 @@ impl DotTracker {
     /// if it is larger, cut by the window or of another shape, the dot merged with something
     /// and is lost. Otherwise the nearest component of the dot's size and shape in the
     /// window, the window doubling while there is none.
-    fn search<C: Pixels>(&mut self, image: &GreyBuffer<C>, i: usize, dots: &[TrackedDot]) -> Option<Hit> {
+    fn search<C: Pixels>(
+        &mut self,
+        image: &GreyBuffer<C>,
+        i: usize,
+        dots: &[TrackedDot],
+        first_only: bool,
+    ) -> std::result::Result<Option<Hit>, Beyond> {
         let dot = &dots[i];
         // A component nearer to another dot's prediction is that dot's (taking it would swap).
         let own = |c: &Component| {
@@ -237,16 +293,13 @@ impl DotTracker {
         };
         let level = Level { threshold: dot.threshold, flip: if self.dark { 255 } else { 0 } };
         let ratio = self.config.max_area_ratio;
-        let mut half = dot.window_half(&self.config);
-        let limit = half.map(|h| h.max(self.config.max_search_radius));
-        if dot.lost_for > 0 {
-            half = limit;
-        }
+        let mut half = self.first_half(dot);
+        let limit = dot.window_half(&self.config).map(|h| h.max(self.config.max_search_radius));
         let (w, h) = (f64::from(image.width()), f64::from(image.height()));
         let (pu, pv) = (dot.predicted[0].round(), dot.predicted[1].round());
         let inside = pu >= 0.0 && pv >= 0.0 && pu < w && pv < h;
         loop {
-            let window = window_around(image, dot.predicted, half)?;
+            let Some(window) = window_around(image, dot.predicted, half) else { return Ok(None) };
             self.search.begin(window);
             let under = if inside { self.search.component_at(image, level, pu as u32, pv as u32) } else { None };
             if let Some(c) = under {
@@ -256,7 +309,7 @@ impl DotTracker {
                     c.area < self.config.min_area || (shape.area < dot.shape.area && !dot.shape.admits(&shape, ratio));
                 if !smaller {
                     let whole = !c.touches_window && !c.touches_image;
-                    return (whole && dot.shape.admits(&shape, ratio)).then(|| self.hit(image, level, &c, shape));
+                    return Ok((whole && dot.shape.admits(&shape, ratio)).then(|| self.hit(image, level, &c, shape)));
                 }
             }
             self.search.label_all(image, level);
@@ -271,12 +324,15 @@ impl DotTracker {
                     distance(a.0.centroid(), dot.predicted).total_cmp(&distance(b.0.centroid(), dot.predicted))
                 });
             if let Some((c, shape)) = best {
-                return Some(self.hit(image, level, &c, shape));
+                return Ok(Some(self.hit(image, level, &c, shape)));
             }
             let whole =
                 window.u0 == 0 && window.v0 == 0 && window.u1 + 1 >= image.width() && window.v1 + 1 >= image.height();
             if whole || (half[0] >= limit[0] && half[1] >= limit[1]) {
-                return None;
+                return Ok(None);
+            }
+            if first_only {
+                return Err(Beyond);
             }
             half = [(2.0 * half[0]).min(limit[0]), (2.0 * half[1]).min(limit[1])];
         }
@@ -300,7 +356,12 @@ impl DotTracker {
 /// The rectangle of half-sides `half` around `center`, clipped to the image; None when it
 /// falls outside.
 fn window_around<C: Pixels>(image: &GreyBuffer<C>, center: [f64; 2], half: [f64; 2]) -> Option<Window> {
-    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+    window_in(image.dimensions(), center, half)
+}
+
+/// [`window_around`] in an image of `size` (width, height).
+fn window_in(size: (u32, u32), center: [f64; 2], half: [f64; 2]) -> Option<Window> {
+    let (w, h) = (f64::from(size.0), f64::from(size.1));
     let (u0, u1) = ((center[0] - half[0]).round().max(0.0), (center[0] + half[0]).round().min(w - 1.0));
     let (v0, v1) = ((center[1] - half[1]).round().max(0.0), (center[1] + half[1]).round().min(h - 1.0));
     (u0 <= u1 && v0 <= v1).then_some(Window { u0: u0 as u32, v0: v0 as u32, u1: u1 as u32, v1: v1 as u32 })

@@ -8,8 +8,9 @@ use super::shape::Shape;
 use super::window_search::{Component, Level, WindowSearch};
 use super::{TrackedDot, TrackerConfig, distance};
 use crate::error::{Error, Short, fixed_or_short};
-use crate::vision::dots::{DIGITISATION_SLACK, Window};
+use crate::vision::dots::DIGITISATION_SLACK;
 use crate::vision::error::{Result, VisionError};
+use crate::vision::image::Window;
 use crate::vision::image::{GreyBuffer, Pixels};
 
 /// Grey levels by which a dot must stand out from its background.

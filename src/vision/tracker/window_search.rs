@@ -5,7 +5,7 @@
 //! from call to call: a search allocates nothing once they have reached the largest window.
 //! Pixel `(u, v)` covers `[u - 0.5, u + 0.5] x [v - 0.5, v + 0.5]` (OpenCV's convention).
 
-use crate::vision::dots::Window;
+use crate::vision::image::Window;
 use crate::vision::image::{GreyBuffer, Pixels};
 
 /// Pixels added around a component's bounding box for its weighted centroid (as
