@@ -123,6 +123,7 @@ pub(super) fn paint(image: &mut GreyImage, shape: &impl Shape, warp: &Warp, pain
     let (bg, fg) = (f64::from(paint.background), f64::from(paint.foreground));
     let width = image.width() as usize;
     let data: &mut [u8] = image;
+    paint.noise.warm((0..patch.h).map(|j| ((patch.v0 as usize + j) * width + patch.u0 as usize, patch.w)));
     let mut noise = paint.noise.reader();
     for (j, row) in coverage.chunks_exact(patch.w).enumerate() {
         let start = (patch.v0 as usize + j) * width + patch.u0 as usize;
@@ -161,27 +162,27 @@ fn pixel_coverage(shape: &impl Shape, ideal: [f64; 2], local: Option<&Local>) ->
     } else if far && value > 0.0 {
         0.0
     } else {
-        match local {
-            Some(local) => supersampled(shape, local),
-            None => supersampled(shape, &Local { ideal, jacobian: nalgebra::Matrix2::identity() }),
-        }
+        let identity = Local { ideal, jacobian: nalgebra::Matrix2::identity() };
+        counted_from(shape, local.unwrap_or(&identity), value, [gradient.x, gradient.y])
     }
-}
-
-fn supersampled(shape: &impl Shape, local: &Local) -> f32 {
-    let step = 1.0 / SUBSAMPLES as f64;
-    if let Some(side) = one_side(shape, local, 0.5 - 0.5 * step) {
-        return side;
-    }
-    counted(shape, local)
 }
 
 /// The share of the pixel's `SUBSAMPLES x SUBSAMPLES` samples inside the shape: the count of
 /// every sample evaluated. A quadratic shape counts them from its expansion about the pixel
 /// ([`SampleQuadratic`]); a sample it cannot decide, or another shape, evaluates every one.
+#[cfg(test)]
 fn counted(shape: &impl Shape, local: &Local) -> f32 {
-    let inside =
-        SampleQuadratic::of(shape, local).and_then(|q| q.count()).unwrap_or_else(|| every_sample(shape, local));
+    let [u, v] = local.ideal;
+    let g = local.jacobian.transpose() * shape.gradient(u, v);
+    counted_from(shape, local, shape.value(u, v), [g.x, g.y])
+}
+
+/// [`counted`] given the shape's value at the pixel and its gradient in sample offsets
+/// (`J^T gradient`), as the far test computed them.
+fn counted_from(shape: &impl Shape, local: &Local, value: f64, gradient: [f64; 2]) -> f32 {
+    let inside = SampleQuadratic::of(shape, local, value, gradient)
+        .and_then(|q| q.one_side().or_else(|| q.count()))
+        .unwrap_or_else(|| every_sample(shape, local));
     inside as f32 / (SUBSAMPLES * SUBSAMPLES) as f32
 }
 
@@ -207,8 +208,9 @@ fn every_sample(shape: &impl Shape, local: &Local) -> usize {
 /// `(g_s, g_t) = J^T gradient(p)` and `[a, b; b, c] = J^T A J` (`A` of
 /// [`Shape::second_order`]). Evaluated in floating point, each sample's value is off by a few
 /// 1e-16 of the size of the terms ([`Shape::quadratic_scale`]); `margin`, 1e-9 of it (as in
-/// [`one_side`]), decides every sample farther than that from the boundary as its own
-/// evaluation does. All 64 in straight-line arithmetic, without a branch a sample.
+/// [`Shape::quadratic_scale`] at the pixel's farthest sample), decides every sample farther
+/// than that from the boundary as its own evaluation does. All 64 in straight-line
+/// arithmetic, without a branch a sample.
 struct SampleQuadratic {
     value: f64,
     gradient: [f64; 2],
@@ -218,17 +220,34 @@ struct SampleQuadratic {
 }
 
 impl SampleQuadratic {
-    /// None for a shape that is not a quadratic.
-    fn of(shape: &impl Shape, local: &Local) -> Option<Self> {
+    /// From the shape's `value` at the pixel and its `gradient` in sample offsets; None for a
+    /// shape that is not a quadratic.
+    fn of(shape: &impl Shape, local: &Local, value: f64, gradient: [f64; 2]) -> Option<Self> {
         let (j, [u, v]) = (&local.jacobian, local.ideal);
         let (du, dv) = (0.5 * (j[(0, 0)].abs() + j[(0, 1)].abs()), 0.5 * (j[(1, 0)].abs() + j[(1, 1)].abs()));
         let margin = 1e-9 * shape.quadratic_scale(u.abs() + du + 1.0, v.abs() + dv + 1.0)?;
         let [a, b, c] = shape.second_order();
-        let g = shape.gradient(u, v);
         let (s, t) = ([j[(0, 0)], j[(1, 0)]], [j[(0, 1)], j[(1, 1)]]);
         let form = |x: [f64; 2], y: [f64; 2]| a * x[0] * y[0] + b * (x[0] * y[1] + x[1] * y[0]) + c * x[1] * y[1];
-        let gradient = [g.x * s[0] + g.y * s[1], g.x * t[0] + g.y * t[1]];
-        Some(Self { value: shape.value(u, v), gradient, second: [form(s, s), form(s, t), form(t, t)], margin })
+        Some(Self { value, gradient, second: [form(s, s), form(s, t), form(t, t)], margin })
+    }
+
+    /// All the samples (or none) when every one is certainly inside (outside): the expansion's
+    /// terms bounded over the pixel's samples (`|s|, |t| <= 7/16`) keep the value from zero.
+    /// None otherwise (then [`SampleQuadratic::count`]).
+    fn one_side(&self) -> Option<usize> {
+        let ([gs, gt], [a, b, c], m) = (self.gradient, self.second, self.margin);
+        let h = sample_offset(SUBSAMPLES - 1);
+        let spread = (gs.abs() + gt.abs()) * h + (a.abs() + 2.0 * b.abs() + c.abs()) * h * h;
+        if !(self.value.is_finite() && spread.is_finite() && m.is_finite()) {
+            None
+        } else if self.value - spread > m {
+            Some(0)
+        } else if self.value + spread < -m {
+            Some(SUBSAMPLES * SUBSAMPLES)
+        } else {
+            None
+        }
     }
 
     /// The samples inside, or None when one lies within the margin of the boundary (or a
@@ -246,32 +265,6 @@ impl SampleQuadratic {
             }
         }
         (!unsure && m.is_finite()).then_some(inside)
-    }
-}
-
-/// For a quadratic shape, 1 when every sample of the pixel is certainly inside, 0 when every
-/// one is certainly outside (what counting them gives), None otherwise. The samples are
-/// `p + d` with `d = J (du, dv)`, `|du|, |dv| <= h`. Exactly, `value(p + d)` is `value(p) +
-/// g . d + d^T A d`, with `|g . d|` at most `|g_u| du_max + |g_v| dv_max` and `|d^T A d|` at
-/// most `|a| du_max^2 + 2 |b| du_max dv_max + |c| dv_max^2`; the margin, `1e-9` times the
-/// size of the terms, covers the rounding of each sample's evaluation (a few 1e-16 of it)
-/// many times over.
-fn one_side(shape: &impl Shape, local: &Local, h: f64) -> Option<f32> {
-    let (j, [u, v]) = (&local.jacobian, local.ideal);
-    let (du, dv) = (h * (j[(0, 0)].abs() + j[(0, 1)].abs()), h * (j[(1, 0)].abs() + j[(1, 1)].abs()));
-    let scale = shape.quadratic_scale(u.abs() + du + 1.0, v.abs() + dv + 1.0)?;
-    let [a, b, c] = shape.second_order();
-    let g = shape.gradient(u, v);
-    let spread = g.x.abs() * du + g.y.abs() * dv + a.abs() * du * du + 2.0 * b.abs() * du * dv + c.abs() * dv * dv;
-    let (value, margin) = (shape.value(u, v), 1e-9 * scale);
-    if !(value.is_finite() && spread.is_finite() && margin.is_finite()) {
-        None
-    } else if value - spread > margin {
-        Some(0.0)
-    } else if value + spread < -margin {
-        Some(1.0)
-    } else {
-        None
     }
 }
 
@@ -383,10 +376,10 @@ mod tests {
         inside as f32 / (n * n) as f32
     }
 
-    /// The shortcuts (a pixel on one side, the rows' quadratics) give the count of every
-    /// sample evaluated, exactly, on ellipses of any size, scale and orientation.
+    /// The expansion about the pixel gives the count of every sample evaluated, exactly, on
+    /// ellipses of any size, scale and orientation.
     #[test]
-    fn the_one_side_shortcut_gives_the_count_of_the_samples() {
+    fn the_expansion_gives_the_count_of_the_samples() {
         use crate::vision::render::conic::ImageEllipse;
         use nalgebra::{Matrix2, Matrix3};
         let mut state = 17u64;
@@ -415,17 +408,21 @@ mod tests {
                 let local = Local { ideal, jacobian };
                 let full = every_sample(&ellipse, &local);
                 assert_eq!(counted(&ellipse, &local), full, "{ideal:?}");
-                assert_eq!(supersampled(&ellipse, &local), full, "{ideal:?}");
                 pixels += 1;
-                shortcuts += usize::from(one_side(&ellipse, &local, 0.5 - 0.5 / SUBSAMPLES as f64).is_some());
+                let [u, v] = ideal;
+                let g = jacobian.transpose() * ellipse.gradient(u, v);
+                let expansion = SampleQuadratic::of(&ellipse, &local, ellipse.value(u, v), [g.x, g.y]).unwrap();
+                assert!(expansion.one_side().is_none_or(|side| side == expansion.count().unwrap()), "{ideal:?}");
+                shortcuts += usize::from(expansion.count().is_some());
             }
         }
-        // The shortcut is taken (it is what saves the time).
-        assert!(shortcuts > pixels / 2, "{shortcuts} of {pixels}");
+        // The expansion decides (it is what saves the time): every pixel but those with a
+        // sample within 1e-9 of the boundary.
+        assert!(shortcuts > pixels * 99 / 100, "{shortcuts} of {pixels}");
     }
 
     /// Samples exactly on the boundary (a circle through samples of the pixel) are inside, as
-    /// when each sample is evaluated: the rows' quadratics leave them to the exact evaluation.
+    /// when each sample is evaluated: the expansion leaves them to the exact evaluation.
     #[test]
     fn samples_on_the_boundary_are_counted_as_each_sample_evaluated() {
         use crate::vision::render::conic::ImageEllipse;
