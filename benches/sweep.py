@@ -6,6 +6,7 @@ How to run (from the repository root, with the package installed)::
     python benches/sweep.py                  # about two minutes
     python benches/sweep.py --quick          # fewer runs and rounds
     python benches/sweep.py --json out.json  # also write the numbers as JSON
+    python benches/sweep.py --baseline DIR   # also the vision sweep against another build (below)
 
 The sweep is the one of the performance page: ``lens-12-6`` with ``focal_error`` on a grid
 and ``roll_deg`` drawn uniformly (``--runs`` runs in all). Its peer is
@@ -30,14 +31,21 @@ The vision sweep: ``vision-12-6`` (images rendered, dots tracked in the loop) wi
 and one iteration split into render + track (the vision run's iteration time less the same
 scenario's without ``[vision]``), track (``DotTracker.track`` on a frame) and the rest (law,
 world). It checks first that the sweep's rows equal the single runs'.
+
+``--baseline DIR`` also times the vision sweep (8 runs) against another build, importable with
+``PYTHONPATH=DIR`` (for example the wheel of an older commit installed with ``pip install
+--target DIR``): each build runs it in a process of its own on one thread, the two
+alternating for three rounds, and each prints its CPU time, iterations and a digest of its rows.
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 from typing import Any, Callable
@@ -213,13 +221,62 @@ def vision_sweep(args: argparse.Namespace, results: dict[str, Any]) -> None:
     }
 
 
+def child_sweep() -> None:
+    """The vision sweep of ``--baseline``, in this process's build (an older build spells
+    ``run_sweep`` and its table otherwise): its CPU time, iterations and a digest of its rows,
+    as one line of JSON."""
+    run = vsinv.sim.run_sweep if hasattr(vsinv, "sim") else getattr(vsinv, "run_sweep")
+    c0 = time.process_time()
+    result = run(VISION, {"focal_error": np.linspace(-0.3, 0.6, 8)}, seed=3, threads=1, progress=False)
+    cpu = time.process_time() - c0
+    table = result.columns if hasattr(result, "columns") else result.table
+    rows = [[int(x) for x in table["iterations"]], [str(x) for x in table["status"]],
+            [float(x) for x in table["final_translation_error"]]]
+    digest = hashlib.sha1(json.dumps(rows).encode()).hexdigest()[:12]
+    print(json.dumps({"cpu_s": cpu, "iterations": sum(rows[0]), "digest": digest}))
+
+
+def vision_builds(args: argparse.Namespace, results: dict[str, Any]) -> None:
+    """The vision sweep (8 runs) in this build and in ``--baseline``'s, each in a process of
+    its own on one thread, alternating for 3 rounds: CPU time a sweep and its rows' digest."""
+    rounds: dict[str, list[dict[str, Any]]] = {"this build": [], "baseline": []}
+    load_before = os.getloadavg()
+    for _ in range(3):
+        for name, path in (("baseline", args.baseline), ("this build", None)):
+            env = dict(os.environ, RAYON_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
+            if path:
+                env["PYTHONPATH"] = path
+            out = subprocess.run([sys.executable, __file__, "--child-sweep"], env=env, capture_output=True,
+                                 text=True, check=True, timeout=600)
+            rounds[name].append(json.loads(out.stdout.strip().splitlines()[-1]))
+    load_after = os.getloadavg()
+    print(f"\nvision sweep against {args.baseline} (8 runs of {VISION}, 3 alternating rounds, one process a "
+          f"round; load average {load_before[0]:.1f} before, {load_after[0]:.1f} after):")
+    for name, runs in rounds.items():
+        print(f"  {name:10s} CPU a sweep " + " / ".join(f"{r['cpu_s']:.3f}" for r in runs) + " s, "
+              f"{runs[0]['iterations']} iterations, rows {runs[0]['digest']}")
+    ratios = [b["cpu_s"] / t["cpu_s"] for b, t in zip(rounds["baseline"], rounds["this build"])]
+    summed = sum(r["cpu_s"] for r in rounds["baseline"]) / sum(r["cpu_s"] for r in rounds["this build"])
+    print("  baseline / this build: " + ", ".join(f"{r:.2f}x" for r in ratios) + f"; {summed:.2f}x summed")
+    results["vision_builds"] = {"rounds": rounds, "ratios": ratios, "summed": summed,
+                                "load_before": load_before, "load_after": load_after}
+
+
 def main(argv: list[str] | None = None) -> int:
+    if argv is None and sys.argv[1:] == ["--child-sweep"]:
+        child_sweep()
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="1000 runs, 3 rounds; 4 vision runs")
     parser.add_argument("--runs", type=int, default=None, help="runs per call (default 2000; quick 1000)")
     parser.add_argument("--json", metavar="PATH", help="also write the results to PATH as JSON")
+    parser.add_argument("--baseline", metavar="PYTHONPATH",
+                        help="also the vision sweep against the build importable from PYTHONPATH (e.g. an older "
+                             "wheel installed with pip install --target), alternating")
     args = parser.parse_args(argv)
     results: dict[str, Any] = {}
+    if args.baseline:
+        vision_builds(args, results)
     batch_and_sweep(args, results)
     vision_sweep(args, results)
     if args.json:
