@@ -229,11 +229,11 @@ def child_sweep() -> None:
     c0 = time.process_time()
     result = run(VISION, {"focal_error": np.linspace(-0.3, 0.6, 8)}, seed=3, threads=1, progress=False)
     cpu = time.process_time() - c0
-    table = result.columns if hasattr(result, "columns") else result.table
-    rows = [[int(x) for x in table["iterations"]], [str(x) for x in table["status"]],
-            [float(x) for x in table["final_translation_error"]]]
+    table = result.columns if hasattr(result, "columns") else getattr(result, "table")
+    iterations = [int(x) for x in table["iterations"]]
+    rows = [iterations, [str(x) for x in table["status"]], [float(x) for x in table["final_translation_error"]]]
     digest = hashlib.sha1(json.dumps(rows).encode()).hexdigest()[:12]
-    print(json.dumps({"cpu_s": cpu, "iterations": sum(rows[0]), "digest": digest}))
+    print(json.dumps({"cpu_s": cpu, "iterations": sum(iterations), "digest": digest}))
 
 
 def vision_builds(args: argparse.Namespace, results: dict[str, Any]) -> None:
@@ -256,7 +256,7 @@ def vision_builds(args: argparse.Namespace, results: dict[str, Any]) -> None:
         print(f"  {name:10s} CPU a sweep " + " / ".join(f"{r['cpu_s']:.3f}" for r in runs) + " s, "
               f"{runs[0]['iterations']} iterations, rows {runs[0]['digest']}")
     ratios = [b["cpu_s"] / t["cpu_s"] for b, t in zip(rounds["baseline"], rounds["this build"])]
-    summed = sum(r["cpu_s"] for r in rounds["baseline"]) / sum(r["cpu_s"] for r in rounds["this build"])
+    summed = sum(float(r["cpu_s"]) for r in rounds["baseline"]) / sum(float(r["cpu_s"]) for r in rounds["this build"])
     print("  baseline / this build: " + ", ".join(f"{r:.2f}x" for r in ratios) + f"; {summed:.2f}x summed")
     results["vision_builds"] = {"rounds": rounds, "ratios": ratios, "summed": summed,
                                 "load_before": load_before, "load_after": load_after}
