@@ -195,10 +195,16 @@ impl<'f> SeenFace<'f> {
         Some(Self { face, from_image, depth: to_camera.row(2).transpose(), bbox: image.bbox() })
     }
 
+    /// The plane point of ideal pixel `p`, and the homogeneous weight it was divided by
+    /// (positive in front of the camera).
+    fn plane_point(&self, p: [f64; 2]) -> (Vector2<f64>, f64) {
+        let x = self.from_image * Vector3::new(p[0], p[1], 1.0);
+        (Vector2::new(x.x / x.z, x.y / x.z), x.z)
+    }
+
     /// Plane coordinates and depth of ideal pixel `p`, if it falls inside the face.
     fn hit(&self, p: [f64; 2]) -> Option<(Vector2<f64>, f64)> {
-        let x = self.from_image * Vector3::new(p[0], p[1], 1.0);
-        let q = Vector2::new(x.x / x.z, x.y / x.z);
+        let (q, _) = self.plane_point(p);
         let n = self.face.outline.len();
         for i in 0..n {
             let (a, b) = (self.face.outline[i], self.face.outline[(i + 1) % n]);
@@ -306,23 +312,88 @@ fn pixel_samples(seen: &[&SeenFace], local: &super::lens::Local) -> (f64, f64) {
     let scale = seen.iter().map(|s| s.scale(local.ideal)).fold(0.0, f64::max)
         * local.jacobian.column(0).norm().max(local.jacobian.column(1).norm());
     let n = ((4.0 * scale).ceil() as usize).clamp(MIN_SAMPLES, MAX_SAMPLES);
+    match sole_face(seen, local) {
+        // Every sample on that face, nearest: the same sums without the other faces' tests.
+        Some(face) => {
+            let sum = samples(local, n).map(|p| face.grey(face.plane_point(p).0)).sum::<f64>();
+            (1.0, sum / (n * n) as f64)
+        }
+        None => each_sample(seen, local, n),
+    }
+}
+
+/// The `n x n` samples of the pixel (ideal pixels), row by row.
+fn samples(local: &super::lens::Local, n: usize) -> impl Iterator<Item = [f64; 2]> + '_ {
+    (0..n * n).map(move |k| {
+        let d = Vector2::new(((k % n) as f64 + 0.5) / n as f64 - 0.5, ((k / n) as f64 + 0.5) / n as f64 - 0.5);
+        let p = Vector2::from(local.ideal) + local.jacobian * d;
+        [p.x, p.y]
+    })
+}
+
+/// [`pixel_samples`] with each sample on its nearest face, every face tested.
+fn each_sample(seen: &[&SeenFace], local: &super::lens::Local, n: usize) -> (f64, f64) {
     let (mut hits, mut sum) = (0usize, 0.0);
-    for a in 0..n {
-        for b in 0..n {
-            let d = Vector2::new((b as f64 + 0.5) / n as f64 - 0.5, (a as f64 + 0.5) / n as f64 - 0.5);
-            let p = Vector2::from(local.ideal) + local.jacobian * d;
-            let nearest = seen
-                .iter()
-                .filter_map(|s| s.hit([p.x, p.y]).map(|(q, z)| (s, q, z)))
-                .min_by(|x, y| x.2.total_cmp(&y.2));
-            if let Some((s, q, _)) = nearest {
-                hits += 1;
-                sum += s.grey(q);
-            }
+    for p in samples(local, n) {
+        let nearest = seen.iter().filter_map(|s| s.hit(p).map(|(q, z)| (s, q, z))).min_by(|x, y| x.2.total_cmp(&y.2));
+        if let Some((s, q, _)) = nearest {
+            hits += 1;
+            sum += s.grey(q);
         }
     }
     let total = (n * n) as f64;
     (hits as f64 / total, sum / total)
+}
+
+/// The face every sample of the pixel falls on, in front of every other face there: the
+/// pixel's square (through the lens's local map) inside it, and each other face that may meet
+/// the pixel either missing the whole square or behind the face over all of it. `None` when
+/// that is not certain (by margins far above the rounding), and the samples are tested face by
+/// face.
+///
+/// A face's outline is convex and the square's image in its plane too (a projective map in
+/// front of the camera), so four corners inside an outline put every sample inside, and four
+/// corners beyond one of its edges put every sample beyond; the inverse depth of a plane is
+/// affine in the image, so a face's depths over the square lie between those at its corners.
+fn sole_face<'a>(seen: &[&'a SeenFace<'_>], local: &super::lens::Local) -> Option<&'a SeenFace<'a>> {
+    let corners = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]].map(|[du, dv]| {
+        let p = Vector2::from(local.ideal) + local.jacobian * Vector2::new(du, dv);
+        [p.x, p.y]
+    });
+    // Per face: its corners' plane points and depths, or None (a corner beyond the horizon).
+    let mapped = |s: &SeenFace| -> Option<[(Vector2<f64>, f64); 4]> {
+        let points = corners.map(|c| s.plane_point(c));
+        points
+            .iter()
+            .all(|(q, w)| *w > 0.0 && q.x.is_finite() && q.y.is_finite())
+            .then(|| points.map(|(q, _)| (q, s.depth.dot(&Vector3::new(q.x, q.y, 1.0)))))
+    };
+    // How far inside edge i of a face a plane point is, and the margin of that test.
+    let side = |s: &SeenFace, i: usize, q: Vector2<f64>| {
+        let n = s.face.outline.len();
+        let (a, b) = (s.face.outline[i], s.face.outline[(i + 1) % n]);
+        ((b - a).perp(&(q - a)), 1e-7 * (b - a).norm() * (q.norm() + a.norm() + 1.0))
+    };
+    // The nearest of the faces that hold the whole square (a tile over its box face: the tile).
+    let (front, farthest) = seen
+        .iter()
+        .filter_map(|s| {
+            let points = mapped(s)?;
+            let holds =
+                (0..s.face.outline.len()).all(|i| points.iter().all(|&(q, _)| side(s, i, q).0 > side(s, i, q).1));
+            holds.then(|| (*s, points.iter().map(|&(_, z)| z).fold(f64::NEG_INFINITY, f64::max)))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    for other in seen.iter().filter(|s| !std::ptr::eq(**s, front)) {
+        let points = mapped(other)?;
+        let misses = (0..other.face.outline.len())
+            .any(|i| points.iter().all(|&(q, _)| side(other, i, q).0 < -side(other, i, q).1));
+        let nearest = points.iter().map(|&(_, z)| z).fold(f64::INFINITY, f64::min);
+        if !(misses || nearest > farthest + 1e-9 * (farthest.abs() + 1.0)) {
+            return None;
+        }
+    }
+    Some(front)
 }
 
 #[cfg(test)]
@@ -330,6 +401,74 @@ fn pixel_samples(seen: &[&SeenFace], local: &super::lens::Local) -> (f64, f64) {
 mod tests {
     use super::super::noise::{Noise, quantised_pool};
     use super::*;
+
+    /// A cube of half side 0.05 m at the origin with a textured tile 1 mm out on each face
+    /// (as the markerless tests' box): the faces, each counter-clockwise about its outward
+    /// normal.
+    fn tiled_cube() -> Vec<TexturedFace> {
+        let tex = texture(37, 29);
+        let mut faces = Vec::new();
+        for k in 0..6 {
+            let mut n = [0.0; 3];
+            n[k % 3] = if k < 3 { 1.0 } else { -1.0 };
+            let n = Vector3::from(n);
+            let a = if k % 3 == 0 { Vector3::y() } else { Vector3::x() } * n.sum();
+            let b = n.cross(&a);
+            for (h, out) in [(0.05, 0.0), (0.04, 0.001)] {
+                let c = n * (0.05 + out);
+                let vertices = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                    .map(|(x, y)| (c + a * (h * x) + b * (h * y)).into())
+                    .to_vec();
+                let uv = vec![[-0.5, 28.5], [36.5, 28.5], [36.5, -0.5], [-0.5, -0.5]];
+                faces.push(TexturedFace::new(vertices, uv, tex.clone()).unwrap());
+            }
+        }
+        faces
+    }
+
+    /// A pixel wholly on one face, nearest, takes that face's samples alone: the same share
+    /// and sum as every sample tested on every face, bit for bit, over random views of the
+    /// tiled cube (the tiles' edges, the cube's edges and its silhouette among them).
+    #[test]
+    fn a_pixel_on_one_face_gives_what_testing_every_face_gives() {
+        let faces = tiled_cube();
+        let k = Intrinsics::new(120.0, 120.0, 32.0, 32.0, std::f64::consts::FRAC_PI_2).unwrap();
+        let mut state = 5u64;
+        let mut uniform = || (super::super::noise::splitmix64(&mut state) >> 11) as f64 / (1u64 << 53) as f64;
+        let (mut sole, mut pixels) = (0, 0);
+        for _ in 0..40 {
+            let direction = Vector3::new(uniform() - 0.5, uniform() - 0.5, uniform() - 0.5).normalize();
+            let eye = Point3::from(direction * (0.15 + 0.2 * uniform()));
+            let target = Point3::new(0.02 * (uniform() - 0.5), 0.02 * (uniform() - 0.5), 0.0);
+            let pose = Isometry3::face_towards(&eye, &target, &Vector3::new(uniform() - 0.5, 1.0, 0.3));
+            let seen: Vec<SeenFace> = faces.iter().filter_map(|f| SeenFace::of(f, &pose, &k, &Warp::Pinhole)).collect();
+            let near: Vec<&SeenFace> = seen.iter().collect();
+            for v in 0..64 {
+                for u in 0..64 {
+                    let local = Warp::Pinhole.local(f64::from(u), f64::from(v)).unwrap();
+                    for n in [MIN_SAMPLES, 7, MAX_SAMPLES] {
+                        let want = each_sample(&near, &local, n);
+                        if let Some(face) = sole_face(&near, &local) {
+                            let sum = samples(&local, n).map(|p| face.grey(face.plane_point(p).0)).sum::<f64>();
+                            assert_eq!((1.0, sum / (n * n) as f64), want, "pixel ({u}, {v}), {n} x {n} samples");
+                            sole += 1;
+                        }
+                        pixels += usize::from(want.0 > 0.0);
+                    }
+                    assert_eq!(
+                        pixel_samples(&near, &local),
+                        {
+                            let scale = near.iter().map(|s| s.scale(local.ideal)).fold(0.0, f64::max);
+                            each_sample(&near, &local, ((4.0 * scale).ceil() as usize).clamp(MIN_SAMPLES, MAX_SAMPLES))
+                        },
+                        "pixel ({u}, {v})"
+                    );
+                }
+            }
+        }
+        // Many pixels of the cube are wholly on one face (the others are tested face by face).
+        assert!(sole > pixels / 3 && sole < pixels, "{sole} of {pixels}");
+    }
 
     fn texture(w: u32, h: u32) -> Arc<GreyImage> {
         Arc::new(GreyImage::from_fn(w, h, |i, j| [((i * 37 + j * 91) % 251) as u8].into()))
