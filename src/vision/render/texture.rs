@@ -374,26 +374,34 @@ fn sole_face<'a>(seen: &[&'a SeenFace<'_>], local: &super::lens::Local) -> Optio
         let (a, b) = (s.face.outline[i], s.face.outline[(i + 1) % n]);
         ((b - a).perp(&(q - a)), 1e-7 * (b - a).norm() * (q.norm() + a.norm() + 1.0))
     };
-    // The nearest of the faces that hold the whole square (a tile over its box face: the tile).
-    let (front, farthest) = seen
-        .iter()
-        .filter_map(|s| {
-            let points = mapped(s)?;
-            let holds =
-                (0..s.face.outline.len()).all(|i| points.iter().all(|&(q, _)| side(s, i, q).0 > side(s, i, q).1));
-            holds.then(|| (*s, points.iter().map(|&(_, z)| z).fold(f64::NEG_INFINITY, f64::max)))
-        })
-        .min_by(|a, b| a.1.total_cmp(&b.1))?;
-    for other in seen.iter().filter(|s| !std::ptr::eq(**s, front)) {
-        let points = mapped(other)?;
-        let misses = (0..other.face.outline.len())
-            .any(|i| points.iter().all(|&(q, _)| side(other, i, q).0 < -side(other, i, q).1));
-        let nearest = points.iter().map(|&(_, z)| z).fold(f64::INFINITY, f64::min);
-        if !(misses || nearest > farthest + 1e-9 * (farthest.abs() + 1.0)) {
+    // One pass over the faces, each mapped once: the nearest of those that hold the whole
+    // square (a tile over its box face: the tile), and the two nearest depths among those
+    // that do not miss it (the front face's own among them).
+    let mut front: Option<(usize, f64)> = None;
+    let mut nearest = [(f64::INFINITY, usize::MAX); 2];
+    for (k, s) in seen.iter().enumerate() {
+        let points = mapped(s)?;
+        let (far, near) =
+            points.iter().fold((f64::NEG_INFINITY, f64::INFINITY), |(f, n), &(_, z)| (f.max(z), n.min(z)));
+        if !(far.is_finite() && near.is_finite()) {
             return None;
         }
+        let edges = 0..s.face.outline.len();
+        let beyond = |i: usize, sign: f64| points.iter().all(|&(q, _)| sign * side(s, i, q).0 > side(s, i, q).1);
+        if edges.clone().all(|i| beyond(i, 1.0)) && front.is_none_or(|(_, f)| far < f) {
+            front = Some((k, far));
+        }
+        if !edges.into_iter().any(|i| beyond(i, -1.0)) {
+            if near < nearest[0].0 {
+                nearest = [(near, k), nearest[0]];
+            } else if near < nearest[1].0 {
+                nearest[1] = (near, k);
+            }
+        }
     }
-    Some(front)
+    let (index, farthest) = front?;
+    let others = if nearest[0].1 == index { nearest[1].0 } else { nearest[0].0 };
+    (others > farthest + 1e-9 * (farthest.abs() + 1.0)).then(|| seen[index])
 }
 
 #[cfg(test)]
