@@ -156,6 +156,36 @@ struct Runs {
     area: Vec<u32>,
     above: Vec<Run>,
     here: Vec<Run>,
+    ends: Vec<usize>,
+}
+
+/// The ends (one past the last pixel) of the runs of equal pixels of `row`, in order, into
+/// `ends` (the last is the row's length). Eight pixels and the one after them at a time: a
+/// byte of `word ^ next` (the eight and the eight from the next pixel on) is not zero where a
+/// pixel differs from the one after it, so a row of long runs costs a test per eight pixels.
+fn run_ends(row: &[Pixel], ends: &mut Vec<usize>) {
+    ends.clear();
+    let mut i = 0;
+    while let Some(nine) = row.get(i..i + 9) {
+        let byte = |k: usize| nine[k] as u8;
+        let word = u64::from_le_bytes(std::array::from_fn(byte));
+        let next = u64::from_le_bytes(std::array::from_fn(|k| byte(k + 1)));
+        let mut differs = word ^ next;
+        while differs != 0 {
+            let k = differs.trailing_zeros() as usize / 8;
+            ends.push(i + k + 1);
+            differs &= !(0xff << (8 * k));
+        }
+        i += 8;
+    }
+    for j in i..row.len().saturating_sub(1) {
+        if row[j] != row[j + 1] {
+            ends.push(j + 1);
+        }
+    }
+    if !row.is_empty() {
+        ends.push(row.len());
+    }
 }
 
 impl Runs {
@@ -163,16 +193,16 @@ impl Runs {
     /// [`MIN_REGION_PIXELS`]: the runs of each row are joined to the overlapping runs of the
     /// same colour in the row above (union-find over runs, their areas summed at the roots).
     fn count_regions(&mut self, pixels: &[Pixel], width: usize) -> u64 {
-        let Self { parent, area, above, here } = self;
+        let Self { parent, area, above, here, ends } = self;
         parent.clear();
         area.clear();
         above.clear();
         for row in pixels.chunks_exact(width) {
             here.clear();
+            run_ends(row, ends);
             let mut start = 0;
-            while start < width {
+            for &end in ends.iter() {
                 let colour = row[start];
-                let end = row[start..].iter().position(|&p| p != colour).map_or(width, |n| start + n);
                 if colour != Pixel::Skip {
                     let id = parent.len() as u32;
                     parent.push(id);
@@ -321,6 +351,22 @@ mod tests {
         assert_eq!(count_regions(&[Pixel::Skip; 100], 10), 0);
         assert_eq!(count_regions(&[Pixel::Black; 100], 10), 1);
         assert_eq!(count_regions(&[Pixel::Black; 24], 6), 0);
+    }
+
+    #[test]
+    fn run_ends_are_where_a_pixel_differs_from_the_next() {
+        let mut rng = Rng(11);
+        let colours = [Pixel::Black, Pixel::White, Pixel::Skip];
+        let mut ends = Vec::new();
+        for length in [0, 1, 2, 8, 9, 16, 17, 40, 131] {
+            for run in [1, 3, 8, 20] {
+                let row: Vec<Pixel> = (0..length).map(|i| colours[(i / run + rng.below(2)) % 3]).collect();
+                run_ends(&row, &mut ends);
+                let mut expected: Vec<usize> = (1..length).filter(|&j| row[j] != row[j - 1]).collect();
+                expected.extend((length > 0).then_some(length));
+                assert_eq!(ends, expected, "length {length}, runs of {run}");
+            }
+        }
     }
 
     /// The old rule: every candidate measured, then per id the fewest bit errors and the best
