@@ -12,7 +12,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::vision::image::{GreyBuffer, Pixels};
-use crate::vision::own_sums::{Plane, own_sums};
+use crate::vision::own_sums::{Plane, background_sums, own_sums};
 use crate::vision::runs::{Component, Labelling, Run};
 
 /// Pixels added around a component's bounding box for its centroid.
@@ -62,30 +62,153 @@ pub fn weighted_centroid<C: Pixels>(
     dark: bool,
     fit: RingFit,
 ) -> Weighted {
-    let c: &Component = &labelling.components[index as usize];
-    let (w, h) = (image.width(), image.height());
-    let flip = if dark { 255u8 } else { 0 };
-    let levels = Levels { data: image.as_raw(), width: w as usize, flip };
-    let Ring { bbox, centre, plane, residual: ring_residual } = match fit {
-        RingFit::Near => Ring::fit(labelling, index, grow(c.bbox, MARGIN, w, h), &levels),
-        RingFit::Grown => grown_ring(labelling, index, c.bbox, w, h, &levels),
+    let dot = Dot::new(image, labelling, index, dark);
+    let ring = match fit {
+        RingFit::Near => dot.near_ring(),
+        RingFit::Grown => grown_ring(labelling, index, dot.component.bbox, dot.size, &dot.levels),
     };
-    let plane = Plane { coefficients: plane, centre };
-    let background = |u: u32, v: u32| plane.at(u, v);
-    // A background pixel counts only above the ring's noise: its anti-aliased edge share.
-    let floor = NOISE_FLOOR * ring_residual;
-    let (mut sum, mut su, mut sv, mut own) = (0.0, 0.0, 0.0, 0.0);
-    for v in bbox[1]..=bbox[3] {
-        visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
-            if owner == Owner::Other {
+    if dot.component.area < LANES_MIN_AREA {
+        return dot.weighted(&ring, dot.chained_sums(&ring));
+    }
+    let own = dot.own_sums(&ring);
+    dot.weighted(&ring, own.plus(dot.background_sums(&ring)))
+}
+
+/// The centroid of component `index` against its near ring when `keep_near(ring_residual,
+/// contrast)` of that measure holds, against its grown ring otherwise: [`weighted_centroid`]
+/// with the fit so chosen, bit for bit. A large dot's own pixels are summed first (its
+/// contrast), and its near ring's background only when the near ring is kept.
+pub fn near_or_grown_centroid<C: Pixels>(
+    image: &GreyBuffer<C>,
+    labelling: &Labelling,
+    index: u32,
+    dark: bool,
+    keep_near: impl FnOnce(f64, f64) -> bool,
+) -> Weighted {
+    let dot = Dot::new(image, labelling, index, dark);
+    if dot.component.area < LANES_MIN_AREA {
+        let near = weighted_centroid(image, labelling, index, dark, RingFit::Near);
+        return if keep_near(near.ring_residual, near.contrast) {
+            near
+        } else {
+            weighted_centroid(image, labelling, index, dark, RingFit::Grown)
+        };
+    }
+    let ring = dot.near_ring();
+    let own = dot.own_sums(&ring);
+    if keep_near(ring.residual, own.own / dot.component.area as f64) {
+        dot.weighted(&ring, own.plus(dot.background_sums(&ring)))
+    } else {
+        weighted_centroid(image, labelling, index, dark, RingFit::Grown)
+    }
+}
+
+/// The sums of a centroid: the weights, their moments in `u` and `v`, and the dot's own
+/// pixels' levels above the background.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    sum: f64,
+    su: f64,
+    sv: f64,
+    own: f64,
+}
+
+impl Sums {
+    fn plus(self, o: Sums) -> Sums {
+        Sums { sum: self.sum + o.sum, su: self.su + o.su, sv: self.sv + o.sv, own: self.own + o.own }
+    }
+}
+
+/// One component and the image it is measured in.
+struct Dot<'a> {
+    labelling: &'a Labelling,
+    index: u32,
+    component: &'a Component,
+    levels: Levels<'a>,
+    size: [u32; 2],
+}
+
+impl<'a> Dot<'a> {
+    fn new<C: Pixels>(image: &'a GreyBuffer<C>, labelling: &'a Labelling, index: u32, dark: bool) -> Self {
+        let flip = if dark { 255u8 } else { 0 };
+        let levels = Levels { data: image.as_raw(), width: image.width() as usize, flip };
+        let component = &labelling.components[index as usize];
+        Self { labelling, index, component, levels, size: [image.width(), image.height()] }
+    }
+
+    fn near_ring(&self) -> Ring {
+        let [w, h] = self.size;
+        Ring::fit(self.labelling, self.index, grow(self.component.bbox, MARGIN, w, h), &self.levels)
+    }
+
+    /// The centroid from the sums over `ring`'s box (the box's centre when nothing weighs).
+    fn weighted(&self, ring: &Ring, s: Sums) -> Weighted {
+        let [u0, v0, u1, v1] = self.component.bbox;
+        let centroid = if s.sum > 0.0 {
+            [s.su / s.sum, s.sv / s.sum]
+        } else {
+            [0.5 * f64::from(u0 + u1), 0.5 * f64::from(v0 + v1)]
+        };
+        Weighted { centroid, contrast: s.own / self.component.area as f64, ring_residual: ring.residual }
+    }
+
+    /// Calls `f(u0, u1, v, owner, pixels)` for the segments of each row of `ring`'s box that
+    /// are not another dot's.
+    fn visit(&self, ring: &Ring, mut f: impl FnMut(u32, u32, u32, Owner, &[u8])) {
+        let bbox = ring.bbox;
+        for v in bbox[1]..=bbox[3] {
+            visit_row(self.labelling, self.index, v, bbox[0], bbox[2], |u0, u1, owner| {
+                if owner != Owner::Other {
+                    f(u0, u1, v, owner, self.levels.run(u0, u1, v));
+                }
+            });
+        }
+    }
+
+    /// A large dot's own pixels ([`own_sums`]), a sum per run chained in the rows' order.
+    fn own_sums(&self, ring: &Ring) -> Sums {
+        let plane = Plane { coefficients: ring.plane, centre: ring.centre };
+        let mut s = Sums::default();
+        self.visit(ring, |u0, _, v, owner, segment| {
+            if owner == Owner::Own {
+                let [own, sum, su, sv] = own_sums(segment, self.levels.flip, u0, v, &plane);
+                s = s.plus(Sums { sum, su, sv, own });
+            }
+        });
+        s
+    }
+
+    /// A large dot's background above the noise floor ([`background_sums`]), a sum per loud
+    /// block chained in the rows' order (a quiet block weighs nothing).
+    fn background_sums(&self, ring: &Ring) -> Sums {
+        let plane = Plane { coefficients: ring.plane, centre: ring.centre };
+        let background = |u: u32, v: u32| plane.at(u, v);
+        let floor = NOISE_FLOOR * ring.residual;
+        let flip = self.levels.flip;
+        let mut s = Sums::default();
+        self.visit(ring, |u0, _, v, owner, segment| {
+            if owner != Owner::Background {
                 return;
             }
-            let line = &image.as_raw()[v as usize * w as usize..(v as usize + 1) * w as usize];
-            if owner == Owner::Own && c.area >= LANES_MIN_AREA {
-                let [a, b, d, e] = own_sums(&line[u0 as usize..u1 as usize], flip, u0, v, &plane);
-                (sum, su, sv, own) = (sum + b, su + d, sv + e, own + a);
-                return;
+            let quiet = |a: u32, b: u32| quiet_level(owner, a, b, v, &background, floor);
+            for (a, pixels, _) in loud_blocks(segment, u0, flip, quiet) {
+                let [sum, su, sv] = background_sums(pixels, flip, a, v, &plane, floor);
+                s = s.plus(Sums { sum, su, sv, own: 0.0 });
             }
+        });
+        s
+    }
+
+    /// A small dot's sums pixel by pixel, in one chain over the box's rows (its own pixels and
+    /// the background's as they come).
+    fn chained_sums(&self, ring: &Ring) -> Sums {
+        let plane = Plane { coefficients: ring.plane, centre: ring.centre };
+        let background = |u: u32, v: u32| plane.at(u, v);
+        // A background pixel counts only above the ring's noise: its anti-aliased edge share.
+        let floor = NOISE_FLOOR * ring.residual;
+        let flip = self.levels.flip;
+        let (mut sum, mut su, mut sv, mut own) = (0.0, 0.0, 0.0, 0.0);
+        self.visit(ring, |u0, u1, v, owner, segment| {
             // The sums in registers over the segment (captured ones live in memory).
             let (mut s, mut s_u, mut s_v, mut o) = (sum, su, sv, own);
             let mut add = |a: u32, pixels: &[u8], quiet: i16| {
@@ -113,7 +236,6 @@ pub fn weighted_centroid<C: Pixels>(
             };
             // A run of the dot's own pixels, or a short one, in one go; a long run of
             // background block by block (most blocks of a grown box are quiet).
-            let segment = &line[u0 as usize..u1 as usize];
             if owner == Owner::Own || segment.len() <= BLOCK {
                 add(u0, segment, quiet_level(owner, u0, u1, v, &background, floor));
             } else {
@@ -124,19 +246,15 @@ pub fn weighted_centroid<C: Pixels>(
             }
             (sum, su, sv, own) = (s, s_u, s_v, o);
         });
+        Sums { sum, su, sv, own }
     }
-    let centroid = if sum > 0.0 {
-        [su / sum, sv / sum]
-    } else {
-        [0.5 * f64::from(c.bbox[0] + c.bbox[2]), 0.5 * f64::from(c.bbox[1] + c.bbox[3])]
-    };
-    Weighted { centroid, contrast: own / c.area as f64, ring_residual }
 }
 
-/// Components of at least this many pixels (a disc 72 px across) sum their own pixels in
-/// [`LANES`](super::own_sums::LANES) interleaved partial sums ([`own_sums`]): one sum per pixel
-/// is a chain of additions, each waiting for the last (4 cycles a pixel), where independent
-/// lanes run side by side. Smaller dots keep the one chain, bit for bit as before.
+/// Components of at least this many pixels (a disc 72 px across) sum their own pixels and their
+/// background's in [`LANES`](super::own_sums::LANES) interleaved partial sums ([`own_sums`],
+/// [`background_sums`]): one sum per pixel is a chain of additions, each waiting for the last
+/// (4 cycles a pixel), where independent lanes run side by side. Smaller dots keep the one
+/// chain, bit for bit as before.
 const LANES_MIN_AREA: u64 = 4096;
 
 /// Pixels per block of [`loud_blocks`].
@@ -191,6 +309,14 @@ struct Levels<'a> {
     flip: u8,
 }
 
+impl Levels<'_> {
+    /// The bytes of columns `u0..u1` of row `v`.
+    fn run(&self, u0: u32, u1: u32, v: u32) -> &[u8] {
+        let first = v as usize * self.width;
+        &self.data[first + u0 as usize..first + u1 as usize]
+    }
+}
+
 /// A box around a dot and the background plane fitted to its border ring.
 #[derive(Debug, Clone, Copy)]
 struct Ring {
@@ -211,20 +337,21 @@ impl Ring {
 }
 
 /// [`RingFit::Grown`]: the plainest grown ring inside the image (an infinite residual when
-/// none is).
-fn grown_ring(labelling: &Labelling, index: u32, component: [u32; 4], w: u32, h: u32, levels: &Levels) -> Ring {
+/// none is); the first of the plainest when several are as plain.
+fn grown_ring(labelling: &Labelling, index: u32, component: [u32; 4], [w, h]: [u32; 2], levels: &Levels) -> Ring {
     let size = (component[2] - component[0]).max(component[3] - component[1]) + 1;
     let inside = |margin: u32| {
         component[0] >= margin && component[1] >= margin && component[2] + margin < w && component[3] + margin < h
     };
+    let margins = std::iter::successors(Some(2 * MARGIN), |m| m.checked_mul(2));
+    let boxes: Vec<[u32; 4]> =
+        margins.take_while(|&m| m <= 2 * size.max(MARGIN) && inside(m)).map(|m| grow(component, m, w, h)).collect();
     let mut best: Option<Ring> = None;
-    let mut margin = 2 * MARGIN;
-    while margin <= 2 * size.max(MARGIN) && inside(margin) {
-        let next = Ring::fit(labelling, index, grow(component, margin, w, h), levels);
-        if best.is_none_or(|b| next.residual < b.residual) {
-            best = Some(next);
+    for (bbox, (plane, residual)) in boxes.iter().zip(ring_planes(labelling, index, &boxes, levels)) {
+        if best.is_none_or(|b| residual < b.residual) {
+            let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
+            best = Some(Ring { bbox: *bbox, centre, plane, residual });
         }
-        margin *= 2;
     }
     best.unwrap_or_else(|| Ring {
         residual: f64::INFINITY,
@@ -260,32 +387,46 @@ fn visit_row(labelling: &Labelling, index: u32, v: u32, first: u32, last: u32, m
 /// are none).
 fn ring_plane(labelling: &Labelling, index: u32, bbox: [u32; 4], levels: &Levels) -> ([f64; 3], f64) {
     let mut sums = PlaneSums::new(bbox);
-    visit_ring(labelling, index, bbox, |u0, u1, v| {
-        let line = &levels.data[v as usize * levels.width..(v as usize + 1) * levels.width];
-        sums.add_run(u0, &line[u0 as usize..u1 as usize], v, levels.flip);
-    });
+    for v in bbox[1]..=bbox[3] {
+        visit_ring_row(labelling, index, bbox, v, |u0, u1| sums.add_run(u0, levels.run(u0, u1, v), v, levels.flip));
+    }
     sums.solve()
 }
 
-/// Calls `f(u0, u1, v)` for each run `u0..u1` of row `v` of background pixels of the border
-/// ring of `bbox` (its first and last rows, and its first and last columns between them).
-fn visit_ring(labelling: &Labelling, index: u32, bbox: [u32; 4], mut f: impl FnMut(u32, u32, u32)) {
-    for v in bbox[1]..=bbox[3] {
-        let whole_row = v == bbox[1] || v == bbox[3];
+/// [`ring_plane`] of each of `boxes`, each box inside the next (the grown rings of one dot): one
+/// pass over the rows of the last, each row's runs read once for every ring crossing it (the
+/// sums are whole numbers: the same whatever the order of the pixels, see [`PlaneSums`]).
+fn ring_planes(labelling: &Labelling, index: u32, boxes: &[[u32; 4]], levels: &Levels) -> Vec<([f64; 3], f64)> {
+    let mut sums: Vec<PlaneSums> = boxes.iter().map(|&bbox| PlaneSums::new(bbox)).collect();
+    let Some(outer) = boxes.last() else { return Vec::new() };
+    for v in outer[1]..=outer[3] {
+        for (&bbox, sums) in boxes.iter().zip(&mut sums).filter(|(b, _)| (b[1]..=b[3]).contains(&v)) {
+            visit_ring_row(labelling, index, bbox, v, |u0, u1| sums.add_run(u0, levels.run(u0, u1, v), v, levels.flip));
+        }
+    }
+    sums.iter().map(PlaneSums::solve).collect()
+}
+
+/// Calls `f(u0, u1)` for each run `u0..u1` of background pixels of row `v` (inside `bbox`) on
+/// the border ring of `bbox` (its first and last rows, and its first and last columns between
+/// them). Between the first and last rows only the two columns are looked up (a search in the
+/// row's runs each), not the row's runs across the box: a grown ring's box is many times the
+/// dot's.
+fn visit_ring_row(labelling: &Labelling, index: u32, bbox: [u32; 4], v: u32, mut f: impl FnMut(u32, u32)) {
+    if v == bbox[1] || v == bbox[3] {
         visit_row(labelling, index, v, bbox[0], bbox[2], |u0, u1, owner| {
-            if owner != Owner::Background {
-                return;
-            }
-            if whole_row {
-                f(u0, u1, v);
-            } else {
-                for u in [bbox[0], bbox[2]] {
-                    if (u0..u1).contains(&u) {
-                        f(u, u + 1, v);
-                    }
-                }
+            if owner == Owner::Background {
+                f(u0, u1);
             }
         });
+        return;
+    }
+    let (runs, _) = labelling.row(v);
+    for u in [bbox[0], bbox[2]] {
+        let covered = runs.get(runs.partition_point(|r| r.u1 <= u)).is_some_and(|r| r.u0 <= u);
+        if !covered {
+            f(u, u + 1);
+        }
     }
 }
 
@@ -362,8 +503,79 @@ impl PlaneSums {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ring_visits_the_background_pixels_of_its_border_in_order() {
+        // Blobs of every size on a 90 x 70 image, labelled; against each pixel of the ring
+        // looked up in the runs of its row (every run, not a search), rings of many boxes.
+        use crate::vision::background::TileThresholds;
+        use crate::vision::image::GreyImage;
+        use crate::vision::runs::label;
+        let image = GreyImage::from_fn(90, 70, |u, v| {
+            let (x, y) = (f64::from(u), f64::from(v));
+            let blob = (x * 0.37).sin() * (y * 0.23).cos() + 0.4 * (x * 0.11 + y * 0.17).sin();
+            ::image::Luma([if blob > 0.35 { 200 } else { 30 }])
+        });
+        let labelling = label(&image, &TileThresholds::uniform(&image, 100), false);
+        assert!(labelling.components.len() > 5, "{} components", labelling.components.len());
+        let covered = |u: u32, v: u32| labelling.row(v).0.iter().any(|r| (r.u0..r.u1).contains(&u));
+        for (k, bbox) in [[0u32, 0, 89, 69], [3, 4, 40, 30], [10, 10, 10, 40], [50, 2, 88, 3], [20, 33, 71, 33]]
+            .into_iter()
+            .enumerate()
+        {
+            let mut seen = Vec::new();
+            for v in bbox[1]..=bbox[3] {
+                visit_ring_row(&labelling, k as u32, bbox, v, |u0, u1| seen.extend((u0..u1).map(|u| (u, v))));
+            }
+            let mut expected = Vec::new();
+            for v in bbox[1]..=bbox[3] {
+                let columns: Vec<u32> =
+                    if v == bbox[1] || v == bbox[3] { (bbox[0]..=bbox[2]).collect() } else { vec![bbox[0], bbox[2]] };
+                expected.extend(columns.into_iter().filter(|&u| !covered(u, v)).map(|u| (u, v)));
+            }
+            assert_eq!(seen, expected, "{bbox:?}");
+        }
+    }
+
+    #[test]
+    fn the_near_or_grown_centroid_is_the_chosen_fits_bit_for_bit() {
+        // A large disc (lanes, its own pixels summed first) and a small one (one chain) on a
+        // sloped, textured background, each kept near and sent to the grown ring.
+        use crate::vision::background::TileThresholds;
+        use crate::vision::image::GreyImage;
+        use crate::vision::runs::label;
+        let image = GreyImage::from_fn(400, 300, |u, v| {
+            let (x, y) = (f64::from(u), f64::from(v));
+            let disc =
+                |cx: f64, cy: f64, r: f64| (r + 0.5 - ((x - cx).powi(2) + (y - cy).powi(2)).sqrt()).clamp(0.0, 1.0);
+            let inside = disc(150.0, 140.0, 60.0).max(disc(320.0, 90.0, 12.0));
+            let ground = 40.0 + 0.1 * x + 0.05 * y + f64::from((u * 7 + v * 13) % 5);
+            ::image::Luma([(ground + inside * 150.0).round() as u8])
+        });
+        let labelling = label(&image, &TileThresholds::uniform(&image, 120), false);
+        let areas: Vec<u64> = labelling.components.iter().map(|c| c.area).collect();
+        assert!(areas.iter().any(|&a| a >= LANES_MIN_AREA) && areas.iter().any(|&a| a < LANES_MIN_AREA), "{areas:?}");
+        for index in 0..labelling.components.len() as u32 {
+            for (keep, fit) in [(true, RingFit::Near), (false, RingFit::Grown)] {
+                let mut asked = None;
+                let chosen = near_or_grown_centroid(&image, &labelling, index, false, |residual, contrast| {
+                    asked = Some((residual, contrast));
+                    keep
+                });
+                assert_eq!(chosen, weighted_centroid(&image, &labelling, index, false, fit), "{index} {fit:?}");
+                // It decided on the near ring's own measure.
+                let near = weighted_centroid(&image, &labelling, index, false, RingFit::Near);
+                let (residual, contrast) = asked.unwrap();
+                assert_eq!(
+                    (residual.to_bits(), contrast.to_bits()),
+                    (near.ring_residual.to_bits(), near.contrast.to_bits())
+                );
+            }
+        }
+    }
 
     #[test]
     fn integer_plane_sums_are_the_float_sums_bit_for_bit() {

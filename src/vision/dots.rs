@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use crate::error::Error;
 use crate::vision::background::TileThresholds;
-use crate::vision::centroid::{MARGIN, RingFit, Weighted, weighted_centroid};
+use crate::vision::centroid::{MARGIN, near_or_grown_centroid};
 use crate::vision::error::{Result, VisionError};
 pub use crate::vision::image::Window;
 use crate::vision::image::{GreyBuffer, GreyImage, MAX_IMAGE_PIXELS, Pixels, check_image};
@@ -131,16 +131,12 @@ fn dots_of<C: Pixels>(image: &GreyBuffer<C>, config: &DetectConfig) -> Result<Ve
         .enumerate()
         .filter(|(_, c)| keeps_shape(c, config, whole))
         .filter_map(|(index, c)| {
-            let plain = |w: &Weighted| w.ring_residual <= config.max_ring_residual * w.contrast;
+            let plain = |residual: f64, contrast: f64| residual <= config.max_ring_residual * contrast;
             // A dot whose near surround is not plain (a shaded sphere's limb) is measured again
             // against a ring farther out, where its surround may be plain.
-            let near = weighted_centroid(image, &labelling, index as u32, dark, RingFit::Near);
-            let weighted = if plain(&near) || c.area < GROWN_MIN_AREA {
-                near
-            } else {
-                weighted_centroid(image, &labelling, index as u32, dark, RingFit::Grown)
-            };
-            let plain = plain(&weighted);
+            let keep_near = |residual, contrast| c.area < GROWN_MIN_AREA || plain(residual, contrast);
+            let weighted = near_or_grown_centroid(image, &labelling, index as u32, dark, keep_near);
+            let plain = plain(weighted.ring_residual, weighted.contrast);
             (weighted.contrast >= f64::from(config.min_contrast).max(f64::MIN_POSITIVE) && plain).then_some(Dot {
                 centroid: weighted.centroid,
                 area: c.area as f64,

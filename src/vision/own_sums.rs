@@ -1,8 +1,12 @@
-//! The sums of a dot's own pixels for its centroid ([`centroid`](super::centroid)), over one run
-//! of a large dot: per pixel `above = g - b(u, v)` (its level over the background plane) and
-//! `weight = max(above, 0)`, summed as `[above, weight, weight u, weight v]` in [`LANES`]
-//! interleaved partial sums (pixel `i` of the run into lane `i % LANES`), each lane summed
-//! left to right.
+//! The sums of a large dot's pixels for its centroid ([`centroid`](super::centroid)), over one
+//! run: per pixel `above = g - b(u, v)` (its level over the background plane) and
+//! - of the dot's own pixels ([`own_sums`]), `weight = max(above, 0)`, summed as
+//!   `[above, weight, weight u, weight v]`;
+//! - of the background ([`background_sums`]), `weight = above` above the noise floor (its
+//!   anti-aliased edge), 0 under it, summed as `[weight, weight u, weight v]`;
+//!
+//! in [`LANES`] interleaved partial sums (pixel `i` of the run into lane `i % LANES`), each lane
+//! summed left to right.
 //!
 //! Speed: on a processor with AVX2 the four lanes are the four `f64` of one 256-bit register,
 //! through `pulp`'s safe wrappers of the intrinsics (`pulp::x86::V3`, detected at run time: no
@@ -36,9 +40,22 @@ impl Plane {
 pub fn own_sums(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane) -> [f64; 4] {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(avx2::OwnSums { simd, segment, flip, u0, v, plane });
+        return simd.vectorize(avx2::OwnSums { simd, segment, flip, u0, v, plane, floor: None });
     }
-    reduce(scalar_lanes(segment, flip, u0, v, plane))
+    reduce(scalar_lanes(segment, flip, u0, v, plane, None))
+}
+
+/// `[sum, su, sv]` over a run of background pixels, `segment` starting at column `u0` of row
+/// `v`, levels `g ^ flip`, the pixels at most `floor` above the plane weighing nothing (see the
+/// module's documentation).
+pub fn background_sums(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane, floor: f64) -> [f64; 3] {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = pulp::x86::V3::try_new() {
+        let [_, sum, su, sv] = simd.vectorize(avx2::OwnSums { simd, segment, flip, u0, v, plane, floor: Some(floor) });
+        return [sum, su, sv];
+    }
+    let [_, sum, su, sv] = reduce(scalar_lanes(segment, flip, u0, v, plane, Some(floor)));
+    [sum, su, sv]
 }
 
 /// The four lanes' sums into one: `(l0 + l1) + (l2 + l3)`.
@@ -46,21 +63,40 @@ fn reduce(lanes: [[f64; LANES]; 4]) -> [f64; 4] {
     lanes.map(|l| (l[0] + l[1]) + (l[2] + l[3]))
 }
 
-/// The lanes pixel by pixel (the definition).
-fn scalar_lanes(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane) -> [[f64; LANES]; 4] {
+/// The lanes pixel by pixel (the definition): the own pixels' sums, or with a `floor` the
+/// background's.
+fn scalar_lanes(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane, floor: Option<f64>) -> [[f64; LANES]; 4] {
     let mut lanes = [[0.0f64; LANES]; 4];
-    add_pixels(&mut lanes, segment, flip, u0, v, plane);
+    add_pixels(&mut lanes, segment, flip, (u0, v), plane, floor);
     lanes
 }
 
-/// Adds pixels `segment` (from column `u0`, its first pixel in lane 0) to `lanes`.
+/// The weight of a pixel `above` the plane: its positive part for the dot's own pixels, itself
+/// above the background's noise `floor` and 0 under it (and for a NaN, as `f64::max`).
 #[inline(always)]
-fn add_pixels(lanes: &mut [[f64; LANES]; 4], segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane) {
+fn weight(above: f64, floor: Option<f64>) -> f64 {
+    match floor {
+        None => above.max(0.0),
+        Some(floor) if above > floor => above,
+        Some(_) => 0.0,
+    }
+}
+
+/// Adds pixels `segment` (from column `u0` of row `v`, its first pixel in lane 0) to `lanes`.
+#[inline(always)]
+fn add_pixels(
+    lanes: &mut [[f64; LANES]; 4],
+    segment: &[u8],
+    flip: u8,
+    (u0, v): (u32, u32),
+    plane: &Plane,
+    floor: Option<f64>,
+) {
     let fv = f64::from(v);
     for (i, &g) in segment.iter().enumerate() {
         let (lane, u) = (i % LANES, u0 + i as u32);
         let above = f64::from(g ^ flip) - plane.at(u, v);
-        let weight = above.max(0.0);
+        let weight = weight(above, floor);
         lanes[0][lane] += above;
         lanes[1][lane] += weight;
         lanes[2][lane] += weight * f64::from(u);
@@ -70,7 +106,7 @@ fn add_pixels(lanes: &mut [[f64; LANES]; 4], segment: &[u8], flip: u8, u0: u32, 
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use core::arch::x86_64::__m256d;
+    use core::arch::x86_64::{__m256d, _CMP_GT_OQ};
 
     use pulp::bytemuck::cast;
     use pulp::x86::V3;
@@ -85,6 +121,8 @@ mod avx2 {
         pub u0: u32,
         pub v: u32,
         pub plane: &'a Plane,
+        /// `None`: the dot's own pixels; `Some`: the background's, with its noise floor.
+        pub floor: Option<f64>,
     }
 
     impl pulp::NullaryFnOnce for OwnSums<'_> {
@@ -101,6 +139,7 @@ mod avx2 {
             let row = splat(bv * (f64::from(self.v) - plane.centre[1]));
             let fv = splat(f64::from(self.v));
             let zero = avx._mm256_setzero_pd();
+            let floor = self.floor.map(splat);
             let (mut own, mut sum, mut su, mut sv) = (zero, zero, zero, zero);
             let (chunks, tail) = self.segment.as_chunks::<LANES>();
             // Columns as f64 (whole numbers: the steps of 4 are exact); 4 levels widened to
@@ -115,8 +154,12 @@ mod avx2 {
                 let background =
                     avx._mm256_add_pd(avx._mm256_add_pd(a, avx._mm256_mul_pd(bu, avx._mm256_sub_pd(us, cu))), row);
                 let above = avx._mm256_sub_pd(g, background);
-                // max(above, 0): 0 for a NaN `above`, as f64::max.
-                let weight = avx._mm256_max_pd(above, zero);
+                // max(above, 0): 0 for a NaN `above`, as f64::max; above the floor: `above`
+                // where the (ordered) comparison holds, 0 elsewhere and for a NaN.
+                let weight = match floor {
+                    None => avx._mm256_max_pd(above, zero),
+                    Some(floor) => avx._mm256_and_pd(above, avx._mm256_cmp_pd::<_CMP_GT_OQ>(above, floor)),
+                };
                 own = avx._mm256_add_pd(own, above);
                 sum = avx._mm256_add_pd(sum, weight);
                 su = avx._mm256_add_pd(su, avx._mm256_mul_pd(weight, us));
@@ -125,7 +168,7 @@ mod avx2 {
             }
             let mut lanes: [[f64; LANES]; 4] = [cast(own), cast(sum), cast(su), cast(sv)];
             let u = self.u0 + (chunks.len() * LANES) as u32;
-            add_pixels(&mut lanes, tail, self.flip, u, self.v, plane);
+            add_pixels(&mut lanes, tail, self.flip, (u, self.v), plane, self.floor);
             reduce(lanes)
         }
     }
@@ -157,9 +200,14 @@ mod tests {
                     centre: [(next() % 4000) as f64 * 0.5, (next() % 3000) as f64 * 0.5],
                 };
                 let (u0, v) = ((next() % 3000) as u32, (next() % 2000) as u32);
-                let scalar = reduce(scalar_lanes(&segment, flip, u0, v, &plane));
+                let scalar = reduce(scalar_lanes(&segment, flip, u0, v, &plane, None));
                 let ours = own_sums(&segment, flip, u0, v, &plane);
                 assert_eq!(ours.map(f64::to_bits), scalar.map(f64::to_bits), "len {len} flip {flip}");
+                for floor in [0.0, 2.5, 40.0] {
+                    let [_, sum, su, sv] = reduce(scalar_lanes(&segment, flip, u0, v, &plane, Some(floor)));
+                    let ours = background_sums(&segment, flip, u0, v, &plane, floor);
+                    assert_eq!(ours.map(f64::to_bits), [sum, su, sv].map(f64::to_bits), "len {len} floor {floor}");
+                }
             }
         }
     }
@@ -174,5 +222,10 @@ mod tests {
         assert_eq!(sum, 20.0 + 2.0 + 190.0);
         assert_eq!(su, 20.0 * 100.0 + 2.0 * 103.0 + 190.0 * 104.0);
         assert_eq!(sv, 212.0 * 7.0);
+        // The background above a floor of 2: only 30 (20) and 200 (190) weigh; 12 (2) does not.
+        let [sum, su, sv] = background_sums(&segment, 0, 100, 7, &plane, 2.0);
+        assert_eq!(sum, 20.0 + 190.0);
+        assert_eq!(su, 20.0 * 100.0 + 190.0 * 104.0);
+        assert_eq!(sv, 210.0 * 7.0);
     }
 }
