@@ -259,21 +259,20 @@ fn crossing_and_width<C: Pixels>(
     reach: f64,
     (reversed, want_width): (bool, bool),
 ) -> Option<(f64, Option<f64>)> {
+    let ray = Ray::across(p, out, reach, reversed);
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(Crossing { image, p, out, reach, reversed, want_width });
+        return simd.vectorize(Crossing { image, ray, want_width });
     }
-    crossing_and_width_here(image, p, out, reach, (reversed, want_width))
+    crossing_in_profile(image, ray, want_width)
 }
 
-/// [`crossing_and_width`] compiled for AVX2 (its profile's arithmetic in four lanes).
+/// [`crossing_in_profile`] as a `pulp` operation, so that on a processor with AVX2 its
+/// arithmetic is compiled for it (four lanes).
 #[cfg(target_arch = "x86_64")]
 struct Crossing<'a, C: Pixels> {
     image: &'a GreyBuffer<C>,
-    p: P,
-    out: P,
-    reach: f64,
-    reversed: bool,
+    ray: Ray,
     want_width: bool,
 }
 
@@ -283,20 +282,16 @@ impl<C: Pixels> pulp::NullaryFnOnce for Crossing<'_, C> {
 
     #[inline(always)]
     fn call(self) -> Self::Output {
-        crossing_and_width_here(self.image, self.p, self.out, self.reach, (self.reversed, self.want_width))
+        crossing_in_profile(self.image, self.ray, self.want_width)
     }
 }
 
+/// [`crossing_and_width`] of the profile `ray` (`None` when its ends are not both inside the
+/// image).
 #[inline(always)]
-fn crossing_and_width_here<C: Pixels>(
-    image: &GreyBuffer<C>,
-    p: P,
-    out: P,
-    reach: f64,
-    (reversed, want_width): (bool, bool),
-) -> Option<(f64, Option<f64>)> {
-    let steps = (2.0 * reach / STEP).round() as usize;
-    let start = -(steps as f64) * STEP / 2.0;
+fn crossing_in_profile<C: Pixels>(image: &GreyBuffer<C>, ray: Ray, want_width: bool) -> Option<(f64, Option<f64>)> {
+    let Ray { p, out, start, samples, .. } = ray;
+    let steps = samples - 1;
     let at = |k: usize| {
         let o = start + STEP * k as f64;
         [p[0] + out[0] * o, p[1] + out[1] * o]
@@ -307,7 +302,7 @@ fn crossing_and_width_here<C: Pixels>(
         return None;
     }
     let mut profile = [0.0f64; PROFILE_SAMPLES];
-    read_profile(image, Ray { p, out, start, samples: steps + 1, reversed }, &mut profile)?;
+    read_profile(image, ray, &mut profile)?;
     let (black, white) = ((profile[0] + profile[1]) / 2.0, (profile[steps] + profile[steps - 1]) / 2.0);
     if white - black < MIN_CONTRAST {
         return None;
@@ -406,6 +401,14 @@ struct Ray {
     start: f64,
     samples: usize,
     reversed: bool,
+}
+
+impl Ray {
+    /// The profile through `p` along `out` reaching `reach` on each side, in half-pixel steps.
+    fn across(p: P, out: P, reach: f64, reversed: bool) -> Self {
+        let steps = (2.0 * reach / STEP).round() as usize;
+        Self { p, out, start: -(steps as f64) * STEP / 2.0, samples: steps + 1, reversed }
+    }
 }
 
 /// The grey levels of the ray's samples, each bilinear as [`sample`] reads it (the same
