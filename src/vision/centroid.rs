@@ -330,8 +330,12 @@ struct Ring {
 
 impl Ring {
     fn fit(labelling: &Labelling, index: u32, bbox: [u32; 4], levels: &Levels) -> Self {
+        Self::new(bbox, ring_plane(labelling, index, bbox, levels))
+    }
+
+    /// The ring of `bbox` with its fitted plane and residual.
+    fn new(bbox: [u32; 4], (plane, residual): ([f64; 3], f64)) -> Self {
         let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
-        let (plane, residual) = ring_plane(labelling, index, bbox, levels);
         Self { bbox, centre, plane, residual }
     }
 }
@@ -347,10 +351,9 @@ fn grown_ring(labelling: &Labelling, index: u32, component: [u32; 4], [w, h]: [u
     let boxes: Vec<[u32; 4]> =
         margins.take_while(|&m| m <= 2 * size.max(MARGIN) && inside(m)).map(|m| grow(component, m, w, h)).collect();
     let mut best: Option<Ring> = None;
-    for (bbox, (plane, residual)) in boxes.iter().zip(ring_planes(labelling, index, &boxes, levels)) {
-        if best.is_none_or(|b| residual < b.residual) {
-            let centre = [0.5 * f64::from(bbox[0] + bbox[2]), 0.5 * f64::from(bbox[1] + bbox[3])];
-            best = Some(Ring { bbox: *bbox, centre, plane, residual });
+    for (&bbox, fitted) in boxes.iter().zip(ring_planes(labelling, index, &boxes, levels)) {
+        if best.is_none_or(|b| fitted.1 < b.residual) {
+            best = Some(Ring::new(bbox, fitted));
         }
     }
     best.unwrap_or_else(|| Ring {
@@ -386,11 +389,9 @@ fn visit_row(labelling: &Labelling, index: u32, v: u32, first: u32, last: u32, m
 /// they do not fix a plane (fewer than three, or all on one line), their mean (and 0 when there
 /// are none).
 fn ring_plane(labelling: &Labelling, index: u32, bbox: [u32; 4], levels: &Levels) -> ([f64; 3], f64) {
-    let mut sums = PlaneSums::new(bbox);
-    for v in bbox[1]..=bbox[3] {
-        visit_ring_row(labelling, index, bbox, v, |u0, u1| sums.add_run(u0, levels.run(u0, u1, v), v, levels.flip));
-    }
-    sums.solve()
+    let planes = ring_planes(labelling, index, std::slice::from_ref(&bbox), levels);
+    // One box gives one plane (the fallback, a ring without pixels, is never taken).
+    planes.into_iter().next().unwrap_or_else(|| PlaneSums::new(bbox).solve())
 }
 
 /// [`ring_plane`] of each of `boxes`, each box inside the next (the grown rings of one dot): one
