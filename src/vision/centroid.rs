@@ -12,7 +12,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use crate::vision::image::{GreyBuffer, Pixels};
-use crate::vision::own_sums::{Plane, background_sums, own_sums};
+use crate::vision::own_sums::{Plane, background_sums, own_sums, weight};
 use crate::vision::runs::{Component, Labelling, Run};
 
 /// Pixels added around a component's bounding box for its centroid.
@@ -217,14 +217,10 @@ impl<'a> Dot<'a> {
                         continue;
                     }
                     let above = f64::from(g ^ flip) - background(u, v);
-                    let weight = if owner == Owner::Own {
+                    if owner == Owner::Own {
                         o += above;
-                        above.max(0.0)
-                    } else if above > floor {
-                        above
-                    } else {
-                        0.0
-                    };
+                    }
+                    let weight = weight(above, (owner == Owner::Background).then_some(floor));
                     // A weight of zero adds nothing (the sums stay bit for bit what they were):
                     // most of a grown box is background under the noise floor.
                     if weight != 0.0 {

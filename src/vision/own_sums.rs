@@ -40,7 +40,7 @@ impl Plane {
 pub fn own_sums(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane) -> [f64; 4] {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(avx2::OwnSums { simd, segment, flip, u0, v, plane, floor: None });
+        return simd.vectorize(avx2::LaneSums { simd, segment, flip, u0, v, plane, floor: None });
     }
     reduce(scalar_lanes(segment, flip, u0, v, plane, None))
 }
@@ -51,7 +51,7 @@ pub fn own_sums(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane) -> [f6
 pub fn background_sums(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane, floor: f64) -> [f64; 3] {
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        let [_, sum, su, sv] = simd.vectorize(avx2::OwnSums { simd, segment, flip, u0, v, plane, floor: Some(floor) });
+        let [_, sum, su, sv] = simd.vectorize(avx2::LaneSums { simd, segment, flip, u0, v, plane, floor: Some(floor) });
         return [sum, su, sv];
     }
     let [_, sum, su, sv] = reduce(scalar_lanes(segment, flip, u0, v, plane, Some(floor)));
@@ -71,10 +71,11 @@ fn scalar_lanes(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane, floor:
     lanes
 }
 
-/// The weight of a pixel `above` the plane: its positive part for the dot's own pixels, itself
-/// above the background's noise `floor` and 0 under it (and for a NaN, as `f64::max`).
+/// The weight of a pixel `above` the plane in a centroid: its positive part for the dot's own
+/// pixels (`floor` None), itself above the background's noise `floor` and 0 under it (and for a
+/// NaN, as `f64::max`).
 #[inline(always)]
-fn weight(above: f64, floor: Option<f64>) -> f64 {
+pub fn weight(above: f64, floor: Option<f64>) -> f64 {
     match floor {
         None => above.max(0.0),
         Some(floor) if above > floor => above,
@@ -113,8 +114,8 @@ mod avx2 {
 
     use super::{LANES, Plane, add_pixels, reduce};
 
-    /// [`own_sums`](super::own_sums) compiled for AVX2.
-    pub(super) struct OwnSums<'a> {
+    /// [`own_sums`](super::own_sums) and [`background_sums`](super::background_sums) compiled for AVX2.
+    pub(super) struct LaneSums<'a> {
         pub simd: V3,
         pub segment: &'a [u8],
         pub flip: u8,
@@ -125,7 +126,7 @@ mod avx2 {
         pub floor: Option<f64>,
     }
 
-    impl pulp::NullaryFnOnce for OwnSums<'_> {
+    impl pulp::NullaryFnOnce for LaneSums<'_> {
         type Output = [f64; 4];
 
         #[inline(always)]
