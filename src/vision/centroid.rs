@@ -78,7 +78,7 @@ pub fn weighted_centroid<C: Pixels>(
 /// contrast)` of that measure holds, against its grown ring otherwise: [`weighted_centroid`]
 /// with the fit so chosen, bit for bit. A large dot's own pixels are summed first (its
 /// contrast), and its near ring's background only when the near ring is kept.
-pub fn near_or_grown_centroid<C: Pixels>(
+pub(crate) fn near_or_grown_centroid<C: Pixels>(
     image: &GreyBuffer<C>,
     labelling: &Labelling,
     index: u32,

@@ -75,7 +75,7 @@ fn scalar_lanes(segment: &[u8], flip: u8, u0: u32, v: u32, plane: &Plane, floor:
 /// pixels (`floor` None), itself above the background's noise `floor` and 0 under it (and for a
 /// NaN, as `f64::max`).
 #[inline(always)]
-pub fn weight(above: f64, floor: Option<f64>) -> f64 {
+pub(crate) fn weight(above: f64, floor: Option<f64>) -> f64 {
     match floor {
         None => above.max(0.0),
         Some(floor) if above > floor => above,
