@@ -28,10 +28,13 @@
 //! do not support its corners is not reported (never reported with a wrong corner).
 
 mod budget;
+mod clusters;
+mod components;
 mod edge_search;
 mod edges;
 mod face;
 mod follow;
+mod level;
 mod pyramid;
 mod smoothed;
 
@@ -39,8 +42,7 @@ pub use self::budget::{MAX_MEASURED_CANDIDATES, MAX_SEARCHED_REGIONS, TagReport}
 pub use self::face::TagFace;
 
 use kornia_apriltag::family::TagFamilyKind;
-use kornia_apriltag::{AprilTagDecoder, DecodeTagsConfig};
-use kornia_image::{Image, ImageSize};
+use kornia_image::Image;
 
 pub use follow::TagFollower;
 
@@ -198,12 +200,12 @@ pub struct TagDecoder {
     family: TagFamily,
     /// `None`: chosen per image ([`automatic_decimation`]).
     decimation: Option<u32>,
-    /// One detector per level: the size it reads and its own decimation.
-    levels: Vec<(ImageSize, usize, AprilTagDecoder)>,
+    /// One search per level, for the size it reads and its own decimation.
+    levels: Vec<level::LevelSearch>,
     /// The image and its halves, as the levels read them.
     pyramid: pyramid::Pyramid,
-    /// The buffers of the regions' count (`budget.rs`).
-    counter: budget::RegionCounter,
+    /// The regions and clusters of the level searched.
+    scratch: level::Scratch,
 }
 
 /// AprilTag's own default decimation, for callers that fix one ([`TagDecoder::new`] chooses it
@@ -216,8 +218,7 @@ pub const AUTOMATIC_MIN_SIDE: u32 = 480;
 /// black border of blurred tags into white).
 const THRESHOLD_SPLIT: f32 = 0.5;
 /// The contrast (grey levels between the darkest and brightest pixel around a 4 x 4 tile)
-/// below which a tile of the threshold is left out of the quad search; set here so that
-/// [`budget::RegionCounter::regions`] thresholds as the detector does.
+/// below which a tile of the threshold is left out of the quad search (`level.rs`).
 ///
 /// Why 15 and not the AprilTag library's 5: on a real photograph the background's faint
 /// texture (paper grain, a wall, shadows) passes 5 everywhere and becomes thousands of small
@@ -307,7 +308,7 @@ impl TagDecoder {
     /// A detector of `family`'s tags, which chooses the decimation per image
     /// ([`automatic_decimation`]).
     pub fn new(family: TagFamily) -> Self {
-        Self { family, decimation: None, levels: Vec::new(), pyramid: Default::default(), counter: Default::default() }
+        Self { family, decimation: None, levels: Vec::new(), pyramid: Default::default(), scratch: Default::default() }
     }
 
     /// A detector whose finest quad search is in the image shrunk by `decimation` (`1..=8`;
@@ -326,7 +327,7 @@ impl TagDecoder {
             decimation: Some(decimation),
             levels: Vec::new(),
             pyramid: Default::default(),
-            counter: Default::default(),
+            scratch: Default::default(),
         })
     }
 
@@ -356,11 +357,10 @@ impl TagDecoder {
         let mut budget = budget::Budget::new();
         // The levels are kept in the decoder (their buffers reused), out of it while searched.
         let mut pyramid = std::mem::take(&mut self.pyramid);
-        // One hand-off to vsinv's pool a frame: kornia's threshold, components and decoding of
-        // every level (and the regions' count) run with rayon there, where their own `install`s
-        // stay on the worker. Each hand-off wakes a pool thread, which on a loaded machine
-        // waits to be scheduled: one a level and one a count cost more than the search of a
-        // small image's coarse levels.
+        // One hand-off to vsinv's pool a frame: kornia's threshold, quad fit and decoding of
+        // every level run with rayon there, where their own `install`s stay on the worker. Each
+        // hand-off wakes a pool thread, which on a loaded machine waits to be scheduled: one a
+        // level costs more than the search of a small image's coarse levels.
         let search = || self.search_levels(&mut pyramid, &mut budget, image, decimation);
         let candidates = crate::parallel::install(search)?;
         self.pyramid = pyramid;
@@ -405,8 +405,9 @@ impl TagDecoder {
         Ok(candidates)
     }
 
-    /// [`Self::search`] when the level's regions fit in what is left of the frame's budget
-    /// ([`budget::Budget::admit_level`]), nothing otherwise.
+    /// The tags decoded in `source` (a level `scale` times smaller than the full image, searched
+    /// at `decimation`), with their corners in the full image: none when its regions do not fit
+    /// in what is left of the frame's budget ([`budget::Budget::admit`]).
     fn search_within(
         &mut self,
         budget: &mut budget::Budget,
@@ -415,26 +416,18 @@ impl TagDecoder {
         decimation: u32,
         scale: f64,
     ) -> Result<Vec<Candidate>> {
-        let size = source.size();
-        let searched = searched_pixels(size.width as u32, size.height as u32, decimation);
-        let counter = &mut self.counter;
-        let count = || counter.regions(source, decimation, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT);
-        if !budget.admit_level(searched, count) {
-            // The level keeps its decoder, so that the levels after it find theirs.
-            self.decoder_for(level, size, decimation)?;
+        let Self { family, levels, scratch, .. } = self;
+        let (size, decimation) = (source.size(), decimation as usize);
+        if levels.get(level).is_none_or(|l| !l.fits(size, decimation)) {
+            levels.truncate(level);
+            levels.push(level::LevelSearch::new(*family, size, decimation)?);
+        }
+        let search = levels.get_mut(level).ok_or_else(|| decoder_error("no level"))?;
+        if !budget.admit(search.regions(source, scratch)?) {
             return Ok(Vec::new());
         }
-        self.search(level, source, decimation, scale)
-    }
-
-    /// The tags the detector decodes in `source` (a level `scale` times smaller than the
-    /// full image), with their corners in the full image.
-    fn search(&mut self, level: usize, source: &Image<u8, 1>, decimation: u32, scale: f64) -> Result<Vec<Candidate>> {
-        let decoder = self.decoder_for(level, source.size(), decimation)?;
-        // kornia decodes with rayon: on vsinv's pool, never rayon's global one (see `parallel`).
-        let detections = crate::parallel::install(|| decoder.decode(source))?.map_err(decoder_error);
-        decoder.clear();
-        Ok(detections?
+        Ok(search
+            .decode(source, scratch)
             .iter()
             .map(|d| {
                 // The decoded homography maps the tag frame (x right, y down in the AprilTag
@@ -450,27 +443,6 @@ impl TagDecoder {
             })
             .collect())
     }
-
-    fn decoder_for(&mut self, level: usize, size: ImageSize, decimation: u32) -> Result<&mut AprilTagDecoder> {
-        let factor = decimation as usize;
-        let stale = self.levels.get(level).is_none_or(|(s, f, _)| *s != size || *f != factor);
-        if stale {
-            // The family data the faces are drawn from (`face.rs`), repaired where kornia's is not.
-            let family = TagFamilyKind::Custom(std::sync::Arc::new(face::layout(self.family)?.clone()));
-            let mut config = DecodeTagsConfig::new(vec![family]).map_err(decoder_error)?;
-            config.downscale_factor = factor;
-            config.min_tag_width = (self.family.border_cells() / decimation).max(3) as usize;
-            config.threshold_split = THRESHOLD_SPLIT;
-            config.min_white_black_difference = MIN_WHITE_BLACK_DIFFERENCE;
-            let decoder = AprilTagDecoder::new(config, size).map_err(decoder_error)?;
-            self.levels.truncate(level);
-            self.levels.push((size, factor, decoder));
-        }
-        match self.levels.get_mut(level) {
-            Some((_, _, decoder)) => Ok(decoder),
-            None => Err(decoder_error("no decoder")),
-        }
-    }
 }
 
 /// Tags drawn in closed form for the tests: a fronto-parallel tag, turned by quarter turns,
@@ -482,6 +454,26 @@ pub(crate) mod synthetic {
 
     use super::{TAG_CORNERS_IN_LAYOUT, TagFamily};
     use crate::vision::image::GreyImage;
+
+    /// A small deterministic generator (xorshift64*), so that the tests need no crate.
+    pub struct Rng(pub u64);
+
+    impl Rng {
+        pub fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        }
+
+        pub fn below(&mut self, n: usize) -> usize {
+            (self.next() % n as u64) as usize
+        }
+
+        pub fn unit(&mut self) -> f64 {
+            (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
 
     /// Where a tag is drawn: the centre of its black square `(u, v)` in pixels (OpenCV's
     /// convention), the side of one cell in pixels, and quarter turns (counter-clockwise on the
