@@ -25,6 +25,9 @@ type Key = (usize, usize);
 pub(super) struct Clusters {
     /// The clusters found by the last [`Clusters::find`].
     pub map: FxHashMap<Key, Vec<GradientInfo>>,
+    /// While gathering: each key's place in `lists`, and the lists in the order found.
+    index: FxHashMap<Key, u32>,
+    lists: Vec<(Key, Vec<GradientInfo>)>,
     /// The region of each pixel of the two rows read.
     above: Vec<u32>,
     below: Vec<u32>,
@@ -36,28 +39,28 @@ pub(super) struct Clusters {
 /// The clusters being gathered: each key's list, found through the last key (the same pair
 /// of regions runs along an edge) or the index.
 struct Gathering<'a> {
-    map: &'a mut FxHashMap<Key, Vec<GradientInfo>>,
-    last: Option<(Key, Vec<GradientInfo>)>,
+    index: &'a mut FxHashMap<Key, u32>,
+    lists: &'a mut Vec<(Key, Vec<GradientInfo>)>,
+    /// The last key and its list.
+    last: Option<(Key, usize)>,
 }
 
 impl Gathering<'_> {
     fn push(&mut self, key: Key, point: GradientInfo) {
-        match &mut self.last {
-            Some((k, list)) if *k == key => list.push(point),
-            last => {
-                if let Some((k, list)) = last.take() {
-                    self.map.insert(k, list);
+        let i = match self.last {
+            Some((k, i)) if k == key => i,
+            _ => {
+                let next = self.lists.len();
+                let i = *self.index.entry(key).or_insert(next as u32) as usize;
+                if i == next {
+                    self.lists.push((key, Vec::with_capacity(64)));
                 }
-                let mut list = self.map.remove(&key).unwrap_or_else(|| Vec::with_capacity(64));
-                list.push(point);
-                *last = Some((key, list));
+                self.last = Some((key, i));
+                i
             }
-        }
-    }
-
-    fn finish(mut self) {
-        if let Some((k, list)) = self.last.take() {
-            self.map.insert(k, list);
+        };
+        if let Some((_, list)) = self.lists.get_mut(i) {
+            list.push(point);
         }
     }
 }
@@ -70,10 +73,12 @@ impl Clusters {
         if width < 3 || height < 3 {
             return;
         }
-        let Self { map, above, below, bytes_above, bytes_below } = self;
+        let Self { map, index, lists, above, below, bytes_above, bytes_below } = self;
         regions_of_row(components, 1, width, above);
         as_bytes(&binary[width..2 * width], bytes_above);
-        let mut gathering = Gathering { map, last: None };
+        index.clear();
+        lists.clear();
+        let mut gathering = Gathering { index, lists, last: None };
         for y in 1..height - 1 {
             regions_of_row(components, y + 1, width, below);
             let b = &binary[(y + 1) * width..(y + 2) * width];
@@ -91,7 +96,7 @@ impl Clusters {
             std::mem::swap(above, below);
             std::mem::swap(bytes_above, bytes_below);
         }
-        gathering.finish();
+        map.extend(lists.drain(..));
     }
 }
 
