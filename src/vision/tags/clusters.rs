@@ -14,7 +14,7 @@ use kornia_apriltag::segmentation::GradientInfo;
 use kornia_apriltag::utils::{Pixel, Point2d};
 use rustc_hash::FxHashMap;
 
-use super::components::{Components, NO_REGION, as_bytes, word};
+use super::components::{Components, NO_REGION, word};
 
 /// A cluster's key: the two regions it lies between, the smaller first.
 type Key = (usize, usize);
@@ -31,7 +31,7 @@ pub(super) struct Clusters {
     /// The region of each pixel of the two rows read.
     above: Vec<u32>,
     below: Vec<u32>,
-    /// The two rows' pixels as bytes.
+    /// The two rows' pixels as bytes, skipped outside the kept regions.
     bytes_above: Vec<u8>,
     bytes_below: Vec<u8>,
 }
@@ -74,18 +74,15 @@ impl Clusters {
             return;
         }
         let Self { map, index, lists, above, below, bytes_above, bytes_below } = self;
-        regions_of_row(components, 1, width, above);
-        as_bytes(&binary[width..2 * width], bytes_above);
+        regions_of_row(components, 1, width, above, bytes_above);
         index.clear();
         lists.clear();
         let mut gathering = Gathering { index, lists, last: None };
         for y in 1..height - 1 {
-            regions_of_row(components, y + 1, width, below);
-            let b = &binary[(y + 1) * width..(y + 2) * width];
-            as_bytes(b, bytes_below);
+            regions_of_row(components, y + 1, width, below, bytes_below);
             let rows = Rows {
                 a: &binary[y * width..(y + 1) * width],
-                b,
+                b: &binary[(y + 1) * width..(y + 2) * width],
                 bytes_a: bytes_above,
                 bytes_b: bytes_below,
                 above,
@@ -100,15 +97,30 @@ impl Clusters {
     }
 }
 
-/// The region of each pixel of row `y` into `regions` ([`NO_REGION`] outside the kept ones).
-fn regions_of_row(components: &Components, y: usize, width: usize, regions: &mut Vec<u32>) {
+/// The region of each pixel of row `y` into `regions` ([`NO_REGION`] outside the kept ones),
+/// and its colour into `bytes`, as a skipped pixel outside them (so that the pixels of regions
+/// too small to keep are quiet in [`Rows::gather`]'s eight-pixel test).
+fn regions_of_row(components: &Components, y: usize, width: usize, regions: &mut Vec<u32>, bytes: &mut Vec<u8>) {
     regions.clear();
     regions.resize(width, NO_REGION);
+    bytes.clear();
+    bytes.resize(width, Pixel::Skip as u8);
     for (run, region) in components.row(y) {
         if region != NO_REGION {
-            regions[run.start as usize..run.end as usize].fill(region);
+            let span = run.start as usize..run.end as usize;
+            regions[span.clone()].fill(region);
+            bytes[span].fill(run.colour as u8);
         }
     }
+}
+
+/// The bytes of `xor` (of two words of pixels) that are black against white: the pixels are
+/// black 0, white 255 and skipped 127, so a byte is 255 for black against white, 128 or 127
+/// for a skipped pixel against another, 0 for the same; its top bit and its lowest bit are
+/// both set only for 255 (`xor << 7` brings each byte's lowest bit to its top bit).
+#[inline(always)]
+fn black_white(xor: u64) -> u64 {
+    xor & (xor << 7) & 0x8080_8080_8080_8080
 }
 
 /// Row `y` (`a`) and the row below it (`b`), with their pixels' regions.
@@ -124,7 +136,8 @@ struct Rows<'a> {
 
 impl Rows<'_> {
     /// The points of row `y`'s interior pixels, in order. Eight pixels at a time where none
-    /// differs from its four neighbours read (a zero byte of `differs`): those add no point.
+    /// is black with a white neighbour of the four read or white with a black one, both in kept
+    /// regions (a zero byte of `differs`): those add no point.
     fn gather(&self, gathering: &mut Gathering) {
         let width = self.a.len();
         let (a, b) = (self.bytes_a, self.bytes_b);
@@ -133,8 +146,10 @@ impl Rows<'_> {
         while x < width - 1 {
             if x + 9 <= width {
                 let here = word(a, x);
-                let differs =
-                    (here ^ word(a, x + 1)) | (here ^ word(b, x)) | (here ^ word(b, x - 1)) | (here ^ word(b, x + 1));
+                let differs = black_white(here ^ word(a, x + 1))
+                    | black_white(here ^ word(b, x))
+                    | black_white(here ^ word(b, x - 1))
+                    | black_white(here ^ word(b, x + 1));
                 if differs == 0 {
                     connected_last = false;
                     x += 8;
