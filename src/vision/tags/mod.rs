@@ -1,7 +1,9 @@
 //! AprilTag detection ([`detect_tags`]): the tags of one family found in an image, each with
-//! its id and its four corners, by `kornia-apriltag` (a pure-Rust port of the AprilTag 3
-//! detector: Wang & Olson, "AprilTag 2: Efficient and robust fiducial detection", IROS 2016;
-//! Krogius, Haggenmiller & Olson, "Flexible layouts for fiducial tags", IROS 2019).
+//! its id and its four corners, by the AprilTag 3 detector (Wang & Olson, "AprilTag 2:
+//! Efficient and robust fiducial detection", IROS 2016; Krogius, Haggenmiller & Olson,
+//! "Flexible layouts for fiducial tags", IROS 2019): its threshold, regions and gradient
+//! clusters here (`level.rs`, `components.rs`, `clusters.rs`), its quad fit and decoding from
+//! `kornia-apriltag` (a pure-Rust port), on every level of a pyramid (`pyramid.rs`).
 //!
 //! # Corners: order and pixel convention
 //!
