@@ -11,6 +11,8 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::error::Error;
+use crate::vision::error::{Result, VisionError};
 use crate::vision::image::{GreyBuffer, Pixels};
 use crate::vision::own_sums::{Plane, background_sums, own_sums, weight};
 use crate::vision::runs::{Component, Labelling, Run};
@@ -54,8 +56,35 @@ pub enum RingFit {
     Grown,
 }
 
-/// The centroid of component `index` of `labelling`.
+/// The centroid of component `index` of `labelling`, which labelled `image`. An index that is
+/// no component, or a labelling of an image of another size, is an error.
 pub fn weighted_centroid<C: Pixels>(
+    image: &GreyBuffer<C>,
+    labelling: &Labelling,
+    index: u32,
+    dark: bool,
+    fit: RingFit,
+) -> Result<Weighted> {
+    let (size, count) = (labelling.size(), labelling.components.len());
+    if size != [image.width(), image.height()] {
+        let reason = format!(
+            "the labelling is of a {} x {} image, this one is {} x {} (height x width)",
+            size[1],
+            size[0],
+            image.height(),
+            image.width()
+        );
+        return Err(VisionError::InvalidImage { what: "image".to_string(), reason });
+    }
+    if index as usize >= count {
+        let reason = format!("{index} is no component: the labelling has {count}");
+        return Err(Error::InvalidParameter { name: "index", reason }.into());
+    }
+    Ok(centroid_of(image, labelling, index, dark, fit))
+}
+
+/// [`weighted_centroid`] of a component of a labelling of `image` (the detector's own).
+fn centroid_of<C: Pixels>(
     image: &GreyBuffer<C>,
     labelling: &Labelling,
     index: u32,
@@ -87,11 +116,11 @@ pub(crate) fn near_or_grown_centroid<C: Pixels>(
 ) -> Weighted {
     let dot = Dot::new(image, labelling, index, dark);
     if dot.component.area < LANES_MIN_AREA {
-        let near = weighted_centroid(image, labelling, index, dark, RingFit::Near);
+        let near = centroid_of(image, labelling, index, dark, RingFit::Near);
         return if keep_near(near.ring_residual, near.contrast) {
             near
         } else {
-            weighted_centroid(image, labelling, index, dark, RingFit::Grown)
+            centroid_of(image, labelling, index, dark, RingFit::Grown)
         };
     }
     let ring = dot.near_ring();
@@ -99,7 +128,7 @@ pub(crate) fn near_or_grown_centroid<C: Pixels>(
     if keep_near(ring.residual, own.own / dot.component.area as f64) {
         dot.weighted(&ring, own.plus(dot.background_sums(&ring)))
     } else {
-        weighted_centroid(image, labelling, index, dark, RingFit::Grown)
+        centroid_of(image, labelling, index, dark, RingFit::Grown)
     }
 }
 
@@ -562,9 +591,13 @@ mod tests {
                     asked = Some((residual, contrast));
                     keep
                 });
-                assert_eq!(chosen, weighted_centroid(&image, &labelling, index, false, fit), "{index} {fit:?}");
+                assert_eq!(
+                    chosen,
+                    weighted_centroid(&image, &labelling, index, false, fit).unwrap(),
+                    "{index} {fit:?}"
+                );
                 // It decided on the near ring's own measure.
-                let near = weighted_centroid(&image, &labelling, index, false, RingFit::Near);
+                let near = weighted_centroid(&image, &labelling, index, false, RingFit::Near).unwrap();
                 let (residual, contrast) = asked.unwrap();
                 assert_eq!(
                     (residual.to_bits(), contrast.to_bits()),
@@ -604,5 +637,28 @@ mod tests {
             assert_eq!(r, rhs, "{bbox:?}");
             assert_eq!(sums.squares as f64, squares);
         }
+    }
+
+    /// An index that is no component and a labelling of another image are errors naming
+    /// them, never a panic; a row outside the labelling has no runs.
+    #[test]
+    fn a_wrong_index_or_labelling_is_an_error() {
+        use crate::vision::background::TileThresholds;
+        use crate::vision::image::GreyImage;
+        use crate::vision::runs::label;
+        let image =
+            GreyImage::from_fn(40, 30, |u, v| ::image::Luma([if (u / 10 + v / 10) % 2 == 0 { 200 } else { 20 }]));
+        let labelling = label(&image, &TileThresholds::uniform(&image, 120), false);
+        let count = labelling.components.len() as u32;
+        assert!(count > 0 && weighted_centroid(&image, &labelling, count - 1, false, RingFit::Near).is_ok());
+        for index in [count, u32::MAX] {
+            let err = weighted_centroid(&image, &labelling, index, false, RingFit::Grown).unwrap_err();
+            assert!(err.to_string().contains("index") && err.to_string().contains("no component"), "{err}");
+        }
+        let other = GreyImage::from_fn(41, 30, |_, _| ::image::Luma([0]));
+        let err = weighted_centroid(&other, &labelling, 0, false, RingFit::Near).unwrap_err();
+        assert!(err.to_string().starts_with("image: the labelling is of a 30 x 40 image"), "{err}");
+        assert_eq!(labelling.size(), [40, 30]);
+        assert!(labelling.row(30).0.is_empty() && labelling.row(u32::MAX).0.is_empty());
     }
 }

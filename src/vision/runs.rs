@@ -96,13 +96,23 @@ pub struct Labelling {
     pub components: Vec<Component>,
     /// The smallest and largest grey level of the image.
     pub range: [u8; 2],
+    /// The labelled image's width and height.
+    size: [u32; 2],
 }
 
 impl Labelling {
-    /// The runs of row `v`, with their components.
+    /// The runs of row `v`, with their components (none for a row outside the image).
     pub fn row(&self, v: u32) -> (&[Run], &[u32]) {
-        let (a, b) = (self.row_start[v as usize], self.row_start[v as usize + 1]);
-        (&self.runs[a..b], &self.component_of[a..b])
+        let start = |v: usize| self.row_start.get(v).copied();
+        match (start(v as usize), start(v as usize + 1)) {
+            (Some(a), Some(b)) => (&self.runs[a..b], &self.component_of[a..b]),
+            _ => (&[], &[]),
+        }
+    }
+
+    /// The width and height of the image labelled.
+    pub fn size(&self) -> [u32; 2] {
+        self.size
     }
 }
 
@@ -134,7 +144,7 @@ pub fn label<C: Pixels>(image: &GreyBuffer<C>, thresholds: &TileThresholds, dark
         join_rows(&runs, row_start[v - 1]..row_start[v], row_start[v]..row_start[v + 1], &mut parent);
     }
     let (component_of, components) = components(&runs, &mut parent);
-    Labelling { runs, row_start, component_of, components, range }
+    Labelling { runs, row_start, component_of, components, range, size: [image.width(), image.height()] }
 }
 
 fn find(parent: &mut [u32], mut i: u32) -> u32 {
