@@ -66,8 +66,15 @@ impl Gathering<'_> {
 }
 
 impl Clusters {
-    /// The clusters of `binary` (rows of `width`), whose regions `components` labelled.
-    pub(super) fn find(&mut self, binary: &[Pixel], width: usize, components: &Components) {
+    /// The clusters of `binary` (rows of `width`), whose regions `components` labelled, that
+    /// hold a number of points in `sizes` (the others are left out).
+    pub(super) fn find(
+        &mut self,
+        binary: &[Pixel],
+        width: usize,
+        components: &Components,
+        sizes: std::ops::RangeInclusive<usize>,
+    ) {
         self.map.clear();
         let height = binary.len() / width.max(1);
         if width < 3 || height < 3 {
@@ -93,7 +100,7 @@ impl Clusters {
             std::mem::swap(above, below);
             std::mem::swap(bytes_above, bytes_below);
         }
-        map.extend(lists.drain(..));
+        map.extend(lists.drain(..).filter(|(_, points)| sizes.contains(&points.len())));
     }
 }
 
@@ -272,7 +279,7 @@ mod tests {
                 let mut components = Components::default();
                 components.label(&pixels, width);
                 let mut clusters = Clusters::default();
-                clusters.find(&pixels, width, &components);
+                clusters.find(&pixels, width, &components, 0..=usize::MAX);
                 let mut expected: FxHashMap<Key, Vec<(u32, u32, i16, i16)>> = FxHashMap::default();
                 for (key, point) in reference(&pixels, width, &components) {
                     expected.entry(key).or_default().push(point);

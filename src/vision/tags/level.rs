@@ -24,6 +24,10 @@ use crate::vision::error::Result;
 
 /// The adaptive threshold's tiles (pixels a side), the AprilTag detector's.
 const TILE: usize = 4;
+/// The fewest points of a cluster the quad fit reads (the AprilTag library's `fit_quad` and
+/// kornia-apriltag's `fit_single_quad` return no quad for fewer); the most is four times the
+/// level's width and height (kornia-apriltag's `fit_quads`).
+const MIN_QUAD_POINTS: usize = 24;
 
 /// The buffers and settings of one level's search (kept while the level's size and decimation
 /// stay the same).
@@ -104,7 +108,9 @@ impl LevelSearch {
     /// quads in `source`'s pixels (centres at `+0.5`).
     pub(super) fn decode(&mut self, source: &Image<u8, 1>, scratch: &mut Scratch) -> Vec<Detection> {
         let Scratch { components, clusters } = scratch;
-        clusters.find(self.binary.as_slice(), self.binary.width(), components);
+        let (width, height) = (self.binary.width(), self.binary.height());
+        // The quad fit returns no quad for the other clusters (and copies each before it looks).
+        clusters.find(self.binary.as_slice(), width, components, MIN_QUAD_POINTS..=4 * (width + height));
         let mut quads = fit_quads(&self.binary, std::slice::from_ref(&clusters.map), &self.config);
         // The edges are refined over the decimation and one pixel, as the AprilTag library does.
         let refine_range = self.decimation as f32 + 1.0;
