@@ -54,16 +54,15 @@ const SETTLED_PX: f64 = 0.05;
 const MAX_PASSES: usize = 4;
 /// The readings [`refine_blurred_corners`] allows a blurred tag's edges to settle in.
 const MAX_BLURRED_PASSES: usize = 10;
-/// At most this many profiles per edge (spread evenly along it, one a pixel on shorter edges)
-/// in every reading. More add little to the line's accuracy and cost time on large tags: the
-/// line through N crossings has an offset error of the crossings' own over the square root of
-/// N. On ViSP's photograph enlarged to 1920 x 1080 (12 tags of 106-194 px), reading up to 200
-/// profiles an edge in the narrow readings moved no corner by more than 0.04 px from 64 and
-/// left the error against ViSP's ground truth the same (median 0.218 and 0.217 px, max 0.709
-/// and 0.702 px), for 0.9-1.8 ms more a frame on one thread; the wide readings (profiles of up to
-/// 25 samples, a narrow one about 11) were already held to 64 (on five tags of 120-205 px at
-/// 1920 x 1080, a tracked frame went from 1.9 to 1.3 ms).
-const MAX_PROFILES: usize = 64;
+/// At most this many profiles per edge (spread evenly along it): more add little to the
+/// line's accuracy and cost time on large tags.
+const MAX_PROFILES: usize = 200;
+/// At most this many profiles per edge in the readings that reach half a cell (the first
+/// stage of [`settle`]): they only measure each edge's width and bring the corners near
+/// the narrow readings' lines, which then read every profile. Each of these profiles reads
+/// up to 25 samples, a narrow one about 11: on five tags of 120-205 px at 1920 x 1080, a
+/// tracked frame went from 1.9 to 1.3 ms on one thread with every profile read there.
+const MAX_WIDE_PROFILES: usize = 64;
 
 /// The square whose edges are read: its side in cells, and its polarity.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -218,7 +217,8 @@ fn fit_edge<C: Pixels>(
     }
     // Only the wide readings' widths are used (`settle`): the narrow ones skip the walk.
     let want_width = max_reach.is_infinite();
-    let count = ((length - 2.0 * skip).floor() as usize + 1).min(MAX_PROFILES);
+    let most = if want_width { MAX_WIDE_PROFILES } else { MAX_PROFILES };
+    let count = ((length - 2.0 * skip).floor() as usize + 1).min(most);
     let spacing = (length - 2.0 * skip) / (count - 1).max(1) as f64;
     let mut widths = Vec::with_capacity(if want_width { count } else { 0 });
     let crossings: Vec<P> = (0..count)
