@@ -19,7 +19,7 @@ use kornia_image::{Image, ImageSize};
 
 use super::clusters::Clusters;
 use super::components::Components;
-use super::{MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT, TagFamily, decoder_error, face};
+use super::{MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT, TagFamily, decimated_side, decoder_error, face};
 use crate::vision::error::Result;
 
 /// The adaptive threshold's tiles (pixels a side), the AprilTag detector's.
@@ -134,10 +134,9 @@ fn adaptive_threshold(source: &Image<u8, 1>, binary: &mut Image<Pixel, 1>, tiles
         .map_err(decoder_error)
 }
 
-/// The size of an image of `size` decimated by `d` (rounded up, as the detector decimates).
+/// The size of an image of `size` decimated by `d` ([`decimated_side`]).
 fn decimated_size(size: ImageSize, d: usize) -> ImageSize {
-    let d = d.max(1);
-    ImageSize { width: 1 + size.width.saturating_sub(1) / d, height: 1 + size.height.saturating_sub(1) / d }
+    ImageSize { width: decimated_side(size.width, d), height: decimated_side(size.height, d) }
 }
 
 #[cfg(test)]

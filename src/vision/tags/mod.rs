@@ -256,8 +256,14 @@ pub const MAX_SEARCH_PIXELS: u64 = (1 << 22) + (1 << 14);
 /// The pixels of the image `width x height` shrunk by `decimation` (rounded up, as the
 /// detector does).
 pub fn searched_pixels(width: u32, height: u32, decimation: u32) -> u64 {
-    let d = u64::from(decimation.max(1));
-    u64::from(width).div_ceil(d) * u64::from(height).div_ceil(d)
+    let side = |s: u32| decimated_side(s as usize, decimation as usize) as u64;
+    side(width) * side(height)
+}
+
+/// A side of `side` pixels decimated by `decimation` (one pixel of each `d x d` block, the
+/// last block partial: rounded up, as the detector decimates).
+fn decimated_side(side: usize, decimation: usize) -> usize {
+    side.div_ceil(decimation.max(1))
 }
 
 /// Refuses a decimation that leaves more than [`MAX_SEARCH_PIXELS`] to search, naming the
