@@ -21,6 +21,7 @@
 //! settle, or when a corner ends far from the detector's (more than 2 px and 0.75 cell): its
 //! corners are not reported rather than reported wrong.
 
+use super::profile::{PROFILE_SAMPLES, Ray, STEP, read_profile};
 use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];
@@ -36,8 +37,6 @@ const REACH_PER_WIDTH: f64 = 2.75;
 /// side (the pixel's area and the interpolation), and each end's level is read half a pixel
 /// farther in, half a pixel off the edge at most once centred.
 const MIN_WIDTH_REACH: f64 = 2.5;
-/// Half-pixel steps across the edge.
-const STEP: f64 = 0.5;
 /// Least contrast between the border and the quiet zone, grey levels.
 const MIN_CONTRAST: f64 = 10.0;
 /// Least share of the profiles along an edge that must cross it.
@@ -262,15 +261,16 @@ fn crossing_and_width<C: Pixels>(
     let ray = Ray::across(p, out, reach, reversed);
     #[cfg(target_arch = "x86_64")]
     if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(Crossing { image, ray, want_width });
+        return simd.vectorize(Crossing { simd, image, ray, want_width });
     }
-    crossing_in_profile(image, ray, want_width)
+    crossing_in_profile(image, ray, want_width, |profile| read_profile(image, ray, profile))
 }
 
 /// [`crossing_in_profile`] as a `pulp` operation, so that on a processor with AVX2 its
-/// arithmetic is compiled for it (four lanes).
+/// arithmetic is compiled for it and its profile read in AVX2 lanes.
 #[cfg(target_arch = "x86_64")]
 struct Crossing<'a, C: Pixels> {
+    simd: pulp::x86::V3,
     image: &'a GreyBuffer<C>,
     ray: Ray,
     want_width: bool,
@@ -282,14 +282,23 @@ impl<C: Pixels> pulp::NullaryFnOnce for Crossing<'_, C> {
 
     #[inline(always)]
     fn call(self) -> Self::Output {
-        crossing_in_profile(self.image, self.ray, self.want_width)
+        let Self { simd, image, ray, want_width } = self;
+        let read = |profile: &mut [f64; PROFILE_SAMPLES]| {
+            pulp::NullaryFnOnce::call(super::profile::Avx2Profile { simd, image, ray, profile })
+        };
+        crossing_in_profile(image, ray, want_width, read)
     }
 }
 
-/// [`crossing_and_width`] of the profile `ray` (`None` when its ends are not both inside the
-/// image).
+/// [`crossing_and_width`] of the profile `ray`, its samples read by `read` (`None` when its
+/// ends are not both inside the image).
 #[inline(always)]
-fn crossing_in_profile<C: Pixels>(image: &GreyBuffer<C>, ray: Ray, want_width: bool) -> Option<(f64, Option<f64>)> {
+fn crossing_in_profile<C: Pixels>(
+    image: &GreyBuffer<C>,
+    ray: Ray,
+    want_width: bool,
+    read: impl FnOnce(&mut [f64; PROFILE_SAMPLES]) -> Option<()>,
+) -> Option<(f64, Option<f64>)> {
     let Ray { p, out, start, samples, .. } = ray;
     let steps = samples - 1;
     let at = |k: usize| {
@@ -302,7 +311,7 @@ fn crossing_in_profile<C: Pixels>(image: &GreyBuffer<C>, ray: Ray, want_width: b
         return None;
     }
     let mut profile = [0.0f64; PROFILE_SAMPLES];
-    read_profile(image, ray, &mut profile)?;
+    read(&mut profile)?;
     let (black, white) = ((profile[0] + profile[1]) / 2.0, (profile[steps] + profile[steps - 1]) / 2.0);
     if white - black < MIN_CONTRAST {
         return None;
@@ -389,76 +398,6 @@ fn intersect(l: Line, m: Line) -> Option<P> {
     Some([x, y])
 }
 
-/// The most samples a profile reads (a reach of 6 px is 25 half-pixel steps).
-const PROFILE_SAMPLES: usize = 32;
-
-/// A profile's samples: `samples` points `p + (start + STEP k) out`, read as `255 - g` when
-/// `reversed`.
-#[derive(Clone, Copy)]
-struct Ray {
-    p: P,
-    out: P,
-    start: f64,
-    samples: usize,
-    reversed: bool,
-}
-
-impl Ray {
-    /// The profile through `p` along `out` reaching `reach` on each side, in half-pixel steps.
-    fn across(p: P, out: P, reach: f64, reversed: bool) -> Self {
-        let steps = (2.0 * reach / STEP).round() as usize;
-        Self { p, out, start: -(steps as f64) * STEP / 2.0, samples: steps + 1, reversed }
-    }
-}
-
-/// The grey levels of the ray's samples, each bilinear as [`sample`] reads it (the same
-/// operations in the same order, so the same bits), all of them known to be [`inside`] the
-/// image: the coordinates and weights of four samples at a time, then their pixels, then
-/// their levels, so that the arithmetic runs in vector lanes.
-#[inline(always)]
-fn read_profile<C: Pixels>(image: &GreyBuffer<C>, ray: Ray, profile: &mut [f64; PROFILE_SAMPLES]) -> Option<()> {
-    let (last_u, last_v) = (f64::from(image.width().saturating_sub(2)), f64::from(image.height().saturating_sub(2)));
-    let stride = image.width() as usize;
-    let pixels: &[u8] = image.as_raw();
-    let last = pixels.len().checked_sub(stride + 2)?;
-    for (c, chunk) in profile.chunks_exact_mut(4).enumerate().take(ray.samples.div_ceil(4)) {
-        let (mut fu, mut fv, mut first) = ([0.0; 4], [0.0; 4], [0usize; 4]);
-        for l in 0..4 {
-            let o = ray.start + STEP * (4 * c + l) as f64;
-            let (u, v) = (ray.p[0] + ray.out[0] * o, ray.p[1] + ray.out[1] * o);
-            // `u, v >= 0` inside the image: truncation is the floor, and the last column (row)
-            // is read between the one before it and itself, as in `sample`. (Comparisons, not
-            // `f64::clamp`, whose NaN rule keeps it out of the vector lanes: the coordinates are
-            // finite. A lane past the profile's end may be outside the image: held inside it,
-            // its level is never read.)
-            let clamp = |x: f64, last: f64| {
-                if x < 0.0 {
-                    0.0
-                } else if x < last {
-                    x
-                } else {
-                    last
-                }
-            };
-            let (u0, v0) = (clamp(u, last_u).trunc(), clamp(v, last_v).trunc());
-            (fu[l], fv[l]) = (u - u0, v - v0);
-            first[l] = (v0 as usize * stride + u0 as usize).min(last);
-        }
-        let mut corners = [[0.0; 4]; 4];
-        for l in 0..4 {
-            let (top, bottom) =
-                (pixels.get(first[l]..first[l] + 2)?, pixels.get(first[l] + stride..first[l] + stride + 2)?);
-            corners[l] = [top[0], top[1], bottom[0], bottom[1]].map(f64::from);
-        }
-        for l in 0..4 {
-            let [a, b, c, d] = corners[l];
-            let g = (a * (1.0 - fu[l]) + b * fu[l]) * (1.0 - fv[l]) + (c * (1.0 - fu[l]) + d * fu[l]) * fv[l];
-            chunk[l] = if ray.reversed { 255.0 - g } else { g };
-        }
-    }
-    Some(())
-}
-
 /// The grey level at `(u, v)` (pixel centres at integers), `None` outside the image.
 ///
 /// Inlined into the profile loops, which spend most of a tracked frame here.
@@ -472,14 +411,14 @@ pub(super) fn bilinear<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Opti
 
 /// Whether `[u, v]` is inside the image's pixel centres (where [`bilinear`] reads).
 #[inline]
-fn inside<C: Pixels>(image: &GreyBuffer<C>, [u, v]: P) -> bool {
+pub(super) fn inside<C: Pixels>(image: &GreyBuffer<C>, [u, v]: P) -> bool {
     let (w, h) = (image.width() as f64, image.height() as f64);
     u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0
 }
 
 /// [`bilinear`] at a point known to be [`inside`] the image.
 #[inline]
-fn sample<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
+pub(super) fn sample<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
     // `u, v >= 0` and below 2^32: truncation is the floor, without a call to libm's `floor`; the
     // last column (row) is read between the one before it and itself. One conversion each way
     // and one bounds check a sample: the profiles of `crossing_and_width` spend their time here.
@@ -566,44 +505,6 @@ pub(super) mod tests {
 
     /// Bilinear interpolation reproduces a function bilinear in `(u, v)` exactly, up to the
     /// last column and row (read between the pixel before and itself); outside it reads nothing.
-    #[test]
-    fn a_profile_is_read_as_its_samples_one_by_one_bit_for_bit() {
-        // The four-lane reading against `sample` at each point, on rays in every direction
-        // that end on the image's last row and column too.
-        let image = GreyImage::from_fn(37, 29, |u, v| ::image::Luma([((u * 71 + v * 113 + u * v * 7) % 256) as u8]));
-        let mut checked = 0;
-        for k in 0..400 {
-            let angle = f64::from(k) * 0.731;
-            let out = [angle.cos(), angle.sin()];
-            let p = [2.0 + f64::from(k % 33) * 1.03, 2.0 + f64::from(k % 25) * 1.01];
-            let steps = 6 + k as usize % 20;
-            let start = -(steps as f64) * STEP / 2.0;
-            let at = |k: usize| [p[0] + out[0] * (start + STEP * k as f64), p[1] + out[1] * (start + STEP * k as f64)];
-            if !inside(&image, at(0)) || !inside(&image, at(steps)) {
-                continue;
-            }
-            for reversed in [false, true] {
-                let read = || {
-                    let mut profile = [0.0; PROFILE_SAMPLES];
-                    read_profile(&image, Ray { p, out, start, samples: steps + 1, reversed }, &mut profile).unwrap();
-                    profile
-                };
-                let mut readings = vec![read()];
-                // Compiled for AVX2 too, as `crossing_and_width` runs it.
-                #[cfg(target_arch = "x86_64")]
-                readings.extend(pulp::x86::V3::try_new().map(|simd| simd.vectorize(read)));
-                for (k, value) in readings.iter().flat_map(|r| r.iter().enumerate().take(steps + 1)) {
-                    let [u, v] = at(k);
-                    let g = sample(&image, u, v).unwrap();
-                    let expected = if reversed { 255.0 - g } else { g };
-                    assert_eq!(value.to_bits(), expected.to_bits(), "ray {p:?} {out:?}, sample {k}");
-                }
-            }
-            checked += 1;
-        }
-        assert!(checked > 100, "{checked} rays inside the image");
-    }
-
     #[test]
     fn bilinear_reproduces_a_bilinear_function_up_to_the_last_pixel() {
         let f = |u: f64, v: f64| 5.0 + 3.0 * u + 2.0 * v + u * v;

@@ -37,6 +37,7 @@ mod edges;
 mod face;
 mod follow;
 mod level;
+mod profile;
 mod pyramid;
 mod smoothed;
 
