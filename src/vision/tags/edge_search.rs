@@ -14,7 +14,8 @@
 //! data cell two cells in. A wrong start is caught after it: the edge refinement checks the
 //! edges' support and straightness, and the follower the tag's bits.
 
-use super::edges::{self, Border, bilinear};
+use super::edges::{Border, bilinear};
+use super::profile;
 use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];
@@ -109,13 +110,11 @@ fn subpixel<C: Pixels>(
     reach: f64,
     reversed: bool,
 ) -> Option<f64> {
-    let crossings: Vec<f64> = points
-        .iter()
-        .filter_map(|p| {
-            let q = [p[0] + out[0] * coarse, p[1] + out[1] * coarse];
-            edges::crossing(image, q, out, reach, reversed)
-        })
-        .collect();
+    let centred: Vec<P> = points.iter().map(|p| [p[0] + out[0] * coarse, p[1] + out[1] * coarse]).collect();
+    let mut crossings: Vec<f64> = Vec::with_capacity(points.len());
+    profile::crossings_along(image, &centred, out, reach, (reversed, false), |_, crossing| {
+        crossings.extend(crossing.map(|(edge, _)| edge));
+    });
     Some(coarse + agreed(crossings)?)
 }
 

@@ -21,7 +21,7 @@
 //! settle, or when a corner ends far from the detector's (more than 2 px and 0.75 cell): its
 //! corners are not reported rather than reported wrong.
 
-use super::profile::{PROFILE_SAMPLES, Ray, STEP, read_profile};
+use super::profile::crossings_along;
 use crate::vision::image::{GreyBuffer, Pixels};
 
 type P = [f64; 2];
@@ -37,8 +37,6 @@ const REACH_PER_WIDTH: f64 = 2.75;
 /// side (the pixel's area and the interpolation), and each end's level is read half a pixel
 /// farther in, half a pixel off the edge at most once centred.
 const MIN_WIDTH_REACH: f64 = 2.5;
-/// Least contrast between the border and the quiet zone, grey levels.
-const MIN_CONTRAST: f64 = 10.0;
 /// Least share of the profiles along an edge that must cross it.
 const MIN_SUPPORT: f64 = 0.6;
 /// Largest RMS distance of the crossings from their line, pixels.
@@ -219,131 +217,26 @@ fn fit_edge<C: Pixels>(
     let most = if want_width { MAX_WIDE_PROFILES } else { MAX_PROFILES };
     let count = ((length - 2.0 * skip).floor() as usize + 1).min(most);
     let spacing = (length - 2.0 * skip) / (count - 1).max(1) as f64;
-    let mut widths = Vec::with_capacity(if want_width { count } else { 0 });
-    let crossings: Vec<P> = (0..count)
-        .filter_map(|k| {
+    let points: Vec<P> = (0..count)
+        .map(|k| {
             let s = skip + spacing * k as f64;
-            let p = [a[0] + along[0] * s, a[1] + along[1] * s];
-            let (e, width) = crossing_and_width(image, p, out, reach, (border.reversed, want_width))?;
-            widths.extend(width);
-            Some([p[0] + out[0] * e, p[1] + out[1] * e])
+            [a[0] + along[0] * s, a[1] + along[1] * s]
         })
         .collect();
+    let mut widths = Vec::with_capacity(if want_width { count } else { 0 });
+    let mut crossings: Vec<P> = Vec::with_capacity(count);
+    crossings_along(image, &points, out, reach, (border.reversed, want_width), |k, crossing| {
+        if let (Some((e, width)), Some(p)) = (crossing, points.get(k)) {
+            widths.extend(width);
+            crossings.push([p[0] + out[0] * e, p[1] + out[1] * e]);
+        }
+    });
     if (crossings.len() as f64) < (MIN_SUPPORT * count as f64).max(3.0) {
         return None;
     }
     widths.sort_unstable_by(f64::total_cmp);
     let width = widths.get(widths.len() / 2).copied().unwrap_or(f64::INFINITY);
     Some((fit_line(&crossings)?, width))
-}
-
-/// Where the edge crosses the profile through `p` along `out` (from the square outwards;
-/// `reversed`: a bright square, whose grey levels are read as `255 - g`), as a signed
-/// distance from `p`. The profile, scaled from its black end (0) to
-/// its white end (1), is a step blurred by the lens and the pixels' area: its integral over
-/// the profile is the length on the white side of the edge, exactly so for a pixel-area or a
-/// symmetric blur (the level-crossing of a pixel-sampled step is off by up to a tenth of a
-/// pixel). `None` without contrast or when the edge is not inside the profile.
-pub(super) fn crossing<C: Pixels>(image: &GreyBuffer<C>, p: P, out: P, reach: f64, reversed: bool) -> Option<f64> {
-    crossing_and_width(image, p, out, reach, (reversed, false)).map(|(edge, _)| edge)
-}
-
-/// [`crossing`], and the distance between the profile's first crossings of the levels a quarter
-/// and three quarters of the way from black to white on either side of the edge (`None` when
-/// one is not inside the profile, or not `want_width`).
-fn crossing_and_width<C: Pixels>(
-    image: &GreyBuffer<C>,
-    p: P,
-    out: P,
-    reach: f64,
-    (reversed, want_width): (bool, bool),
-) -> Option<(f64, Option<f64>)> {
-    let ray = Ray::across(p, out, reach, reversed);
-    #[cfg(target_arch = "x86_64")]
-    if let Some(simd) = pulp::x86::V3::try_new() {
-        return simd.vectorize(Crossing { simd, image, ray, want_width });
-    }
-    crossing_in_profile(image, ray, want_width, |profile| read_profile(image, ray, profile))
-}
-
-/// [`crossing_in_profile`] as a `pulp` operation, so that on a processor with AVX2 its
-/// arithmetic is compiled for it and its profile read in AVX2 lanes.
-#[cfg(target_arch = "x86_64")]
-struct Crossing<'a, C: Pixels> {
-    simd: pulp::x86::V3,
-    image: &'a GreyBuffer<C>,
-    ray: Ray,
-    want_width: bool,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl<C: Pixels> pulp::NullaryFnOnce for Crossing<'_, C> {
-    type Output = Option<(f64, Option<f64>)>;
-
-    #[inline(always)]
-    fn call(self) -> Self::Output {
-        let Self { simd, image, ray, want_width } = self;
-        let read = |profile: &mut [f64; PROFILE_SAMPLES]| {
-            pulp::NullaryFnOnce::call(super::profile::Avx2Profile { simd, image, ray, profile })
-        };
-        crossing_in_profile(image, ray, want_width, read)
-    }
-}
-
-/// [`crossing_and_width`] of the profile `ray`, its samples read by `read` (`None` when its
-/// ends are not both inside the image).
-#[inline(always)]
-fn crossing_in_profile<C: Pixels>(
-    image: &GreyBuffer<C>,
-    ray: Ray,
-    want_width: bool,
-    read: impl FnOnce(&mut [f64; PROFILE_SAMPLES]) -> Option<()>,
-) -> Option<(f64, Option<f64>)> {
-    let Ray { p, out, start, samples, .. } = ray;
-    let steps = samples - 1;
-    let at = |k: usize| {
-        let o = start + STEP * k as f64;
-        [p[0] + out[0] * o, p[1] + out[1] * o]
-    };
-    // Each coordinate of `at(k)` is monotonic in `k`: with both ends inside the image, every
-    // sample is, and the samples are read without the check.
-    if steps >= PROFILE_SAMPLES || !inside(image, at(0)) || !inside(image, at(steps)) {
-        return None;
-    }
-    let mut profile = [0.0f64; PROFILE_SAMPLES];
-    read(&mut profile)?;
-    let (black, white) = ((profile[0] + profile[1]) / 2.0, (profile[steps] + profile[steps - 1]) / 2.0);
-    if white - black < MIN_CONTRAST {
-        return None;
-    }
-    // Trapezoid rule: the integral of the piecewise linear profile.
-    let whiteness = |v: f64| (v - black) / (white - black);
-    let inner: f64 = profile[1..steps].iter().map(|&v| whiteness(v)).sum();
-    let area = STEP * (inner + (whiteness(profile[0]) + whiteness(profile[steps])) / 2.0);
-    let edge = -start - area;
-    if edge.abs() > -start - 1.0 {
-        return None;
-    }
-    // The sample at the edge, then outwards to the first sample past each quartile level.
-    if !want_width {
-        return Some((edge, None));
-    }
-    let at_edge = (((edge - start) / STEP).round() as usize).min(steps);
-    let level_at = |level: f64, outwards: bool| -> Option<f64> {
-        let (mut k, w) = (at_edge, |k: usize| whiteness(profile[k]));
-        loop {
-            let next = if outwards { k.checked_add(1).filter(|&n| n <= steps)? } else { k.checked_sub(1)? };
-            let (inside, outside) = if outwards { (w(k), w(next)) } else { (w(next), w(k)) };
-            if (inside - level) * (outside - level) <= 0.0 && inside != outside {
-                let (lo, hi) = if outwards { (k, next) } else { (next, k) };
-                let t = (level - w(lo)) / (w(hi) - w(lo));
-                return Some(start + STEP * (lo as f64 + t));
-            }
-            k = next;
-        }
-    };
-    let width = level_at(0.75, true).zip(level_at(0.25, false)).map(|(hi, lo)| hi - lo);
-    Some((edge, width))
 }
 
 /// The total least squares line of the points, one pass without the points farther than
@@ -421,7 +314,7 @@ pub(super) fn inside<C: Pixels>(image: &GreyBuffer<C>, [u, v]: P) -> bool {
 pub(super) fn sample<C: Pixels>(image: &GreyBuffer<C>, u: f64, v: f64) -> Option<f64> {
     // `u, v >= 0` and below 2^32: truncation is the floor, without a call to libm's `floor`; the
     // last column (row) is read between the one before it and itself. One conversion each way
-    // and one bounds check a sample: the profiles of `crossing_and_width` spend their time here.
+    // and one bounds check a sample: the edges' profiles spend their time here.
     let (u0, v0) = ((u as u32).min(image.width().saturating_sub(2)), (v as u32).min(image.height().saturating_sub(2)));
     let (fu, fv) = (u - f64::from(u0), v - f64::from(v0));
     let stride = image.width() as usize;
@@ -458,6 +351,7 @@ pub(super) mod tests {
     use crate::core::distortion::Distortion;
     use crate::vision::image::GreyImage;
     use crate::vision::render::{CameraView, RenderConfig, Renderer};
+    use crate::vision::tags::profile::crossing_and_width;
     use crate::vision::tags::synthetic::{Placement, corners, draw};
     use crate::vision::tags::{TagFamily, detect_tags};
     use crate::vision::target::tags::{RigTag, TagRig};
