@@ -171,7 +171,7 @@ pub(super) fn crossing_in_profile<C: Pixels>(
     let whiteness = |v: f64| (v - black) / (white - black);
     let inner: f64 = profile[1..steps].iter().map(|&v| whiteness(v)).sum();
     let area = STEP * (inner + (whiteness(profile[0]) + whiteness(profile[steps])) / 2.0);
-    found_edge(&profile, ray, want_width, [black, white], -ray.start - area)
+    found_edge(|k| profile[k], ray, want_width, [black, white], -ray.start - area)
 }
 
 /// Whether the first and last samples of `ray` are inside the image's pixel centres: each
@@ -185,11 +185,12 @@ fn ends_inside<C: Pixels>(image: &GreyBuffer<C>, ray: Ray) -> bool {
     inside(image, at(0)) && inside(image, at(ray.samples - 1))
 }
 
-/// The crossing `edge` of a read `profile` whose ends are at levels `black` and `white`, when
-/// it has the contrast and lies inside the profile, with its width when `want_width`.
+/// The crossing `edge` of a read profile (sample `k` at level `profile(k)`) whose ends are at
+/// levels `black` and `white`, when it has the contrast and lies inside the profile, with its
+/// width when `want_width`.
 #[inline(always)]
 fn found_edge(
-    profile: &[f64; PROFILE_SAMPLES],
+    profile: impl Fn(usize) -> f64,
     ray: Ray,
     want_width: bool,
     [black, white]: [f64; 2],
@@ -206,7 +207,7 @@ fn found_edge(
     let whiteness = |v: f64| (v - black) / (white - black);
     let at_edge = (((edge - start) / STEP).round() as usize).min(steps);
     let level_at = |level: f64, outwards: bool| -> Option<f64> {
-        let (mut k, w) = (at_edge, |k: usize| whiteness(profile[k]));
+        let (mut k, w) = (at_edge, |k: usize| whiteness(profile(k)));
         loop {
             let next = if outwards { k.checked_add(1).filter(|&n| n <= steps)? } else { k.checked_sub(1)? };
             let (inside, outside) = if outwards { (w(k), w(next)) } else { (w(next), w(k)) };
@@ -281,13 +282,11 @@ impl<C: Pixels, F: FnMut(usize, Crossing)> pulp::NullaryFnOnce for Lanes<'_, C, 
             let area = avx._mm256_mul_pd(half_step, avx._mm256_add_pd(inner, ends));
             let edges: [f64; 4] = cast(avx._mm256_sub_pd(neg_start, area));
             let (blacks, whites): ([f64; 4], [f64; 4]) = (cast(black), cast(white));
-            let columns: [[f64; 4]; PROFILE_SAMPLES] = levels.map(cast);
+            let columns: [[f64; 4]; PROFILE_SAMPLES] = cast(levels);
             for (l, &p) in chunk.iter().enumerate() {
                 let ray = Ray { p, ..ray };
-                let crossing = ends_inside(image, ray).then(|| {
-                    let profile = columns.map(|column| column[l]);
-                    found_edge(&profile, ray, want_width, [blacks[l], whites[l]], edges[l])
-                });
+                let crossing = ends_inside(image, ray)
+                    .then(|| found_edge(|k| columns[k][l], ray, want_width, [blacks[l], whites[l]], edges[l]));
                 found(4 * c + l, crossing.flatten());
             }
         }
@@ -324,7 +323,7 @@ fn bilinear_lanes(
         }
     }
     let widen = |word: u32| avx._mm256_cvtepi32_pd(sse41._mm_cvtepu8_epi32(sse2._mm_cvtsi32_si128(word as i32)));
-    let [a, b, c, d] = words.map(widen);
+    let [a, b, c, d] = [widen(words[0]), widen(words[1]), widen(words[2]), widen(words[3])];
     let one = avx._mm256_set1_pd(1.0);
     let (fu1, fv1) = (avx._mm256_sub_pd(one, fu), avx._mm256_sub_pd(one, fv));
     let top = avx._mm256_add_pd(avx._mm256_mul_pd(a, fu1), avx._mm256_mul_pd(b, fu));
