@@ -28,6 +28,9 @@ pub(super) struct Clusters {
     /// While gathering: each key's place in `lists`, and the lists in the order found.
     index: FxHashMap<Key, u32>,
     lists: Vec<(Key, Vec<GradientInfo>)>,
+    /// Emptied lists of earlier calls, whose buffers the next ones reuse (a photograph's level
+    /// has hundreds of clusters: each a buffer allocated, grown and freed a frame otherwise).
+    spare: Vec<Vec<GradientInfo>>,
     /// The region of each pixel of the two rows read.
     above: Vec<u32>,
     below: Vec<u32>,
@@ -41,6 +44,7 @@ pub(super) struct Clusters {
 struct Gathering<'a> {
     index: &'a mut FxHashMap<Key, u32>,
     lists: &'a mut Vec<(Key, Vec<GradientInfo>)>,
+    spare: &'a mut Vec<Vec<GradientInfo>>,
     /// The last key and its list.
     last: Option<(Key, usize)>,
 }
@@ -53,7 +57,8 @@ impl Gathering<'_> {
                 let next = self.lists.len();
                 let i = *self.index.entry(key).or_insert(next as u32) as usize;
                 if i == next {
-                    self.lists.push((key, Vec::with_capacity(64)));
+                    let list = self.spare.pop().unwrap_or_else(|| Vec::with_capacity(64));
+                    self.lists.push((key, list));
                 }
                 self.last = Some((key, i));
                 i
@@ -75,16 +80,19 @@ impl Clusters {
         components: &Components,
         sizes: std::ops::RangeInclusive<usize>,
     ) {
-        self.map.clear();
+        let Self { map, index, lists, spare, above, below, bytes_above, bytes_below } = self;
+        spare.extend(map.drain().map(|(_, mut list)| {
+            list.clear();
+            list
+        }));
         let height = binary.len() / width.max(1);
         if width < 3 || height < 3 {
             return;
         }
-        let Self { map, index, lists, above, below, bytes_above, bytes_below } = self;
         regions_of_row(components, 1, width, above, bytes_above);
         index.clear();
         lists.clear();
-        let mut gathering = Gathering { index, lists, last: None };
+        let mut gathering = Gathering { index, lists, spare, last: None };
         for y in 1..height - 1 {
             regions_of_row(components, y + 1, width, below, bytes_below);
             let rows = Rows {
@@ -100,7 +108,14 @@ impl Clusters {
             std::mem::swap(above, below);
             std::mem::swap(bytes_above, bytes_below);
         }
-        map.extend(lists.drain(..).filter(|(_, points)| sizes.contains(&points.len())));
+        for (key, mut points) in lists.drain(..) {
+            if sizes.contains(&points.len()) {
+                map.insert(key, points);
+            } else {
+                points.clear();
+                spare.push(points);
+            }
+        }
     }
 }
 
