@@ -1,5 +1,6 @@
 //! The quad search of one level of the pyramid ([`LevelSearch`]): the level decimated as the
-//! AprilTag detector decimates it, thresholded by its adaptive threshold, its regions labelled
+//! AprilTag detector decimates it, thresholded by its adaptive threshold (`threshold.rs`, the
+//! same pixels as kornia-apriltag's), its regions labelled
 //! (`components.rs`) and counted for the frame's budget, and only then, when the budget admits
 //! them, their gradient clusters gathered (`clusters.rs`), fitted by quads and decoded by
 //! `kornia-apriltag`'s public stages.
@@ -13,17 +14,15 @@ use kornia_apriltag::DecodeTagsConfig;
 use kornia_apriltag::decoder::{Detection, decode_tags, dedup_detections};
 use kornia_apriltag::family::{TagFamily as Layout, TagFamilyKind};
 use kornia_apriltag::quad::fit_quads;
-use kornia_apriltag::threshold::{TileMinMax, adaptive_threshold_with_split};
 use kornia_apriltag::utils::Pixel;
 use kornia_image::{Image, ImageSize};
 
 use super::clusters::Clusters;
 use super::components::Components;
+use super::threshold::{TILE, Threshold};
 use super::{MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT, TagFamily, decimated_side, decoder_error, face};
 use crate::vision::error::Result;
 
-/// The adaptive threshold's tiles (pixels a side), the AprilTag detector's.
-const TILE: usize = 4;
 /// The fewest points of a cluster the quad fit reads (the AprilTag library's `fit_quad` and
 /// kornia-apriltag's `fit_single_quad` return no quad for fewer); the most is four times the
 /// level's width and height (kornia-apriltag's `fit_quads`).
@@ -38,7 +37,7 @@ pub(super) struct LevelSearch {
     families: Vec<(TagFamilyKind, Layout)>,
     decimated: Vec<u8>,
     binary: Image<Pixel, 1>,
-    tiles: TileMinMax,
+    threshold: Threshold,
 }
 
 /// The labelling and clusters, shared by the levels (one level is searched at a time).
@@ -67,7 +66,7 @@ impl LevelSearch {
             families: vec![(kind, layout)],
             decimated: Vec::new(),
             binary: Image::from_size_val(searched, Pixel::Skip).map_err(decoder_error)?,
-            tiles: TileMinMax::new(searched, TILE),
+            threshold: Threshold::default(),
         })
     }
 
@@ -86,21 +85,19 @@ impl LevelSearch {
             return Ok(0);
         }
         let d = self.decimation.max(1);
-        let thresholded = if d == 1 {
-            adaptive_threshold(source, &mut self.binary, &mut self.tiles)
+        let (width, binary) = (searched.width, self.binary.as_slice_mut());
+        let (split, least) = (THRESHOLD_SPLIT, MIN_WHITE_BLACK_DIFFERENCE);
+        if d == 1 {
+            self.threshold.apply(source.as_slice(), width, binary, least, split);
         } else {
             // One pixel of each `d x d` block, its top-left (the AprilTag library's decimation).
-            let mut pixels = std::mem::take(&mut self.decimated);
+            let pixels = &mut self.decimated;
             pixels.clear();
-            for row in source.as_slice().chunks_exact(source.width()).step_by(d) {
+            for row in source.as_slice().chunks_exact(source.width()).step_by(d).take(searched.height) {
                 pixels.extend(row.iter().step_by(d));
             }
-            let decimated = Image::<u8, 1>::new(searched, pixels).map_err(decoder_error)?;
-            let thresholded = adaptive_threshold(&decimated, &mut self.binary, &mut self.tiles);
-            self.decimated = decimated.into_vec();
-            thresholded
-        };
-        thresholded?;
+            self.threshold.apply(pixels, width, binary, least, split);
+        }
         Ok(scratch.components.label(self.binary.as_slice(), searched.width))
     }
 
@@ -125,13 +122,6 @@ impl LevelSearch {
         );
         dedup_detections(decoded)
     }
-}
-
-/// The threshold of the detector: the tile contrast below which pixels are skipped and the
-/// split between a tile's darkest and brightest pixels.
-fn adaptive_threshold(source: &Image<u8, 1>, binary: &mut Image<Pixel, 1>, tiles: &mut TileMinMax) -> Result<()> {
-    adaptive_threshold_with_split(source, binary, tiles, MIN_WHITE_BLACK_DIFFERENCE, THRESHOLD_SPLIT)
-        .map_err(decoder_error)
 }
 
 /// The size of an image of `size` decimated by `d` ([`decimated_side`]).

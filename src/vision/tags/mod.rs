@@ -40,6 +40,7 @@ mod level;
 mod profile;
 mod pyramid;
 mod smoothed;
+mod threshold;
 
 pub use self::budget::{MAX_MEASURED_CANDIDATES, MAX_SEARCHED_REGIONS, TagReport};
 pub use self::face::TagFace;
