@@ -31,9 +31,11 @@ pub(super) struct Threshold {
     /// One tile row's levels spread over a row of pixels, and its skipped columns (runs).
     levels: Vec<u8>,
     skipped: Vec<std::ops::Range<usize>>,
-    /// One band of tile rows' darkest and brightest pixel in each column.
-    column_min: Vec<u8>,
-    column_max: Vec<u8>,
+    /// Scratch rows of extremes: a band of pixel rows' darkest and brightest pixel in each
+    /// column ([`Self::tile_extremes`]), then the tiles' extremes across each tile row
+    /// ([`Self::neighbourhoods`]).
+    work_min: Vec<u8>,
+    work_max: Vec<u8>,
 }
 
 impl Threshold {
@@ -66,7 +68,7 @@ impl Threshold {
 
     /// The darkest and brightest pixel of each whole tile.
     fn tile_extremes(&mut self, src: &[u8], width: usize, tiles_x: usize, tiles_y: usize) {
-        let Self { min, max, column_min, column_max, .. } = self;
+        let Self { min, max, work_min: column_min, work_max: column_max, .. } = self;
         min.clear();
         max.clear();
         for band in src.chunks_exact(TILE * width).take(tiles_y) {
@@ -92,7 +94,7 @@ impl Threshold {
     /// Each whole tile's extremes over it and its neighbouring whole tiles: over the three
     /// tiles across (fewer at the ends) in each tile row, then over three such rows.
     fn neighbourhoods(&mut self, tiles_x: usize, tiles_y: usize) {
-        let Self { min, max, near_min, near_max, column_min: across_min, column_max: across_max, .. } = self;
+        let Self { min, max, near_min, near_max, work_min: across_min, work_max: across_max, .. } = self;
         across(min, tiles_x, across_min, u8::min);
         across(max, tiles_x, across_max, u8::max);
         down(across_min, tiles_x, tiles_y, near_min, u8::min);
